@@ -1,0 +1,34 @@
+# Two commands set everything up on a fresh machine with Python >= 3.11 and make:
+#   make run    reduce the embedded campaign (raw/) into results/
+#   make test   run the test suite
+PYTHON ?= python3
+VENV   := .venv
+BIN    := $(VENV)/bin
+CORES  ?= 2
+STAMP  := $(VENV)/.installed
+
+.PHONY: run test bench venv clean dryrun
+
+$(STAMP): requirements.lock pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -r requirements.lock
+	$(BIN)/python -m pip install --quiet --no-deps -e .
+	touch $@
+
+venv: $(STAMP)
+
+run: $(STAMP)
+	$(BIN)/snakemake --cores $(CORES) --printshellcmds --rerun-incomplete
+
+dryrun: $(STAMP)
+	$(BIN)/snakemake --cores $(CORES) --dry-run
+
+test: $(STAMP)
+	$(BIN)/python -m pytest -n $(CORES) -q
+
+bench: $(STAMP)
+	$(BIN)/python -m rocklab.bench --out results/bench
+
+clean:
+	rm -rf results .snakemake

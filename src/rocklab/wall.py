@@ -1,0 +1,95 @@
+"""Geometry and rigid-body constants of a rocking wall.
+
+A homogeneous rectangular wall of height ``h`` and thickness ``b`` rocking
+about one base edge (Fig. 1 of Sorrentino, Masiani & Griffith, hereafter
+"the paper").  All functions are pure and vectorise over NumPy arrays.
+Lengths may be in any unit as long as they are consistent; the frequency
+parameter needs metres because it involves gravity.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Standard gravity [m/s^2].
+G = 9.80665
+
+
+def slenderness_angle(height, thickness):
+    """Nominal slenderness angle alpha = arctan(b/h) [rad] (Fig. 1).
+
+    Parameters
+    ----------
+    height, thickness : array_like
+        Wall height h and thickness b, same length unit.
+    """
+    return np.arctan2(np.asarray(thickness, float), np.asarray(height, float))
+
+
+def half_diagonal(height, thickness):
+    """Distance R of the centre of mass from the rocking edge (Fig. 1).
+
+    R = sqrt(h^2 + b^2) / 2, in the unit of the inputs.
+    """
+    return 0.5 * np.hypot(height, thickness)
+
+
+def inertia_ratio():
+    """m R^2 / I_O of a homogeneous rectangle about its base edge [-].
+
+    I_O = 4/3 m R^2, so the ratio is 3/4: it turns Eq. 1 into Eq. 2 and
+    Eq. 12 into Eq. 13.
+    """
+    return 0.75
+
+
+def frequency_parameter(R, mR2_over_Io=None, g=G):
+    """Housner's frequency parameter p = sqrt(m g R / I_O) [rad/s].
+
+    Parameters
+    ----------
+    R : array_like
+        Half diagonal [m].
+    mR2_over_Io : float, optional
+        m R^2 / I_O; defaults to the homogeneous rectangle (3/4).
+    g : float
+        Gravity [m/s^2].
+    """
+    ratio = inertia_ratio() if mR2_over_Io is None else mR2_over_Io
+    return np.sqrt(ratio * g / np.asarray(R, float))
+
+
+def overturning_velocity(alpha, p):
+    """Angular velocity that overturns a wall at rest, Eq. 16 [rad/s].
+
+    thetadot_r^2 = 2 (m g R / I_O) (1 - cos alpha) = 2 p^2 (1 - cos alpha),
+    the kinetic energy that lifts the centre of mass from theta = 0 to the
+    instability rotation theta = alpha.
+    """
+    return np.sqrt(2.0 * np.asarray(p, float) ** 2 * (1.0 - np.cos(alpha)))
+
+
+def quarter_period_housner(theta0_over_alpha):
+    """Non-dimensional first quarter period p T_1/4 of Housner (1963).
+
+    Released from rest at theta0, the piecewise-linear equation gives
+    theta(t) = alpha - (alpha - theta0) cosh(p t), hence
+    p T_1/4 = arccosh(1 / (1 - theta0/alpha))  (used against Fig. 17).
+
+    Parameters
+    ----------
+    theta0_over_alpha : array_like
+        Release rotation over the slenderness angle, in (0, 1).
+    """
+    r = np.asarray(theta0_over_alpha, float)
+    return np.arccosh(1.0 / (1.0 - r))
+
+
+def no_sliding_friction(zeta):
+    """Least static friction coefficient that prevents sliding, Eq. 9 [-].
+
+    mu_s >= 3 zeta / (1 + 4 zeta^2) (Shenton 1996) for free rocking of a
+    rectangle of slenderness zeta = h/b.
+    """
+    z = np.asarray(zeta, float)
+    return 3.0 * z / (1.0 + 4.0 * z**2)
