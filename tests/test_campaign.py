@@ -1,0 +1,88 @@
+"""The raw-format reader: every bad input names the file, the row and the problem."""
+
+import gzip
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from rocklab.campaign import RawFormatError, open_campaign, read_record, series_id
+
+
+def _rewrite(path, edit):
+    text = gzip.decompress(path.read_bytes()).decode()
+    path.write_bytes(gzip.compress(edit(text).encode()))
+
+
+def test_reads_embedded_records(tiny_campaign):
+    c = open_campaign(tiny_campaign)
+    assert list(c.tests.test_id) == ["T0001", "T0027", "T0100"]
+    r = read_record(c.record_path("T0001"), "T0001")
+    assert r.fs == 400 and r.channels == [0, 1, 2, 3, 4]
+    assert r.readings.shape == (r.time.size, 5)
+    # first data row of the file: 0.0000,35.620,86.874,36.892,88.154,12.570
+    np.testing.assert_allclose(r.readings[0], [35.620, 86.874, 36.892, 88.154, 12.570])
+    assert read_record(c.record_path("T0027")).fs == 100
+    assert len(r.sha256) == 64
+
+
+def test_non_numeric_value_names_row(tiny_campaign):
+    f = tiny_campaign / "tests" / "T0001.csv.gz"
+    _rewrite(f, lambda s: s.replace("0.0050,35.621", "0.0050,3x.621", 1))
+    with pytest.raises(RawFormatError) as err:
+        read_record(f)
+    assert err.value.row == 7 and "T0001.csv.gz:7" in str(err.value) and "'3x.621' is not a number" in str(err.value)
+
+
+def test_truncated_gzip(tiny_campaign):
+    f = tiny_campaign / "tests" / "T0001.csv.gz"
+    f.write_bytes(f.read_bytes()[:5000])
+    with pytest.raises(RawFormatError, match="truncated or corrupt gzip"):
+        read_record(f)
+
+
+def test_truncated_last_row(tiny_campaign):
+    f = tiny_campaign / "tests" / "T0001.csv.gz"
+    _rewrite(f, lambda s: s.rstrip("\n").rsplit(",", 2)[0] + "\n")
+    with pytest.raises(RawFormatError, match="truncated row"):
+        read_record(f)
+
+
+def test_rate_disagrees_with_time(tiny_campaign):
+    f = tiny_campaign / "tests" / "T0001.csv.gz"
+    _rewrite(f, lambda s: s.replace("sampling_rate_hz: 400", "sampling_rate_hz: 100"))
+    with pytest.raises(RawFormatError, match="disagrees with sampling_rate_hz 100"):
+        read_record(f)
+
+
+def test_missing_column_in_table(tiny_campaign):
+    s = pd.read_csv(tiny_campaign / "specimens.csv").drop(columns="thickness_mm")
+    s.to_csv(tiny_campaign / "specimens.csv", index=False)
+    with pytest.raises(RawFormatError, match=r"specimens.csv:1: missing column\(s\) thickness_mm"):
+        open_campaign(tiny_campaign)
+
+
+def test_bad_rows_of_the_log_are_set_apart(tiny_campaign):
+    t = pd.read_csv(tiny_campaign / "tests.csv", dtype=str, keep_default_na=False)
+    extra = t.iloc[[0, 1, 2]].copy()
+    extra.loc[:, "test_id"] = ["T0001", "T9001", "T9002"]
+    extra.iloc[1, extra.columns.get_loc("specimen")] = "9z"
+    extra.iloc[2, extra.columns.get_loc("setup")] = "S-nowhere"
+    pd.concat([t, extra]).to_csv(tiny_campaign / "tests.csv", index=False)
+    c = open_campaign(tiny_campaign)
+    msgs = {k: str(v) for k, v in c.log.errors.items()}
+    assert "duplicated test_id T0001" in msgs["T0001@5"] and "tests.csv:5" in msgs["T0001@5"]
+    assert "unknown specimen '9z'" in msgs["T9001"]
+    assert "unknown setup 'S-nowhere'" in msgs["T9002"]
+    assert "T0027" not in msgs
+
+
+def test_header_test_id_must_match(tiny_campaign):
+    f = tiny_campaign / "tests" / "T0001.csv.gz"
+    with pytest.raises(RawFormatError, match="header test_id 'T0001' but tests.csv says 'T0002'"):
+        read_record(f, expected_test_id="T0002")
+
+
+def test_series_id():
+    assert series_id("2a", "two-sided", np.nan) == "2a-2s"
+    assert series_id("2a", "one-sided", 60.0) == "2a-1s-cd60"
