@@ -28,7 +28,7 @@ test: $(STAMP)
 	$(BIN)/python -m pytest -n $(CORES) -q
 
 bench: $(STAMP)
-	$(BIN)/python -m rocklab.bench --out results/bench
+	set -e; for b in bench/*.py; do $(BIN)/python $$b --out results/bench; done
 
 clean:
 	rm -rf results .snakemake

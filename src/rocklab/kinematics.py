@@ -370,7 +370,7 @@ def wall_motion_dataset(time, elongation, wall_xyz, frame_xyz, thickness,
     units = {"theta": "rad", "phi": "rad", "v": "mm", "w": "mm", "residual_rms": "mm"}
     ds = xr.Dataset({k: ("time", np.asarray(a), {"units": units[k]} if k in units else {})
                      for k, a in sol.items()}, coords={"time": ("time", np.asarray(time, float), {"units": "s"})})
-    used = np.flatnonzero(np.atleast_1d(W).reshape(-1)[: E.shape[1]] > 0) if np.ndim(W) == 1 else None
+    used = np.flatnonzero(W > 0) if W.ndim == 1 else None
     ch, h = simplified_channel(wall_xyz, frame_xyz, used)
     if ch >= 0:
         t8 = theta_simplified(E[:, ch], h)

@@ -172,6 +172,7 @@ def reduce_test(campaign: Campaign, test_id: str, options=None) -> xr.Dataset:
         channels_used=" ".join(f"ch{c}" for c in choice.used),
         flags="; ".join(flags),
         channel_reports=json.dumps([r.__dict__ for r in reports], default=float),
+        residual_rms_median_mm=float(np.nanmedian(ds.residual_rms.values)) if np.isfinite(ds.residual_rms.values).any() else np.nan,
     )
     return ds
 
@@ -210,3 +211,12 @@ def qc_table(datasets, campaign: Campaign) -> pd.DataFrame:
         seen.add(tid)
         table.append(rows[tid])
     return pd.DataFrame(table + out, columns=QC_COLUMNS)
+
+
+KINEMATICS_COLUMNS = ["test_id", "series", "peak_theta", "peak_phi", "peak_v", "peak_w",
+                      "theta_eq8_max_abs_diff", "residual_rms_median_mm"]
+
+
+def kinematics_row(attrs: dict) -> dict:
+    """One row of ``kinematics.csv``: Fig. 9b peaks and the Eq. 8 difference (Fig. 9a)."""
+    return {k: attrs.get(k, np.nan) for k in KINEMATICS_COLUMNS}

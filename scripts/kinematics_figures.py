@@ -1,0 +1,23 @@
+"""Snakemake shim: Figs. 6, 8 and 9 from the reduced tests."""
+
+from pathlib import Path
+
+import pandas as pd
+import xarray as xr
+
+from rocklab import figures
+from rocklab.workflow import setup_logging
+
+setup_logging(snakemake.log[0])
+qc = pd.read_csv(snakemake.input.qc, keep_default_na=False)
+valid = qc[qc.valid.astype(str) == "True"]
+sample = snakemake.params.sample_test or valid.test_id.iloc[0]
+paths = {Path(p).stem: p for p in snakemake.input.tests}
+with xr.open_dataset(paths[sample]) as ds:
+    ds = ds.load()
+figures.sample_record(ds).savefig(snakemake.output.fig6, dpi=120)
+figures.degrees_of_freedom(ds).savefig(snakemake.output.fig8, dpi=120)
+kin = pd.read_csv(snakemake.input.kinematics).merge(valid[["test_id"]], on="test_id")
+peaks = kin[kin.series.str.startswith(f"{snakemake.params.specimen}-")].reset_index(drop=True)
+peaks.attrs["specimen"] = snakemake.params.specimen
+figures.eq8_and_peaks(ds, peaks).savefig(snakemake.output.fig9, dpi=120)

@@ -1,0 +1,13 @@
+"""Snakemake shim: results/qc.csv and results/kinematics.csv from the reduced tests."""
+
+import pandas as pd
+
+from rocklab.campaign import open_campaign
+from rocklab.reduction import KINEMATICS_COLUMNS, kinematics_row, qc_table
+from rocklab.workflow import read_attrs, setup_logging, write_table
+
+setup_logging(snakemake.log[0])
+reduced = read_attrs(snakemake.input.tests)
+write_table(qc_table(reduced, open_campaign(snakemake.params.raw_dir)), snakemake.output.qc, snakemake.params.schema)
+rows = [kinematics_row(r.attrs) for r in reduced if r.attrs.get("reject_reason") != "unreadable"]
+write_table(pd.DataFrame(rows, columns=KINEMATICS_COLUMNS), snakemake.output.kinematics)

@@ -1,0 +1,145 @@
+"""rocklab.dissipation against exact free rocking, closed forms and the paper."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy.integrate import solve_ivp
+from test_motion import free_rocking_record
+
+from rocklab import restitution
+from rocklab.dissipation import (IMPACT_COLUMNS, TEST_COLUMNS, amplitude_law_fit, analyse_motion,
+                                 analytic_e, e_by_n, no_sliding_check, table3_windows)
+from rocklab.wall import overturning_velocity, quarter_period_housner
+
+P = 3.4
+
+
+def test_eq10_and_eq11_agree_in_the_small_angle_limit():
+    alpha = 1e-3
+    peaks = alpha * np.array([0.8, 0.6, 0.45, 0.3])
+    d = e_by_n(peaks, alpha, alpha, alpha, 1.0)
+    assert np.allclose(d.e_exp_eq10, d.e_exp_eq11, rtol=1e-6)
+    alpha = 0.15   # stockiest wall (h/b = 6.5): they "coincide substantially"
+    d = e_by_n(alpha * np.array([0.8, 0.6]), alpha, alpha, alpha, 1.0)
+    diff = np.abs(d.e_exp_eq10 - d.e_exp_eq11)
+    assert np.all((diff > 1e-5) & (diff < 1e-3))
+
+
+@pytest.mark.parametrize("boundary,e,alpha", [("two-sided", 0.9, 0.15), ("one-sided", -0.45, 0.1)])
+def test_eq11_inverts_an_exact_motion_for_every_n(boundary, e, alpha):
+    _, _, truth = free_rocking_record(boundary=boundary, e=e, alpha=alpha, noise=0, hum=0,
+                                      ring=0, duration=6.0)
+    peaks = np.abs(truth["peaks"])[:8]
+    d = e_by_n(peaks, truth["theta0"], alpha, alpha, 1.0)
+    assert np.allclose(d.e_exp_eq11, abs(e), atol=1e-6)
+    # Eq. 10 (piecewise linear) is close but not exact for a stocky wall
+    assert np.allclose(d.e_exp_eq10, abs(e), atol=0.01)
+
+
+def test_eq13_range_quoted_in_sect3():
+    zeta = np.linspace(6.5, 14.6, 50)
+    e_tr = restitution.transverse(np.arctan(1 / zeta))
+    assert np.round(e_tr.max(), 2) == -0.47 and np.round(e_tr.min(), 2) == -0.49
+    assert np.allclose(e_tr, restitution.transverse_from_slenderness(zeta))
+
+
+def test_eq16_against_the_energy_balance():
+    """A wall leaving theta = 0 at thetadot_r just reaches alpha."""
+    alpha = 0.1
+    vr = overturning_velocity(alpha, P)
+
+    def run(v):
+        sol = solve_ivp(lambda _, y: [y[1], -P**2 * np.sin(alpha - y[0])], (0, 10), [0, v],
+                        events=lambda _, y: y[1], rtol=1e-12, atol=1e-14)
+        return sol.y_events[0][0][0] if len(sol.t_events[0]) else np.inf
+
+    assert run(vr * (1 - 1e-6)) == pytest.approx(alpha, rel=1e-2)
+    assert run(vr * (1 - 1e-6)) < alpha
+    assert run(vr * 0.5) < 0.5 * alpha
+
+
+def test_analytic_e_uses_eq2_and_eq14():
+    a = np.arctan(1 / 12.0)
+    assert analytic_e("two-sided", a) == pytest.approx((2 * 144 - 1) / (2 * 145))
+    assert analytic_e("one-sided", a) == pytest.approx(((2 * 144 - 1) / 290) ** 2 * (2 - 144) / 290)
+    with pytest.raises(ValueError):
+        analytic_e("free", a)
+
+
+def test_table3_windows_are_equal_for_a_constant_e():
+    alpha, e = 0.08, 0.9
+    _, _, truth = free_rocking_record(e=e, alpha=alpha, noise=0, hum=0, ring=0, duration=5.0)
+    w = table3_windows(np.abs(truth["peaks"])[:6], truth["theta0"], alpha, 0.5)
+    assert all(v == pytest.approx(e / 0.5, abs=1e-6) for v in w.values())
+
+
+ALPHA_NOM = 0.08    # arctan(b/h), h/b = 12.5
+ALPHA_DYN = 0.074   # effective instability angle (rounded hinge)
+
+
+@pytest.mark.parametrize("boundary,e,seed", [("two-sided", 0.93, 0), ("one-sided", -0.5, 1)])
+def test_noisy_400hz_record_recovers_e_and_theta0(boundary, e, seed):
+    """Done-when of the issue: e_exp and theta0/alpha within 0.005."""
+    frac = 0.995
+    t, th, truth = free_rocking_record(boundary=boundary, e=e, alpha=ALPHA_DYN,
+                                       theta0_frac=frac, seed=seed, noise=1e-5, hum=2e-5)
+    s, imp, e_n = analyse_motion(t, th, 400.0, boundary, ALPHA_NOM, P, "push")
+    assert list(s)[: len(TEST_COLUMNS)] == TEST_COLUMNS
+    assert list(imp.columns) == IMPACT_COLUMNS
+    assert s["theta0_over_alpha"] == pytest.approx(frac * ALPHA_DYN / ALPHA_NOM, abs=0.005)
+    assert s["e_exp_eq11"] == pytest.approx(abs(e), abs=0.005)
+    assert s["e_exp_eq10"] == pytest.approx(abs(e), abs=0.005)
+    assert s["e_ratio"] == pytest.approx(abs(e) / abs(analytic_e(boundary, ALPHA_NOM)), rel=0.006)
+    # every n of Fig. 11 and every per-impact e_k while the peaks are large
+    big = e_n.peak_over_alpha > 0.02
+    assert np.allclose(e_n.e_exp_eq11[big], abs(e), atol=0.005)
+    assert np.allclose(imp.e_exp_k[big.to_numpy()], abs(e), atol=0.01)
+    assert s["n_impacts"] == len(imp) == len(e_n)
+    assert s["n_cycles"] == s["n_impacts"] / 2
+
+
+def test_alpha_ind_equal_to_the_dynamics_removes_the_residual_bias():
+    t, th, _ = free_rocking_record(e=0.93, alpha=ALPHA_DYN, theta0_frac=0.97, seed=4)
+    s, _, _ = analyse_motion(t, th, 400.0, "two-sided", ALPHA_NOM, P, "push", alpha_ind=ALPHA_DYN)
+    assert s["e_exp_eq11"] == pytest.approx(0.93, abs=0.002)
+
+
+def test_quarter_period_and_velocity_ratio_against_closed_forms():
+    """p T_1/4 vs Housner (Fig. 17); |thetadot^-|/thetadot_r vs energy (Eq. 17)."""
+    alpha, frac = 0.08, 0.9
+    t, th, truth = free_rocking_record(e=0.92, alpha=alpha, theta0_frac=frac, seed=5)
+    s, imp, _ = analyse_motion(t, th, 400.0, "two-sided", alpha, P, "pull")
+    assert s["direction"] == "pull"
+    assert s["T_quarter_p"] == pytest.approx(quarter_period_housner(frac), rel=0.01)
+    assert s["T_quarter_p_housner"] == pytest.approx(quarter_period_housner(frac), rel=0.01)
+    v_energy = np.sqrt(restitution.peak_energy_ratio(imp.peak_before_over_alpha * alpha, alpha))
+    big = imp.peak_before_over_alpha > 0.1
+    assert np.allclose(imp.v_over_vr[big], v_energy[big], rtol=0.01)
+    assert s["duration_p"] > s["T_quarter_p"]
+
+
+def test_amplitude_law_fit_recovers_eq15_and_eq17():
+    rng = np.random.default_rng(0)
+    n = 60
+    x = rng.uniform(0.05, 0.8, n)
+    tests = pd.DataFrame({"test_id": ["A", "B"], "e_an": [-0.45, -0.45],
+                          "series": ["s1", "s2"], "boundary": ["one-sided"] * 2})
+    imp = pd.DataFrame({"test_id": np.repeat(["A", "B"], n // 2), "peak_before_over_alpha": x,
+                        "v_over_vr": np.sqrt(x), "e_exp_k": 0.45 * (1.17 - 0.453 * x)})
+    f = amplitude_law_fit(imp, tests, by=("boundary",), law="peak")
+    assert f.a.iloc[0] == pytest.approx(1.17) and f.b.iloc[0] == pytest.approx(0.453)
+    assert f.r2.iloc[0] == pytest.approx(1.0)
+    imp["e_exp_k"] += 0.45 * 0.1 * rng.standard_normal(n)
+    f = amplitude_law_fit(imp, tests, by=("series",), law="velocity")
+    assert list(f.series) == ["s1", "s2"] and (f.n == n // 2).all()
+    assert ((f.r2 > 0) & (f.r2 < 1)).all()
+    assert np.all(np.abs(f.b - 0.453) < 4 * f.b_se)
+
+
+def test_no_sliding_check_eq9():
+    d = no_sliding_check([6.5, 14.6])
+    assert d.no_sliding.all()
+    assert (d.mu_required < d.b_over_h).all()     # Sect. 2.2: mu_s > b/h suffices
+    assert not no_sliding_check(0.5, mu_s=0.6).no_sliding.iloc[0]   # 3z/(1+4z^2) = 0.75

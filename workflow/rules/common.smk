@@ -1,0 +1,45 @@
+# Paths, the campaign's test list and the per-test parameters that decide
+# when a test must be reduced again.
+from pathlib import Path
+
+from rocklab.campaign import open_campaign
+
+RAW = Path(config["raw_dir"])
+RESULTS = Path(config["results_dir"])
+CAMPAIGN = open_campaign(RAW)
+TEST_IDS = list(dict.fromkeys(CAMPAIGN.tests.test_id))
+SAMPLE_TESTS = config.get("sample_tests", {})
+
+
+def res(*parts):
+    return str(RESULTS.joinpath(*parts))
+
+
+def record_input(wildcards):
+    """The test's record, when the log points at an existing file.
+
+    A missing record is not a missing input: the test is reduced to an
+    'unreadable' entry and the rest of the campaign goes on.
+    """
+    row = CAMPAIGN.test_row(wildcards.test_id)
+    path = RAW / row.file if row.file else None
+    return [str(path)] if path is not None and path.is_file() else []
+
+
+def test_params(wildcards):
+    """Everything of the tables that this test's reduction depends on.
+
+    Passed as params (not the table files as inputs) so that editing one row
+    of tests.csv reduces that test again, not the whole campaign.
+    """
+    row = CAMPAIGN.test_row(wildcards.test_id)
+    out = {"row": {k: str(v) for k, v in row.items()}}
+    if row.specimen in set(CAMPAIGN.specimens.specimen):
+        out["specimen"] = {k: str(v) for k, v in CAMPAIGN.specimen(row.specimen).items()}
+    out["setup"] = CAMPAIGN.setup(row.setup).astype(str).to_dict("records")
+    out["error"] = str(CAMPAIGN.log.errors.get(wildcards.test_id, ""))
+    return out
+
+
+def all_outputs():
+    return [res("qc.csv"), res("series.csv")] + figure_outputs()

@@ -1,0 +1,19 @@
+# Stage 2: the QC table of the whole campaign, one row per row of tests.csv.
+
+
+rule qc_table:
+    input:
+        tests=expand(res("tests", "{test_id}.nc"), test_id=TEST_IDS),
+        log=str(RAW / "tests.csv"),
+    output:
+        qc=res("qc.csv"),
+        kinematics=res("kinematics.csv"),
+    params:
+        raw_dir=config["raw_dir"],
+        schema=workflow.source_path("../schemas/qc.schema.yaml"),
+    log:
+        res("logs", "qc_table.log"),
+    benchmark:
+        res("benchmarks", "qc_table.tsv")
+    script:
+        "../../scripts/qc_table.py"
