@@ -132,8 +132,10 @@ def residual_out_of_plumb(top_y, fs, tail_s=1.0):
     the last ``tail_s`` seconds of the record (the wall is at rest there).
     """
     n = max(int(round(tail_s * fs)), 1)
-    tail = np.nanmedian(np.asarray(top_y)[-n:], axis=0)
-    return float(np.nanmax(np.abs(tail)))
+    tail = np.asarray(top_y)[-n:]
+    if not np.isfinite(tail).any():
+        return float("nan")
+    return float(np.nanmax(np.abs(np.nanmedian(tail, axis=0))))
 
 
 def release_state(t, theta, p):

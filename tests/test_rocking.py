@@ -1,0 +1,140 @@
+"""Event-driven reference of the rocking wall against independent truths."""
+
+import numpy as np
+import pytest
+
+from rocklab import impact, restitution, wall
+from rocklab.rocking import RockingModel, simulate_free, simulate_ground
+
+
+def _energy_drift(model, h, mask):
+    side = np.where(h.theta > 0, 1, -1)
+    e = model.energy(h.theta, h.thetadot, side)[mask]
+    return np.max(np.abs(e - e[0])) / e[0]
+
+
+@pytest.mark.parametrize("form", ["exact", "linear"])
+def test_energy_conserved_between_impacts(form):
+    model = RockingModel(alpha=0.15, p=2.2, form=form)
+    h = simulate_free(model, 0.12, t_end=3.0)
+    t1 = h.impacts.t.iloc[0]
+    assert _energy_drift(model, h, h.t < t1) < 1e-9
+
+
+def test_energy_conserved_with_e_one():
+    model = RockingModel(alpha=0.15, p=2.2, impact=impact.Constant(1.0))
+    h = simulate_free(model, 0.12, t_end=12.0)
+    assert len(h.impacts) >= 5
+    assert _energy_drift(model, h, np.isfinite(h.theta)) < 1e-9
+
+
+def test_flight_damping_dissipates():
+    model = RockingModel(alpha=0.15, p=2.2, impact=impact.Constant(1.0), flight_damping=0.02)
+    h = simulate_free(model, 0.12, t_end=6.0)
+    side = np.where(h.theta > 0, 1, -1)
+    e = model.energy(h.theta, h.thetadot, side)
+    assert np.all(np.diff(e) <= 1e-12) and e[-1] < 0.9 * e[0]
+
+
+@pytest.mark.parametrize("r", [0.3, 0.7, 0.95])
+def test_housner_quarter_period(r):
+    """Linear form: p T_1/4 = arccosh(1/(1 - theta0/alpha)) (Housner 1963)."""
+    alpha, p = 0.1, 2.0
+    h = simulate_free(RockingModel(alpha=alpha, p=p, form="linear"), r * alpha, t_end=5.0)
+    assert p * h.impacts.t.iloc[0] == pytest.approx(wall.quarter_period_housner(r), rel=1e-9)
+
+
+def test_exact_and_linear_converge_for_small_alpha():
+    errs = []
+    for alpha in (0.2, 0.1, 0.05):
+        t = [simulate_free(RockingModel(alpha=alpha, p=2.0, form=f), 0.8 * alpha, t_end=4.0).impacts.t.iloc[0]
+             for f in ("exact", "linear")]
+        errs.append(abs(t[0] - t[1]) / t[1])
+    assert errs[0] > errs[1] > errs[2]
+    assert errs[2] < 1e-3
+    # second order in alpha: halving alpha divides the difference by about 4
+    assert 3.0 < errs[1] / errs[2] < 5.0
+
+
+def test_eq11_and_eq10_recover_e():
+    alpha = 0.1
+    e = restitution.two_sided(alpha)
+    h = simulate_free(RockingModel(alpha=alpha, p=2.5), 0.9 * alpha, t_end=20.0)
+    peaks = h.impacts.theta_peak_before.to_numpy()
+    n = np.arange(1, 6)
+    np.testing.assert_allclose(restitution.experimental_pena(peaks[n], peaks[0], alpha, n), e, rtol=1e-7)
+    hl = simulate_free(RockingModel(alpha=alpha, p=2.5, form="linear"), 0.9 * alpha, t_end=20.0)
+    pl = hl.impacts.theta_peak_before.to_numpy()
+    np.testing.assert_allclose(restitution.experimental_housner(pl[n], pl[0], alpha, n), e, rtol=1e-7)
+
+
+def test_one_sided_rebound_is_eq14_and_gap_limit():
+    alpha = 0.1
+    e1s = restitution.one_sided(alpha)
+    h0 = simulate_free(RockingModel(alpha=alpha, p=2.5, boundary="one-sided"), 0.8 * alpha, t_end=3.0)
+    first = h0.impacts.iloc[0]
+    assert first.thetadot_after / first.thetadot_before == pytest.approx(e1s, rel=1e-12)
+    assert np.nanmin(h0.theta) >= 0.0
+    for gap in (1e-4, 1e-6):
+        hg = simulate_free(RockingModel(alpha=alpha, p=2.5, boundary="one-sided", gap=gap), 0.8 * alpha, t_end=3.0)
+        kinds = list(hg.impacts.kind.iloc[:3])
+        assert kinds == ["base", "transverse", "base"]
+        net = hg.impacts.thetadot_after.iloc[2] / hg.impacts.thetadot_before.iloc[0]
+        assert net == pytest.approx(e1s, rel=50 * gap / alpha)
+        assert np.nanmin(hg.theta) >= -gap * (1 + 1e-9)
+
+
+def test_zero_law_stops_at_first_impact():
+    h = simulate_free(RockingModel(alpha=0.1, p=2.0, impact=impact.Zero()), 0.05, t_end=3.0)
+    assert len(h.impacts) == 1 and h.t_rest == pytest.approx(h.impacts.t.iloc[0])
+    assert np.all(h.theta[h.t > h.t_rest] == 0.0)
+
+
+def test_rest_without_chattering():
+    """Zeno sequence cut at the rest threshold: finitely many impacts."""
+    h = simulate_free(RockingModel(alpha=0.1, p=3.0, impact=impact.Constant(0.6)), 0.08, t_end=10.0)
+    assert h.t_rest is not None and 5 < len(h.impacts) < 60
+    assert abs(h.impacts.thetadot_after.iloc[-2]) >= 1e-3 * wall.overturning_velocity(0.1, 3.0)
+
+
+def test_free_overturning():
+    model = RockingModel(alpha=0.1, p=2.0)
+    assert simulate_free(model, 0.101, t_end=10.0).overturned
+    assert not simulate_free(model, 0.099, t_end=10.0).overturned
+
+
+def test_onset_at_interpolated_threshold():
+    """Rocking starts when -ag crosses g tan(alpha), linearly interpolated."""
+    alpha, dt = 0.1, 0.1
+    thr = wall.G * np.tan(alpha)
+    ag = -np.linspace(0.0, 2.0 * thr, 11)  # crosses -thr at t = 0.5 s
+    h = simulate_ground(RockingModel(alpha=alpha, p=2.0), ag, dt, fs=1000.0)
+    moving = h.t[np.abs(h.theta) > 0]
+    assert moving[0] == pytest.approx(0.5, abs=1.1e-3) and np.all(h.theta[h.t > 0.5 + 1e-9] > 0)
+    # same sign: positive ag pushes theta negative
+    h2 = simulate_ground(RockingModel(alpha=alpha, p=2.0), -ag, dt, fs=1000.0)
+    assert np.nanmin(h2.theta) < 0 <= -np.nanmax(h2.theta) + 1e-15
+    # one-sided walls never start inwards
+    h3 = simulate_ground(RockingModel(alpha=alpha, p=2.0, boundary="one-sided"), -ag, dt, fs=1000.0)
+    assert np.all(h3.theta == 0.0)
+
+
+def test_pulse_overturns_and_xarray():
+    alpha, p = 0.1, 2.0
+    dt = 0.01
+    t = np.arange(0, 2.0, dt)
+    pulse = -3.0 * wall.G * np.tan(alpha) * np.sin(np.pi * t / 1.0) * (t < 1.0)
+    h = simulate_ground(RockingModel(alpha=alpha, p=p), pulse, dt)
+    assert h.overturned and h.t_overturn > 0
+    small = simulate_ground(RockingModel(alpha=alpha, p=p), 0.5 * pulse, dt)
+    assert not small.overturned
+    ds = small.to_xarray()
+    assert ds.theta.attrs["units"] == "rad" and ds.time.attrs["units"] == "s"
+    assert ds.attrs["overturned"] == 0 and ds.sizes["time"] == len(small.t)
+
+
+def test_from_wall_uses_wall_constants():
+    m = RockingModel.from_wall(1.63, 0.113, boundary="one-sided")
+    assert m.alpha == pytest.approx(np.arctan(0.113 / 1.63))
+    assert m.p == pytest.approx(wall.frequency_parameter(wall.half_diagonal(1.63, 0.113)))
+    assert isinstance(m.base_law, impact.OneSided)
