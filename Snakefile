@@ -15,6 +15,7 @@ include: "workflow/rules/common.smk"
 include: "workflow/rules/ingest.smk"
 include: "workflow/rules/qc.smk"
 include: "workflow/rules/dissipation.smk"
+include: "workflow/rules/diagnosis.smk"
 include: "workflow/rules/figures.smk"
 
 

@@ -899,3 +899,16 @@ def diagnosis_markdown(entries) -> str:
                            f"free-run log-peak error {er['log_peak_rms']:.3f}")
             out.append("")
     return "\n".join(out)
+
+
+def records_by_series(datasets):
+    """Group reduced tests (``rocklab.reduction``) into the records of :func:`diagnose_campaign`."""
+    out = {}
+    for ds in datasets:
+        a = ds.attrs
+        out.setdefault(a["series"], []).append({
+            "test_id": a["test_id"], "t": ds.time.values, "theta": ds.theta.values,
+            "fs": float(a["sampling_rate_hz"]), "alpha": float(a["alpha"]), "p": float(a["p"]),
+            "boundary": a["boundary"], "direction": a["direction"],
+        })
+    return dict(sorted(out.items()))

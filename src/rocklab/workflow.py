@@ -94,3 +94,15 @@ def write_table(df: pd.DataFrame, path, schema=None, float_format="%.6g") -> Non
         validate_table(df, schema)
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     df.to_csv(path, index=False, float_format=float_format)
+
+
+def valid_tests(paths, qc_path):
+    """Yield the reduced datasets of the tests that ``qc.csv`` marks valid, loaded."""
+    import xarray as xr
+
+    qc = pd.read_csv(qc_path, keep_default_na=False)
+    valid = set(qc.test_id[qc.valid.astype(str) == "True"])
+    for path in paths:
+        if Path(path).stem in valid:
+            with xr.open_dataset(path) as ds:
+                yield ds.load()

@@ -42,4 +42,4 @@ def test_params(wildcards):
 
 
 def all_outputs():
-    return [res("qc.csv"), res("series.csv")] + figure_outputs()
+    return [res("qc.csv"), res("series.csv"), res("diagnosis.json")] + figure_outputs()
