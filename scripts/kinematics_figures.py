@@ -6,18 +6,18 @@ import pandas as pd
 import xarray as xr
 
 from rocklab import figures
-from rocklab.workflow import setup_logging
+from rocklab.workflow import setup_logging, valid_test_ids
 
 setup_logging(snakemake.log[0])
-qc = pd.read_csv(snakemake.input.qc, keep_default_na=False)
-valid = qc[qc.valid.astype(str) == "True"]
-sample = snakemake.params.sample_test or valid.test_id.iloc[0]
+valid = valid_test_ids(snakemake.input.qc)
+sample = snakemake.params.sample_test or valid[0]
 paths = {Path(p).stem: p for p in snakemake.input.tests}
 with xr.open_dataset(paths[sample]) as ds:
     ds = ds.load()
 figures.sample_record(ds).savefig(snakemake.output.fig6, dpi=120)
 figures.degrees_of_freedom(ds).savefig(snakemake.output.fig8, dpi=120)
-kin = pd.read_csv(snakemake.input.kinematics).merge(valid[["test_id"]], on="test_id")
+kin = pd.read_csv(snakemake.input.kinematics)
+kin = kin[kin.test_id.isin(valid)]
 peaks = kin[kin.series.str.startswith(f"{snakemake.params.specimen}-")].reset_index(drop=True)
 peaks.attrs["specimen"] = snakemake.params.specimen
 figures.eq8_and_peaks(ds, peaks).savefig(snakemake.output.fig9, dpi=120)

@@ -311,8 +311,9 @@ def read_record(path, expected_test_id=None) -> Record:
         what = "truncated row" if counts[i] < ncol - 1 else "too many fields"
         raise RawFormatError(path, first_data + i, f"{what}: {counts[i] + 1} fields, expected {ncol}")
     table = pd.read_csv(io.StringIO("\n".join(body)), header=None, names=columns, dtype=str, keep_default_na=False)
-    values = table.apply(lambda s: pd.to_numeric(s.str.strip().replace("", np.nan), errors="coerce"))
-    nonnum = (values.isna() & table.apply(lambda s: s.str.strip().ne(""))).to_numpy()
+    fields = table.apply(lambda s: s.str.strip())
+    values = fields.apply(lambda s: pd.to_numeric(s.replace("", np.nan), errors="coerce"))
+    nonnum = (values.isna() & fields.ne("")).to_numpy()
     if nonnum.any():
         i, j = np.argwhere(nonnum)[0]
         raise RawFormatError(path, first_data + int(i), f"{columns[j]}: {table.iat[i, j]!r} is not a number")

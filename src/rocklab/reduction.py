@@ -19,7 +19,8 @@ from rocklab import kinematics, validity, wall
 from rocklab.campaign import Campaign, RawFormatError, read_record, series_id
 
 DEFAULTS = {
-    "channels": {"flat_run_s": 0.25, "max_gap_s": 0.05, "dead_span_mm": 0.1, "backup": [2], "policy": "primary"},
+    "channels": {"flat_run_s": health.FLAT_RUN_S, "max_gap_s": health.MAX_GAP_S,
+                 "dead_span_mm": health.DEAD_SPAN_MM, "backup": [2], "policy": "primary"},
     "validity": {"residual_top_mm": 1.5, "release_velocity_ratio": 0.10, "max_lost_out_of_plane": 1},
 }
 
@@ -133,10 +134,9 @@ def reduce_test(campaign: Campaign, test_id: str, options=None) -> xr.Dataset:
     residual = validity.residual_out_of_plumb(top, rec.fs)
     release = validity.release_state(rec.time, motion.theta.values, meta["p"])
     ratio = release["thetadot0"] / meta["overturning_velocity"]
-    valid, reason, detail = (False, "instrument_malfunction", choice.malfunction) if choice.malfunction else \
-        validity.verdict(choice, ratio, residual, opt["validity"])
+    valid, reason, detail = validity.verdict(choice, ratio, residual, opt["validity"])
 
-    flags = [r.describe() for r in reports if r.describe()] + choice.flags
+    flags = [d for d in (r.describe() for r in reports) if d] + choice.flags
     ds = motion
     ds = ds.assign_coords(channel=("channel", np.asarray(rec.channels, int)))
     ds["raw"] = (("time", "channel"), rec.readings, {"units": "mm", "long_name": "transducer elongation as recorded"})

@@ -32,6 +32,7 @@ def write_netcdf(ds, path):
     run never leaves a truncated output that looks complete."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    ds = ds.copy(deep=False)
     encoding = {
         name: {"zlib": True, "complevel": 4}
         for name, var in ds.variables.items()
@@ -96,12 +97,17 @@ def write_table(df: pd.DataFrame, path, schema=None, float_format="%.6g") -> Non
     df.to_csv(path, index=False, float_format=float_format)
 
 
+def valid_test_ids(qc_path) -> list:
+    """Test ids that ``qc.csv`` marks valid, in its order."""
+    qc = pd.read_csv(qc_path, keep_default_na=False)
+    return qc.test_id[qc.valid.astype(str) == "True"].tolist()
+
+
 def valid_tests(paths, qc_path):
     """Yield the reduced datasets of the tests that ``qc.csv`` marks valid, loaded."""
     import xarray as xr
 
-    qc = pd.read_csv(qc_path, keep_default_na=False)
-    valid = set(qc.test_id[qc.valid.astype(str) == "True"])
+    valid = set(valid_test_ids(qc_path))
     for path in paths:
         if Path(path).stem in valid:
             with xr.open_dataset(path) as ds:
