@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from rocklab.statistics import campaign_tables
+from rocklab.statistics import campaign_tables, table3_markdown
 from rocklab.workflow import setup_logging, valid_tests, write_table
 
 setup_logging(snakemake.log[0])
@@ -15,6 +15,7 @@ tables, failed = campaign_tables(valid_tests(snakemake.input.tests, snakemake.in
 for test_id, why in failed:
     logging.warning("%s: motion not analysed: %s", test_id, why)
 schemas = Path(snakemake.params.schemas)
-for name in ("tests", "impacts", "e_by_n", "series", "laws", "effects"):
+for name in ("tests", "impacts", "e_by_n", "series", "laws", "effects", "table3", "summary"):
     schema = schemas / f"{name}.schema.yaml"
     write_table(tables[name], snakemake.output[name], schema if schema.exists() else None)
+Path(snakemake.output.table3_md).write_text(table3_markdown(tables["table3"]) + "\n")

@@ -36,3 +36,17 @@ def test_simulate_record_matches_library(tmp_path):
 def test_simulate_requires_a_wall():
     with pytest.raises(SystemExit):
         cli.main(["simulate", "--theta0", "0.01", "-o", "x.nc"])
+
+
+def test_simulate_shipped_record_by_name(tmp_path):
+    """A Table 4 record by manifest name, read through the obspy plugins."""
+    from rocklab.accelerograms import load_record
+
+    out = tmp_path / "elc.nc"
+    assert cli.main(["simulate", "--alpha", "0.1", "--p", "1.5658", "--form", "linear", "--record", "40EIC180",
+                     "--scale", "0.5", "--t-end", "10", "-o", str(out)]) == 0
+    tr = load_record("40EIC180")
+    ref = simulate_ground(RockingModel(alpha=0.1, p=1.5658, form="linear"), 0.5 * tr.data, tr.stats.delta, t_end=10)
+    np.testing.assert_allclose(xr.load_dataset(out).theta.values, ref.theta, atol=1e-12)
+    with pytest.raises(SystemExit, match="needs --dt"):
+        cli.main(["simulate", "--alpha", "0.1", "--p", "1.5", "--record", "no-such-record", "-o", str(out)])

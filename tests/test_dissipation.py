@@ -8,9 +8,14 @@ import pytest
 from scipy.integrate import solve_ivp
 from test_motion import free_rocking_record
 
-from rocklab import restitution
+from rocklab import restitution, virtual_lab
+from rocklab.campaign import open_campaign
 from rocklab.dissipation import (IMPACT_COLUMNS, TEST_COLUMNS, amplitude_law_fit, analyse_motion,
-                                 analytic_e, e_by_n, no_sliding_check, table3_windows)
+                                 analyse_reduced_test, analytic_e, e_by_n, monitor_readings,
+                                 no_sliding_check, quarter_period_linear, table3_windows)
+from rocklab.impact import Constant
+from rocklab.reduction import reduce_test
+from rocklab.rocking import RockingModel, simulate_free
 from rocklab.wall import overturning_velocity, quarter_period_housner
 
 P = 3.4
@@ -36,6 +41,44 @@ def test_eq11_inverts_an_exact_motion_for_every_n(boundary, e, alpha):
     assert np.allclose(d.e_exp_eq11, abs(e), atol=1e-6)
     # Eq. 10 (piecewise linear) is close but not exact for a stocky wall
     assert np.allclose(d.e_exp_eq10, abs(e), atol=0.01)
+
+
+def _simulated_peaks(boundary, e, alpha, form, frac=0.9, t_end=20.0):
+    """theta0 and the peaks after impacts 1..N of an exact simulate_free motion."""
+    law = None if e is None else Constant(e)
+    h = simulate_free(RockingModel(alpha=alpha, p=P, boundary=boundary, impact=law, form=form),
+                      frac * alpha, t_end=t_end)
+    peaks = np.abs(h.impacts.theta_peak_before.to_numpy())
+    return peaks[0], peaks[1:9]
+
+
+@pytest.mark.parametrize("boundary,e", [("two-sided", 0.93), ("one-sided", None)])
+def test_eqs10_11_invert_simulate_free_with_known_e(boundary, e):
+    """Eq. 11 inverts the exact rigid-block motion, Eq. 10 its piecewise-linear form."""
+    alpha = 0.12                                    # h/b = 8.3
+    e_true = abs(e if e is not None else restitution.one_sided(alpha))   # Eq. 14 by default
+    theta0, peaks = _simulated_peaks(boundary, e, alpha, "exact")
+    d = e_by_n(peaks, theta0, alpha, alpha, 1.0)
+    assert len(d) == 8 and np.allclose(d.e_exp_eq11, e_true, rtol=1e-7)
+    # Eq. 10 is exact only for the linearised equation it derives from ...
+    theta0, peaks = _simulated_peaks(boundary, e, alpha, "linear")
+    d = e_by_n(peaks, theta0, alpha, alpha, 1.0)
+    assert np.allclose(d.e_exp_eq10, e_true, rtol=1e-7)
+    # ... on which Eq. 11, exact for the rigid block, is off by ~1e-4
+    assert np.abs(d.e_exp_eq11 - e_true).max() > 3e-5
+
+
+def test_eqs10_11_agree_in_the_small_angle_limit_of_an_exact_motion():
+    """|Eq. 10 - Eq. 11| vanishes like alpha^2 on the exact motion (Sect. 3)."""
+    diffs = []
+    for alpha in (0.16, 0.08, 0.04):
+        theta0, peaks = _simulated_peaks("two-sided", 0.9, alpha, "exact", t_end=10.0)
+        d = e_by_n(peaks, theta0, alpha, alpha, 1.0)
+        assert np.allclose(d.e_exp_eq11, 0.9, rtol=1e-7)
+        diffs.append(np.abs(d.e_exp_eq10 - d.e_exp_eq11).max())
+    # 2e-4 at h/b = 6.5, the paper's "coincide substantially"
+    assert 1e-4 < diffs[0] < 3e-4
+    assert 3.5 < diffs[0] / diffs[1] < 4.5 and 3.5 < diffs[1] / diffs[2] < 4.5
 
 
 def test_eq13_range_quoted_in_sect3():
@@ -104,6 +147,60 @@ def test_alpha_ind_equal_to_the_dynamics_removes_the_residual_bias():
     t, th, _ = free_rocking_record(e=0.93, alpha=ALPHA_DYN, theta0_frac=0.97, seed=4)
     s, _, _ = analyse_motion(t, th, 400.0, "two-sided", ALPHA_NOM, P, "push", alpha_ind=ALPHA_DYN)
     assert s["e_exp_eq11"] == pytest.approx(0.93, abs=0.002)
+
+
+def test_quarter_period_linear_against_housner_and_the_linear_simulator():
+    r = np.array([0.5, 0.9, 0.999])
+    assert np.allclose(quarter_period_linear(r), quarter_period_housner(r), rtol=1e-12)
+    # released with a speed towards the vertical: the linear simulator's first impact
+    alpha, w = 0.1, 0.05
+    h = simulate_free(RockingModel(alpha=alpha, p=P, form="linear"), 0.99 * alpha,
+                      thetadot0=-w * P * alpha, t_end=5.0)
+    assert quarter_period_linear(0.99, w) == pytest.approx(P * h.impacts.t.iloc[0], rel=1e-6)
+    assert quarter_period_linear(0.99, w) < quarter_period_linear(0.99)
+    assert np.isnan(quarter_period_linear(1.2))
+
+
+@pytest.fixture(scope="module")
+def virtual_tests(tmp_path_factory):
+    """A two-sided and a one-sided test of the virtual lab: simulate_free, noisy 400 Hz
+    transducer records with hum, ringing, the screw's creep and 3-decimal readings,
+    written in the lab's format, reduced by rocklab.reduction."""
+    folder = tmp_path_factory.mktemp("vlab") / "campaign"
+    plan = [virtual_lab.VirtualTest("V0001", specimen="2a", theta0_ratio=0.996),
+            virtual_lab.VirtualTest("V0002", specimen="3b", boundary="one-sided",
+                                    contact_depth_mm=120.0, theta0_ratio=0.993)]
+    truth = virtual_lab.write_campaign(folder, plan, seed=11).set_index("test_id")
+    camp = open_campaign(folder)
+    out = {}
+    for tid in truth.index:
+        ds = reduce_test(camp, tid)
+        out[tid] = (ds, analyse_reduced_test(ds)[0], truth.loc[tid])
+    return out
+
+
+@pytest.mark.parametrize("test_id", ["V0001", "V0002"])
+def test_reducing_a_virtual_test_recovers_e_and_theta0(virtual_tests, test_id):
+    """Done-when of the issue: e_exp and theta0/alpha within 0.005 through the whole chain."""
+    _, s, truth = virtual_tests[test_id]
+    assert s["boundary"] == truth.boundary
+    assert s["e_exp_eq11"] == pytest.approx(abs(truth.e_true), abs=0.005)
+    assert s["theta0_over_alpha"] == pytest.approx(truth.theta0 / truth.alpha, abs=0.005)
+    assert s["n_impacts"] >= 3
+
+
+def test_centre_amplification_of_a_reduced_test(virtual_tests):
+    """Fig. 20: 1 for a rigid wall, the bulge of a deforming one, NaN without channel 5."""
+    ds, s, _ = virtual_tests["V0002"]
+    assert s["centre_amplification"] == pytest.approx(1.0, abs=2e-3)
+    ch, measured, rigid = monitor_readings(ds)
+    assert ch == 5 and np.nanmax(np.abs(measured - rigid)) < 0.05      # mm
+    after = ds.time.values >= s["t_first_impact"]
+    bulged = ds.copy(deep=True)
+    bulged["elongation"].loc[{"channel": 5}] = np.where(after, 1.05, 1.0) * measured
+    assert analyse_reduced_test(bulged)[0]["centre_amplification"] == pytest.approx(1.05, abs=3e-3)
+    assert np.isnan(virtual_tests["V0001"][1]["centre_amplification"])
+    assert monitor_readings(virtual_tests["V0001"][0]) is None
 
 
 def test_quarter_period_and_velocity_ratio_against_closed_forms():

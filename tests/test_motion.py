@@ -30,7 +30,8 @@ def free_rocking_record(*, alpha=ALPHA, p=P, e=0.93, theta0_frac=0.99, boundary=
     e / e_base^2) and comes back through a second base impact (e_base).
 
     Returns t, theta, truth: release time, theta0, impacts (t arriving at
-    zero, thetadot before, thetadot after leaving zero), signed peaks.
+    zero, thetadot before, thetadot after leaving zero), signed peaks and
+    their times.
     """
     rng = np.random.default_rng(seed)
     theta0 = theta0_frac * alpha
@@ -48,7 +49,7 @@ def free_rocking_record(*, alpha=ALPHA, p=P, e=0.93, theta0_frac=0.99, boundary=
     def top(_, y, side):
         return y[1]
 
-    segs, impacts, peaks, pending = [], [], [], None
+    segs, impacts, peaks, peak_t, pending = [], [], [], [], None
     y, tcur, side = np.array([theta0, 0.0]), hold_s, 1.0
     while tcur < hold_s + duration:
         events = [level(0.0, -side)]
@@ -61,6 +62,7 @@ def free_rocking_record(*, alpha=ALPHA, p=P, e=0.93, theta0_frac=0.99, boundary=
         for tt, yy in zip(sol.t_events[-1], sol.y_events[-1]):
             if tt > tcur + 1e-9:
                 peaks.append(yy[0])
+                peak_t.append(tt)
         hits = [(ev[0], k) for k, ev in enumerate(sol.t_events[:-1]) if len(ev)]
         if not hits:
             break
@@ -97,7 +99,7 @@ def free_rocking_record(*, alpha=ALPHA, p=P, e=0.93, theta0_frac=0.99, boundary=
     theta += noise * rng.standard_normal(t.size)
     theta += hum * np.sin(2 * np.pi * 50.0 * t + rng.uniform(0, 2 * np.pi))
     truth = dict(t_release=hold_s, theta0=theta0, impacts=np.array(impacts, float),
-                 peaks=np.array(peaks), alpha=alpha, p=p, e=e)
+                 peaks=np.array(peaks), peak_t=np.array(peak_t), alpha=alpha, p=p, e=e)
     return t, sign * theta, truth
 
 
@@ -211,3 +213,33 @@ def test_centre_amplification_ratio_after_first_impact():
     side = np.r_[10.0, 5.0, -2.0, 1.0]
     assert centre_amplification(1.05 * side, side, 1) == pytest.approx(1.05)
     assert centre_amplification(np.r_[99.0, side[1:]], side, 1) == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("k_gap,hump,quiet", [
+    (None, 0.0, False),    # stops dead after its last small flight
+    (2, 0.0, False),       # stops dead coming back up from its 3rd swing into the gap
+    (None, 6e-4, False),   # then drifts (settling askew): no curvature of a flight
+    (0, 0.0, True),        # stops dead after the 1st impact: only a smoother overshoot
+])
+def test_a_wall_that_stops_dead_ends_on_its_last_flight(k_gap, hump, quiet):
+    """One-sided wall that stops dead at theta = 0 and may then drift slowly:
+    every flight is kept, no spurious final impact is added."""
+    kw = dict(boundary="one-sided", e=-0.35, theta0_frac=0.98, alpha=0.09, gap=0.002, seed=6,
+              min_peak=1e-3, **(dict(noise=5e-6, hum=0.0) if quiet else {}))
+    t, th, truth = free_rocking_record(**kw)
+    _, clean, _ = free_rocking_record(**{**kw, "noise": 0.0, "hum": 0.0, "ring": 0.0})
+    t_stop = t[np.flatnonzero(clean)[-1]]
+    if k_gap is not None:
+        up = np.flatnonzero((clean[:-1] < 0) & (clean[1:] >= 0))
+        t_stop = t[up[k_gap] + 1]
+        th = np.where(t < t_stop, th, th - clean)
+    x = np.clip((t - t_stop - 0.05) / 2.0, 0.0, 1.0)
+    th = th + hump * np.sin(np.pi * x) ** 2 * (1 - 0.5 * x)
+    m = extract_motion(t, th, 400.0, "one-sided", P)
+    kept = (truth["peaks"] > 0) & (truth["peak_t"] < t_stop)
+    assert len(m.peaks) == kept.sum()
+    assert np.allclose(m.peaks, truth["peaks"][kept], atol=3e-5)
+    if kept.any():
+        # the end is the impact (arrival at zero) after the last flight
+        t_arrival = t[(t > truth["peak_t"][kept][-1]) & (clean <= 0)][0]
+        assert m.t_end == pytest.approx(t_arrival, abs=0.01)

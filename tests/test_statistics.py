@@ -7,8 +7,9 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from rocklab.statistics import (bootstrap_ci, factor_effect, flag_outlying_series, holm,
-                                series_stats, series_table, symmetry_test)
+from rocklab.statistics import (boundary_summary, bootstrap_ci, cluster_bootstrap_ci,
+                                factor_effect, flag_outlying_series, holm, series_stats,
+                                series_table, symmetry_test, table3, table3_markdown)
 
 
 def campaign(seed=0, odd_series="5a-2s", shift=-0.08):
@@ -106,3 +107,40 @@ def test_series_table_counts_and_law():
     assert np.allclose(t.law_a, 1.17) and np.allclose(t.law_b, 0.453)
     for c in ("e_ratio_mean", "e_ratio_sd", "e_ratio_ci_low", "theta0_over_alpha_ci_high"):
         assert t[c].notna().all()
+
+
+def test_cluster_bootstrap_sees_the_scatter_between_series():
+    """Two-sided series: sd 0.01 within, 0.01 between: the series bootstrap is
+    ~sqrt(15) wider than the test bootstrap, and covers the population mean."""
+    df = campaign(shift=0.0)
+    two = df[df.boundary == "two-sided"]
+    lo, hi = cluster_bootstrap_ci(two.e_ratio, two.series, seed=1)
+    t_lo, t_hi = bootstrap_ci(two.e_ratio, seed=1)
+    assert lo < two.e_ratio.mean() < hi
+    assert 2.5 < (hi - lo) / (t_hi - t_lo) < 6.0
+    means = two.groupby("series").e_ratio.mean()
+    s_lo, s_hi = stats.t.interval(0.95, len(means) - 1, means.mean(), stats.sem(means))
+    assert hi - lo == pytest.approx(s_hi - s_lo, rel=0.35)
+    assert (lo, hi) == cluster_bootstrap_ci(two.e_ratio, two.series, seed=1)
+    assert np.isnan(cluster_bootstrap_ci([1.0, 2.0], ["a", "a"])[0])
+
+
+def test_boundary_summary_and_table3():
+    df = campaign()
+    df["e_ratio_complete"] = df.e_ratio
+    df["e_ratio_without_first_half_cycle"] = df.e_ratio + 0.3 * (df.boundary == "one-sided")
+    df["e_ratio_first_half_cycle"] = df.e_ratio - 0.3 * (df.boundary == "one-sided")
+    b = boundary_summary(df, ["e_ratio", "theta0_over_alpha"]).set_index(["boundary", "quantity"])
+    assert b.loc[("one-sided", "e_ratio"), "mean"] == pytest.approx(
+        df[df.boundary == "one-sided"].e_ratio.mean())
+    assert b.loc[("two-sided", "theta0_over_alpha"), "n_series"] == 10
+    assert (b.ci_low < b["mean"]).all() and (b["mean"] < b.ci_high).all()
+    t3 = table3(df).set_index(["boundary", "column"])
+    one = t3.loc["one-sided"]
+    assert one.loc["e_ratio_without_first_half_cycle", "mean"] == pytest.approx(
+        one.loc["e_ratio_complete", "mean"] + 0.3)
+    assert list(one.paper) == [1.05, 1.34, 0.72]
+    assert t3.loc["two-sided"].paper.isna().all()
+    md = table3_markdown(table3(df))
+    assert "disregarding the first half cycle" in md and "one-sided, paper" in md
+    assert md.count("\n") == 4        # header, rule, two boundaries, the paper's row

@@ -14,30 +14,10 @@ Scaling (Sect. 5): an amplitude scale multiplies ``ag``; a duration scale
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 import xarray as xr
 
-from rocklab.rocking import OVERTURN, REST_TOL, RockingModel, run_history
-
-
-@numba.njit(parallel=True, cache=True)
-def _kernel(ag, h, scale, n_tail, prm, law, x0, v0, max_log):
-    n = h.shape[0]
-    over = np.zeros(n, np.bool_)
-    t_over = np.full(n, np.nan)
-    max_ratio = np.zeros(n)
-    n_imp = np.zeros(n, np.int64)
-    log_t = np.full((n, max_log), np.nan)
-    log_vb = np.full((n, max_log), np.nan)
-    log_va = np.full((n, max_log), np.nan)
-    log_pk = np.full((n, max_log), np.nan)
-    for i in numba.prange(n):
-        o, t, m, k = run_history(
-            ag, h[i], scale[i], n_tail[i], prm[i], law[i], x0[i], v0[i], log_t[i], log_vb[i], log_va[i], log_pk[i]
-        )
-        over[i], t_over[i], max_ratio[i], n_imp[i] = o, t, m, k
-    return over, t_over, max_ratio, n_imp, log_t, log_vb, log_va, log_pk
+from rocklab.rocking import OVERTURN, REST_TOL, RockingModel, batch_kernel as _kernel
 
 
 def _model_arrays(models, overturn, rest_tol, substeps):
@@ -186,7 +166,7 @@ def free_batch(model: RockingModel, theta0, thetadot0=0.0, *, alpha_rock=None, a
         laws[:, :2, 2] = b["amplitude_b"][:, None]
     n_steps = int(np.ceil(t_end / dt))
     out = _kernel(
-        np.zeros(n_steps + 1), np.full(n, dt), np.ones(n), np.zeros(n, np.int64), prm, laws,
+        np.zeros(n_steps), np.full(n, dt), np.ones(n), np.zeros(n, np.int64), prm, laws,
         b.get("theta0", np.zeros(n)).copy(), b.get("thetadot0", np.zeros(n)).copy(), max_impacts,
     )
     return _dataset(out)

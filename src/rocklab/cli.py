@@ -18,20 +18,26 @@ from rocklab.rocking import OVERTURN, RockingModel, simulate_free, simulate_grou
 LAWS = {"housner": impact.HousnerTwoSided, "one-sided": impact.OneSided, "zero": impact.Zero}
 
 
-def _read_record(path, dt, units):
-    """Ground acceleration from a text file: one column, or two (time, ag)."""
+def _read_record(name, dt, units):
+    """Ground acceleration [m/s^2] and its sample interval [s].
+
+    With ``dt``: a one-column text file in ``units``.  Without: a Table 4
+    record of the manifest (e.g. ``40EIC180``) or any file the accelerogram
+    readers detect (PEER AT2, Caltech, K-NET, column text...), in m/s^2 and
+    baseline-corrected (:func:`rocklab.accelerograms.load_record`).
+    """
     from rocklab.wall import G
 
-    data = np.loadtxt(path, ndmin=2)
-    factor = {"g": G, "m/s2": 1.0, "cm/s2": 0.01}[units]
-    if data.shape[1] >= 2:
-        t, ag = data[:, 0], data[:, 1]
-        dt = float(np.median(np.diff(t)))
-    else:
-        if dt is None:
-            raise SystemExit("rocklab simulate: --dt is required for a one-column record")
-        ag = data[:, 0]
-    return ag * factor, dt
+    if dt is not None:
+        data = np.loadtxt(name, ndmin=2)
+        return data[:, 0] * {"g": G, "m/s2": 1.0, "cm/s2": 0.01}[units], dt
+    from rocklab.accelerograms import load_record
+
+    try:
+        tr = load_record(name)
+    except (FileNotFoundError, TypeError, ValueError) as err:
+        raise SystemExit(f"rocklab simulate: --record {name}: {err} (a one-column text file needs --dt)")
+    return tr.data, tr.stats.delta
 
 
 def _model(args):
@@ -93,9 +99,10 @@ def _add_simulate(sub):
     g.add_argument("--amplitude-law", type=float, nargs=2, metavar=("A", "B"), help="Eq. 17 coefficients")
     g.add_argument("--flight-damping", type=float, default=0.0, help="zeta between impacts")
     m = p.add_argument_group("motion")
-    m.add_argument("--record", help="ground acceleration text file (one column, or time and ag)")
-    m.add_argument("--dt", type=float, help="sample interval of a one-column record [s]")
-    m.add_argument("--units", choices=["g", "m/s2", "cm/s2"], default="m/s2")
+    m.add_argument("--record", help="Table 4 record name (raw/accelerograms/manifest.csv) or accelerogram file "
+                                    "(any format rocklab reads; one-column text with --dt)")
+    m.add_argument("--dt", type=float, help="sample interval of a one-column text record [s]")
+    m.add_argument("--units", choices=["g", "m/s2", "cm/s2"], default="m/s2", help="units of a one-column record")
     m.add_argument("--scale", type=float, default=1.0, help="amplitude scale of the record")
     m.add_argument("--theta0", type=float, default=0.0, help="initial rotation [rad]")
     m.add_argument("--thetadot0", type=float, default=0.0, help="initial angular velocity [rad/s]")

@@ -4,8 +4,10 @@ Per test (:func:`analyse_motion`): e_exp after n impacts by Eq. 10 and
 Eq. 11 for every n (Fig. 11), the analytic e (Eq. 2 two-sided, Eq. 14
 one-sided, nominal alpha), e_exp / e_an, the windows of Table 3, the
 per-impact e_k, the impact velocity over the overturning velocity (Eq. 16),
-theta0/alpha (Figs. 10, 16), p T_1/4 (Fig. 17), cycles (Fig. 18) and p D
-(Fig. 19).  Per table: the amplitude laws of Eqs. 15 and 17
+theta0/alpha (Figs. 10, 16), p T_1/4 against Housner's closed form
+(Fig. 17, :func:`quarter_period_linear`), cycles (Fig. 18), p D (Fig. 19)
+and, on a reduced test, the channel-5 amplification (Fig. 20,
+:func:`monitor_readings`).  Per table: the amplitude laws of Eqs. 15 and 17
 (:func:`amplitude_law_fit`) and the no-sliding check of Eq. 9.
 
 Conventions
@@ -19,6 +21,12 @@ Conventions
   so n_cycles = n_impacts / 2 for both boundary conditions.
 * Only peaks above the noise threshold of :mod:`rocklab.motion` are used;
   "whole history" means from theta0 to the last reliable peak.
+* T_1/4 runs from the instant the wall leaves the screw to the first
+  impact (:mod:`rocklab.motion`, "Release and first quarter period"); the
+  closed forms it is compared with use the instability angle of the fall
+  (alpha_fall), not the nominal alpha: with theta0 / alpha = 0.9 Housner's
+  p T_1/4 would be 2.9, while the wall was released a few 1e-4 rad from
+  its own instability point.
 """
 
 from __future__ import annotations
@@ -26,9 +34,9 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from rocklab import restitution
-from rocklab.motion import extract_motion
-from rocklab.wall import no_sliding_friction, overturning_velocity, quarter_period_housner
+from rocklab import kinematics, restitution
+from rocklab.motion import centre_amplification, extract_motion
+from rocklab.wall import no_sliding_friction, overturning_velocity
 
 #: Keys of the per-test summary required by results/tests.csv (the lead
 #: adds test_id, series, specimen, boundary, contact_depth_mm).
@@ -105,6 +113,39 @@ def table3_windows(peaks, theta0, alpha_ind, e_an):
             "e_ratio_first_half_cycle": float(first) / abs(e_an)}
 
 
+def quarter_period_linear(theta0_over_alpha, thetadot0_over_p_alpha=0.0):
+    """First quarter period p T_1/4 of the linearised rocking equation [-].
+
+    Released at theta0 with speed thetadot0 towards the vertical, a wall
+    obeying theta'' = p^2 (theta - alpha) (Housner 1963) reaches theta = 0
+    when (1 - r) cosh(pT) + w sinh(pT) = 1, r = theta0 / alpha,
+    w = thetadot0 / (p alpha), hence
+
+        p T_1/4 = ln[(1 + sqrt(1 - (1 - r)^2 + w^2)) / (1 - r + w)],
+
+    which is Housner's arccosh(1 / (1 - r)) from rest (w = 0,
+    :func:`rocklab.wall.quarter_period_housner`; Sect. 4, Fig. 17).
+
+    Parameters
+    ----------
+    theta0_over_alpha : array_like
+        Release rotation over the instability angle of the motion [-].
+    thetadot0_over_p_alpha : array_like
+        Release speed towards the vertical over p alpha [-], >= 0.
+
+    Returns
+    -------
+    ndarray
+        p T_1/4; NaN where the wall does not fall (1 - r + w <= 0).
+    """
+    a = 1.0 - np.asarray(theta0_over_alpha, float)
+    w = np.asarray(thetadot0_over_p_alpha, float)
+    den = a + w
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = np.log((1.0 + np.sqrt(1.0 - a**2 + w**2)) / den)
+    return np.where(den > 0, out, np.nan)
+
+
 def analyse_motion(t, theta, fs, boundary, alpha, p, direction, *, alpha_ind=None,
                    **motion_kw):
     """Reduce one free-rocking record (Sects. 3-4).
@@ -132,9 +173,14 @@ def analyse_motion(t, theta, fs, boundary, alpha, p, direction, *, alpha_ind=Non
     summary : dict
         :data:`TEST_COLUMNS` first, then diagnostics: alpha_ind,
         e_ratio_complete / _without_first_half_cycle / _first_half_cycle,
-        n_cycles, T_quarter_p_housner (closed form at the measured
-        theta0/alpha), t_release, t_first_impact, t_end, noise_rad,
-        n_negative_excursions, max_negative_over_alpha.
+        n_cycles, alpha_fall (instability angle of the fitted fall),
+        theta0_over_alpha_fall, thetadot_release (speed leaving the screw),
+        T_quarter_p_housner (Housner's closed form from rest at
+        theta0/alpha_fall), T_quarter_p_linear (the same with the release
+        speed, :func:`quarter_period_linear`), t_release, t_first_impact,
+        t_end, noise_rad, n_negative_excursions, max_negative_over_alpha.
+        T_quarter_p is p (t_first_impact - t_release), the release being
+        where the wall leaves the screw (:mod:`rocklab.motion`).
     impacts : pandas.DataFrame
         :data:`IMPACT_COLUMNS`, one row per impact followed by a reliable peak.
     e_n : pandas.DataFrame
@@ -164,7 +210,11 @@ def analyse_motion(t, theta, fs, boundary, alpha, p, direction, *, alpha_ind=Non
         "duration_p": p * (m.t_end - m.t_release),
         "alpha_ind": a_ind, **table3_windows(m.peaks, m.theta0, a_ind, e_an),
         "n_cycles": N / 2.0,
-        "T_quarter_p_housner": float(quarter_period_housner(min(m.theta0 / alpha, 1 - 1e-12))),
+        "alpha_fall": m.alpha_fall, "theta0_over_alpha_fall": m.theta0 / m.alpha_fall,
+        "thetadot_release": m.thetadot_release,
+        "T_quarter_p_housner": float(quarter_period_linear(m.theta0 / m.alpha_fall)),
+        "T_quarter_p_linear": float(quarter_period_linear(
+            m.theta0 / m.alpha_fall, m.thetadot_release / (p * m.alpha_fall))),
         "t_release": m.t_release, "t_first_impact": m.t_first_impact, "t_end": m.t_end,
         "noise_rad": m.noise_rad, "n_negative_excursions": m.n_negative_excursions,
         "max_negative_over_alpha": float(imp.negative_excursion.max() / alpha) if N else 0.0,
@@ -238,19 +288,65 @@ def no_sliding_check(h_over_b, mu_s=0.6):
 
 
 META_COLUMNS = ["test_id", "series", "specimen", "boundary", "contact_depth_mm"]
+#: Channel statuses of rocklab.channels that lose a channel.
+LOST_STATUSES = ("dead", "stuck", "clipped", "dropout")
+
+
+def monitor_readings(ds):
+    """Monitor transducer (channel 5 at the centre of the facade, Fig. 20a).
+
+    Its reading against the one the rigid-body motion of the reduced test
+    (theta, phi, v, w of Eqs. 3-7, forward model of
+    :func:`rocklab.kinematics.transducer_elongation`) gives at the same
+    point.  The monitor is kept out of the kinematic fit, so any excess is
+    deformation of the facade (Sect. 4).  The rigid reading uses all four
+    degrees of freedom rather than theta alone so that twist and sliding are
+    not read as deformation.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A reduced test (``rocklab.reduction``).
+
+    Returns
+    -------
+    (int, ndarray, ndarray) or None
+        Channel number, measured and rigid-body elongation [mm] on ``time``;
+        None when the setup has no working monitor channel.
+    """
+    role = ds.channel_role.values.astype(str)
+    status = ds.channel_status.values.astype(str)
+    k = np.flatnonzero((role == "monitor") & ~np.isin(status, LOST_STATUSES))
+    if k.size == 0:
+        return None
+    k = k[:1]
+    X = np.column_stack([ds[f"wall_{c}"].values[k] for c in "xyz"])
+    F = np.column_stack([ds[f"frame_{c}"].values[k] for c in "xyz"])
+    rigid = kinematics.transducer_elongation(ds.theta.values, ds.phi.values, ds.v.values,
+                                             ds.w.values, X, F, float(ds.attrs["thickness_mm"]))
+    return int(ds.channel.values[k[0]]), ds.elongation.values[:, k[0]], rigid[:, 0]
 
 
 def analyse_reduced_test(ds):
     """:func:`analyse_motion` on a reduced test (``rocklab.reduction``).
 
     Returns the three tables of :func:`analyse_motion`, each carrying the
-    test's metadata columns first.
+    test's metadata columns first; the summary also holds
+    ``centre_amplification``: the largest |reading| of the monitor channel
+    after the first impact over that of the rigid-body motion (Fig. 20b,
+    :func:`rocklab.motion.centre_amplification`), NaN without a monitor.
     """
     a = ds.attrs
     summary, impacts, e_n = analyse_motion(
         ds.time.values, ds.theta.values, float(a["sampling_rate_hz"]), a["boundary"],
         float(a["alpha"]), float(a["p"]), a["direction"],
     )
+    mon = monitor_readings(ds)
+    amp = np.nan
+    if mon is not None and np.isfinite(summary["t_first_impact"]):
+        i1 = int(np.searchsorted(ds.time.values, summary["t_first_impact"]))
+        amp = centre_amplification(mon[1], mon[2], i1)
+    summary["centre_amplification"] = amp
     meta = {k: a.get(k, np.nan) for k in META_COLUMNS}
     return ({**meta, **summary},
             impacts.assign(test_id=a["test_id"])[["test_id", *impacts.columns]],

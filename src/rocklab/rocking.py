@@ -170,6 +170,21 @@ class RockingModel:
             return self.p**2 * (theta - a - ag / wall.G) - damp
         return -self.p**2 * (np.sin(a - theta) + ag / wall.G * np.cos(a - theta)) - damp
 
+    def equation_of_motion(self, side, a0, slope, t0):
+        """Right-hand side f(t, y) for solve_ivp, y = (theta, thetadot), on hinge
+        ``side`` under ag(t) = a0 + slope (t - t0) [m/s^2]; scalar and lean,
+        since the event-driven reference calls it millions of times."""
+        a = side * float(self.alpha_side(side))
+        p2, c, g = self.p**2, 2.0 * self.flight_damping * self.p, wall.G
+        if self.form == "linear":
+            def rhs(t, y):
+                return [y[1], p2 * (y[0] - a - (a0 + slope * (t - t0)) / g) - c * y[1]]
+        else:
+            def rhs(t, y):
+                ag = (a0 + slope * (t - t0)) / g
+                return [y[1], -p2 * (math.sin(a - y[0]) + ag * math.cos(a - y[0])) - c * y[1]]
+        return rhs
+
     def energy(self, theta, thetadot, side):
         """Energy per unit I_O measured as 1/2 thetadot^2 at theta = 0 [rad^2/s^2].
 
@@ -300,9 +315,21 @@ class _Record:
             a = np.asarray(ag, float)
             self.a = np.append(a, 0.0)
             self.t = np.arange(len(self.a)) * float(dt)
+        self.free = ag is None
 
     def __call__(self, t):
         return np.interp(t, self.t, self.a, left=self.a[0], right=0.0)
+
+    def piece(self, t, t_hard):
+        """End of the straight piece of the record holding ``t`` (capped at
+        ``t_hard``) and the piece as ag(tt) = a0 + slope (tt - t0)."""
+        # a piece shorter than rounding (an onset found at a sample up to an
+        # ulp) is merged into the next: solve_ivp cannot step over it
+        k = int(np.searchsorted(self.t, t + 1e-12 * max(1.0, abs(t)), side="right"))
+        if self.free or k >= len(self.t):
+            return t_hard, 0.0, 0.0, t
+        t0, t1 = self.t[k - 1], self.t[k]
+        return min(t1, t_hard), self.a[k - 1], (self.a[k] - self.a[k - 1]) / (t1 - t0), t0
 
 
 def _onset(model, rec, t0, t_stop, theta_rest):
@@ -371,9 +398,10 @@ def _reference(model, rec, theta0, thetadot0, t_end, fs, overturn, rest_tol, rto
             fill(t, t_on, value=rest_at)
             t, th, thd, side, resting, t_rest = t_on, rest_at, 0.0, s_on, False, None
         s = side
-
-        def rhs(tt, y):
-            return [y[1], model.acceleration(y[0], y[1], s, rec(tt))]
+        # one straight piece of the record at a time: the solution is smooth
+        # inside it, so the error control never meets the record's kinks
+        t_seg, a0, slope, tk = rec.piece(t, t_hard)
+        rhs = model.equation_of_motion(s, a0, slope, tk)
 
         def ev_base(tt, y):
             return y[0]
@@ -401,13 +429,15 @@ def _reference(model, rec, theta0, thetadot0, t_end, fs, overturn, rest_tol, rto
         else:
             seg_step = max_step
         sol = solve_ivp(
-            rhs, (t, t_hard), [th, thd], method="DOP853", rtol=rtol, atol=atol,
+            rhs, (t, t_seg), [th, thd], method="DOP853", rtol=rtol, atol=atol,
             max_step=seg_step, events=events, dense_output=True,
         )
         t_new = sol.t[-1]
         fill(t, min(t_new, t_end), sol.sol)
         peaks = [abs(th), abs(sol.y[0, -1])] + [abs(y[0]) for y in sol.y_events[2]]
-        if sol.status != 1:  # reached t_hard
+        if sol.status == -1:
+            raise RuntimeError(f"solve_ivp failed at t = {t:.6g} s: {sol.message}")
+        if sol.status != 1:  # reached the end of the piece
             t, th, thd = t_new, sol.y[0, -1], sol.y[1, -1]
             continue
         if sol.t_events[1].size:
@@ -704,19 +734,39 @@ def run_history(ag, h, scale, n_tail, prm, law, x, v, log_t, log_vb, log_va, log
             gb = ga0 + (ga1 - ga0) * tb / h
             x1, v1 = _advance(x, v, s, ga, gb, u, prm, l1, l2, zp, h, E1h, E2h)
             ev = _outside(x1, s, prm, ov)
-            if ev == 0:
-                if want_peaks and v * v1 < 0.0:
-                    # a peak inside the step: bisection on the sign of thetadot
-                    lo, hi = 0.0, u
-                    for _ in range(50):
-                        mid = 0.5 * (lo + hi)
-                        xm, vm = _advance(x, v, s, ga, ga + (gb - ga) * mid / u, mid, prm, l1, l2, zp, h, E1h, E2h)
-                        if vm * v > 0.0:
-                            lo = mid
-                        else:
-                            hi = mid
-                    xm, vm = _advance(x, v, s, ga, ga + (gb - ga) * lo / u, lo, prm, l1, l2, zp, h, E1h, E2h)
+            toward_edge = s * v < 0.0 or (one and s < 0.0)
+            if ev == 0 and v * v1 < 0.0 and (want_peaks or toward_edge):
+                # thetadot changes sign inside the step: the turning point is a
+                # peak, or (moving towards an edge) may lie past the edge, an
+                # impact that both step ends miss
+                # safeguarded Newton on thetadot (its derivative is _accel)
+                lo, hi = 0.0, u
+                tn = u * v / (v - v1)
+                tm = tn
+                for _ in range(60):
+                    if not (lo < tn < hi):
+                        tn = 0.5 * (lo + hi)
+                    gm = ga + (gb - ga) * tn / u
+                    tm = tn
+                    xm, vm = _advance(x, v, s, ga, gm, tm, prm, l1, l2, zp, h, E1h, E2h)
+                    if vm * v > 0.0:
+                        lo = tn
+                    else:
+                        hi = tn
+                    am = _accel(xm, vm, s, gm, prm)
+                    if hi - lo <= 1e-12 * u or am == 0.0:
+                        break
+                    d = vm / am
+                    if abs(d) <= 1e-12 * u:
+                        break
+                    tn = tn - d
+                if toward_edge and _outside(xm, s, prm, ov) != 0:
+                    gb = ga + (gb - ga) * tm / u
+                    u, x1, v1 = tm, xm, vm
+                    ev = _outside(x1, s, prm, ov)
+                else:
                     peak = max(peak, abs(xm))
+            if ev == 0:
                 x, v = x1, v1
                 peak = max(peak, abs(x))
                 tau = tb
@@ -732,6 +782,9 @@ def run_history(ag, h, scale, n_tail, prm, law, x, v, log_t, log_vb, log_va, log
             f0, f1 = x - target, x1 - target
             tn = u * f0 / (f0 - f1) if f0 != f1 else 0.5 * u
             xm, vm = x1, v1
+            # theta is a sum of terms of size ~ alpha + |ag|/g: below this
+            # rounding floor Newton only wanders (slow, small velocities)
+            x_floor = 1e-15 * (abs(x) + prm[_P_APOS] + abs(ga) / prm[_P_G])
             for _ in range(60):
                 if not (lo < tn < hi):
                     tn = 0.5 * (lo + hi)
@@ -747,7 +800,7 @@ def run_history(ag, h, scale, n_tail, prm, law, x, v, log_t, log_vb, log_va, log
                     tn = 0.5 * (lo + hi)
                     continue
                 d = f / vm
-                if abs(d) <= 1e-12 * u:
+                if abs(d) <= 1e-12 * u or abs(f) <= x_floor:
                     break
                 tn = tn - d
             ev = _outside(xm, s, prm, ov)
@@ -788,3 +841,32 @@ def run_history(ag, h, scale, n_tail, prm, law, x, v, log_t, log_vb, log_va, log
     a_s = prm[_P_APOS] if s > 0 else prm[_P_ANEG]
     max_ratio = max(max_ratio, peak / a_s)
     return False, math.nan, max_ratio, n_imp
+
+
+# The batch kernel lives beside run_history: numba's on-disk cache is per
+# file and does not see changes in the functions a cached kernel calls.
+
+
+@numba.njit(cache=True)
+def _row(ag, h, scale, n_tail, prm, law, x0, v0, logs, out, i):
+    # called from the prange body instead of run_history itself: inlined into
+    # the parallel loop, run_history runs 4-8x slower (measured, numba 0.68)
+    o, t, m, k = run_history(ag, h[i], scale[i], n_tail[i], prm[i], law[i], x0[i], v0[i], logs[0, i], logs[1, i],
+                             logs[2, i], logs[3, i])
+    out[0][i], out[1][i], out[2][i], out[3][i] = o, t, m, k
+
+
+@numba.njit(parallel=True, cache=True)
+def batch_kernel(ag, h, scale, n_tail, prm, law, x0, v0, max_log):
+    """:func:`run_history` of every row (history) in parallel; the Python
+    front ends are in :mod:`rocklab.batch`."""
+    n = h.shape[0]
+    over = np.zeros(n, np.bool_)
+    t_over = np.full(n, np.nan)
+    max_ratio = np.zeros(n)
+    n_imp = np.zeros(n, np.int64)
+    logs = np.full((4, n, max_log), np.nan)
+    out = (over, t_over, max_ratio, n_imp)
+    for i in numba.prange(n):
+        _row(ag, h, scale, n_tail, prm, law, x0, v0, logs, out, i)
+    return over, t_over, max_ratio, n_imp, logs[0], logs[1], logs[2], logs[3]

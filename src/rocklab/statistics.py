@@ -17,7 +17,12 @@ scattered between series.  Hence
   values") is which series is atypical of the population of series;
 * effects of contact depth and unit material are tested on the series
   means (Kruskal-Wallis; the experimental unit is the series), so that
-  repeated tests do not inflate the sample size.
+  repeated tests do not inflate the sample size;
+* for the same reason, a value quoted for a whole boundary condition (the
+  paper's "0.95" and "1.05", Table 3) is the mean over its tests with a
+  series (cluster) bootstrap interval (:func:`cluster_bootstrap_ci`): a
+  test-level bootstrap treats 150 repeats of 10 set-ups as 150 independent
+  walls and gives an interval about three times too narrow.
 """
 
 from __future__ import annotations
@@ -29,9 +34,21 @@ from scipy import stats
 from rocklab.dissipation import amplitude_law_fit
 
 #: Ratios summarised per series.
-RATIO_COLUMNS = ("e_ratio", "theta0_over_alpha", "T_quarter_p", "n_cycles", "duration_p",
+RATIO_COLUMNS = ("e_ratio", "theta0_over_alpha", "T_quarter_p", "T_quarter_p_housner",
+                 "T_quarter_p_linear", "n_cycles", "duration_p", "centre_amplification",
                  "e_ratio_complete", "e_ratio_without_first_half_cycle",
                  "e_ratio_first_half_cycle")
+#: Per-series quantities of results/series.csv (Figs. 13, 16-20).
+SERIES_COLUMNS = ("e_ratio", "theta0_over_alpha", "T_quarter_p", "T_quarter_p_housner",
+                  "T_quarter_p_linear", "n_cycles", "duration_p", "centre_amplification")
+#: The windows of Table 3 (tests.csv column -> the paper's heading).
+TABLE3_WINDOWS = {"e_ratio_complete": "complete",
+                  "e_ratio_without_first_half_cycle": "disregarding the first half cycle",
+                  "e_ratio_first_half_cycle": "considering only the first half cycle"}
+#: Table 3 of the paper (one-sided rocking only), e_exp / e_an,1s.
+PAPER_TABLE3 = {("one-sided", "e_ratio_complete"): 1.05,
+                ("one-sided", "e_ratio_without_first_half_cycle"): 1.34,
+                ("one-sided", "e_ratio_first_half_cycle"): 0.72}
 
 
 def bootstrap_ci(values, n_boot=4000, level=0.95, seed=0):
@@ -48,6 +65,93 @@ def bootstrap_ci(values, n_boot=4000, level=0.95, seed=0):
     q = (1 - level) / 2
     lo, hi = np.quantile(means, [q, 1 - q])
     return float(lo), float(hi)
+
+
+def cluster_bootstrap_ci(values, groups, n_boot=4000, level=0.95, seed=0):
+    """Percentile interval of the pooled mean, resampling whole groups.
+
+    Each resample draws as many groups (series) as there are, with
+    replacement, and takes the mean over all their values, so the interval
+    reflects the scatter between series, not only within them.
+
+    Parameters
+    ----------
+    values : array_like
+        One value per test.
+    groups : array_like
+        Group (series) of each value.
+
+    Returns
+    -------
+    (float, float)
+        NaN for fewer than 2 groups with finite values.
+    """
+    d = pd.DataFrame({"x": np.asarray(values, float), "g": np.asarray(groups)}).dropna()
+    agg = d.groupby("g").x.agg(["sum", "count"])
+    if len(agg) < 2:
+        return np.nan, np.nan
+    rng = np.random.default_rng(seed)
+    idx = rng.integers(0, len(agg), size=(n_boot, len(agg)))
+    means = agg["sum"].to_numpy()[idx].sum(axis=1) / agg["count"].to_numpy()[idx].sum(axis=1)
+    q = (1 - level) / 2
+    lo, hi = np.quantile(means, [q, 1 - q])
+    return float(lo), float(hi)
+
+
+def boundary_summary(tests_df, columns, by="series", within="boundary", n_boot=4000, seed=0):
+    """Mean of per-test quantities by boundary condition, series-bootstrap CI.
+
+    Returns one row per (boundary, quantity) with data: n_tests, n_series,
+    mean (over tests), sd (between tests), series_sd (between series
+    means), ci_low, ci_high (:func:`cluster_bootstrap_ci`).
+    """
+    rows = []
+    for key, g in tests_df.groupby(within, sort=True):
+        for c in columns:
+            d = g[[by, c]].dropna() if c in g else g.iloc[:0]
+            if d.empty:
+                continue
+            lo, hi = cluster_bootstrap_ci(d[c], d[by], n_boot=n_boot, seed=seed)
+            rows.append({within: key, "quantity": c, "n_tests": len(d),
+                         "n_series": d[by].nunique(), "mean": d[c].mean(),
+                         "sd": d[c].std(ddof=1), "series_sd": d.groupby(by)[c].mean().std(ddof=1),
+                         "ci_low": lo, "ci_high": hi})
+    return pd.DataFrame(rows)
+
+
+def table3(tests_df, n_boot=4000, seed=0):
+    """Table 3: e_exp / |e_an| over the paper's three windows, by boundary.
+
+    The paper gives the one-sided row only (1.05, 1.34, 0.72); the
+    two-sided row is computed the same way (Eq. 11 over the windows of
+    :func:`rocklab.dissipation.table3_windows`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        boundary, window (the paper's heading), column (of tests.csv), the
+        statistics of :func:`boundary_summary` and ``paper``.
+    """
+    out = boundary_summary(tests_df, list(TABLE3_WINDOWS), n_boot=n_boot, seed=seed)
+    out = out.rename(columns={"quantity": "column"})
+    out.insert(1, "window", out.column.map(TABLE3_WINDOWS))
+    out["paper"] = [PAPER_TABLE3.get(k, np.nan) for k in zip(out.boundary, out.column)]
+    return out
+
+
+def table3_markdown(t3):
+    """Table 3 as markdown: one row per boundary, mean [95 % CI], and the paper's row."""
+    t3 = t3.assign(cell=[f"{m:.3f} [{lo:.3f}, {hi:.3f}]"
+                         for m, lo, hi in zip(t3["mean"], t3.ci_low, t3.ci_high)])
+    wide = t3.pivot(index="boundary", columns="window", values="cell")
+    wide = wide[[w for w in TABLE3_WINDOWS.values() if w in wide]]
+    counts = t3.groupby("boundary").first()
+    wide.insert(0, "tests (series)", [f"{counts.n_tests[b]} ({counts.n_series[b]})"
+                                      for b in wide.index])
+    for b, g in t3.dropna(subset=["paper"]).groupby("boundary"):
+        wide.loc[f"{b}, paper"] = ["", *(f"{v:.2f}" for v in g.set_index("window").paper
+                                        .reindex(wide.columns[1:]))]
+    return wide.rename_axis("boundary").reset_index().to_markdown(index=False)
 
 
 def series_stats(tests_df, columns=RATIO_COLUMNS, by="series", n_boot=4000, seed=0):
@@ -161,7 +265,7 @@ def factor_effect(tests_df, factor, value="e_ratio", by="series", within="bounda
 
 
 def series_table(tests_df, qc_df, impacts_df=None, by="series", n_boot=4000, seed=0):
-    """results/series.csv: counts, e_ratio and theta0/alpha statistics, law.
+    """results/series.csv: counts, statistics of :data:`SERIES_COLUMNS`, law.
 
     Parameters
     ----------
@@ -177,7 +281,8 @@ def series_table(tests_df, qc_df, impacts_df=None, by="series", n_boot=4000, see
     -------
     pandas.DataFrame
         series, n_valid, n_rejected, rejected_<reason>..., the statistics of
-        :func:`series_stats` for e_ratio and theta0_over_alpha, law columns.
+        :func:`series_stats` for the :data:`SERIES_COLUMNS` present in
+        ``tests_df``, law columns.
     """
     counts = qc_df.assign(valid=qc_df.valid.astype(bool))
     base = counts.groupby(by).valid.agg(n_valid="sum", n_tests="size").reset_index()
@@ -186,7 +291,7 @@ def series_table(tests_df, qc_df, impacts_df=None, by="series", n_boot=4000, see
     if len(rej):
         rc = pd.crosstab(rej[by], rej.reason).add_prefix("rejected_").reset_index()
         base = base.merge(rc, on=by, how="left")
-    st = series_stats(tests_df, ("e_ratio", "theta0_over_alpha"), by, n_boot, seed)
+    st = series_stats(tests_df, SERIES_COLUMNS, by, n_boot, seed)
     out = base.merge(st.drop(columns="n"), on=by, how="left")
     if impacts_df is not None:
         law = amplitude_law_fit(impacts_df, tests_df, by=(by,), law="peak")
@@ -212,9 +317,12 @@ def campaign_tables(datasets, qc_df, n_boot=4000, seed=0):
     -------
     dict of pandas.DataFrame, and a list of (test_id, message)
         ``tests``, ``impacts``, ``e_by_n``, ``series``, ``laws`` (Eqs. 15 and
-        17 by series and by boundary), ``effects`` (outlying series, contact
-        depth, unit material, push/pull); the second item lists the valid
-        tests whose motion could not be analysed, with the reason.
+        17 by series and by boundary), ``effects`` (contact depth and unit
+        material on e_ratio, contact depth on the channel-5 amplification,
+        push/pull), ``table3`` (:func:`table3`) and ``summary``
+        (:func:`boundary_summary` of :data:`SERIES_COLUMNS`); the second item
+        lists the valid tests whose motion could not be analysed, with the
+        reason.
     """
     from rocklab.dissipation import analyse_reduced_test
 
@@ -245,11 +353,14 @@ def campaign_tables(datasets, qc_df, n_boot=4000, seed=0):
         amplitude_law_fit(impacts, tests, by=(by,), law=law).assign(grouping=by)
         for law in ("peak", "velocity") for by in ("series", "boundary")
     ], ignore_index=True)
+    one = tests[tests.boundary == "one-sided"]
     effects = pd.concat([
-        factor_effect(tests[tests.boundary == "one-sided"], "contact_depth_mm"),
+        factor_effect(one, "contact_depth_mm"),
         factor_effect(tests, "unit"),
+        factor_effect(one, "contact_depth_mm", value="centre_amplification"),
         symmetry_test(tests, "theta0_over_alpha").assign(factor="push/pull"),
         symmetry_test(tests, "e_ratio").assign(factor="push/pull"),
     ], ignore_index=True)
     return {"tests": tests, "impacts": impacts, "e_by_n": e_n, "series": series,
-            "laws": laws, "effects": effects}, failed
+            "laws": laws, "effects": effects, "table3": table3(tests, n_boot, seed),
+            "summary": boundary_summary(tests, SERIES_COLUMNS, n_boot=n_boot, seed=seed)}, failed

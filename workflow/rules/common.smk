@@ -42,4 +42,5 @@ def test_params(wildcards):
 
 
 def all_outputs():
-    return [res("qc.csv"), res("series.csv"), res("diagnosis.json")] + figure_outputs()
+    return ([res("qc.csv"), res("series.csv"), res("diagnosis.json")] + dissipation_outputs()
+            + figure_outputs())

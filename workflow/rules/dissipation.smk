@@ -1,5 +1,16 @@
 # Stage 3: energy dissipation of every valid test (Sects. 3-4): impacts,
-# peaks, experimental and analytic coefficients, per-series statistics.
+# peaks, experimental and analytic coefficients, per-series statistics,
+# Table 3.
+
+
+def report_table(name):
+    """A table output, shown in the report with workflow/report/<name>.rst."""
+    return report(res(name), caption=f"../report/{name.removesuffix('.csv')}.rst",
+                  category="Dissipation tables (Sects. 3-4)")
+
+
+def dissipation_outputs():
+    return [res(name) for name in ("table3.csv", "table3.md", "summary.csv")]
 
 
 rule dissipation_tables:
@@ -7,14 +18,19 @@ rule dissipation_tables:
         qc=res("qc.csv"),
         tests=expand(res("tests", "{test_id}.nc"), test_id=TEST_IDS),
     output:
-        tests=res("tests.csv"),
+        tests=report_table("tests.csv"),
         impacts=res("impacts.csv"),
         e_by_n=res("e_by_n.csv"),
-        series=res("series.csv"),
-        laws=res("amplitude_laws.csv"),
-        effects=res("effects.csv"),
+        series=report_table("series.csv"),
+        laws=report_table("amplitude_laws.csv"),
+        effects=report_table("effects.csv"),
+        table3=report_table("table3.csv"),
+        table3_md=res("table3.md"),
+        summary=report_table("summary.csv"),
     params:
-        schemas=workflow.source_path("../schemas/"),
+        # A stable path: source_path() points into a per-run cache, which
+        # would count as changed params and rerun the rule every time.
+        schemas=str(Path(workflow.basedir, "workflow", "schemas")),
         n_boot=config.get("statistics", {}).get("n_boot", 4000),
         seed=config.get("statistics", {}).get("seed", 0),
     log:
