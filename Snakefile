@@ -17,6 +17,7 @@ include: "workflow/rules/qc.smk"
 include: "workflow/rules/dissipation.smk"
 include: "workflow/rules/diagnosis.smk"
 include: "workflow/rules/figures.smk"
+include: "workflow/rules/seismic.smk"
 
 
 rule all:

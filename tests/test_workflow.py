@@ -50,7 +50,9 @@ def test_workflow_reduces_any_campaign_and_never_writes_to_it(virtual_campaign, 
     before = _tree_hash(folder)
     results = tmp_path / "results"
     cmd = [str(SNAKEMAKE), "--cores", "2", "--quiet", "all", "--directory", str(ROOT),
-           "--config", f"raw_dir={folder}", f"results_dir={results}", "figures={'fig9_specimen': '1a'}"]
+           "--config", f"raw_dir={folder}", f"results_dir={results}", "figures={'fig9_specimen': '1a'}",
+           # the overturning maps of one short record only (test_overturning covers the stage)
+           "maps={'records': ['Pac164']}"]
     run = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env={**os.environ, "PYTHONWARNINGS": "ignore"})
     assert run.returncode == 0, run.stderr[-3000:]
     assert _tree_hash(folder) == before

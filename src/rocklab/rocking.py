@@ -661,6 +661,7 @@ def run_history(ag, h, scale, n_tail, prm, law, x, v, log_t, log_vb, log_va, log
     nsub = 1 if prm[_P_LIN] > 0 else max(1, int(prm[_P_SUB]))
     hs = h / nsub
     resting = x == 0.0 and v == 0.0
+    hold = False
     rest_at = 0.0
     s = 1.0 if (x > 0.0 or (x == 0.0 and v >= 0.0)) else -1.0
     peak = abs(x)
@@ -687,6 +688,7 @@ def run_history(ag, h, scale, n_tail, prm, law, x, v, log_t, log_vb, log_va, log
                     break
                 k += 1
         ga0 = scale * ag[k] if k < n_rec else 0.0
+        hold = False
         ga1 = scale * ag[k + 1] if k + 1 < n_rec else 0.0
         t0 = k * h
         tau = 0.0
@@ -717,7 +719,7 @@ def run_history(ag, h, scale, n_tail, prm, law, x, v, log_t, log_vb, log_va, log
                         continue
                     if tc < t_on:
                         t_on, s_on = tc, ss
-                if s_on == 0.0:
+                if s_on == 0.0 or hold:
                     break
                 resting = False
                 s = s_on
@@ -831,6 +833,10 @@ def run_history(ag, h, scale, n_tail, prm, law, x, v, log_t, log_vb, log_va, log
             peak = 0.0
             wrong_way = (one and gap == 0.0 and v_after <= 0.0) or (ev == 2 and v_after <= 0.0)
             if abs(v_after) < prm[_P_VREST] or wrong_way:
+                # a landing slower than rest (ground held at the onset
+                # threshold) would lift again at once, endlessly: the wall
+                # stays down to the end of the step, then the onset is tested
+                hold = abs(vm) < prm[_P_VREST]
                 resting = True
                 rest_at = x
                 v = 0.0

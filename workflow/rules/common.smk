@@ -15,6 +15,12 @@ def res(*parts):
     return str(RESULTS.joinpath(*parts))
 
 
+def schema_path(name):
+    """A table schema by a stable path: workflow.source_path() points into a
+    per-run cache, which changes the params and reruns the rule every time."""
+    return str(Path(workflow.basedir, "workflow", "schemas", name))
+
+
 def record_input(wildcards):
     """The test's record, when the log points at an existing file.
 
@@ -43,4 +49,4 @@ def test_params(wildcards):
 
 def all_outputs():
     return ([res("qc.csv"), res("series.csv"), res("diagnosis.json")] + dissipation_outputs()
-            + figure_outputs())
+            + figure_outputs()) + map_outputs()

@@ -28,9 +28,7 @@ rule dissipation_tables:
         table3_md=res("table3.md"),
         summary=report_table("summary.csv"),
     params:
-        # A stable path: source_path() points into a per-run cache, which
-        # would count as changed params and rerun the rule every time.
-        schemas=str(Path(workflow.basedir, "workflow", "schemas")),
+        schemas=schema_path(""),
         n_boot=config.get("statistics", {}).get("n_boot", 4000),
         seed=config.get("statistics", {}).get("seed", 0),
     log:

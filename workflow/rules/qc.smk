@@ -10,7 +10,7 @@ rule qc_table:
         kinematics=res("kinematics.csv"),
     params:
         raw_dir=config["raw_dir"],
-        schema=workflow.source_path("../schemas/qc.schema.yaml"),
+        schema=schema_path("qc.schema.yaml"),
     log:
         res("logs", "qc_table.log"),
     benchmark:

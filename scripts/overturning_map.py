@@ -1,0 +1,15 @@
+"""Snakemake shim: one overturning map (record x model) of Sect. 5."""
+
+import numba
+
+from rocklab.accelerograms import load_record
+from rocklab.overturning import overturning_map
+from rocklab.workflow import setup_logging, write_netcdf
+
+setup_logging(snakemake.log[0])
+numba.set_num_threads(min(snakemake.threads, numba.config.NUMBA_NUM_THREADS))
+p = snakemake.params
+eq17 = (p.eq17["a"], p.eq17["b"]) if p.eq17 else None
+ds = overturning_map(load_record(snakemake.wildcards.record), model=snakemake.wildcards.model, n=p.n, lo=p.lo,
+                     hi=p.hi, alpha=p.alpha, R=p.R, form=p.form, eq17=eq17, polarity=p.polarity, chunks=p.chunks)
+write_netcdf(ds, snakemake.output[0])

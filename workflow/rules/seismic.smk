@@ -1,0 +1,102 @@
+# Stage: overturning maps of Sect. 5 (Figs. 21-23). One job per (record,
+# model) map, since a map is the unit that takes time; then the indices of
+# Fig. 22 with the reductions between models, and the figures.
+import re
+
+from rocklab.accelerograms import accelerogram_dir, read_manifest
+from rocklab.overturning import MODELS
+
+MAPS = config.get("maps", {})
+MANIFEST = read_manifest()
+MAP_RECORDS = MAPS.get("records") or list(MANIFEST.record)
+MAP_FIG_RECORD = MAPS.get("figure_record", "40EIC180")
+if MAP_FIG_RECORD not in MAP_RECORDS:
+    MAP_FIG_RECORD = MAP_RECORDS[0]
+
+
+def map_outputs():
+    return [res("maps", "summary.csv"), res("maps", "reductions.csv")] + [
+        res("figures", f"fig{n}.png") for n in (21, 22, 23)
+    ]
+
+
+def map_path(record, model):
+    return res("maps", f"{record}__{model}.nc")
+
+
+def record_file(wildcards):
+    """The shipped file of the record, so that replacing it recomputes its maps."""
+    return str(accelerogram_dir() / MANIFEST.set_index("record").loc[wildcards.record, "file"])
+
+
+localrules:
+    maps,
+
+
+rule maps:
+    input:
+        map_outputs(),
+
+
+rule overturning_map:
+    input:
+        record_file,
+    output:
+        res("maps", "{record}__{model}.nc"),
+    wildcard_constraints:
+        record="|".join(map(re.escape, MAP_RECORDS)),
+        model="|".join(map(re.escape, MODELS)),
+    params:
+        n=MAPS.get("n", 201),
+        lo=MAPS.get("lo", 0.5),
+        hi=MAPS.get("hi", 1.5),
+        alpha=MAPS.get("alpha", 0.1),
+        R=MAPS.get("R", 3.0),
+        form=MAPS.get("form", "linear"),
+        eq17=MAPS.get("eq17", {}),
+        polarity=MAPS.get("polarity", 1),
+        chunks=MAPS.get("chunks", 10),
+    threads: MAPS.get("threads", 2)
+    resources:
+        mem_mb=1000,
+        runtime=20,
+    log:
+        res("logs", "maps", "{record}__{model}.log"),
+    benchmark:
+        res("benchmarks", "maps", "{record}__{model}.tsv")
+    script:
+        "../../scripts/overturning_map.py"
+
+
+rule map_summary:
+    input:
+        maps=[map_path(r, m) for r in MAP_RECORDS for m in MODELS],
+    output:
+        summary=res("maps", "summary.csv"),
+        reductions=res("maps", "reductions.csv"),
+    params:
+        summary_schema=schema_path("map_summary.schema.yaml"),
+        reductions_schema=schema_path("map_reductions.schema.yaml"),
+    log:
+        res("logs", "map_summary.log"),
+    benchmark:
+        res("benchmarks", "map_summary.tsv")
+    script:
+        "../../scripts/map_summary.py"
+
+
+rule map_figures:
+    input:
+        summary=res("maps", "summary.csv"),
+        two_sided=[map_path(MAP_FIG_RECORD, m) for m in ("2s-housner", "2s-0.95")],
+        one_sided=[map_path(MAP_FIG_RECORD, m) for m in ("1s-zero", "1s-1.05", "1s-eq17")],
+    output:
+        fig21=res("figures", "fig21.png"),
+        fig22=res("figures", "fig22.png"),
+        fig23=res("figures", "fig23.png"),
+    log:
+        res("logs", "map_figures.log"),
+    benchmark:
+        res("benchmarks", "map_figures.tsv")
+    script:
+        "../../scripts/map_figures.py"
