@@ -48,5 +48,5 @@ def test_params(wildcards):
 
 
 def all_outputs():
-    return ([res("qc.csv"), res("series.csv"), res("diagnosis.json")] + dissipation_outputs()
+    return ([res("qc.csv"), res("series.csv")] + diagnosis_outputs() + dissipation_outputs()
             + figure_outputs()) + map_outputs()

@@ -1,5 +1,14 @@
 # Stage 4: model diagnosis (issue 6) - what the base simulation gets wrong,
-# which physical extension the data carry, and the gain on held-out tests.
+# which physical extensions the data carry, and the gain on held-out tests;
+# Figs. 14-15 per series; the restitution of the UMinho limestone blocks.
+
+DIAGNOSIS = config.get("diagnosis", {})
+BLOCKS = Path(workflow.basedir, "raw", "rocking-tests", "uminho-limestone-free-rocking")
+
+
+def diagnosis_outputs():
+    return [res("diagnosis.json"), res("figures", "fig14.png"), res("figures", "fig15.png"),
+            res("figures", "diagnosis"), res("limestone_diagnosis.json")]
 
 
 rule diagnosis:
@@ -7,14 +16,48 @@ rule diagnosis:
         qc=res("qc.csv"),
         tests=expand(res("tests", "{test_id}.nc"), test_id=TEST_IDS),
     output:
-        json=res("diagnosis.json"),
+        json=report(res("diagnosis.json"), caption="../report/diagnosis.rst", category="Model diagnosis"),
         md=res("diagnosis.md"),
     params:
-        n_boot=config.get("diagnosis", {}).get("n_boot", 40),
-        n_history=config.get("diagnosis", {}).get("n_history", 2),
+        n_boot=DIAGNOSIS.get("n_boot", 40),
+        n_history=DIAGNOSIS.get("n_history", 2),
+        seed=DIAGNOSIS.get("seed", 0),
     log:
         res("logs", "diagnosis.log"),
     benchmark:
         res("benchmarks", "diagnosis.tsv")
     script:
         "../../scripts/diagnosis.py"
+
+
+rule diagnosis_figures:
+    input:
+        diagnosis=res("diagnosis.json"),
+        tests=expand(res("tests", "{test_id}.nc"), test_id=TEST_IDS),
+    output:
+        fig14=report(res("figures", "fig14.png"), caption="../report/fig14.rst", category="Model diagnosis"),
+        fig15=report(res("figures", "fig15.png"), caption="../report/fig15.rst", category="Model diagnosis"),
+        series=directory(res("figures", "diagnosis")),
+    log:
+        res("logs", "diagnosis_figures.log"),
+    benchmark:
+        res("benchmarks", "diagnosis_figures.tsv")
+    script:
+        "../../scripts/diagnosis_figures.py"
+
+
+rule limestone_diagnosis:
+    input:
+        events=str(BLOCKS / "limestone-rocking-events.csv"),
+    output:
+        json=res("limestone_diagnosis.json"),
+        md=res("limestone_diagnosis.md"),
+    params:
+        n_boot=DIAGNOSIS.get("n_boot", 40),
+        seed=DIAGNOSIS.get("seed", 0),
+    log:
+        res("logs", "limestone_diagnosis.log"),
+    benchmark:
+        res("benchmarks", "limestone_diagnosis.tsv")
+    script:
+        "../../scripts/limestone_diagnosis.py"

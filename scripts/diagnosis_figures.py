@@ -1,0 +1,14 @@
+"""Snakemake shim: Figs. 14-15 of each series' sample test, and of the largest series of each boundary."""
+
+import json
+from pathlib import Path
+
+from rocklab.diagnosis_figures import series_figures
+from rocklab.workflow import setup_logging
+
+setup_logging(snakemake.log[0])
+entries = json.loads(Path(snakemake.input.diagnosis).read_text())
+out = Path(snakemake.output.series)
+out.mkdir(parents=True, exist_ok=True)
+for name, fig in series_figures(entries, snakemake.input.tests).items():
+    fig.savefig(snakemake.output[name] if name in ("fig14", "fig15") else out / f"{name}.png", dpi=110)
