@@ -102,7 +102,7 @@ from scipy.signal import savgol_filter
 
 from rocklab import impact as _impact
 from rocklab import restitution
-from rocklab.motion import extract_motion
+from rocklab.motion import extract_motion, odd_samples
 from rocklab.rocking import RockingModel, simulate_free
 from rocklab.wall import overturning_velocity
 
@@ -707,7 +707,7 @@ def end_of_motion(S: _Stack, mp: ModelParams, min_ratio=3.0, window_s=1.0):
             side = side if mpi.one_sided else -side
             A, t = apex_after(v, mpi.hinge(side), mpi.p, mpi.zeta), t + tau
         sel = (ts.t > lo) & (ts.t <= hi)
-        win = _odd_samples(0.25 / ts.dt)
+        win = odd_samples(0.25 / ts.dt)
         if sel.sum() < win:
             continue
         hp = ts.theta[sel] - savgol_filter(ts.theta[sel], win, 2)
@@ -720,11 +720,6 @@ def end_of_motion(S: _Stack, mp: ModelParams, min_ratio=3.0, window_s=1.0):
                 f"the record shows ({int(np.sum(r > min_ratio))} of {r.size} tests; last measured impact at "
                 f"{np.median(speeds):.2f} thetadot_r)"]
     return []
-
-
-def _odd_samples(n):
-    n = max(int(round(n)), 5)
-    return n + 1 - n % 2
 
 
 # ---------------------------------------------------------------------------

@@ -170,7 +170,8 @@ class Motion:
     thetadot_release: float
 
 
-def _odd(n, lo):
+def odd_samples(n, lo=5):
+    """Odd Savitzky-Golay window length nearest ``n`` samples, at least ``lo``."""
     n = max(int(round(n)), lo)
     return n + 1 - n % 2
 
@@ -183,7 +184,7 @@ def noise_level(theta, fs):
     do not, and the median ignores the few samples around impacts.
     """
     theta = np.asarray(theta, float)
-    win = _odd(0.1 * fs, 7)
+    win = odd_samples(0.1 * fs, 7)
     if theta.size <= win:
         return float(1.4826 * np.median(np.abs(np.diff(theta)))) / np.sqrt(2.0)
     r = theta - savgol_filter(theta, win, 3)
@@ -310,7 +311,7 @@ def find_release(t, u, p, fs, noise, smooth_win):
     i_half = i_max + int(below[0])
     # Hold velocity: zero on a plateau, the screw speed on a slow ramp (the
     # campaign records creep at ~3e-4 rad/s before the wall leaves the screw).
-    vwin = _odd(0.1 * fs, 5)
+    vwin = odd_samples(0.1 * fs)
     vs = savgol_filter(u, vwin, 2, deriv=1, delta=1.0 / fs)
     drop = np.flatnonzero(us[i_max:i_half] < 0.98 * us[i_max])
     i_q = i_max + (int(drop[0]) if drop.size else 0)
@@ -384,7 +385,7 @@ def extract_motion(t, theta, fs, boundary, p, *, k_noise=10.0, ring_guard_s=0.06
     t = np.asarray(t, float)
     theta = np.asarray(theta, float)
     noise = noise_level(theta, fs)
-    smooth_win = _odd(0.025 * fs, 5)
+    smooth_win = odd_samples(0.025 * fs)
     sm = savgol_filter(theta, smooth_win, 2)
     sign = 1 if sm[np.argmax(np.abs(sm))] >= 0 else -1
     u = sign * theta
