@@ -71,6 +71,15 @@ REST_TOL = 1e-3
 OVERTURN = math.pi / 2
 
 
+def _restoring(theta, a, ag_g, linear, sin, cos):
+    """thetaddot / p^2 without the flight loss on the hinge at signed angle
+    ``a`` (module docstring, exact or linear); ``sin``, ``cos`` from math or
+    numpy."""
+    if linear:
+        return theta - a - ag_g
+    return -(sin(a - theta) + ag_g * cos(a - theta))
+
+
 @dataclass(frozen=True)
 class RockingModel:
     """A rocking wall: geometry, boundary condition, impact law and form.
@@ -165,24 +174,19 @@ class RockingModel:
     def acceleration(self, theta, thetadot, side, ag):
         """Angular acceleration [rad/s^2] on hinge ``side`` under ``ag`` [m/s^2]."""
         a = side * self.alpha_side(side)
-        damp = 2.0 * self.flight_damping * self.p * thetadot
-        if self.form == "linear":
-            return self.p**2 * (theta - a - ag / wall.G) - damp
-        return -self.p**2 * (np.sin(a - theta) + ag / wall.G * np.cos(a - theta)) - damp
+        restoring = _restoring(theta, a, ag / wall.G, self.form == "linear", np.sin, np.cos)
+        return self.p**2 * restoring - 2.0 * self.flight_damping * self.p * thetadot
 
     def equation_of_motion(self, side, a0, slope, t0):
         """Right-hand side f(t, y) for solve_ivp, y = (theta, thetadot), on hinge
-        ``side`` under ag(t) = a0 + slope (t - t0) [m/s^2]; scalar and lean,
-        since the event-driven reference calls it millions of times."""
+        ``side`` under ag(t) = a0 + slope (t - t0) [m/s^2]; scalar (math, not
+        numpy), since the event-driven reference calls it millions of times."""
         a = side * float(self.alpha_side(side))
-        p2, c, g = self.p**2, 2.0 * self.flight_damping * self.p, wall.G
-        if self.form == "linear":
-            def rhs(t, y):
-                return [y[1], p2 * (y[0] - a - (a0 + slope * (t - t0)) / g) - c * y[1]]
-        else:
-            def rhs(t, y):
-                ag = (a0 + slope * (t - t0)) / g
-                return [y[1], -p2 * (math.sin(a - y[0]) + ag * math.cos(a - y[0])) - c * y[1]]
+        p2, c, g, lin = self.p**2, 2.0 * self.flight_damping * self.p, wall.G, self.form == "linear"
+
+        def rhs(t, y):
+            return [y[1], p2 * _restoring(y[0], a, (a0 + slope * (t - t0)) / g, lin, math.sin, math.cos) - c * y[1]]
+
         return rhs
 
     def energy(self, theta, thetadot, side):
@@ -403,8 +407,12 @@ def _reference(model, rec, theta0, thetadot0, t_end, fs, overturn, rest_tol, rto
         t_seg, a0, slope, tk = rec.piece(t, t_hard)
         rhs = model.equation_of_motion(s, a0, slope, tk)
 
-        def ev_base(tt, y):
-            return y[0]
+        # a segment that starts on the edge (after an impact, or at an onset)
+        # must not find that edge again at its first instant: when the first
+        # step spans the whole excursion, the root search would otherwise
+        # return the start and log a chain of impacts at one instant
+        def ev_base(tt, y, t0=t, s=s):
+            return y[0] if tt > t0 else float(s)
 
         ev_base.terminal, ev_base.direction = True, -float(s)
 
@@ -419,8 +427,8 @@ def _reference(model, rec, theta0, thetadot0, t_end, fs, overturn, rest_tol, rto
         events = [ev_base, ev_over, ev_peak]
         if model.one_sided and model.gap > 0 and s < 0:
 
-            def ev_tr(tt, y):
-                return y[0] + model.gap
+            def ev_tr(tt, y, t0=t):
+                return y[0] + model.gap if tt > t0 else 1.0
 
             ev_tr.terminal, ev_tr.direction = True, -1.0
             events.append(ev_tr)
@@ -540,19 +548,26 @@ def _accel(x, v, s, ag, prm):
 
 
 @numba.njit(cache=True, inline="always")
-def _linear_state(x0, v0, c0, c1, u, l1, l2, zp, E1, E2):
+def _transition(l1, l2, E1, E2):
+    """State-transition matrix of y'' + 2 zeta p y' - p^2 y = 0 over a time u,
+    from E1, E2 = exp(l1 u), exp(l2 u), the roots l1, l2 of
+    l^2 + 2 zeta p l - p^2 (cosh/sinh for zeta = 0)."""
+    d = l1 - l2
+    return ((l1 * E2 - l2 * E1) / d, (E1 - E2) / d, l1 * l2 * (E2 - E1) / d, (l1 * E1 - l2 * E2) / d)
+
+
+@numba.njit(cache=True, inline="always")
+def _linear_state(x0, v0, c0, c1, u, zp, F):
     """Closed form of x'' + 2 zeta p x' - p^2 x = -p^2 (c0 + c1 u) after time u.
 
-    E1, E2 = exp(l1 u), exp(l2 u), the roots l1, l2 of l^2 + 2 zeta p l - p^2
-    (cosh/sinh for zeta = 0), precomputed for a full record step.
+    ``F`` is :func:`_transition` over u: as a matrix product the new state
+    is two multiply-adds away from the old one, a short dependency chain in
+    the record loop (1.6x faster than through the modal constants).
     """
     xp0 = c0 + zp * c1
     y0 = x0 - xp0
     yd0 = v0 - c1
-    d = l1 - l2
-    C1 = (yd0 - l2 * y0) / d
-    C2 = (l1 * y0 - yd0) / d
-    return C1 * E1 + C2 * E2 + xp0 + c1 * u, l1 * C1 * E1 + l2 * C2 * E2 + c1
+    return F[0] * y0 + F[1] * yd0 + xp0 + c1 * u, F[2] * y0 + F[3] * yd0 + c1
 
 
 @numba.njit(cache=True)
@@ -566,16 +581,19 @@ def _rk4(x, v, s, ga, gb, u, prm):
     return (x + u / 6.0 * (k1x + 2 * k2x + 2 * k3x + k4x), v + u / 6.0 * (k1v + 2 * k2v + 2 * k3v + k4v))
 
 
-@numba.njit(cache=True)
-def _advance(x, v, s, ga, gb, u, prm, l1, l2, zp, h, E1h, E2h):
+@numba.njit(cache=True, inline="always")
+def _advance(x, v, s, ga, gb, u, prm, l1, l2, zp, h, Fh):
     """State after time u from (x, v) on hinge s, ag linear from ga to gb."""
     if prm[_P_LIN] > 0:
         a = s * (prm[_P_APOS] if s > 0 else prm[_P_ANEG])
         g = prm[_P_G]
-        c1 = (gb - ga) / (g * u) if u > 0 else 0.0
         if u == h:
-            return _linear_state(x, v, a + ga / g, c1, u, l1, l2, zp, E1h, E2h)
-        return _linear_state(x, v, a + ga / g, c1, u, l1, l2, zp, math.exp(l1 * u), math.exp(l2 * u))
+            # multiplications by reciprocals: divisions cost as much as the
+            # closed form itself in the record loop
+            ig = 1.0 / g
+            return _linear_state(x, v, a + ga * ig, (gb - ga) * (ig / h), u, zp, Fh)
+        c1 = (gb - ga) / (g * u) if u > 0 else 0.0
+        return _linear_state(x, v, a + ga / g, c1, u, zp, _transition(l1, l2, math.exp(l1 * u), math.exp(l2 * u)))
     return _rk4(x, v, s, ga, gb, u, prm)
 
 
@@ -626,6 +644,52 @@ def _outside(x, s, prm, ov):
 
 
 @numba.njit(cache=True)
+def _locate(x, v, s, ga, gb, u, prm, l1, l2, zp, h, Fh, ov, edge, target, f0, f1):
+    """First root in (0, u] of theta - ``target`` (``edge``) or of thetadot.
+
+    Safeguarded Newton from the linear interpolation of ``f0``, ``f1`` (the
+    function at the step ends): each trial integrates from the step start,
+    the derivative is thetadot or :func:`_accel`, and a trial that leaves
+    the bracket falls back to bisection.  The bracket side is decided by the
+    hinge's range (edge) or by the sign of thetadot.
+
+    Returns
+    -------
+    t, theta, thetadot at the root.
+    """
+    lo, hi = 0.0, u
+    tn = u * f0 / (f0 - f1) if f0 != f1 else 0.5 * u
+    xm, vm = x, v
+    # theta is a sum of terms of size ~ alpha + |ag|/g: below this rounding
+    # floor Newton only wanders (slow, small velocities)
+    floor = 1e-15 * (abs(x) + prm[_P_APOS] + abs(ga) / prm[_P_G]) if edge else 0.0
+    tol = (1e-13 if edge else 1e-12) * u
+    for _ in range(60):
+        if not (lo < tn < hi):
+            tn = 0.5 * (lo + hi)
+        gm = ga + (gb - ga) * tn / u
+        xm, vm = _advance(x, v, s, ga, gm, tn, prm, l1, l2, zp, h, Fh)
+        if edge:
+            f, df, inside = xm - target, vm, _outside(xm, s, prm, ov) == 0
+        else:
+            f, df, inside = vm, _accel(xm, vm, s, gm, prm), vm * v > 0.0
+        if inside:
+            lo = tn
+        else:
+            hi = tn
+        if f == 0.0 or hi - lo <= tol:
+            break
+        if df == 0.0:
+            tn = 0.5 * (lo + hi)
+            continue
+        d = f / df
+        if abs(d) <= 1e-12 * u or abs(f) <= floor:
+            break
+        tn = tn - d
+    return tn, xm, vm
+
+
+@numba.njit(cache=True)
 def run_history(ag, h, scale, n_tail, prm, law, x, v, log_t, log_vb, log_va, log_peak):
     """Event-driven integration of one wall, sample interval by sample interval.
 
@@ -652,8 +716,8 @@ def run_history(ag, h, scale, n_tail, prm, law, x, v, log_t, log_vb, log_va, log
     l1 = p * (-zeta + math.sqrt(zeta * zeta + 1.0))
     l2 = p * (-zeta - math.sqrt(zeta * zeta + 1.0))
     zp = 2.0 * zeta / p if p > 0 else 0.0
-    E1h = math.exp(l1 * h)
-    E2h = math.exp(l2 * h)
+    ih = 1.0 / h
+    Fh = _transition(l1, l2, math.exp(l1 * h), math.exp(l2 * h))
     want_peaks = log_t.shape[0] > 0
     ov = prm[_P_OV]
     gap = prm[_P_GAP]
@@ -693,7 +757,7 @@ def run_history(ag, h, scale, n_tail, prm, law, x, v, log_t, log_vb, log_va, log
         t0 = k * h
         tau = 0.0
         while tau < h:
-            ga = ga0 + (ga1 - ga0) * tau / h
+            ga = ga0 + (ga1 - ga0) * (tau * ih)
             if resting:
                 # onset: first zero of the (affine in ag) acceleration at rest
                 t_on = h + 1.0
@@ -733,35 +797,15 @@ def run_history(ag, h, scale, n_tail, prm, law, x, v, log_t, log_vb, log_va, log
             if u <= 1e-14 * h:
                 tau = tb
                 continue
-            gb = ga0 + (ga1 - ga0) * tb / h
-            x1, v1 = _advance(x, v, s, ga, gb, u, prm, l1, l2, zp, h, E1h, E2h)
+            gb = ga0 + (ga1 - ga0) * (tb * ih)
+            x1, v1 = _advance(x, v, s, ga, gb, u, prm, l1, l2, zp, h, Fh)
             ev = _outside(x1, s, prm, ov)
             toward_edge = s * v < 0.0 or (one and s < 0.0)
             if ev == 0 and v * v1 < 0.0 and (want_peaks or toward_edge):
                 # thetadot changes sign inside the step: the turning point is a
                 # peak, or (moving towards an edge) may lie past the edge, an
                 # impact that both step ends miss
-                # safeguarded Newton on thetadot (its derivative is _accel)
-                lo, hi = 0.0, u
-                tn = u * v / (v - v1)
-                tm = tn
-                for _ in range(60):
-                    if not (lo < tn < hi):
-                        tn = 0.5 * (lo + hi)
-                    gm = ga + (gb - ga) * tn / u
-                    tm = tn
-                    xm, vm = _advance(x, v, s, ga, gm, tm, prm, l1, l2, zp, h, E1h, E2h)
-                    if vm * v > 0.0:
-                        lo = tn
-                    else:
-                        hi = tn
-                    am = _accel(xm, vm, s, gm, prm)
-                    if hi - lo <= 1e-12 * u or am == 0.0:
-                        break
-                    d = vm / am
-                    if abs(d) <= 1e-12 * u:
-                        break
-                    tn = tn - d
+                tm, xm, vm = _locate(x, v, s, ga, gb, u, prm, l1, l2, zp, h, Fh, ov, False, 0.0, v, v1)
                 if toward_edge and _outside(xm, s, prm, ov) != 0:
                     gb = ga + (gb - ga) * tm / u
                     u, x1, v1 = tm, xm, vm
@@ -773,43 +817,18 @@ def run_history(ag, h, scale, n_tail, prm, law, x, v, log_t, log_vb, log_va, log
                 peak = max(peak, abs(x))
                 tau = tb
                 continue
-            # event: safeguarded Newton (bisection fallback) for the exit from the hinge's range
+            # event: the exit from the hinge's range
             if ev == 3:
                 target = ov if x1 > 0 else -ov
             elif ev == 2:
                 target = -gap
             else:
                 target = 0.0
-            lo, hi = 0.0, u
-            f0, f1 = x - target, x1 - target
-            tn = u * f0 / (f0 - f1) if f0 != f1 else 0.5 * u
-            xm, vm = x1, v1
-            # theta is a sum of terms of size ~ alpha + |ag|/g: below this
-            # rounding floor Newton only wanders (slow, small velocities)
-            x_floor = 1e-15 * (abs(x) + prm[_P_APOS] + abs(ga) / prm[_P_G])
-            for _ in range(60):
-                if not (lo < tn < hi):
-                    tn = 0.5 * (lo + hi)
-                xm, vm = _advance(x, v, s, ga, ga + (gb - ga) * tn / u, tn, prm, l1, l2, zp, h, E1h, E2h)
-                if _outside(xm, s, prm, ov) == 0:
-                    lo = tn
-                else:
-                    hi = tn
-                f = xm - target
-                if f == 0.0 or hi - lo <= 1e-13 * u:
-                    break
-                if vm == 0.0:
-                    tn = 0.5 * (lo + hi)
-                    continue
-                d = f / vm
-                if abs(d) <= 1e-12 * u or abs(f) <= x_floor:
-                    break
-                tn = tn - d
+            tn, xm, vm = _locate(x, v, s, ga, gb, u, prm, l1, l2, zp, h, Fh, ov, True, target, x - target, x1 - target)
             ev = _outside(xm, s, prm, ov)
             if ev == 0:
                 ev = _outside(x1, s, prm, ov)
-            hi = tn
-            tau = tau + hi
+            tau = tau + tn
             if ev == 3:
                 a_s = prm[_P_APOS] if s > 0 else prm[_P_ANEG]
                 max_ratio = max(max_ratio, ov / a_s)
