@@ -64,7 +64,7 @@ def wearing(rate, c):
 
 
 def sticking(v_stick, c):
-    """e = c e_an,2s, but the wall sticks (e = 0) below v_stick thetadot_r: outside the catalogue."""
+    """e = c e_an,2s, but the wall sticks (e = 0) on landings slower than v_stick thetadot_r."""
     def e(thetadot, side, alpha, p):
         fast = abs(thetadot) > v_stick * wall.overturning_velocity(alpha, p)
         return c * restitution.two_sided(alpha) if fast else 0.0
@@ -117,8 +117,9 @@ SCENARIOS = {
                                   {"contact_gap": {"gap_over_alpha": 0.015},
                                    "instability_angle": {"alpha_r_over_alpha": 0.76},
                                    "restitution_amplitude": {"a": 1.18, "b": 0.5}}),
+    "sticking": ("two-sided", sticking(0.15, 0.95), {},
+                 {"restitution_scale": {"c": 0.95}, "stop_threshold": {"v_stop_over_vr": 0.15}}),
     "wearing": ("two-sided", wearing(0.006, 0.97), {}, None),
-    "sticking": ("two-sided", sticking(0.15, 0.95), {}, None),
 }
 
 
@@ -156,17 +157,46 @@ def test_hidden_causes_named_recovered_with_a_gain(diagnosed, name):
             lo, hi = f["ci95"][k]
             tol = 0.02 * abs(x) + 1e-4
             assert lo - tol <= x <= hi + tol, (f["effect"], k, x, f["params"][k], (lo, hi))
-        assert f["gain"]["deviance_per_obs"] > 0
+        if f["effect"] == "stop_threshold":     # a censoring at the end, not a residual: its own measures
+            assert f["gain"]["n_impacts_rms"] > 0 and f["gain"]["duration_pct_rms"] > 0
+        else:
+            assert f["gain"]["deviance_per_obs"] > 0
     h = e["heldout"]
     assert h["model"]["free_run_log_peak_rms"] < h["base"]["free_run_log_peak_rms"]
 
 
-@pytest.mark.parametrize("name", ["wearing", "sticking"])
-def test_effect_outside_the_catalogue_is_flagged(diagnosed, name):
-    e = diagnosed[name]
+def test_effect_outside_the_catalogue_is_flagged(diagnosed):
+    e = diagnosed["wearing"]
     assert e["unexplained"] and e["residual_structure"]
-    if name == "sticking":
-        assert any(s.startswith("end of motion") for s in e["residual_structure"])
+
+
+def test_a_stop_is_named_only_where_the_walls_stop_dead(diagnosed):
+    assert "end of motion" not in " ".join(diagnosed["null-2s"]["residual_structure"])
+    assert all("stop_threshold" not in e["verdict"] for k, e in diagnosed.items() if k != "sticking")
+    e = diagnosed["sticking"]
+    f = next(f for f in e["findings"] if f["effect"] == "stop_threshold")
+    base, model = e["base"]["errors"], e["extended"]["errors"]
+    # Housner's model rocks on far longer; with the threshold the free run stops with the wall
+    assert base["duration_s"]["model"] > 1.2 * base["duration_s"]["measured"]
+    assert model["duration_s"]["model"] == pytest.approx(model["duration_s"]["measured"], rel=0.05)
+    assert f["params"]["spread_log"] < 0.1          # one threshold: only the bracket's width spreads it
+
+
+def test_stop_speeds_bracket_the_sticking_landing():
+    """Exact simulator, no noise: the bracket of each wall holds the landing speed that stuck."""
+    alpha, p = 0.1, 3.0
+    model = RockingModel(alpha=alpha, p=p, impact=I.Sticking(I.Scaled(H(), 0.97), 0.2))
+    tests = []
+    for th0 in (0.9, 0.8, 0.7):
+        h = simulate_free(model, th0 * alpha, 0.0, t_end=20.0, fs=400)
+        t_imp, pk = h.impacts.t.to_numpy(), h.impacts.theta_peak_before.to_numpy()
+        assert h.impacts.thetadot_after.iloc[-1] == 0.0          # the landing that stuck
+        n = t_imp.size - 1                                        # impacts that launched a flight
+        z = np.zeros(n)
+        tests.append(D.MeasuredTest("x", alpha, p, "two-sided", "push", 1, th0 * alpha, pk[1:], z, z, t_imp[:n],
+                                    t_imp[:n], z, 0.0, float(t_imp[-1]), 1e-9, t=h.t, theta=h.theta))
+    lo, hi = D.stop_speeds(D._Stack.of(tests), D.model_params(tests, ("restitution_scale",), {"c": 0.97}))
+    assert np.all(lo < 0.2) and np.all(0.2 <= hi) and np.all(lo / hi > 0.9)
 
 
 def test_what_is_wrong_is_consistent_with_the_numbers(diagnosed):

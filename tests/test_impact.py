@@ -47,3 +47,12 @@ def test_custom_law_has_no_flat_form():
     assert law.coefficient(1.0, -1, ALPHA, P) == 0.6
     with pytest.raises(NotImplementedError):
         law.flat(ALPHA)
+
+
+def test_sticking_law_stops_slow_landings_only():
+    vr = float(wall.overturning_velocity(ALPHA, P))
+    law = impact.Sticking(impact.HousnerTwoSided(), 0.1)
+    e = law.coefficient(np.array([-0.099, 0.101, -0.5]) * vr, 1, ALPHA, P)
+    np.testing.assert_allclose(e, [0.0, restitution.two_sided(ALPHA), restitution.two_sided(ALPHA)])
+    with pytest.raises(NotImplementedError):
+        law.flat(ALPHA)

@@ -86,7 +86,17 @@ already in are tested for removal.  ``unexplained`` flags what survives the
 chosen model: a bias, or a trend with the impact index or the amplitude, of
 a residual group, significant across tests (cluster-robust) and larger than
 1 % and than the group's resolution; or walls that stop dead where the
-model rocks on (:func:`end_of_motion`).
+model rocks on (:func:`end_of_motion`), unless a stop threshold explains
+them.
+
+Stopping dead
+-------------
+A stop is no residual of a flight but the absence of the next one, so it is
+not fitted with the groups: once the chosen model is known and the walls
+stop dead, each wall brackets the landing speed it stuck at
+(:func:`stop_speeds`) and :func:`stop_threshold` estimates the series'
+threshold (:class:`rocklab.impact.Sticking`), named when it at least
+halves the held-out error of the free run in the number of impacts.
 """
 
 from __future__ import annotations
@@ -449,12 +459,13 @@ def impact_speeds(v, side, mp: ModelParams):
     return v_out, depth, duration, v_in, w
 
 
-def rocking_model(test: MeasuredTest, ext=(), values=None, base="analytic") -> RockingModel:
+def rocking_model(test: MeasuredTest, ext=(), values=None, base="analytic", stop=0.0) -> RockingModel:
     """The :class:`rocklab.rocking.RockingModel` of a diagnosis model, for one test.
 
     ``base``: ``"analytic"`` (Eq. 2 / Eq. 14), ``"two-sided-e"`` (e_an,2s used
     for a one-sided wall, Hogan 1992) or ``"zero"`` (e = 0, Liberatore & Spera
-    2003).
+    2003).  ``stop``: landing speed [thetadot_r] below which the wall stops
+    dead at the base (:class:`rocklab.impact.Sticking`, :func:`stop_threshold`).
     """
     mp = model_params([test], ext, values).row(0)
     one = test.boundary == "one-sided"
@@ -475,12 +486,14 @@ def rocking_model(test: MeasuredTest, ext=(), values=None, base="analytic") -> R
     if mp.amp_b != 0.0 or mp.amp_a != 1.0:
         calibrated = _impact.AmplitudeLaw(calibrated, float(mp.amp_a), float(mp.amp_b))
     law, transverse = (law, calibrated) if mp.gap_model else (calibrated, None)
+    if stop > 0:
+        law = _impact.Sticking(law, stop)
     return RockingModel(alpha=test.alpha, p=test.p, boundary=test.boundary, impact=law,
                         alpha_rock=float(mp.a_pos), alpha_neg=float(mp.a_neg),
                         flight_damping=float(mp.zeta), gap=float(mp.gap), transverse_impact=transverse)
 
 
-def simulate_test(test: MeasuredTest, ext=(), values=None, base="analytic", t_end=None, fs=None):
+def simulate_test(test: MeasuredTest, ext=(), values=None, base="analytic", t_end=None, fs=None, stop=0.0):
     """Free run of a diagnosis model from the test's measured release (rotation and speed), on its clock.
 
     Returns
@@ -488,7 +501,7 @@ def simulate_test(test: MeasuredTest, ext=(), values=None, base="analytic", t_en
     t, theta : ndarray
         Time [s] from the start of the record and rotation [rad] (NaN-free).
     """
-    model = rocking_model(test, ext, values, base)
+    model = rocking_model(test, ext, values, base, stop)
     a0 = model.alpha_side(test.side0)
     fs = 1.0 / test.dt if fs is None else fs
     t_end = (test.t_end - test.t_release) * 1.2 + 1.0 if t_end is None else t_end
@@ -632,8 +645,11 @@ def release(S: _Stack, mp: ModelParams):
     return v, quarter_period(th, a0, mp.p) - linear(0.0) + linear(S.v0 / mp.p)
 
 
-def free_run(S: _Stack, mp: ModelParams, n_max=600):
+def free_run(S: _Stack, mp: ModelParams, n_max=600, stop=0.0):
     """Free run of the model from each test's release, closed form.
+
+    ``stop`` (scalar or per test): landing speed [thetadot_r] below which
+    the wall stops dead (:func:`stop_threshold`).
 
     Returns
     -------
@@ -647,9 +663,11 @@ def free_run(S: _Stack, mp: ModelParams, n_max=600):
     out = {k: np.zeros((T, n_max)) for k in ("peaks", "t_before", "t_after", "depth")}
     v, t = release(S, mp)
     first = t.copy()
+    v_stop = stop * overturning_velocity(mp.alpha, mp.p)
     for k in range(n_max):
         if k:
             v = landing_speed(A, a, mp.p, mp.zeta)
+        v = np.where(v < v_stop, 0.0, v)
         v_out, d, tau, _, _ = impact_speeds(v, side, mp)
         side = np.where(mp.one_sided, side, -side)
         a = mp.hinge(side)
@@ -720,6 +738,94 @@ def end_of_motion(S: _Stack, mp: ModelParams, min_ratio=3.0, window_s=1.0):
                 f"the record shows ({int(np.sum(r > min_ratio))} of {r.size} tests; last measured impact at "
                 f"{np.median(speeds):.2f} thetadot_r)"]
     return []
+
+
+def stop_speeds(S: _Stack, mp: ModelParams, min_ratio=3.0, tail_s=0.5):
+    """Landing speeds [thetadot_r] between which each wall stopped dead.
+
+    The last measured flight (apex A_n) was launched by a landing at v_n
+    (from the apex before it) and lands at v_L < v_n.  Had the wall taken
+    off again, the model's next apex would be A_next; where A_next is
+    ``min_ratio`` times above the noise floor and the record runs ``tail_s``
+    past the end, the reduction would have seen that flight, so the wall
+    stuck at a landing speed in (v_L, v_n].
+
+    Returns
+    -------
+    lo, hi : ndarray (tests,)
+        v_L / thetadot_r and v_n / thetadot_r; NaN where the stop cannot be
+        told from a flight too small to see.
+    """
+    T = len(S.tests)
+    lo, hi = np.full(T, np.nan), np.full(T, np.nan)
+    for i, ts in enumerate(S.tests):
+        n = ts.n_impacts
+        if n < 2 or ts.t is None or ts.t[-1] - ts.t_end < tail_s:
+            continue
+        mpi = mp.row(i)
+        # hinge of the flight after impact k (0-based)
+        hinge = [float(S.side[i, k]) if mpi.one_sided else -float(S.side[i, k]) for k in (n - 2, n - 1)]
+        v_n = landing_speed(ts.peaks[n - 2], mpi.hinge(hinge[0]), mpi.p, mpi.zeta)
+        v_l = landing_speed(ts.peaks[n - 1], mpi.hinge(hinge[1]), mpi.p, mpi.zeta)
+        w = impact_speeds(v_l, hinge[1], mpi)[0]
+        nxt = hinge[1] if mpi.one_sided else -hinge[1]
+        if apex_after(w, mpi.hinge(nxt), mpi.p, mpi.zeta) < min_ratio * ts.floor:
+            continue
+        vr = float(overturning_velocity(ts.alpha, ts.p))
+        lo[i], hi[i] = v_l / vr, v_n / vr
+    return lo, hi
+
+
+def stop_threshold(tests, ext=(), values=None, *, n_boot=200, seed=0, min_tests=3):
+    """The landing speed below which the walls of a series stop dead, and what it gains.
+
+    Each test brackets its own stop speed (:func:`stop_speeds`, a bracket as
+    narrow as e); the series' threshold is the geometric mean of the bracket
+    centres, with a bootstrap (over tests) 95 % interval and the test-to-test
+    spread of log speed (Fig. 18's scatter of the number of cycles).  Where
+    the brackets share a common part, one threshold fits every wall: the
+    estimate is that part's geometric centre and the interval spans it.  Gain:
+    the free run of the model (:func:`engineering_rows`) with each test's
+    threshold taken from the other tests (leave one out) against the model
+    without it, in the number of impacts and the duration of rocking.
+
+    Returns
+    -------
+    dict or None
+        None when fewer than ``min_tests`` tests (or half of them) show a
+        stop; otherwise ``v_stop_over_vr``, ``ci95``, ``spread_log``,
+        ``n_observed``, held-out rms errors ``n_impacts_rms`` and
+        ``duration_pct_rms`` as (base, with threshold), and ``named`` (the
+        held-out error in the number of impacts at least halved).
+    """
+    S = _Stack.of(tests)
+    lo, hi = stop_speeds(S, model_params(tests, ext, values))
+    ok = np.isfinite(lo)
+    if ok.sum() < max(min_tests, 0.5 * len(tests)):
+        return None
+    x = 0.5 * (np.log(lo[ok]) + np.log(hi[ok]))
+    rng = np.random.default_rng(seed)
+    boots = np.exp([rng.choice(x, x.size).mean() for _ in range(n_boot)])
+    ci = [float(np.percentile(boots, 2.5)), float(np.percentile(boots, 97.5))]
+    L, U = np.max(lo[ok]), np.min(hi[ok])
+    centre = float(np.exp(x.mean()))
+    if L < U:
+        # one threshold fits every wall: it is known only within the common
+        # bracket, however alike the walls' brackets are
+        centre, ci = float(np.sqrt(L * U)), [min(ci[0], float(L)), max(ci[1], float(U))]
+    obs = [tests[i] for i in np.flatnonzero(ok)]
+    loo = np.exp((x.sum() - x) / (x.size - 1))
+
+    def errors(rows):
+        n = np.array([r["n_impacts"][1] - r["n_impacts"][0] for r in rows], float)
+        d = np.array([100.0 * (r["duration_s"][1] / r["duration_s"][0] - 1.0) for r in rows], float)
+        return float(np.sqrt(np.mean(n**2))), float(np.sqrt(np.mean(d**2)))
+
+    (n0, d0), (n1, d1) = errors(engineering_rows(obs, ext, values)), errors(engineering_rows(obs, ext, values,
+                                                                                             stop=loo))
+    return {"v_stop_over_vr": centre, "ci95": ci, "common_bracket": L < U,
+            "spread_log": float(x.std(ddof=1)), "n_observed": int(ok.sum()), "n_tests": len(tests),
+            "n_impacts_rms": (n0, n1), "duration_pct_rms": (d0, d1), "named": n1 <= 0.5 * n0}
 
 
 # ---------------------------------------------------------------------------
@@ -1348,7 +1454,7 @@ def _asymmetry_signature(tests, S, ratio, a_T, ok, big):
 # engineering measures
 
 
-def engineering_rows(tests, ext=(), values=None, base="analytic", n_max=600):
+def engineering_rows(tests, ext=(), values=None, base="analytic", n_max=600, stop=0.0):
     """Per-test measures of a model's free run against the measured motion.
 
     Returns
@@ -1367,7 +1473,7 @@ def engineering_rows(tests, ext=(), values=None, base="analytic", n_max=600):
         mp = replace(mp, e0=0.0 * mp.e0, gap_model=np.zeros_like(mp.gap_model))
     elif base == "two-sided-e":
         mp = replace(mp, e0=np.where(mp.one_sided, -restitution.two_sided(mp.alpha), mp.e0))
-    run = free_run(S, mp, n_max)
+    run = free_run(S, mp, n_max, stop)
     R = residuals(S, mp)
     rows = []
     for i, ts in enumerate(tests):
@@ -1397,11 +1503,11 @@ def engineering_rows(tests, ext=(), values=None, base="analytic", n_max=600):
     return rows
 
 
-def history_rms(test: MeasuredTest, ext=(), values=None, base="analytic"):
+def history_rms(test: MeasuredTest, ext=(), values=None, base="analytic", stop=0.0):
     """RMS of (theta_model - theta_measured) / alpha over the measured motion (exact simulator)."""
     if test.t is None:
         return np.nan
-    t, th = simulate_test(test, ext, values, base)
+    t, th = simulate_test(test, ext, values, base, stop=stop)
     sel = (test.t >= test.t_release) & (test.t <= test.t_end)
     m = np.interp(test.t[sel], t, th, right=0.0)
     return float(np.sqrt(np.mean((m - test.theta[sel]) ** 2)) / test.alpha)
@@ -1420,10 +1526,10 @@ def summarise_rows(rows):
     return out
 
 
-def engineering_errors(tests, ext=(), values=None, base="analytic", n_history=2):
+def engineering_errors(tests, ext=(), values=None, base="analytic", n_history=2, stop=0.0):
     """Series means of :func:`engineering_rows` and the RMS of theta/alpha on ``n_history`` tests."""
-    out = summarise_rows(engineering_rows(tests, ext, values, base))
-    rms = [history_rms(t, ext, values, base) for t in tests[:n_history]]
+    out = summarise_rows(engineering_rows(tests, ext, values, base, stop=stop))
+    rms = [history_rms(t, ext, values, base, stop) for t in tests[:n_history]]
     out["rms_theta_over_alpha"] = finite_mean(rms) if rms else None
     return out
 
@@ -1559,7 +1665,14 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
             "gain": _gain(sel["base"], st["heldout"]) | {"deviance_per_obs": st["gain"]},
         })
     findings.sort(key=lambda f: -f["gain"]["deviance_per_obs"])
-    unexplained = bool(sel["structure"]) and not sel["weak"]
+    structure = list(sel["structure"])
+    stop = None
+    if any(st.startswith("end of motion") for st in structure):
+        stop = stop_threshold(tests, effects, values, seed=seed)
+    if stop is not None and stop["named"]:
+        structure = [st for st in structure if not st.startswith("end of motion")]
+        findings.append(_stop_finding(stop))
+    unexplained = bool(structure) and not sel["weak"]
     if not effects and not unexplained and not off:
         verdict_text = "the base model explains the data within the noise"
     elif not effects and not unexplained:
@@ -1571,17 +1684,37 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         "n_impacts": int(sum(t.n_impacts for t in tests)),
         "base": base, "what_is_wrong": (verdict_text + ": " if verdict_text else "") + statement,
         "verdict": [f["effect"] for f in findings], "unexplained": unexplained,
-        "residual_structure": sel["structure"], "findings": findings,
+        "residual_structure": structure, "findings": findings,
         "weak_evidence": {k: v["reason"] for k, v in sel["weak"].items()},
         "rejected": sel["rejected"], "signatures": {k: v["text"] for k, v in sig.items()},
         "heldout": {"base": _heldout_summary(sel["base"]), "model": _heldout_summary(sel["final"])},
     }
-    if effects:
-        ext_err = engineering_errors(tests, effects, values, n_history=n_history)
-        entry["extended"] = {"effects": effects, "params": values, "errors": ext_err,
-                             "statement": what_is_wrong(ext_err, "the extended model")[0]}
+    v_stop = stop["v_stop_over_vr"] if stop is not None and stop["named"] else 0.0
+    if effects or v_stop:
+        ext_err = engineering_errors(tests, effects, values, n_history=n_history, stop=v_stop)
+        entry["extended"] = {"effects": effects + (["stop_threshold"] if v_stop else []),
+                             "params": {**values, **({"v_stop_over_vr": v_stop} if v_stop else {})},
+                             "errors": ext_err, "statement": what_is_wrong(ext_err, "the extended model")[0]}
     entry["sample_test"] = tests[int(np.argmax([t.n_impacts for t in tests]))].test_id
     return entry
+
+
+def _stop_finding(stop):
+    """A finding of :func:`diagnose_series` from :func:`stop_threshold`."""
+    (n0, n1), (d0, d1) = stop["n_impacts_rms"], stop["duration_pct_rms"]
+    return {
+        "effect": "stop_threshold",
+        "params": {"v_stop_over_vr": stop["v_stop_over_vr"], "spread_log": stop["spread_log"]},
+        "ci95": {"v_stop_over_vr": stop["ci95"]},
+        "evidence": {"signature": f"{stop['n_observed']} of {stop['n_tests']} walls stop dead at a landing of "
+                                  f"{stop['v_stop_over_vr']:.3f} thetadot_r (test to test x/÷ "
+                                  f"{math.exp(stop['spread_log']):.2f}) where the model's next flight would "
+                                  f"be 3 times the noise",
+                     "fit": f"held-out rms error of the number of impacts {n0:.1f} -> {n1:.1f}, "
+                            f"of the rocking duration {d0:.1f} % -> {d1:.1f} %"},
+        "error_heldout": {"deviance_per_obs": None, "n_impacts_rms": n1, "duration_pct_rms": d1},
+        "gain": {"deviance_per_obs": None, "n_impacts_rms": n0 - n1, "duration_pct_rms": d0 - d1},
+    }
 
 
 def _wmean(vals, w):
@@ -1759,8 +1892,9 @@ def diagnosis_markdown(entries) -> str:
                 fr = g.get("free_run_log_peak_rms")
                 ev = f["evidence"].get("signature") or f["evidence"].get("series", "")
                 out.append(f"| {f['effect']} | {_fmt_params(f)} | {_fmt_ci(f)} | "
-                           f"{f['error_heldout']['deviance_per_obs']:.3g} | {g['deviance_per_obs']:.3g}; "
-                           f"{'' if fr is None else f'{fr:.3f}'} | {ev} |")
+                           f"{_f(f['error_heldout']['deviance_per_obs'], '.3g')} | "
+                           f"{_f(g['deviance_per_obs'], '.3g')}; {'' if fr is None else f'{fr:.3f}'} | {ev} "
+                           f"{f['evidence'].get('fit', '') if f['effect'] == 'stop_threshold' else ''}|")
             out.append("")
         h = e.get("heldout")
         if h and h["base"].get("free_run_log_peak_rms") is not None:
@@ -1783,5 +1917,5 @@ def diagnosis_markdown(entries) -> str:
     return "\n".join(out)
 
 
-def _f(x):
-    return "n/a" if x is None else f"{x:.4f}"
+def _f(x, fmt=".4f"):
+    return "n/a" if x is None else format(x, fmt)

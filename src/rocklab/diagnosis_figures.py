@@ -56,7 +56,8 @@ def history_figure(test, entry):
         _plot(axes[0], t, th, test, ls=style, lw=0.9, label=label)
     ext = entry.get("extended")
     if ext:
-        t, th = simulate_test(test, ext["effects"], ext["params"], t_end=t_end)
+        t, th = simulate_test(test, ext["effects"], ext["params"], t_end=t_end,
+                              stop=ext["params"].get("v_stop_over_vr", 0.0))
         params = ", ".join(f"{k} = {v:.3g}" for k, v in ext["params"].items())
         _plot(axes[1], t, th, test, color="C3", lw=0.9, label=f"{' + '.join(ext['effects'])}\n({params})")
     else:
