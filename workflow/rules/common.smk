@@ -1,14 +1,29 @@
 # Paths, the campaign's test list and the per-test parameters that decide
 # when a test must be reduced again.
+import re
 from pathlib import Path
 
-from rocklab.campaign import open_campaign
+from rocklab.campaign import open_campaign, series_id
 
 RAW = Path(config["raw_dir"])
 RESULTS = Path(config["results_dir"])
 CAMPAIGN = open_campaign(RAW)
 TEST_IDS = list(dict.fromkeys(CAMPAIGN.tests.test_id))
 SAMPLE_TESTS = config.get("sample_tests", {})
+
+
+def _series_of(row):
+    try:
+        depth = float(row.contact_depth_mm)
+    except (TypeError, ValueError):
+        depth = None
+    return series_id(row.specimen, row.boundary, depth)
+
+
+#: The tests of each series, in the order of tests.csv (the unit of one reduction job).
+TESTS_BY_SERIES = {}
+for _row in CAMPAIGN.tests.drop_duplicates("test_id").itertuples():
+    TESTS_BY_SERIES.setdefault(_series_of(_row), []).append(_row.test_id)
 
 
 def res(*parts):
@@ -21,29 +36,29 @@ def schema_path(name):
     return str(Path(workflow.basedir, "workflow", "schemas", name))
 
 
-def record_input(wildcards):
-    """The test's record, when the log points at an existing file.
+def record_inputs(test_ids):
+    """The tests' records that exist where the log points.
 
     A missing record is not a missing input: the test is reduced to an
     'unreadable' entry and the rest of the campaign goes on.
     """
-    row = CAMPAIGN.test_row(wildcards.test_id)
-    path = RAW / row.file if row.file else None
-    return [str(path)] if path is not None and path.is_file() else []
+    rows = (CAMPAIGN.test_row(t) for t in test_ids)
+    paths = (RAW / row.file for row in rows if row.file)
+    return [str(p) for p in paths if p.is_file()]
 
 
-def test_params(wildcards):
+def test_params(test_id):
     """Everything of the tables that this test's reduction depends on.
 
     Passed as params (not the table files as inputs) so that editing one row
-    of tests.csv reduces that test again, not the whole campaign.
+    of tests.csv reduces that test's series again, not the whole campaign.
     """
-    row = CAMPAIGN.test_row(wildcards.test_id)
+    row = CAMPAIGN.test_row(test_id)
     out = {"row": {k: str(v) for k, v in row.items()}}
     if row.specimen in set(CAMPAIGN.specimens.specimen):
         out["specimen"] = {k: str(v) for k, v in CAMPAIGN.specimen(row.specimen).items()}
     out["setup"] = CAMPAIGN.setup(row.setup).astype(str).to_dict("records")
-    out["error"] = str(CAMPAIGN.log.errors.get(wildcards.test_id, ""))
+    out["error"] = str(CAMPAIGN.log.errors.get(test_id, ""))
     return out
 
 
