@@ -1,10 +1,11 @@
-"""Snakemake shim: results/diagnosis.json and diagnosis.md."""
+"""Snakemake shim: results/diagnosis.json and diagnosis.md from the series' diagnoses."""
 
-from rocklab.diagnosis import diagnose_campaign, records_by_series, write_diagnosis
-from rocklab.workflow import setup_logging, valid_tests
+import json
+from pathlib import Path
+
+from rocklab.diagnosis import with_boundaries, write_diagnosis
+from rocklab.workflow import setup_logging
 
 setup_logging(snakemake.log[0])
-entries = diagnose_campaign(records_by_series(valid_tests(snakemake.input.tests, snakemake.input.qc)),
-                            n_boot=snakemake.params.n_boot, n_history=snakemake.params.n_history,
-                            seed=snakemake.params.seed)
-write_diagnosis(entries, snakemake.output.json, snakemake.output.md)
+entries = [e for path in snakemake.input for e in json.loads(Path(path).read_text())]
+write_diagnosis(with_boundaries(entries, seed=snakemake.params.seed), snakemake.output.json, snakemake.output.md)

@@ -1804,6 +1804,26 @@ def diagnose_boundary(entries, boundary, *, n_boot=2000, seed=0):
     }
 
 
+def diagnose_records(records, key, *, n_boot=40, n_history=2, seed=0):
+    """:func:`diagnose_series` of one series' records, or None when fewer than
+    two of its tests have two impacts or more (nothing to diagnose)."""
+    tests = [r if isinstance(r, MeasuredTest) else measured_test(r) for r in records]
+    tests = [t for t in tests if t.n_impacts >= 2]
+    if len(tests) < 2:
+        return None
+    return diagnose_series(tests, key=str(key), n_boot=n_boot, n_history=n_history, seed=seed)
+
+
+def with_boundaries(entries, *, seed=0):
+    """Series entries followed by one entry per boundary condition (:func:`diagnose_boundary`)."""
+    out = list(entries)
+    for b in ("two-sided", "one-sided"):
+        e = diagnose_boundary(out, b, seed=seed)
+        if e is not None:
+            out.append(e)
+    return out
+
+
 def diagnose_campaign(series_records, *, n_boot=40, n_history=2, by_boundary=True, seed=0):
     """Diagnose every series and every boundary condition of a campaign.
 
@@ -1820,18 +1840,10 @@ def diagnose_campaign(series_records, *, n_boot=40, n_history=2, by_boundary=Tru
     list of dict
         The content of results/diagnosis.json.
     """
-    entries = []
-    for sid, recs in series_records.items():
-        tests = [r if isinstance(r, MeasuredTest) else measured_test(r) for r in recs]
-        tests = [t for t in tests if t.n_impacts >= 2]
-        if len(tests) >= 2:
-            entries.append(diagnose_series(tests, key=str(sid), n_boot=n_boot, n_history=n_history, seed=seed))
-    if by_boundary:
-        for b in ("two-sided", "one-sided"):
-            e = diagnose_boundary(entries, b, seed=seed)
-            if e is not None:
-                entries.append(e)
-    return entries
+    entries = [diagnose_records(recs, sid, n_boot=n_boot, n_history=n_history, seed=seed)
+               for sid, recs in series_records.items()]
+    entries = [e for e in entries if e is not None]
+    return with_boundaries(entries, seed=seed) if by_boundary else entries
 
 
 def jsonable(x):

@@ -1,5 +1,6 @@
 # Stage 4: model diagnosis (issue 6) - what the base simulation gets wrong,
-# which physical extensions the data carry, and the gain on held-out tests;
+# which physical extensions the data carry, and the gain on held-out tests:
+# one job per series, then the boundary conditions over the series;
 # Figs. 14-15 per series; the restitution of the UMinho limestone blocks.
 
 DIAGNOSIS = config.get("diagnosis", {})
@@ -11,16 +12,33 @@ def diagnosis_outputs():
             res("figures", "diagnosis"), res("limestone_diagnosis.json")]
 
 
-rule diagnosis:
+rule diagnose_series:
     input:
         qc=res("qc.csv"),
-        tests=expand(res("tests", "{test_id}.nc"), test_id=TEST_IDS),
+        tests=lambda wildcards: [res("tests", f"{t}.nc") for t in TESTS_BY_SERIES[wildcards.series]],
+    output:
+        res("diagnosis", "{series}.json"),
+    wildcard_constraints:
+        series="|".join(map(re.escape, TESTS_BY_SERIES)),
+    params:
+        n_boot=DIAGNOSIS.get("n_boot", 40),
+        n_history=DIAGNOSIS.get("n_history", 2),
+        seed=DIAGNOSIS.get("seed", 0),
+    log:
+        res("logs", "diagnosis", "{series}.log"),
+    benchmark:
+        res("benchmarks", "diagnosis", "{series}.tsv")
+    script:
+        "../../scripts/diagnose_series.py"
+
+
+rule diagnosis:
+    input:
+        expand(res("diagnosis", "{series}.json"), series=sorted(TESTS_BY_SERIES)),
     output:
         json=report(res("diagnosis.json"), caption="../report/diagnosis.rst", category="Model diagnosis"),
         md=res("diagnosis.md"),
     params:
-        n_boot=DIAGNOSIS.get("n_boot", 40),
-        n_history=DIAGNOSIS.get("n_history", 2),
         seed=DIAGNOSIS.get("seed", 0),
     log:
         res("logs", "diagnosis.log"),
