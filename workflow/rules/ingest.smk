@@ -4,11 +4,12 @@
 # One job per series, not per test: a job spends ten times longer starting
 # Python and importing the library (1.0 s) than reducing one test (0.1 s).
 
-for _series, _ids in TESTS_BY_SERIES.items():
+for _k, (_series, _ids) in enumerate(TESTS_BY_SERIES.items()):
 
     rule:
         name:
-            "reduce_" + re.sub(r"\W", "_", _series)
+            # a rule name is an identifier; the index keeps "1a-2s" and "1a_2s" apart
+            f"reduce_{_k:03d}_" + re.sub(r"\W", "_", _series)
         input:
             lambda wildcards, ids=_ids: record_inputs(ids),
         output:
