@@ -4,15 +4,13 @@ import logging
 from pathlib import Path
 
 from rocklab.campaign import open_campaign
-from rocklab.reduction import reduce_test
+from rocklab.reduction import reduce_tests
 from rocklab.workflow import setup_logging, write_netcdf
 
 setup_logging(snakemake.log[0])
-campaign = open_campaign(snakemake.params.raw_dir)
-for out in snakemake.output:
-    test_id = Path(out).name.removesuffix(".nc")
-    ds = reduce_test(campaign, test_id, snakemake.params.options)
+outputs = {Path(out).name.removesuffix(".nc"): out for out in snakemake.output}
+for test_id, ds in reduce_tests(open_campaign(snakemake.params.raw_dir), outputs, snakemake.params.options):
     logging.info("%s: valid=%s %s %s", test_id, ds.attrs["valid"], ds.attrs["reject_reason"], ds.attrs["reject_detail"])
     if ds.attrs.get("flags"):
         logging.info("%s: %s", test_id, ds.attrs["flags"])
-    write_netcdf(ds, out)
+    write_netcdf(ds, outputs[test_id])

@@ -5,6 +5,7 @@ readings with noise, hum, ringing, the screw's creep) and reduced back to
 theta by the kinematics, as a real campaign; the diagnosis sees only that.
 """
 
+import dataclasses
 import json
 
 import numpy as np
@@ -197,6 +198,10 @@ def test_stop_speeds_bracket_the_sticking_landing():
                                     t_imp[:n], z, 0.0, float(t_imp[-1]), 1e-9, t=h.t, theta=h.theta))
     lo, hi = D.stop_speeds(D._Stack.of(tests), D.model_params(tests, ("restitution_scale",), {"c": 0.97}))
     assert np.all(lo < 0.2) and np.all(0.2 <= hi) and np.all(lo / hi > 0.9)
+    # a next flight the noise would hide tells no stop
+    hidden = [dataclasses.replace(tests[0], floor=tests[0].peaks[-1])]
+    assert np.isnan(D.stop_speeds(D._Stack.of(hidden), D.model_params(hidden, ("restitution_scale",),
+                                                                          {"c": 0.97}))[0]).all()
 
 
 def test_what_is_wrong_is_consistent_with_the_numbers(diagnosed):
@@ -237,6 +242,19 @@ def _sim_test(model, theta0):
 
 P = float(wall.frequency_parameter(wall.half_diagonal(1.3, 0.12)))
 ALPHA = float(wall.slenderness_angle(1.3, 0.12))
+
+
+def test_a_gap_wall_sticks_by_the_same_rule_in_the_free_run_and_the_simulator():
+    """With a gap the base law also serves the return from the gap: only the
+    landing from the outer hinge may stick, as free_run and stop_speeds read it."""
+    model = RockingModel(alpha=ALPHA, p=P, boundary="one-sided", gap=0.05 * ALPHA)
+    test = _sim_test(model, 0.8 * ALPHA)
+    ext, values, stop = ("contact_gap",), {"gap_over_alpha": 0.05}, 0.3
+    run = D.free_run(D._Stack.of([test]), D.model_params([test], ext, values), n_max=50, stop=stop)
+    n_free = int(np.count_nonzero(run["peaks"][0] > 0))
+    h = simulate_free(D.rocking_model(test, ext, values, stop=stop), test.theta0, 0.0, t_end=20.0)
+    outer = h.impacts[(h.impacts.kind == "base") & (h.impacts.thetadot_before < 0)]
+    assert outer.thetadot_after.iloc[-1] == 0.0 and 2 <= n_free == len(outer) - 1
 
 
 @pytest.mark.parametrize("kw, ext, values, boundary, rtol", [

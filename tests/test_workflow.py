@@ -63,3 +63,28 @@ def test_workflow_reduces_any_campaign_and_never_writes_to_it(virtual_campaign, 
     assert set(tests.test_id) == set(qc.test_id[qc.valid.astype(str) == "True"])
     for name in ("impacts.csv", "series.csv", "figures/fig09.png"):
         assert (results / name).exists()
+
+
+def test_a_reduction_that_fails_does_not_stop_the_series(virtual_campaign, monkeypatch):
+    """An error no rule foresaw becomes that test's unreadable entry, with the file and the error."""
+    from rocklab import kinematics, reduction
+
+    folder, _ = virtual_campaign
+    c = open_campaign(folder)
+    ids = list(c.tests.test_id[:3])
+    solve = kinematics.solve_wall_motion
+    calls = []
+
+    def flaky(*args, **kw):
+        calls.append(1)
+        if len(calls) == 2:
+            raise FloatingPointError("singular transducer geometry")
+        return solve(*args, **kw)
+
+    monkeypatch.setattr(kinematics, "solve_wall_motion", flaky)
+    out = dict(reduction.reduce_tests(c, ids))
+    assert list(out) == ids
+    bad = [t for t, ds in out.items() if "reduction failed" in ds.attrs["reject_detail"]]
+    assert len(bad) == 1 and out[bad[0]].attrs["reject_reason"] == "unreadable"
+    assert "FloatingPointError" in out[bad[0]].attrs["reject_detail"]
+    assert str(c.record_path(bad[0])) in out[bad[0]].attrs["reject_detail"]

@@ -356,6 +356,16 @@ class Campaign:
         rows = self.tests[self.tests.test_id == test_id]
         return rows.iloc[0]
 
+    def test_series(self, test_id) -> str:
+        """Series of a test (:func:`series_id`); a one-sided row whose contact
+        depth cannot be read gets the two-sided key of its specimen."""
+        row = self.test_row(test_id)
+        try:
+            cd = float(row.contact_depth_mm) if row.boundary == "one-sided" else np.nan
+        except (TypeError, ValueError):
+            cd = np.nan
+        return series_id(row.specimen, row.boundary, cd)
+
     def record_path(self, test_id) -> Path:
         return self.root / self.test_row(test_id).file
 

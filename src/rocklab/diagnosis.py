@@ -487,7 +487,10 @@ def rocking_model(test: MeasuredTest, ext=(), values=None, base="analytic", stop
         calibrated = _impact.AmplitudeLaw(calibrated, float(mp.amp_a), float(mp.amp_b))
     law, transverse = (law, calibrated) if mp.gap_model else (calibrated, None)
     if stop > 0:
-        law = _impact.Sticking(law, stop)
+        # the landing from the outer hinge only, as free_run and stop_speeds
+        # read it: with a gap the base law also serves the return from it
+        sticking = _impact.Sticking(law, stop)
+        law = _impact.Sided(sticking, law) if mp.gap_model else sticking
     return RockingModel(alpha=test.alpha, p=test.p, boundary=test.boundary, impact=law,
                         alpha_rock=float(mp.a_pos), alpha_neg=float(mp.a_neg),
                         flight_damping=float(mp.zeta), gap=float(mp.gap), transverse_impact=transverse)
@@ -771,9 +774,20 @@ def stop_speeds(S: _Stack, mp: ModelParams, min_ratio=3.0, tail_s=0.5):
         nxt = hinge[1] if mpi.one_sided else -hinge[1]
         if apex_after(w, mpi.hinge(nxt), mpi.p, mpi.zeta) < min_ratio * ts.floor:
             continue
+        if v_l >= v_n:      # a last flight higher than the one before: noise, no bracket
+            continue
         vr = float(overturning_velocity(ts.alpha, ts.p))
         lo[i], hi[i] = v_l / vr, v_n / vr
     return lo, hi
+
+
+def _stop_estimate(lo, hi):
+    """Threshold of brackets (lo, hi]: the geometric centre of their common
+    part if they have one, else the geometric mean of their centres."""
+    L, U = np.max(lo), np.min(hi)
+    if L < U:
+        return float(np.sqrt(L * U)), True
+    return float(np.exp(0.5 * np.mean(np.log(lo) + np.log(hi)))), False
 
 
 def stop_threshold(tests, ext=(), values=None, *, n_boot=200, seed=0, min_tests=3):
@@ -784,7 +798,8 @@ def stop_threshold(tests, ext=(), values=None, *, n_boot=200, seed=0, min_tests=
     centres, with a bootstrap (over tests) 95 % interval and the test-to-test
     spread of log speed (Fig. 18's scatter of the number of cycles).  Where
     the brackets share a common part, one threshold fits every wall: the
-    estimate is that part's geometric centre and the interval spans it.  Gain:
+    estimate is that part's geometric centre and the interval spans it
+    (:func:`_stop_estimate`, also used for the tests left out).  Gain:
     the free run of the model (:func:`engineering_rows`) with each test's
     threshold taken from the other tests (leave one out) against the model
     without it, in the number of impacts and the duration of rocking.
@@ -801,20 +816,21 @@ def stop_threshold(tests, ext=(), values=None, *, n_boot=200, seed=0, min_tests=
     S = _Stack.of(tests)
     lo, hi = stop_speeds(S, model_params(tests, ext, values))
     ok = np.isfinite(lo)
-    if ok.sum() < max(min_tests, 0.5 * len(tests)):
+    if ok.sum() < max(min_tests, 3, 0.5 * len(tests)):
         return None
-    x = 0.5 * (np.log(lo[ok]) + np.log(hi[ok]))
+    lo, hi = lo[ok], hi[ok]
+    x = 0.5 * (np.log(lo) + np.log(hi))
     rng = np.random.default_rng(seed)
     boots = np.exp([rng.choice(x, x.size).mean() for _ in range(n_boot)])
     ci = [float(np.percentile(boots, 2.5)), float(np.percentile(boots, 97.5))]
-    L, U = np.max(lo[ok]), np.min(hi[ok])
-    centre = float(np.exp(x.mean()))
-    if L < U:
+    centre, common = _stop_estimate(lo, hi)
+    if common:
         # one threshold fits every wall: it is known only within the common
         # bracket, however alike the walls' brackets are
-        centre, ci = float(np.sqrt(L * U)), [min(ci[0], float(L)), max(ci[1], float(U))]
+        ci = [min(ci[0], float(np.max(lo))), max(ci[1], float(np.min(hi)))]
     obs = [tests[i] for i in np.flatnonzero(ok)]
-    loo = np.exp((x.sum() - x) / (x.size - 1))
+    keep = ~np.eye(x.size, dtype=bool)
+    loo = np.array([_stop_estimate(lo[k], hi[k])[0] for k in keep])
 
     def errors(rows):
         n = np.array([r["n_impacts"][1] - r["n_impacts"][0] for r in rows], float)
@@ -823,9 +839,9 @@ def stop_threshold(tests, ext=(), values=None, *, n_boot=200, seed=0, min_tests=
 
     (n0, d0), (n1, d1) = errors(engineering_rows(obs, ext, values)), errors(engineering_rows(obs, ext, values,
                                                                                              stop=loo))
-    return {"v_stop_over_vr": centre, "ci95": ci, "common_bracket": L < U,
+    return {"v_stop_over_vr": centre, "ci95": ci, "common_bracket": common,
             "spread_log": float(x.std(ddof=1)), "n_observed": int(ok.sum()), "n_tests": len(tests),
-            "n_impacts_rms": (n0, n1), "duration_pct_rms": (d0, d1), "named": n1 <= 0.5 * n0}
+            "n_impacts_rms": (n0, n1), "duration_pct_rms": (d0, d1), "named": n0 > 0 and n1 <= 0.5 * n0}
 
 
 # ---------------------------------------------------------------------------
@@ -1673,9 +1689,9 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         structure = [st for st in structure if not st.startswith("end of motion")]
         findings.append(_stop_finding(stop))
     unexplained = bool(structure) and not sel["weak"]
-    if not effects and not unexplained and not off:
+    if not findings and not unexplained and not off:
         verdict_text = "the base model explains the data within the noise"
-    elif not effects and not unexplained:
+    elif not findings and not unexplained:
         verdict_text = "none of the candidate causes is carried by the data"
     else:
         verdict_text = ""
@@ -1906,7 +1922,7 @@ def diagnosis_markdown(entries) -> str:
                 out.append(f"| {f['effect']} | {_fmt_params(f)} | {_fmt_ci(f)} | "
                            f"{_f(f['error_heldout']['deviance_per_obs'], '.3g')} | "
                            f"{_f(g['deviance_per_obs'], '.3g')}; {'' if fr is None else f'{fr:.3f}'} | {ev} "
-                           f"{f['evidence'].get('fit', '') if f['effect'] == 'stop_threshold' else ''}|")
+                           f"{f['evidence'].get('fit', '') if f['effect'] == 'stop_threshold' else ''} |")
             out.append("")
         h = e.get("heldout")
         if h and h["base"].get("free_run_log_peak_rms") is not None:

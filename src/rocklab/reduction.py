@@ -9,6 +9,7 @@ test with CF-style attributes, and turns a set of them into the QC table.
 from __future__ import annotations
 
 import json
+import logging
 
 import numpy as np
 import pandas as pd
@@ -16,7 +17,9 @@ import xarray as xr
 
 from rocklab import channels as health
 from rocklab import kinematics, validity, wall
-from rocklab.campaign import Campaign, RawFormatError, read_record, series_id
+from rocklab.campaign import Campaign, RawFormatError, read_record
+
+log = logging.getLogger(__name__)
 
 DEFAULTS = {
     "channels": {"flat_run_s": health.FLAT_RUN_S, "max_gap_s": health.MAX_GAP_S,
@@ -50,7 +53,7 @@ def test_metadata(campaign: Campaign, test_id: str) -> dict:
     return {
         "test_id": test_id,
         "specimen": row.specimen,
-        "series": series_id(row.specimen, row.boundary, cd),
+        "series": campaign.test_series(test_id),
         "boundary": row.boundary,
         "contact_depth_mm": cd,
         "direction": row.direction,
@@ -68,6 +71,11 @@ def test_metadata(campaign: Campaign, test_id: str) -> dict:
         "p": p,
         "overturning_velocity": float(wall.overturning_velocity(alpha, p)),
     }
+
+
+def _row_metadata(campaign: Campaign, test_id: str) -> dict:
+    row = campaign.test_row(test_id)
+    return {"test_id": test_id, "specimen": row.specimen, "series": "", "boundary": row.boundary}
 
 
 def _unreadable(meta: dict, error: Exception) -> xr.Dataset:
@@ -93,9 +101,7 @@ def reduce_test(campaign: Campaign, test_id: str, options=None) -> xr.Dataset:
     """
     opt = _options(options)
     if test_id in campaign.log.errors:
-        row = campaign.test_row(test_id)
-        meta = {"test_id": test_id, "specimen": row.specimen, "series": "", "boundary": row.boundary}
-        return _unreadable(meta, campaign.log.errors[test_id])
+        return _unreadable(_row_metadata(campaign, test_id), campaign.log.errors[test_id])
     meta = test_metadata(campaign, test_id)
     path = campaign.record_path(test_id)
     meta["source_file"] = str(path)
@@ -175,6 +181,27 @@ def reduce_test(campaign: Campaign, test_id: str, options=None) -> xr.Dataset:
         residual_rms_median_mm=float(np.nanmedian(ds.residual_rms.values)) if np.isfinite(ds.residual_rms.values).any() else np.nan,
     )
     return ds
+
+
+def reduce_tests(campaign: Campaign, test_ids, options=None):
+    """:func:`reduce_test` of each test, one bad test never stopping the rest.
+
+    A reduction that fails on a record the reader accepted (a defect of
+    ours or a record no rule foresaw) gives that test an ``unreadable``
+    entry naming the file and the error, and is logged with its traceback.
+
+    Yields
+    ------
+    (test_id, xarray.Dataset)
+    """
+    for test_id in test_ids:
+        try:
+            ds = reduce_test(campaign, test_id, options)
+        except Exception as exc:  # noqa: BLE001 - isolate the test, the error is kept in its entry
+            log.exception("%s: reduction failed", test_id)
+            ds = _unreadable(_row_metadata(campaign, test_id),
+                             RuntimeError(f"{campaign.record_path(test_id)}: reduction failed: {exc!r}"))
+        yield test_id, ds
 
 
 def qc_row(ds: xr.Dataset) -> dict:

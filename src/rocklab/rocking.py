@@ -664,11 +664,14 @@ def _locate(x, v, s, ga, gb, u, prm, l1, l2, zp, h, Fh, ov, edge, target, f0, f1
     # floor Newton only wanders (slow, small velocities)
     floor = 1e-15 * (abs(x) + prm[_P_APOS] + abs(ga) / prm[_P_G]) if edge else 0.0
     tol = (1e-13 if edge else 1e-12) * u
+    tm = tn
     for _ in range(60):
         if not (lo < tn < hi):
             tn = 0.5 * (lo + hi)
-        gm = ga + (gb - ga) * tn / u
-        xm, vm = _advance(x, v, s, ga, gm, tn, prm, l1, l2, zp, h, Fh)
+        # the instant of the state returned, whatever the next trial would be
+        tm = tn
+        gm = ga + (gb - ga) * tm / u
+        xm, vm = _advance(x, v, s, ga, gm, tm, prm, l1, l2, zp, h, Fh)
         if edge:
             f, df, inside = xm - target, vm, _outside(xm, s, prm, ov) == 0
         else:
@@ -686,7 +689,7 @@ def _locate(x, v, s, ga, gb, u, prm, l1, l2, zp, h, Fh, ov, edge, target, f0, f1
         if abs(d) <= 1e-12 * u or abs(f) <= floor:
             break
         tn = tn - d
-    return tn, xm, vm
+    return tm, xm, vm
 
 
 @numba.njit(cache=True)

@@ -3,7 +3,7 @@
 import re
 from pathlib import Path
 
-from rocklab.campaign import open_campaign, series_id
+from rocklab.campaign import open_campaign
 
 RAW = Path(config["raw_dir"])
 RESULTS = Path(config["results_dir"])
@@ -11,19 +11,10 @@ CAMPAIGN = open_campaign(RAW)
 TEST_IDS = list(dict.fromkeys(CAMPAIGN.tests.test_id))
 SAMPLE_TESTS = config.get("sample_tests", {})
 
-
-def _series_of(row):
-    try:
-        depth = float(row.contact_depth_mm)
-    except (TypeError, ValueError):
-        depth = None
-    return series_id(row.specimen, row.boundary, depth)
-
-
 #: The tests of each series, in the order of tests.csv (the unit of one reduction job).
 TESTS_BY_SERIES = {}
-for _row in CAMPAIGN.tests.drop_duplicates("test_id").itertuples():
-    TESTS_BY_SERIES.setdefault(_series_of(_row), []).append(_row.test_id)
+for _t in TEST_IDS:
+    TESTS_BY_SERIES.setdefault(CAMPAIGN.test_series(_t), []).append(_t)
 
 
 def res(*parts):
