@@ -88,3 +88,18 @@ def test_a_reduction_that_fails_does_not_stop_the_series(virtual_campaign, monke
     assert len(bad) == 1 and out[bad[0]].attrs["reject_reason"] == "unreadable"
     assert "FloatingPointError" in out[bad[0]].attrs["reject_detail"]
     assert str(c.record_path(bad[0])) in out[bad[0]].attrs["reject_detail"]
+
+
+def test_valid_tests_by_qc_table_or_by_their_own_verdict(tmp_path):
+    import xarray as xr
+
+    from rocklab.workflow import valid_tests
+
+    paths = []
+    for tid, valid in (("T1", 1), ("T2", 0), ("T3", 1)):
+        paths.append(tmp_path / f"{tid}.nc")
+        xr.Dataset(attrs={"test_id": tid, "valid": valid}).to_netcdf(paths[-1])
+    assert [ds.attrs["test_id"] for ds in valid_tests(paths)] == ["T1", "T3"]
+    qc = tmp_path / "qc.csv"
+    pd.DataFrame({"test_id": ["T1", "T2", "T3"], "valid": [False, True, True]}).to_csv(qc, index=False)
+    assert [ds.attrs["test_id"] for ds in valid_tests(paths, qc)] == ["T2", "T3"]

@@ -103,12 +103,20 @@ def valid_test_ids(qc_path) -> list:
     return qc.test_id[qc.valid.astype(str) == "True"].tolist()
 
 
-def valid_tests(paths, qc_path):
-    """Yield the reduced datasets of the tests that ``qc.csv`` marks valid, loaded."""
+def valid_tests(paths, qc_path=None):
+    """Yield the reduced datasets of the valid tests, loaded.
+
+    Valid: marked so in ``qc.csv``, or without it by the test's own verdict
+    (its ``valid`` attribute, of which qc.csv is made), so that a job over
+    a few tests need not depend on the QC of the whole campaign.
+    """
     import xarray as xr
 
-    valid = set(valid_test_ids(qc_path))
+    valid = set(valid_test_ids(qc_path)) if qc_path is not None else None
     for path in paths:
-        if Path(path).stem in valid:
-            with xr.open_dataset(path) as ds:
-                yield ds.load()
+        if valid is not None and Path(path).stem not in valid:
+            continue
+        with xr.open_dataset(path) as ds:
+            if valid is None and not int(ds.attrs.get("valid", 0)):
+                continue
+            yield ds.load()

@@ -14,7 +14,8 @@ def diagnosis_outputs():
 
 rule diagnose_series:
     input:
-        qc=res("qc.csv"),
+        # the series' tests only, each with its own QC verdict: a test edited
+        # elsewhere in the campaign does not diagnose this series again
         tests=lambda wildcards: [res("tests", f"{t}.nc") for t in TESTS_BY_SERIES[wildcards.series]],
     output:
         res("diagnosis", "{series}.json"),
