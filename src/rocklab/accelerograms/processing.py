@@ -35,7 +35,6 @@ duration D5-95 between 5 % and 95 % of the Arias intensity.
 from __future__ import annotations
 
 import numpy as np
-from scipy import signal
 from scipy.integrate import cumulative_trapezoid
 
 from ._text import G
@@ -80,6 +79,10 @@ def baseline_correct_array(acc, dt, pre_event=None, velocity_order=1, freqmin=No
         a -= np.polynomial.polynomial.polyval(t, np.polynomial.polynomial.polyder(coeff))
     if freqmin is None and freqmax is None:
         return a
+    # imported here: the default processing never filters, and scipy.signal
+    # would add 0.4 s to every job that reads a record
+    from scipy import signal
+
     nyq = 0.5 / dt
     if freqmax is not None and freqmax >= nyq:
         raise ValueError(f"freqmax {freqmax} Hz is not below the Nyquist frequency {nyq} Hz")
