@@ -52,11 +52,9 @@ def main(argv=None):
         ref = reference_decisions(ag, dt, MODEL, [(a, d) for a in amps for d in durs], pool=pool).reshape(batch.shape)
         t_ref = time.perf_counter() - t0
         bad = np.argwhere(batch != ref)
-        unexplained = []
-        for i, j in bad:
-            around = [(amps[i] * (1 - args.tol), durs[j]), (amps[i] * (1 + args.tol), durs[j])]
-            if (reference_decisions(ag, dt, MODEL, around, pool=pool) == ref[i, j]).all():
-                unexplained.append([float(amps[i]), float(durs[j])])
+        around = [(amps[i] * f, durs[j]) for i, j in bad for f in (1 - args.tol, 1 + args.tol)]
+        neighbours = reference_decisions(ag, dt, MODEL, around, pool=pool).reshape(-1, 2)
+        unexplained = [[float(amps[i]), float(durs[j])] for (i, j), nb in zip(bad, neighbours) if (nb == ref[i, j]).all()]
     speedup = t_ref / t_batch
     result = {
         "record": Path(args.record).name, "dt_s": dt, "npts": int(ag.size),

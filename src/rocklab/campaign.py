@@ -356,16 +356,6 @@ class Campaign:
         rows = self.tests[self.tests.test_id == test_id]
         return rows.iloc[0]
 
-    def test_series(self, test_id) -> str:
-        """Series of a test (:func:`series_id`); a one-sided row whose contact
-        depth cannot be read gets the two-sided key of its specimen."""
-        row = self.test_row(test_id)
-        try:
-            cd = float(row.contact_depth_mm) if row.boundary == "one-sided" else np.nan
-        except (TypeError, ValueError):
-            cd = np.nan
-        return series_id(row.specimen, row.boundary, cd)
-
     def record_path(self, test_id) -> Path:
         return self.root / self.test_row(test_id).file
 
@@ -374,6 +364,11 @@ class Campaign:
 
     def setup(self, name) -> pd.DataFrame:
         return self.setups[self.setups.setup == name].sort_values("channel").reset_index(drop=True)
+
+
+def row_series(row) -> str:
+    """Series of a row of tests.csv (:func:`series_id`)."""
+    return series_id(row.specimen, row.boundary, row.contact_depth_mm if row.boundary == "one-sided" else np.nan)
 
 
 def series_id(specimen, boundary, contact_depth_mm) -> str:

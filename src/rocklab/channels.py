@@ -26,6 +26,8 @@ DEAD_SPAN_MM = 0.1
 #: A spike exceeds this many noise sigmas and this many mm.
 SPIKE_SIGMAS = 10.0
 SPIKE_MIN_MM = 0.5
+#: Statuses that lose a channel (the rest keep it, repaired or not).
+LOST_STATUSES = ("dead", "stuck", "clipped", "dropout")
 
 
 @dataclass
@@ -42,7 +44,7 @@ class ChannelReport:
 
     @property
     def lost(self) -> bool:
-        return self.status in ("dead", "stuck", "clipped", "dropout")
+        return self.status in LOST_STATUSES
 
     def describe(self) -> str:
         parts = []

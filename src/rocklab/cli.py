@@ -26,12 +26,10 @@ def _read_record(name, dt, units):
     readers detect (PEER AT2, Caltech, K-NET, column text...), in m/s^2 and
     baseline-corrected (:func:`rocklab.accelerograms.load_record`).
     """
-    from rocklab.wall import G
+    from rocklab.accelerograms import load_record, to_si
 
     if dt is not None:
-        data = np.loadtxt(name, ndmin=2)
-        return data[:, 0] * {"g": G, "m/s2": 1.0, "cm/s2": 0.01}[units], dt
-    from rocklab.accelerograms import load_record
+        return to_si(np.loadtxt(name, ndmin=2)[:, 0], units), dt
 
     try:
         tr = load_record(name)

@@ -405,9 +405,8 @@ def release_rotation(theta0, a):
 
 
 def _amplitude_factor(e, v, mp, like):
-    vr = overturning_velocity(_col(mp.alpha, like), _col(mp.p, like))
-    hi = 1.0 / np.maximum(np.abs(e), 1e-12)
-    return np.clip(_col(mp.amp_a, like) - _col(mp.amp_b, like) * (v / vr) ** 2, 0.0, hi)
+    return _impact.amplitude_factor(e, _col(mp.amp_a, like), _col(mp.amp_b, like), v, _col(mp.alpha, like),
+                                    _col(mp.p, like))
 
 
 def impact_speeds(v, side, mp: ModelParams):
@@ -1215,8 +1214,17 @@ def select_effects(problem: Problem, *, signature=None, n_boot=40, max_effects=4
     """
     all_idx = np.arange(problem.n_tests)
     signature = signature or {}
+    fits = {}
+
+    def fit_of(ext):
+        # a fit is deterministic: the rounds, the removals and the weak-evidence
+        # pass meet the same models again
+        if ext not in fits:
+            fits[ext] = fit(problem, all_idx, ext)
+        return fits[ext]
+
     current = ()
-    cur_fit = fit(problem, all_idx, current)
+    cur_fit = fit_of(current)
     cur_ho = heldout(problem, current)
     base_ho = cur_ho
     steps, rejected, ci = {}, {}, {}
@@ -1228,7 +1236,7 @@ def select_effects(problem: Problem, *, signature=None, n_boot=40, max_effects=4
             ext = _with(current, eff) if eff not in current else None
             if ext is None or ext == current or rejected.get(eff, "").startswith("95%"):
                 continue
-            f = fit(problem, all_idx, ext)
+            f = fit_of(ext)
             dbic = f.bic - cur_fit.bic
             if dbic > -bic_margin:
                 rejected[eff] = f"BIC {dbic:+.1f}"
@@ -1258,7 +1266,7 @@ def select_effects(problem: Problem, *, signature=None, n_boot=40, max_effects=4
         # removal: a cause that entered earlier may be carried by the new one
         for old in [e for e in current if e != eff and e in steps]:
             ext = tuple(e for e in current if e != old)
-            f = fit(problem, all_idx, ext)
+            f = fit_of(ext)
             ho = heldout(problem, ext, start=f.values)
             loss, se = _paired(ho["deviance"] - cur_ho["deviance"])
             if not _improves(ho["deviance"] - cur_ho["deviance"]) or f.bic - cur_fit.bic < bic_margin:
@@ -1274,7 +1282,7 @@ def select_effects(problem: Problem, *, signature=None, n_boot=40, max_effects=4
         for eff in problem.candidates():
             ext = _with(current, eff) if eff not in current else None
             if ext is not None and ext != current and signature.get(eff, {}).get("supports", True):
-                f = fit(problem, all_idx, ext)
+                f = fit_of(ext)
                 if not structure(problem, all_idx, ext, f.values):
                     weak[eff] = {"params": f.values, "reason": rejected.get(eff, "")}
     return {"effects": list(current), "fit": cur_fit, "ci": ci, "base": base_ho, "final": cur_ho,

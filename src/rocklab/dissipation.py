@@ -35,6 +35,7 @@ import numpy as np
 import pandas as pd
 
 from rocklab import kinematics, restitution
+from rocklab.channels import LOST_STATUSES
 from rocklab.motion import centre_amplification, extract_motion
 from rocklab.wall import no_sliding_friction, overturning_velocity
 
@@ -288,8 +289,6 @@ def no_sliding_check(h_over_b, mu_s=0.6):
 
 
 META_COLUMNS = ["test_id", "series", "specimen", "boundary", "contact_depth_mm"]
-#: Channel statuses of rocklab.channels that lose a channel.
-LOST_STATUSES = ("dead", "stuck", "clipped", "dropout")
 
 
 def monitor_readings(ds):

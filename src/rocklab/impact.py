@@ -35,8 +35,8 @@ from rocklab import restitution
 from rocklab.wall import overturning_velocity
 
 
-def _amplitude_factor(e0, a, b, thetadot_before, alpha, p):
-    """a - b (thetadot^-/thetadot_r)^2 clipped to [0, 1/|e0|].
+def amplitude_factor(e0, a, b, thetadot_before, alpha, p):
+    """a - b (thetadot^-/thetadot_r)^2 clipped to [0, 1/|e0|] (the bracket of Eq. 17).
 
     The lower clip keeps the sign of e (a fitted law extrapolated to large
     velocities must not turn a rebound into a pass-through); the upper clip
@@ -56,7 +56,7 @@ class ImpactLaw:
         e0, a, b = self._triple(side, alpha)
         if a == 1.0 and b == 0.0:
             return e0 * np.ones_like(np.asarray(thetadot_before, float))
-        return e0 * _amplitude_factor(e0, a, b, thetadot_before, alpha, p)
+        return e0 * amplitude_factor(e0, a, b, thetadot_before, alpha, p)
 
     def flat(self, alpha):
         """Parameters for the numba engines: array (2, 3), rows side +1, -1.
@@ -150,7 +150,7 @@ class AmplitudeLaw(ImpactLaw):
 
     def coefficient(self, thetadot_before, side, alpha, p):
         e = self.law.coefficient(thetadot_before, side, alpha, p)
-        return e * _amplitude_factor(e, self.a, self.b, thetadot_before, alpha, p)
+        return e * amplitude_factor(e, self.a, self.b, thetadot_before, alpha, p)
 
     def _triple(self, side, alpha):
         e0, a, b = self.law._triple(side, alpha)

@@ -192,9 +192,10 @@ def overturning_map(record, dt=None, model="2s-housner", n=201, lo=0.5, hi=1.5, 
     wall_model = named_model(model, alpha, R, form, eq17)
     amp, dur = scales(n, lo, hi), scales(n, lo, hi)
     over = np.zeros((amp.size, dur.size), bool)
+    signed = polarity * ag
     t0 = time.perf_counter()
     for rows in np.array_split(np.arange(amp.size), max(1, min(int(chunks), amp.size))):
-        over[rows] = overturning_batch(polarity * ag, dt, wall_model, amp[rows], dur, overturn=overturn, tail=tail)
+        over[rows] = overturning_batch(signed, dt, wall_model, amp[rows], dur, overturn=overturn, tail=tail)
         log.info("%s %s: amplitude rows %d-%d of %d done, %.1f s", name, model, rows[0] + 1, rows[-1] + 1, amp.size,
                  time.perf_counter() - t0)
     e0, a, b = wall_model.base_law.flat(wall_model.alpha)[0]
@@ -406,13 +407,14 @@ def check_against_reference(ag, dt, model, amplitude_scales, duration_scales, fa
     fast = np.asarray(fast, bool)
     cells = [(a, d) for a in amp for d in dur]
     ref = reference_decisions(ag, dt, model, cells, pool=pool, **kw).reshape(fast.shape)
-    mismatches = []
-    for i, j in np.argwhere(ref != fast):
-        a, d = amp[i], dur[j]
-        around = [(a - step, d), (a + step, d), (a, d - step), (a, d + step)]
-        neighbours = reference_decisions(ag, dt, model, around, pool=pool, **kw)
-        mismatches.append({"amplitude_scale": float(a), "duration_scale": float(d), "map": bool(fast[i, j]),
-                           "reference": bool(ref[i, j]), "boundary": bool((neighbours == fast[i, j]).any())})
+    bad = np.argwhere(ref != fast)
+    # the neighbours of every difference in one call, spread over the pool
+    around = [(a, d) for i, j in bad for a, d in ((amp[i] - step, dur[j]), (amp[i] + step, dur[j]),
+                                                  (amp[i], dur[j] - step), (amp[i], dur[j] + step))]
+    neighbours = reference_decisions(ag, dt, model, around, pool=pool, **kw).reshape(-1, 4)
+    mismatches = [{"amplitude_scale": float(amp[i]), "duration_scale": float(dur[j]), "map": bool(fast[i, j]),
+                   "reference": bool(ref[i, j]), "boundary": bool((nb == fast[i, j]).any())}
+                  for (i, j), nb in zip(bad, neighbours)]
     agree = int((ref == fast).sum())
     return {"cells": int(fast.size), "agree": agree, "agreement_pct": 100.0 * agree / fast.size,
             "mismatches": mismatches, "unexplained": sum(not m["boundary"] for m in mismatches),

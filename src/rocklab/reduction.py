@@ -17,7 +17,7 @@ import xarray as xr
 
 from rocklab import channels as health
 from rocklab import kinematics, validity, wall
-from rocklab.campaign import Campaign, RawFormatError, read_record
+from rocklab.campaign import Campaign, RawFormatError, read_record, row_series
 
 log = logging.getLogger(__name__)
 
@@ -53,7 +53,7 @@ def test_metadata(campaign: Campaign, test_id: str) -> dict:
     return {
         "test_id": test_id,
         "specimen": row.specimen,
-        "series": campaign.test_series(test_id),
+        "series": row_series(row),
         "boundary": row.boundary,
         "contact_depth_mm": cd,
         "direction": row.direction,

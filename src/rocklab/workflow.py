@@ -103,6 +103,17 @@ def valid_test_ids(qc_path) -> list:
     return qc.test_id[qc.valid.astype(str) == "True"].tolist()
 
 
+def load_datasets(paths, keep=None):
+    """Yield the netCDF files at ``paths`` loaded into memory (files closed),
+    those for which ``keep(dataset)`` is true if given."""
+    import xarray as xr
+
+    for path in paths:
+        with xr.open_dataset(path) as ds:
+            if keep is None or keep(ds):
+                yield ds.load()
+
+
 def valid_tests(paths, qc_path=None):
     """Yield the reduced datasets of the valid tests, loaded.
 
@@ -110,13 +121,7 @@ def valid_tests(paths, qc_path=None):
     (its ``valid`` attribute, of which qc.csv is made), so that a job over
     a few tests need not depend on the QC of the whole campaign.
     """
-    import xarray as xr
-
-    valid = set(valid_test_ids(qc_path)) if qc_path is not None else None
-    for path in paths:
-        if valid is not None and Path(path).stem not in valid:
-            continue
-        with xr.open_dataset(path) as ds:
-            if valid is None and not int(ds.attrs.get("valid", 0)):
-                continue
-            yield ds.load()
+    if qc_path is None:
+        return load_datasets(paths, lambda ds: int(ds.attrs.get("valid", 0)))
+    valid = set(valid_test_ids(qc_path))
+    return load_datasets(p for p in paths if Path(p).stem in valid)

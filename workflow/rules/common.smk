@@ -3,7 +3,7 @@
 import re
 from pathlib import Path
 
-from rocklab.campaign import open_campaign
+from rocklab.campaign import open_campaign, row_series
 
 RAW = Path(config["raw_dir"])
 RESULTS = Path(config["results_dir"])
@@ -13,8 +13,8 @@ SAMPLE_TESTS = config.get("sample_tests", {})
 
 #: The tests of each series, in the order of tests.csv (the unit of one reduction job).
 TESTS_BY_SERIES = {}
-for _t in TEST_IDS:
-    TESTS_BY_SERIES.setdefault(CAMPAIGN.test_series(_t), []).append(_t)
+for _row in CAMPAIGN.tests.drop_duplicates("test_id").itertuples():
+    TESTS_BY_SERIES.setdefault(row_series(_row), []).append(_row.test_id)
 
 
 def res(*parts):

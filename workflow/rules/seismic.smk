@@ -1,8 +1,6 @@
 # Stage: overturning maps of Sect. 5 (Figs. 21-23). One job per (record,
 # model) map, since a map is the unit that takes time; then the indices of
 # Fig. 22 with the reductions between models, and the figures.
-import re
-
 from rocklab.accelerograms import accelerogram_dir, read_manifest
 from rocklab.overturning import MODELS
 

@@ -25,6 +25,7 @@ and significant duration.  Shipped records (:mod:`.manifest`):
 :func:`read_manifest`, :func:`load_record`, :func:`read_table4`.
 """
 
+from ._text import to_si
 from .manifest import accelerogram_dir, build_manifest, load_record, read_manifest, read_table4, write_manifest
 from .native import read_accelerogram, to_si_stream
 from .processing import (arias_intensity, baseline_correct, baseline_correct_array, ground_motion_parameters,
@@ -35,5 +36,5 @@ __all__ = [
     "accelerogram_dir", "arias_intensity", "baseline_correct", "baseline_correct_array", "build_manifest",
     "ground_motion_parameters", "load_record", "peak_ground_acceleration", "peak_ground_velocity",
     "read_accelerogram", "read_manifest", "read_table4", "record_duration", "significant_duration",
-    "to_si_stream", "velocity", "write_manifest",
+    "to_si", "to_si_stream", "velocity", "write_manifest",
 ]
