@@ -7,7 +7,7 @@ BIN    := $(VENV)/bin
 CORES  ?= 2
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test bench venv clean dryrun
+.PHONY: run test lint bench venv clean dryrun
 
 $(STAMP): requirements.lock pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -24,7 +24,11 @@ run: $(STAMP)
 dryrun: $(STAMP)
 	$(BIN)/snakemake --cores $(CORES) --dry-run
 
+LINTED := src tests scripts bench
+
 test: $(STAMP)
+	$(BIN)/ruff check $(LINTED)
+	$(BIN)/ruff format --check --quiet $(LINTED)
 	$(BIN)/python -m pytest -n $(CORES) -q
 
 bench: $(STAMP)

@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares
 
-from rocklab.kinematics import _pose, rest_length, solve_wall_motion
+from rocklab.lab.kinematics import _pose, rest_length, solve_wall_motion
 
 DEFAULT_CAMPAIGN = Path(__file__).resolve().parents[1] / "raw" / "campaign"
 XYZ_WALL = ["wall_x_mm", "wall_y_mm", "wall_z_mm"]
@@ -34,8 +34,7 @@ def load_record(campaign, row, setups, specimens):
     chans = [int(c[2:]) for c in rec.columns[1:]]
     g = setups[setups.setup == row.setup].set_index("channel").loc[chans]
     b = float(specimens.loc[row.specimen, "thickness_mm"])
-    return (rec.iloc[:, 1:].to_numpy(float), g[XYZ_WALL].to_numpy(float),
-            g[XYZ_FRAME].to_numpy(float), b, chans)
+    return (rec.iloc[:, 1:].to_numpy(float), g[XYZ_WALL].to_numpy(float), g[XYZ_FRAME].to_numpy(float), b, chans)
 
 
 def scipy_loop(E, X, F, b, x0):
@@ -45,14 +44,13 @@ def scipy_loop(E, X, F, b, x0):
     for k, e in enumerate(E):
         target = e + L0
 
-        def fun(q):
+        def fun(q, target=target):
             return _pose(q[:1], q[1:2], q[2:3], q[3:4], X, F, b, False)[0][0] - target
 
         def jac(q):
             return np.column_stack([d[0] for d in _pose(q[:1], q[1:2], q[2:3], q[3:4], X, F, b, True)[1]])
 
-        out[k] = least_squares(fun, x0[k], jac=jac, method="lm",
-                               xtol=1e-15, ftol=1e-15, gtol=1e-15).x
+        out[k] = least_squares(fun, x0[k], jac=jac, method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15).x
     return out
 
 
@@ -78,7 +76,8 @@ def main(argv=None):
         E, X, F = E[:, idx], X[idx], F[:, :][idx]
         source = f"{campaign.name}/{row.file}"
     else:
-        from rocklab.kinematics import transducer_elongation
+        from rocklab.lab.kinematics import transducer_elongation
+
         X = np.array([[-710, 0, 382], [-710, 0, 926], [710, 0, 926], [710, 0, 654]], float)
         F = np.array([[-710, -180, 382], [-710, -210, 926], [710, -205, 926], [860, 0, 654]], float)
         b = 113.0
@@ -128,16 +127,21 @@ def main(argv=None):
             t_solve += time.perf_counter() - t1
             t_read += t1 - t0
             n_steps += len(E)
-        result.update(campaign_tests=int(len(tests)), campaign_steps=n_steps,
-                      campaign_solve_s=t_solve, campaign_read_s=t_read)
+        result.update(
+            campaign_tests=int(len(tests)), campaign_steps=n_steps, campaign_solve_s=t_solve, campaign_read_s=t_read
+        )
 
     (args.out / "kinematics.json").write_text(json.dumps(result, indent=2) + "\n")
-    print(f"kinematics: batched {best * 1e3:.1f} ms, scipy loop {t_loop:.2f} s on "
-          f"{len(q_batch)} steps: ratio {result['ratio']:.0f}x, "
-          f"max |dtheta| {result['max_abs_diff_theta_rad']:.1e} rad")
+    print(
+        f"kinematics: batched {best * 1e3:.1f} ms, scipy loop {t_loop:.2f} s on "
+        f"{len(q_batch)} steps: ratio {result['ratio']:.0f}x, "
+        f"max |dtheta| {result['max_abs_diff_theta_rad']:.1e} rad"
+    )
     if have_campaign:
-        print(f"campaign: {result['campaign_tests']} tests, {result['campaign_steps']} steps, "
-              f"solve {result['campaign_solve_s']:.1f} s (+ read {result['campaign_read_s']:.1f} s)")
+        print(
+            f"campaign: {result['campaign_tests']} tests, {result['campaign_steps']} steps, "
+            f"solve {result['campaign_solve_s']:.1f} s (+ read {result['campaign_read_s']:.1f} s)"
+        )
     return result
 
 

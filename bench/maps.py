@@ -1,8 +1,8 @@
 """Benchmark: overturning maps of Sect. 5 (201 x 201 histories) against a solve_ivp loop.
 
-Times one map per model of :data:`rocklab.overturning.MODELS` on El Centro
+Times one map per model of :data:`rocklab.seismic.overturning.MODELS` on El Centro
 (40EIC180, Table 4 row 1), the scipy event-driven reference
-(:func:`rocklab.rocking.simulate_ground`) on ``--histories`` cells of the
+(:func:`rocklab.simulation.reference.simulate_ground`) on ``--histories`` cells of the
 same grid drawn at random, and every map of every shipped record (measured,
 not extrapolated, unless ``--records`` restricts them: the JSON says which).
 Targets: one map < 2 s and all maps < 2 min on two cores.
@@ -22,9 +22,9 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from rocklab.accelerograms import load_record, read_manifest
-from rocklab.overturning import MODELS, named_model, overturning_map, scales
-from rocklab.rocking import simulate_ground
+from rocklab.seismic.accelerograms import load_record, read_manifest
+from rocklab.seismic.overturning import MODELS, named_model, overturning_map, scales
+from rocklab.simulation.reference import simulate_ground
 
 RECORD = "40EIC180"
 
@@ -65,15 +65,23 @@ def main(argv=None):
     n_cells = args.n**2
     mean_map = float(np.mean([v["map_s"] for v in per_model.values()]))
     result = {
-        "record": RECORD, "grid": [args.n, args.n], "histories_per_map": n_cells,
-        "numba_threads": numba.get_num_threads(), "cpu_count": os.cpu_count(),
-        "form": "linear", "models": per_model,
-        "reference_histories_timed": args.histories, "reference_s_per_history": t_hist,
+        "record": RECORD,
+        "grid": [args.n, args.n],
+        "histories_per_map": n_cells,
+        "numba_threads": numba.get_num_threads(),
+        "cpu_count": os.cpu_count(),
+        "form": "linear",
+        "models": per_model,
+        "reference_histories_timed": args.histories,
+        "reference_s_per_history": t_hist,
         "reference_s_per_map_estimated": t_hist * n_cells,
         "speedup_vs_reference": t_hist * n_cells / mean_map,
-        "all_maps_records": records, "all_maps_count": len(records) * len(MODELS),
-        "all_maps_s": t_all, "all_maps_measured": True,
-        "target_map_s": 2.0, "target_all_maps_s": 120.0,
+        "all_maps_records": records,
+        "all_maps_count": len(records) * len(MODELS),
+        "all_maps_s": t_all,
+        "all_maps_measured": True,
+        "target_map_s": 2.0,
+        "target_all_maps_s": 120.0,
         "pass": bool(max(v["map_s"] for v in per_model.values()) < 2.0 and t_all < 120.0 and not args.records),
     }
     out = Path(args.out)
@@ -81,8 +89,10 @@ def main(argv=None):
     (out / "maps.json").write_text(json.dumps(result, indent=2))
     for name, v in per_model.items():
         print(f"{name:11s} map {v['map_s']:.2f} s  N_O {v['N_O']:.3f}")
-    print(f"solve_ivp {t_hist:.3f} s/history ({args.histories} timed), ratio {result['speedup_vs_reference']:.0f}x; "
-          f"{result['all_maps_count']} maps of {len(records)} records in {t_all:.1f} s")
+    print(
+        f"solve_ivp {t_hist:.3f} s/history ({args.histories} timed), ratio {result['speedup_vs_reference']:.0f}x; "
+        f"{result['all_maps_count']} maps of {len(records)} records in {t_all:.1f} s"
+    )
     return 0 if result["pass"] else 1
 
 

@@ -21,9 +21,9 @@ from pathlib import Path
 
 import numpy as np
 
-from rocklab.accelerograms import load_record
-from rocklab.batch import overturning_batch
-from rocklab.overturning import named_model, reference_decisions
+from rocklab.seismic.accelerograms import load_record
+from rocklab.seismic.overturning import named_model, reference_decisions
+from rocklab.simulation.batch import overturning_batch
 
 #: El Centro 1940 N-S (Table 4 row 1), shipped in raw/accelerograms.
 RECORD = "40EIC180"
@@ -54,23 +54,34 @@ def main(argv=None):
         bad = np.argwhere(batch != ref)
         around = [(amps[i] * f, durs[j]) for i, j in bad for f in (1 - args.tol, 1 + args.tol)]
         neighbours = reference_decisions(ag, dt, MODEL, around, pool=pool).reshape(-1, 2)
-        unexplained = [[float(amps[i]), float(durs[j])] for (i, j), nb in zip(bad, neighbours) if (nb == ref[i, j]).all()]
+        unexplained = [
+            [float(amps[i]), float(durs[j])] for (i, j), nb in zip(bad, neighbours) if (nb == ref[i, j]).all()
+        ]
     speedup = t_ref / t_batch
     result = {
-        "record": Path(args.record).name, "dt_s": dt, "npts": int(ag.size),
+        "record": Path(args.record).name,
+        "dt_s": dt,
+        "npts": int(ag.size),
         "model": {"alpha": MODEL.alpha, "p": MODEL.p, "form": MODEL.form, "boundary": MODEL.boundary},
-        "histories": int(batch.size), "workers": args.workers,
-        "t_batch_s": t_batch, "t_reference_s": t_ref, "speedup": speedup,
-        "overturned_batch": int(batch.sum()), "overturned_reference": int(ref.sum()),
-        "mismatches": int(len(bad)), "boundary_tolerance_rel_amplitude": args.tol,
+        "histories": int(batch.size),
+        "workers": args.workers,
+        "t_batch_s": t_batch,
+        "t_reference_s": t_ref,
+        "speedup": speedup,
+        "overturned_batch": int(batch.sum()),
+        "overturned_reference": int(ref.sum()),
+        "mismatches": int(len(bad)),
+        "boundary_tolerance_rel_amplitude": args.tol,
         "mismatches_beyond_tolerance": unexplained,
         "pass": bool(speedup >= 1000 and not unexplained),
     }
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "simulator.json").write_text(json.dumps(result, indent=2))
-    print(f"batch {t_batch:.3f} s, solve_ivp {t_ref:.1f} s, ratio {speedup:.0f}x; "
-          f"{len(bad)} mismatches, {len(unexplained)} beyond tolerance")
+    print(
+        f"batch {t_batch:.3f} s, solve_ivp {t_ref:.1f} s, ratio {speedup:.0f}x; "
+        f"{len(bad)} mismatches, {len(unexplained)} beyond tolerance"
+    )
     return 0 if result["pass"] else 1
 
 

@@ -4,11 +4,12 @@ import json
 from pathlib import Path
 
 from rocklab.diagnosis import diagnose_records, jsonable, records_by_series
-from rocklab.workflow import setup_logging, valid_tests
+from rocklab.io import setup_logging, valid_tests
 
 setup_logging(snakemake.log[0])
 series = snakemake.wildcards.series
 records = records_by_series(valid_tests(snakemake.input.tests)).get(series, [])
-entry = diagnose_records(records, series, n_boot=snakemake.params.n_boot, n_history=snakemake.params.n_history,
-                         seed=snakemake.params.seed)
+entry = diagnose_records(
+    records, series, n_boot=snakemake.params.n_boot, n_history=snakemake.params.n_history, seed=snakemake.params.seed
+)
 Path(snakemake.output[0]).write_text(json.dumps(jsonable([entry] if entry else []), indent=1))

@@ -4,7 +4,7 @@ import json
 from pathlib import Path
 
 from rocklab.diagnosis import with_boundaries, write_diagnosis
-from rocklab.workflow import setup_logging
+from rocklab.io import setup_logging
 
 setup_logging(snakemake.log[0])
 entries = [e for path in snakemake.input for e in json.loads(Path(path).read_text())]

@@ -3,8 +3,8 @@
 import json
 from pathlib import Path
 
-from rocklab.diagnosis_figures import series_figures
-from rocklab.workflow import setup_logging
+from rocklab.io import setup_logging
+from rocklab.plots.diagnosis import series_figures
 
 setup_logging(snakemake.log[0])
 entries = json.loads(Path(snakemake.input.diagnosis).read_text())

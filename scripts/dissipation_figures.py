@@ -5,8 +5,8 @@ from pathlib import Path
 import pandas as pd
 import xarray as xr
 
-from rocklab import figures
-from rocklab.workflow import setup_logging
+from rocklab.io import setup_logging
+from rocklab.plots import dissipation as figures
 
 setup_logging(snakemake.log[0])
 tests = pd.read_csv(snakemake.input.tests)
@@ -16,7 +16,8 @@ if sample_id is not None:
     path = {Path(p).stem: p for p in snakemake.input.tests_nc}[sample_id]
     with xr.open_dataset(path) as ds:
         sample = ds.load()
-figs = figures.dissipation_figures(tests, pd.read_csv(snakemake.input.e_by_n),
-                                   pd.read_csv(snakemake.input.series), sample)
+figs = figures.dissipation_figures(
+    tests, pd.read_csv(snakemake.input.e_by_n), pd.read_csv(snakemake.input.series), sample
+)
 for name, fig in figs.items():
     fig.savefig(snakemake.output[name], dpi=120)

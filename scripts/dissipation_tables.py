@@ -5,13 +5,14 @@ from pathlib import Path
 
 import pandas as pd
 
-from rocklab.statistics import campaign_tables, table3_markdown
-from rocklab.workflow import setup_logging, valid_tests, write_table
+from rocklab.dissipation.statistics import campaign_tables, table3_markdown
+from rocklab.io import setup_logging, valid_tests, write_table
 
 setup_logging(snakemake.log[0])
 qc = pd.read_csv(snakemake.input.qc, keep_default_na=False, na_values=[""])
-tables, failed = campaign_tables(valid_tests(snakemake.input.tests, snakemake.input.qc), qc,
-                                 snakemake.params.n_boot, snakemake.params.seed)
+tables, failed = campaign_tables(
+    valid_tests(snakemake.input.tests, snakemake.input.qc), qc, snakemake.params.n_boot, snakemake.params.seed
+)
 for test_id, why in failed:
     logging.warning("%s: motion not analysed: %s", test_id, why)
 schemas = Path(snakemake.params.schemas)

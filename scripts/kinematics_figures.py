@@ -5,8 +5,8 @@ from pathlib import Path
 import pandas as pd
 import xarray as xr
 
-from rocklab import figures
-from rocklab.workflow import setup_logging, valid_test_ids
+from rocklab.io import setup_logging, valid_test_ids
+from rocklab.plots import kinematics as figures
 
 setup_logging(snakemake.log[0])
 valid = valid_test_ids(snakemake.input.qc)

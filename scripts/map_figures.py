@@ -2,8 +2,8 @@
 
 import pandas as pd
 
-from rocklab import map_figures
-from rocklab.workflow import load_datasets, setup_logging
+from rocklab.io import load_datasets, setup_logging
+from rocklab.plots import maps as map_figures
 
 setup_logging(snakemake.log[0])
 map_figures.overturning_maps(list(load_datasets(snakemake.input.two_sided))).savefig(snakemake.output.fig21, dpi=120)

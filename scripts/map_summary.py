@@ -1,7 +1,7 @@
 """Snakemake shim: indices of every map (Fig. 22) and reductions between models."""
 
-from rocklab.overturning import reductions, summary_table
-from rocklab.workflow import load_datasets, setup_logging, write_table
+from rocklab.io import load_datasets, setup_logging, write_table
+from rocklab.seismic.overturning import reductions, summary_table
 
 setup_logging(snakemake.log[0])
 summary = summary_table(load_datasets(snakemake.input.maps))

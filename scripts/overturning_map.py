@@ -2,14 +2,25 @@
 
 import numba
 
-from rocklab.accelerograms import load_record
-from rocklab.overturning import overturning_map
-from rocklab.workflow import setup_logging, write_netcdf
+from rocklab.io import setup_logging, write_netcdf
+from rocklab.seismic.accelerograms import load_record
+from rocklab.seismic.overturning import overturning_map
 
 setup_logging(snakemake.log[0])
 numba.set_num_threads(min(snakemake.threads, numba.config.NUMBA_NUM_THREADS))
 p = snakemake.params
 eq17 = (p.eq17["a"], p.eq17["b"]) if p.eq17 else None
-ds = overturning_map(load_record(snakemake.wildcards.record), model=snakemake.wildcards.model, n=p.n, lo=p.lo,
-                     hi=p.hi, alpha=p.alpha, R=p.R, form=p.form, eq17=eq17, polarity=p.polarity, chunks=p.chunks)
+ds = overturning_map(
+    load_record(snakemake.wildcards.record),
+    model=snakemake.wildcards.model,
+    n=p.n,
+    lo=p.lo,
+    hi=p.hi,
+    alpha=p.alpha,
+    R=p.R,
+    form=p.form,
+    eq17=eq17,
+    polarity=p.polarity,
+    chunks=p.chunks,
+)
 write_netcdf(ds, snakemake.output[0])

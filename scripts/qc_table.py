@@ -2,9 +2,9 @@
 
 import pandas as pd
 
-from rocklab.campaign import open_campaign
-from rocklab.reduction import KINEMATICS_COLUMNS, kinematics_row, qc_table
-from rocklab.workflow import read_attrs, setup_logging, write_table
+from rocklab.io import read_attrs, setup_logging, write_table
+from rocklab.lab.campaign import open_campaign
+from rocklab.lab.reduction import KINEMATICS_COLUMNS, kinematics_row, qc_table
 
 setup_logging(snakemake.log[0])
 reduced = read_attrs(snakemake.input.tests)

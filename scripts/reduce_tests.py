@@ -3,9 +3,9 @@
 import logging
 from pathlib import Path
 
-from rocklab.campaign import open_campaign
-from rocklab.reduction import reduce_tests
-from rocklab.workflow import setup_logging, write_netcdf
+from rocklab.io import setup_logging, write_netcdf
+from rocklab.lab.campaign import open_campaign
+from rocklab.lab.reduction import reduce_tests
 
 setup_logging(snakemake.log[0])
 outputs = {Path(out).name.removesuffix(".nc"): out for out in snakemake.output}

@@ -15,9 +15,9 @@ import numpy as np
 import obspy
 import pytest
 
-import rocklab.accelerograms as acc
-from rocklab.accelerograms import caltech, columns, peer, somerville
-from rocklab.accelerograms._text import G
+import rocklab.seismic.accelerograms as acc
+from rocklab.seismic.accelerograms import caltech, columns, peer, somerville
+from rocklab.seismic.accelerograms._text import G
 
 RAW = acc.accelerogram_dir()
 OBSPY_DATA = Path(obspy.__file__).parent / "io"
@@ -36,15 +36,24 @@ IS_FUNCS = {
 # file, format, kwargs, units factor to m/s^2, dt, npts, first and last sample as written in the file,
 # (column of the file for column text)
 CASES = [
-    ("RSN6_IMPVALL.I_I-ELC180.AT2", "PEER_NGA_AT2", {}, G, 0.01, 5372, .9984852E-03, -.1790158E-03, None),
-    ("RSN864_LANDERS_JOS090.AT2", "PEER_NGA_AT2", {}, G, 0.02, 2200, .2993323E-02, -.2704593E-04, None),
-    ("IELC180.AT2", "PEER_LEGACY_AT2", {}, G, 0.01, 4000, -.6403182E-02, .9459335E-04, None),
+    ("RSN6_IMPVALL.I_I-ELC180.AT2", "PEER_NGA_AT2", {}, G, 0.01, 5372, 0.9984852e-03, -0.1790158e-03, None),
+    ("RSN864_LANDERS_JOS090.AT2", "PEER_NGA_AT2", {}, G, 0.02, 2200, 0.2993323e-02, -0.2704593e-04, None),
+    ("IELC180.AT2", "PEER_LEGACY_AT2", {}, G, 0.01, 4000, -0.6403182e-02, 0.9459335e-04, None),
     ("elcen07_230fn.dat", "CALTECH_VOL2", {}, 0.01, 0.02, 1845, 1.963, 6.648, None),
     ("pacoima_164.dat", "CALTECH_VOL2", {}, 0.01, 0.02, 1024, 7.754, 20.583, None),
-    ("rinaldi_fn.dat", "SOMERVILLE", {}, 0.01, 0.005, 2990, -0.11237E+03, -0.10803E+02, None),
+    ("rinaldi_fn.dat", "SOMERVILLE", {}, 0.01, 0.005, 2990, -0.11237e03, -0.10803e02, None),
     ("elcentro_NS_full.dat", "TWO_COLUMN", {}, G, 0.02, 2688, -1.4275799e-003, -1.4275799e-003, 2),
-    ("Northridge_Sylmar_County.dat", "TWO_COLUMN", {"units": "m/s2"}, 1.0, 0.02, 3000, 6.1130000e-02,
-     -3.5340000e-02, 2),
+    (
+        "Northridge_Sylmar_County.dat",
+        "TWO_COLUMN",
+        {"units": "m/s2"},
+        1.0,
+        0.02,
+        3000,
+        6.1130000e-02,
+        -3.5340000e-02,
+        2,
+    ),
     ("sct190985.txt", "MULTI_COLUMN", {"components": ["NS", "EW", "V"]}, G, 0.02, 8171, -0.00314, -0.00305, 3),
 ]
 # RSN6 is not shipped (row 1 uses elcentro_NS_full.dat): it runs only where ../shared exists.
@@ -152,10 +161,11 @@ def test_files_are_not_modified():
 
 # --- processing ---------------------------------------------------------------
 
+
 def test_baseline_correction_removes_offset_and_drift():
     dt, n = 0.01, 4000
     t = np.arange(n) * dt
-    quake = np.sin(2 * np.pi * 2.0 * t) * np.exp(-((t - 20) / 5) ** 2)
+    quake = np.sin(2 * np.pi * 2.0 * t) * np.exp(-(((t - 20) / 5) ** 2))
     spoiled = quake + 0.05 + 0.002 * t  # offset and linear trend
     fixed = acc.baseline_correct_array(spoiled, dt, velocity_order=2)
     v = acc.velocity(fixed, dt)
@@ -176,6 +186,7 @@ def test_velocity_and_durations_closed_form():
 
 
 # --- shipped records and Table 4 ------------------------------------------------
+
 
 def test_table4():
     t4 = acc.read_table4()

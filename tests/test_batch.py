@@ -1,11 +1,12 @@
-"""Batch engine (numba) against the event-driven reference of rocklab.rocking."""
+"""Batch engine (numba) against the event-driven reference of rocklab.simulation.model."""
 
 import numpy as np
 import pytest
 
-from rocklab import restitution, wall
-from rocklab.batch import free_batch, ground_batch, overturning_batch
-from rocklab.rocking import RockingModel, simulate_free, simulate_ground
+from rocklab.physics import restitution, wall
+from rocklab.simulation.batch import free_batch, ground_batch, overturning_batch
+from rocklab.simulation.model import RockingModel
+from rocklab.simulation.reference import simulate_free, simulate_ground
 
 ALPHA, P = 0.1, float(wall.frequency_parameter(3.0))
 
@@ -33,8 +34,14 @@ def test_free_batch_linear_is_exact():
 def test_free_batch_exact_converges_to_reference():
     model = RockingModel(alpha=ALPHA, p=P)
     ref = simulate_free(model, 0.8 * ALPHA, t_end=10.0).impacts.t.to_numpy()[:4]
-    errs = [np.max(np.abs(free_batch(model, 0.8 * ALPHA, t_end=10.0, dt=dt, substeps=1, max_impacts=4)
-                          .t_impact[0].values - ref)) for dt in (0.04, 0.02, 0.01)]
+    errs = [
+        np.max(
+            np.abs(
+                free_batch(model, 0.8 * ALPHA, t_end=10.0, dt=dt, substeps=1, max_impacts=4).t_impact[0].values - ref
+            )
+        )
+        for dt in (0.04, 0.02, 0.01)
+    ]
     assert errs[0] > errs[1] > errs[2]
     assert errs[2] < 1e-7
     assert errs[0] / errs[1] > 8  # RK4: fourth order
@@ -90,10 +97,15 @@ def test_exact_form_batch_converges_under_ground_motion():
     ag, dt = _record()
     model = RockingModel(alpha=ALPHA, p=P)
     ref = simulate_ground(model, 0.8 * ag, dt).impacts.t.to_numpy()[:3]
-    errs = [np.max(np.abs(ground_batch(ag, dt, [model], amplitude_scale=0.8, substeps=m, max_impacts=3)
-                          .t_impact[0].values - ref)) for m in (1, 2, 4)]
+    errs = [
+        np.max(
+            np.abs(
+                ground_batch(ag, dt, [model], amplitude_scale=0.8, substeps=m, max_impacts=3).t_impact[0].values - ref
+            )
+        )
+        for m in (1, 2, 4)
+    ]
     assert errs[0] > errs[2] and errs[2] < 1e-5
-
 
 
 @pytest.mark.parametrize("gap", [0.005, 0.02])

@@ -4,8 +4,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rocklab import block_tests as B
-from rocklab import restitution
+from rocklab.diagnosis import block_tests as B
+from rocklab.physics import restitution
 
 
 def synthetic_events(c=1.0, s_e=0.0, b=0.0, noise=0.02, n_trials=12, groups=(4, 8, 12), seed=0):
@@ -23,17 +23,20 @@ def synthetic_events(c=1.0, s_e=0.0, b=0.0, noise=0.02, n_trials=12, groups=(4, 
                 r = e * np.exp(rng.normal(0.0, noise / np.sqrt(u)))
                 rows.append((g, trial, k, np.nan, B_m, H_m, r))
                 u *= r**2
-    return pd.DataFrame(rows, columns=["group", "trial", "event", "duplicate_of", "B_m", "H_m",
-                                       "measured_source_angular_ratio"]).assign(
-        alpha=lambda d: np.arctan2(d.B_m, d.H_m))
+    return pd.DataFrame(
+        rows, columns=["group", "trial", "event", "duplicate_of", "B_m", "H_m", "measured_source_angular_ratio"]
+    ).assign(alpha=lambda d: np.arctan2(d.B_m, d.H_m))
 
 
-@pytest.mark.parametrize("kw, effect, truth", [
-    ({}, None, {}),
-    ({"c": 0.96}, "restitution_scale", {"c": 0.96}),
-    ({"s_e": 0.06}, "hinge_asymmetry", {"s_e": 0.06}),
-    ({"c": 1.02, "b": 0.06}, "restitution_amplitude", {"b": 1.02 * 0.06}),
-])
+@pytest.mark.parametrize(
+    "kw, effect, truth",
+    [
+        ({}, None, {}),
+        ({"c": 0.96}, "restitution_scale", {"c": 0.96}),
+        ({"s_e": 0.06}, "hinge_asymmetry", {"s_e": 0.06}),
+        ({"c": 1.02, "b": 0.06}, "restitution_amplitude", {"b": 1.02 * 0.06}),
+    ],
+)
 def test_hidden_restitution_effects_in_block_ratios(kw, effect, truth):
     e = B.diagnose_blocks(synthetic_events(**kw), n_boot=20)["all"]
     assert e["verdict"] == ([effect] if effect else []) and not e["unexplained"], (e["verdict"], e["rejected"])

@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rocklab.campaign import RawFormatError, open_campaign, read_record, series_id
+from rocklab.lab.campaign import RawFormatError, open_campaign, read_record, series_id
 
 
 def _rewrite(path, edit):

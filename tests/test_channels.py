@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from rocklab.channels import assess_channels, find_spikes, noise_sigma
+from rocklab.lab.channels import assess_channels, find_spikes, noise_sigma
 
 FS = 400.0
 

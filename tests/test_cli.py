@@ -4,14 +4,34 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from rocklab import cli, wall
-from rocklab.rocking import RockingModel, simulate_ground
+from rocklab import cli
+from rocklab.physics import wall
+from rocklab.simulation.model import RockingModel
+from rocklab.simulation.reference import simulate_ground
 
 
 def test_simulate_free_writes_netcdf(tmp_path):
     out = tmp_path / "free.nc"
-    assert cli.main(["simulate", "--alpha", "0.1", "--p", "2.0", "--form", "linear", "--theta0", "0.05",
-                     "--t-end", "5", "-o", str(out)]) == 0
+    assert (
+        cli.main(
+            [
+                "simulate",
+                "--alpha",
+                "0.1",
+                "--p",
+                "2.0",
+                "--form",
+                "linear",
+                "--theta0",
+                "0.05",
+                "--t-end",
+                "5",
+                "-o",
+                str(out),
+            ]
+        )
+        == 0
+    )
     ds = xr.load_dataset(out)
     assert ds.theta.attrs["units"] == "rad" and ds.attrs["form"] == "linear"
     assert ds.sizes["impact"] >= 1
@@ -25,8 +45,26 @@ def test_simulate_record_matches_library(tmp_path):
     rec = tmp_path / "rec.txt"
     np.savetxt(rec, ag)
     out = tmp_path / "rec.nc"
-    assert cli.main(["simulate", "--height", "1.63", "--thickness", "0.113", "--boundary", "one-sided",
-                     "--record", str(rec), "--dt", str(dt), "-o", str(out)]) == 0
+    assert (
+        cli.main(
+            [
+                "simulate",
+                "--height",
+                "1.63",
+                "--thickness",
+                "0.113",
+                "--boundary",
+                "one-sided",
+                "--record",
+                str(rec),
+                "--dt",
+                str(dt),
+                "-o",
+                str(out),
+            ]
+        )
+        == 0
+    )
     ds = xr.load_dataset(out)
     ref = simulate_ground(RockingModel.from_wall(1.63, 0.113, boundary="one-sided"), ag, dt)
     np.testing.assert_allclose(ds.theta.values, ref.theta, atol=1e-12)
@@ -40,11 +78,31 @@ def test_simulate_requires_a_wall():
 
 def test_simulate_shipped_record_by_name(tmp_path):
     """A Table 4 record by manifest name, read through the obspy plugins."""
-    from rocklab.accelerograms import load_record
+    from rocklab.seismic.accelerograms import load_record
 
     out = tmp_path / "elc.nc"
-    assert cli.main(["simulate", "--alpha", "0.1", "--p", "1.5658", "--form", "linear", "--record", "40EIC180",
-                     "--scale", "0.5", "--t-end", "10", "-o", str(out)]) == 0
+    assert (
+        cli.main(
+            [
+                "simulate",
+                "--alpha",
+                "0.1",
+                "--p",
+                "1.5658",
+                "--form",
+                "linear",
+                "--record",
+                "40EIC180",
+                "--scale",
+                "0.5",
+                "--t-end",
+                "10",
+                "-o",
+                str(out),
+            ]
+        )
+        == 0
+    )
     tr = load_record("40EIC180")
     ref = simulate_ground(RockingModel(alpha=0.1, p=1.5658, form="linear"), 0.5 * tr.data, tr.stats.delta, t_end=10)
     np.testing.assert_allclose(xr.load_dataset(out).theta.values, ref.theta, atol=1e-12)

@@ -12,13 +12,15 @@ import numpy as np
 import pytest
 
 from rocklab import diagnosis as D
-from rocklab import impact as I
-from rocklab import kinematics, restitution, wall
-from rocklab import virtual_lab as vl
-from rocklab.rocking import RockingModel, simulate_free
+from rocklab.lab import kinematics
+from rocklab.lab import virtual_lab as vl
+from rocklab.physics import impact as I
+from rocklab.physics import restitution, wall
+from rocklab.simulation.model import RockingModel
+from rocklab.simulation.reference import simulate_free
 
 SPEC = vl.DEFAULT_SPECIMENS.set_index("specimen")
-TWO, ONE = "1a", "5c"       # a slender two-sided wall, a stocky one-sided one (short records)
+TWO, ONE = "1a", "5c"  # a slender two-sided wall, a stocky one-sided one (short records)
 
 
 def alpha_of(specimen):
@@ -26,8 +28,9 @@ def alpha_of(specimen):
     return float(wall.slenderness_angle(sp.height_mm, sp.thickness_mm))
 
 
-def virtual_series(name, boundary, model, *, n=6, alpha_ratio=1.0, noise_mm=0.002, pull=False,
-                   theta0_range=(0.97, 0.998), seed=0):
+def virtual_series(
+    name, boundary, model, *, n=6, alpha_ratio=1.0, noise_mm=0.002, pull=False, theta0_range=(0.97, 0.998), seed=0
+):
     """Records of ``n`` virtual-lab tests of one series, reduced to theta by the kinematics."""
     one = boundary == "one-sided"
     specimen = ONE if one else TWO
@@ -35,40 +38,61 @@ def virtual_series(name, boundary, model, *, n=6, alpha_ratio=1.0, noise_mm=0.00
     layout = vl.usual_layout("S", sp.length_mm, sp.height_mm, sp.thickness_mm, one)
     X = layout[["wall_x_mm", "wall_y_mm", "wall_z_mm"]].to_numpy(float)
     F = layout[["frame_x_mm", "frame_y_mm", "frame_z_mm"]].to_numpy(float)
-    used = np.r_[np.ones(5), np.zeros(len(layout) - 5)]       # channel 5 monitors, it is no rigid-body input
+    used = np.r_[np.ones(5), np.zeros(len(layout) - 5)]  # channel 5 monitors, it is no rigid-body input
     rng = np.random.default_rng(seed)
     recs = []
     for i in range(n):
         direction = "pull" if pull and i % 2 else "push"
-        vt = vl.VirtualTest(f"{name}-{i}", specimen, boundary, direction=direction,
-                            contact_depth_mm=120.0 if one else None, alpha_ratio=alpha_ratio,
-                            theta0_ratio=float(rng.uniform(*theta0_range)),
-                            model=model(i) if callable(model) else dict(model),
-                            effects=vl.Effects(noise_mm=noise_mm, hum_mm=noise_mm))
+        vt = vl.VirtualTest(
+            f"{name}-{i}",
+            specimen,
+            boundary,
+            direction=direction,
+            contact_depth_mm=120.0 if one else None,
+            alpha_ratio=alpha_ratio,
+            theta0_ratio=float(rng.uniform(*theta0_range)),
+            model=model(i) if callable(model) else dict(model),
+            effects=vl.Effects(noise_mm=noise_mm, hum_mm=noise_mm),
+        )
         t, E, truth = vl.simulate_test(vt, sp, layout, rng=rng, t_end=60.0)
         theta = kinematics.solve_wall_motion(E, X, F, sp.thickness_mm, weights=used)["theta"]
-        recs.append(dict(test_id=vt.test_id, t=t, theta=theta, fs=vt.fs, alpha=truth["alpha"], p=truth["p"],
-                         boundary=boundary, direction=direction))
+        recs.append(
+            dict(
+                test_id=vt.test_id,
+                t=t,
+                theta=theta,
+                fs=vt.fs,
+                alpha=truth["alpha"],
+                p=truth["p"],
+                boundary=boundary,
+                direction=direction,
+            )
+        )
     return recs
 
 
 def wearing(rate, c):
     """e_k = c e_an,2s (1 - rate k): a hinge worn impact after impact, outside the catalogue."""
+
     def model(_):
         k = [0]
 
         def e(thetadot, side, alpha, p):
             k[0] += 1
             return c * restitution.two_sided(alpha) * (1.0 - rate * k[0])
+
         return {"impact": I.Custom(e)}
+
     return model
 
 
 def sticking(v_stick, c):
     """e = c e_an,2s, but the wall sticks (e = 0) on landings slower than v_stick thetadot_r."""
+
     def e(thetadot, side, alpha, p):
         fast = abs(thetadot) > v_stick * wall.overturning_velocity(alpha, p)
         return c * restitution.two_sided(alpha) if fast else 0.0
+
     return {"impact": I.Custom(e)}
 
 
@@ -81,45 +105,95 @@ SCENARIOS = {
     "scale-0.90": ("two-sided", {"impact": I.Scaled(H(), 0.90)}, {}, {"restitution_scale": {"c": 0.90}}),
     "scale-0.97": ("two-sided", {"impact": I.Scaled(H(), 0.97)}, {}, {"restitution_scale": {"c": 0.97}}),
     "scale-1s": ("one-sided", {"impact": I.Scaled(I.OneSided(), 1.25)}, {}, {"restitution_scale": {"c": 1.25}}),
-    "amplitude-2s": ("two-sided", {"impact": I.AmplitudeLaw(H(), 0.97, 0.06)}, {},
-                     {"restitution_amplitude": {"a": 0.97, "b": 0.06}}),
-    "amplitude-1s": ("one-sided", {"impact": I.AmplitudeLaw(I.OneSided(), 1.2, 0.5)}, {},
-                     {"restitution_amplitude": {"a": 1.2, "b": 0.5}}),
-    "instability-0.85": ("two-sided", {"impact": H()}, {"alpha_ratio": 0.85},
-                         {"instability_angle": {"alpha_r_over_alpha": 0.85}}),
-    "instability-0.95": ("two-sided", {"impact": H()}, {"alpha_ratio": 0.95},
-                         {"instability_angle": {"alpha_r_over_alpha": 0.95}}),
+    "amplitude-2s": (
+        "two-sided",
+        {"impact": I.AmplitudeLaw(H(), 0.97, 0.06)},
+        {},
+        {"restitution_amplitude": {"a": 0.97, "b": 0.06}},
+    ),
+    "amplitude-1s": (
+        "one-sided",
+        {"impact": I.AmplitudeLaw(I.OneSided(), 1.2, 0.5)},
+        {},
+        {"restitution_amplitude": {"a": 1.2, "b": 0.5}},
+    ),
+    "instability-0.85": (
+        "two-sided",
+        {"impact": H()},
+        {"alpha_ratio": 0.85},
+        {"instability_angle": {"alpha_r_over_alpha": 0.85}},
+    ),
+    "instability-0.95": (
+        "two-sided",
+        {"impact": H()},
+        {"alpha_ratio": 0.95},
+        {"instability_angle": {"alpha_r_over_alpha": 0.95}},
+    ),
     "instability-1s": ("one-sided", {}, {"alpha_ratio": 0.75}, {"instability_angle": {"alpha_r_over_alpha": 0.75}}),
     "damping-0.02": ("two-sided", {"impact": H(), "flight_damping": 0.02}, {}, {"flight_damping": {"zeta": 0.02}}),
     "damping-0.005": ("two-sided", {"impact": H(), "flight_damping": 0.005}, {}, {"flight_damping": {"zeta": 0.005}}),
     # alpha_- = 0.97 alpha_+: released lower, or the weaker hinge overturns the wall
-    "asymmetry-alpha": ("two-sided", {"impact": H(), "alpha_neg": 0.97 * A2},
-                        {"pull": True, "theta0_range": (0.72, 0.8)}, {"hinge_asymmetry": {"s_alpha": -np.log(0.97)}}),
-    "asymmetry-e": ("two-sided", {"impact": I.Sided(H(), I.Scaled(H(), 0.96))}, {},
-                    {"hinge_asymmetry": {"s_e": -np.log(0.96)}}),
+    "asymmetry-alpha": (
+        "two-sided",
+        {"impact": H(), "alpha_neg": 0.97 * A2},
+        {"pull": True, "theta0_range": (0.72, 0.8)},
+        {"hinge_asymmetry": {"s_alpha": -np.log(0.97)}},
+    ),
+    "asymmetry-e": (
+        "two-sided",
+        {"impact": I.Sided(H(), I.Scaled(H(), 0.96))},
+        {},
+        {"hinge_asymmetry": {"s_e": -np.log(0.96)}},
+    ),
     "gap-0.05": ("one-sided", {"gap": 0.05 * A1}, {}, {"contact_gap": {"gap_over_alpha": 0.05}}),
     "gap-0.015": ("one-sided", {"gap": 0.015 * A1}, {}, {"contact_gap": {"gap_over_alpha": 0.015}}),
-    "instability+scale": ("two-sided", {"impact": I.Scaled(H(), 0.95)}, {"alpha_ratio": 0.9},
-                          {"instability_angle": {"alpha_r_over_alpha": 0.9}, "restitution_scale": {"c": 0.95}}),
-    "instability+scale-noisy": ("two-sided", {"impact": I.Scaled(H(), 0.95)}, {"alpha_ratio": 0.9, "noise_mm": 0.01},
-                                {"instability_angle": {"alpha_r_over_alpha": 0.9}, "restitution_scale": {"c": 0.95}}),
-    "damping+scale": ("two-sided", {"impact": I.Scaled(H(), 0.95), "flight_damping": 0.01}, {},
-                      {"flight_damping": {"zeta": 0.01}, "restitution_scale": {"c": 0.95}}),
-    "asymmetry+instability": ("two-sided", {"impact": H(), "alpha_neg": 0.9 * 0.97 * A2},
-                              {"pull": True, "theta0_range": (0.72, 0.8), "alpha_ratio": 0.9},
-                              {"hinge_asymmetry": {"s_alpha": -np.log(0.97)},
-                               "instability_angle": {"alpha_r_over_alpha": 0.9 * 0.97**0.5}}),
-    "gap+instability": ("one-sided", {"gap": 0.03 * A1}, {"alpha_ratio": 0.8},
-                        {"contact_gap": {"gap_over_alpha": 0.03}, "instability_angle": {"alpha_r_over_alpha": 0.8}}),
+    "instability+scale": (
+        "two-sided",
+        {"impact": I.Scaled(H(), 0.95)},
+        {"alpha_ratio": 0.9},
+        {"instability_angle": {"alpha_r_over_alpha": 0.9}, "restitution_scale": {"c": 0.95}},
+    ),
+    "instability+scale-noisy": (
+        "two-sided",
+        {"impact": I.Scaled(H(), 0.95)},
+        {"alpha_ratio": 0.9, "noise_mm": 0.01},
+        {"instability_angle": {"alpha_r_over_alpha": 0.9}, "restitution_scale": {"c": 0.95}},
+    ),
+    "damping+scale": (
+        "two-sided",
+        {"impact": I.Scaled(H(), 0.95), "flight_damping": 0.01},
+        {},
+        {"flight_damping": {"zeta": 0.01}, "restitution_scale": {"c": 0.95}},
+    ),
+    "asymmetry+instability": (
+        "two-sided",
+        {"impact": H(), "alpha_neg": 0.9 * 0.97 * A2},
+        {"pull": True, "theta0_range": (0.72, 0.8), "alpha_ratio": 0.9},
+        {"hinge_asymmetry": {"s_alpha": -np.log(0.97)}, "instability_angle": {"alpha_r_over_alpha": 0.9 * 0.97**0.5}},
+    ),
+    "gap+instability": (
+        "one-sided",
+        {"gap": 0.03 * A1},
+        {"alpha_ratio": 0.8},
+        {"contact_gap": {"gap_over_alpha": 0.03}, "instability_angle": {"alpha_r_over_alpha": 0.8}},
+    ),
     # the embedded campaign's one-sided walls: Eq. 17 on the impact on the transverse walls
-    "gap+instability+amplitude": ("one-sided", {"gap": 0.015 * A1,
-                                                "transverse_impact": I.AmplitudeLaw(I.Transverse(), 1.18, 0.5)},
-                                  {"alpha_ratio": 0.76},
-                                  {"contact_gap": {"gap_over_alpha": 0.015},
-                                   "instability_angle": {"alpha_r_over_alpha": 0.76},
-                                   "restitution_amplitude": {"a": 1.18, "b": 0.5}}),
-    "sticking": ("two-sided", sticking(0.15, 0.95), {},
-                 {"restitution_scale": {"c": 0.95}, "stop_threshold": {"v_stop_over_vr": 0.15}}),
+    "gap+instability+amplitude": (
+        "one-sided",
+        {"gap": 0.015 * A1, "transverse_impact": I.AmplitudeLaw(I.Transverse(), 1.18, 0.5)},
+        {"alpha_ratio": 0.76},
+        {
+            "contact_gap": {"gap_over_alpha": 0.015},
+            "instability_angle": {"alpha_r_over_alpha": 0.76},
+            "restitution_amplitude": {"a": 1.18, "b": 0.5},
+        },
+    ),
+    "sticking": (
+        "two-sided",
+        sticking(0.15, 0.95),
+        {},
+        {"restitution_scale": {"c": 0.95}, "stop_threshold": {"v_stop_over_vr": 0.15}},
+    ),
     "wearing": ("two-sided", wearing(0.006, 0.97), {}, None),
 }
 
@@ -158,7 +232,7 @@ def test_hidden_causes_named_recovered_with_a_gain(diagnosed, name):
             lo, hi = f["ci95"][k]
             tol = 0.02 * abs(x) + 1e-4
             assert lo - tol <= x <= hi + tol, (f["effect"], k, x, f["params"][k], (lo, hi))
-        if f["effect"] == "stop_threshold":     # a censoring at the end, not a residual: its own measures
+        if f["effect"] == "stop_threshold":  # a censoring at the end, not a residual: its own measures
             assert f["gain"]["n_impacts_rms"] > 0 and f["gain"]["duration_pct_rms"] > 0
         else:
             assert f["gain"]["deviance_per_obs"] > 0
@@ -180,7 +254,7 @@ def test_a_stop_is_named_only_where_the_walls_stop_dead(diagnosed):
     # Housner's model rocks on far longer; with the threshold the free run stops with the wall
     assert base["duration_s"]["model"] > 1.2 * base["duration_s"]["measured"]
     assert model["duration_s"]["model"] == pytest.approx(model["duration_s"]["measured"], rel=0.05)
-    assert f["params"]["spread_log"] < 0.1          # one threshold: only the bracket's width spreads it
+    assert f["params"]["spread_log"] < 0.1  # one threshold: only the bracket's width spreads it
 
 
 def test_stop_speeds_bracket_the_sticking_landing():
@@ -191,17 +265,38 @@ def test_stop_speeds_bracket_the_sticking_landing():
     for th0 in (0.9, 0.8, 0.7):
         h = simulate_free(model, th0 * alpha, 0.0, t_end=20.0, fs=400)
         t_imp, pk = h.impacts.t.to_numpy(), h.impacts.theta_peak_before.to_numpy()
-        assert h.impacts.thetadot_after.iloc[-1] == 0.0          # the landing that stuck
-        n = t_imp.size - 1                                        # impacts that launched a flight
+        assert h.impacts.thetadot_after.iloc[-1] == 0.0  # the landing that stuck
+        n = t_imp.size - 1  # impacts that launched a flight
         z = np.zeros(n)
-        tests.append(D.MeasuredTest("x", alpha, p, "two-sided", "push", 1, th0 * alpha, pk[1:], z, z, t_imp[:n],
-                                    t_imp[:n], z, 0.0, float(t_imp[-1]), 1e-9, t=h.t, theta=h.theta))
+        tests.append(
+            D.MeasuredTest(
+                "x",
+                alpha,
+                p,
+                "two-sided",
+                "push",
+                1,
+                th0 * alpha,
+                pk[1:],
+                z,
+                z,
+                t_imp[:n],
+                t_imp[:n],
+                z,
+                0.0,
+                float(t_imp[-1]),
+                1e-9,
+                t=h.t,
+                theta=h.theta,
+            )
+        )
     lo, hi = D.stop_speeds(D._Stack.of(tests), D.model_params(tests, ("restitution_scale",), {"c": 0.97}))
     assert np.all(lo < 0.2) and np.all(0.2 <= hi) and np.all(lo / hi > 0.9)
     # a next flight the noise would hide tells no stop
     hidden = [dataclasses.replace(tests[0], floor=tests[0].peaks[-1])]
-    assert np.isnan(D.stop_speeds(D._Stack.of(hidden), D.model_params(hidden, ("restitution_scale",),
-                                                                          {"c": 0.97}))[0]).all()
+    assert np.isnan(
+        D.stop_speeds(D._Stack.of(hidden), D.model_params(hidden, ("restitution_scale",), {"c": 0.97}))[0]
+    ).all()
 
 
 def test_what_is_wrong_is_consistent_with_the_numbers(diagnosed):
@@ -210,8 +305,9 @@ def test_what_is_wrong_is_consistent_with_the_numbers(diagnosed):
     # Housner's e (0.95 too high) keeps the simulation rocking; the instability angle
     # lengthens the measured quarter period
     assert err["n_impacts"]["model"] > err["n_impacts"]["measured"]
-    assert e["what_is_wrong"].startswith(f"the simulation keeps rocking for {err['duration_s']['model']:.1f} s "
-                                         f"({err['n_impacts']['model']:.0f} impacts)")
+    assert e["what_is_wrong"].startswith(
+        f"the simulation keeps rocking for {err['duration_s']['model']:.1f} s ({err['n_impacts']['model']:.0f} impacts)"
+    )
     assert err["decay_pct"]["model"] < err["decay_pct"]["measured"]
     assert err["first_quarter_p"]["model"] < err["first_quarter_p"]["measured"]
     ext = e["extended"]["errors"]
@@ -221,8 +317,9 @@ def test_what_is_wrong_is_consistent_with_the_numbers(diagnosed):
 
 def test_signatures_without_a_fit(diagnosed):
     assert "negative rotations" in diagnosed["gap-0.05"]["signatures"]["contact_gap"]
-    s = D.signatures([D.measured_test(r) for r in virtual_series("s", "two-sided", {"impact": H()},
-                                                                     alpha_ratio=0.85, n=2)])
+    s = D.signatures(
+        [D.measured_test(r) for r in virtual_series("s", "two-sided", {"impact": H()}, alpha_ratio=0.85, n=2)]
+    )
     assert s["instability_angle"]["supports"] and s["instability_angle"]["value"] == pytest.approx(0.85, abs=0.01)
     assert not s["flight_damping"]["supports"]
 
@@ -235,9 +332,24 @@ def _sim_test(model, theta0):
         imp = imp[(imp.kind == "base") & (imp.thetadot_before < 0)]
     pk = imp.theta_peak_before.to_numpy()
     n = min(pk.size - 1, 6)
-    return D.MeasuredTest("x", model.alpha, model.p, model.boundary, "push", 1, theta0, pk[1:n + 1],
-                          np.zeros(n), np.zeros(n), imp.t.to_numpy()[:n], imp.t.to_numpy()[:n], np.zeros(n),
-                          0.0, 1.0, 1e-9)
+    return D.MeasuredTest(
+        "x",
+        model.alpha,
+        model.p,
+        model.boundary,
+        "push",
+        1,
+        theta0,
+        pk[1 : n + 1],
+        np.zeros(n),
+        np.zeros(n),
+        imp.t.to_numpy()[:n],
+        imp.t.to_numpy()[:n],
+        np.zeros(n),
+        0.0,
+        1.0,
+        1e-9,
+    )
 
 
 P = float(wall.frequency_parameter(wall.half_diagonal(1.3, 0.12)))
@@ -257,21 +369,38 @@ def test_a_gap_wall_sticks_by_the_same_rule_in_the_free_run_and_the_simulator():
     assert outer.thetadot_after.iloc[-1] == 0.0 and 2 <= n_free == len(outer) - 1
 
 
-@pytest.mark.parametrize("kw, ext, values, boundary, rtol", [
-    ({}, (), {}, "two-sided", 1e-6),
-    ({"impact": I.Scaled(H(), 0.9)}, ("restitution_scale",), {"c": 0.9}, "two-sided", 1e-6),
-    ({"alpha_rock": 0.85 * ALPHA}, ("instability_angle",), {"alpha_r_over_alpha": 0.85}, "two-sided", 1e-6),
-    # alpha_+- = r alpha exp(+-s_alpha / 2), e_+- = e exp(+-s_e / 2)
-    ({"impact": I.Sided(I.Scaled(H(), np.exp(0.1)), I.Scaled(H(), np.exp(-0.1))), "alpha_neg": 0.95 * ALPHA},
-     ("instability_angle", "hinge_asymmetry"),
-     {"s_e": 0.2, "s_alpha": -np.log(0.95), "alpha_r_over_alpha": np.sqrt(0.95)}, "two-sided", 1e-6),
-    ({"flight_damping": 0.02}, ("flight_damping",), {"zeta": 0.02}, "two-sided", 1e-3),   # first order in zeta
-    ({}, (), {}, "one-sided", 1e-6),
-    ({"impact": I.AmplitudeLaw(I.OneSided(), 1.2, 0.4)}, ("restitution_amplitude",), {"a": 1.2, "b": 0.4},
-     "one-sided", 1e-6),
-    ({"gap": 0.1 * ALPHA, "transverse_impact": I.AmplitudeLaw(I.Transverse(), 1.2, 0.4)},
-     ("restitution_amplitude", "contact_gap"), {"gap_over_alpha": 0.1, "a": 1.2, "b": 0.4}, "one-sided", 1e-6),
-])
+@pytest.mark.parametrize(
+    "kw, ext, values, boundary, rtol",
+    [
+        ({}, (), {}, "two-sided", 1e-6),
+        ({"impact": I.Scaled(H(), 0.9)}, ("restitution_scale",), {"c": 0.9}, "two-sided", 1e-6),
+        ({"alpha_rock": 0.85 * ALPHA}, ("instability_angle",), {"alpha_r_over_alpha": 0.85}, "two-sided", 1e-6),
+        # alpha_+- = r alpha exp(+-s_alpha / 2), e_+- = e exp(+-s_e / 2)
+        (
+            {"impact": I.Sided(I.Scaled(H(), np.exp(0.1)), I.Scaled(H(), np.exp(-0.1))), "alpha_neg": 0.95 * ALPHA},
+            ("instability_angle", "hinge_asymmetry"),
+            {"s_e": 0.2, "s_alpha": -np.log(0.95), "alpha_r_over_alpha": np.sqrt(0.95)},
+            "two-sided",
+            1e-6,
+        ),
+        ({"flight_damping": 0.02}, ("flight_damping",), {"zeta": 0.02}, "two-sided", 1e-3),  # first order in zeta
+        ({}, (), {}, "one-sided", 1e-6),
+        (
+            {"impact": I.AmplitudeLaw(I.OneSided(), 1.2, 0.4)},
+            ("restitution_amplitude",),
+            {"a": 1.2, "b": 0.4},
+            "one-sided",
+            1e-6,
+        ),
+        (
+            {"gap": 0.1 * ALPHA, "transverse_impact": I.AmplitudeLaw(I.Transverse(), 1.2, 0.4)},
+            ("restitution_amplitude", "contact_gap"),
+            {"gap_over_alpha": 0.1, "a": 1.2, "b": 0.4},
+            "one-sided",
+            1e-6,
+        ),
+    ],
+)
 def test_free_run_matches_the_exact_simulator(kw, ext, values, boundary, rtol):
     model = RockingModel(alpha=ALPHA, p=P, boundary=boundary, **kw)
     ts = _sim_test(model, 0.8 * model.alpha_pos)
@@ -284,7 +413,7 @@ def test_free_run_matches_the_exact_simulator(kw, ext, values, boundary, rtol):
     # and the simulator model the diagnosis builds is that model
     h = simulate_free(D.rocking_model(ts, ext, values), ts.theta0, 0.0, t_end=6.0, fs=400)
     imp = h.impacts[(h.impacts.kind == "base") & (h.impacts.thetadot_before < 0)] if model.gap else h.impacts
-    np.testing.assert_allclose(imp.theta_peak_before.to_numpy()[1:ts.n_impacts + 1][big], ts.peaks[big], rtol=1e-6)
+    np.testing.assert_allclose(imp.theta_peak_before.to_numpy()[1 : ts.n_impacts + 1][big], ts.peaks[big], rtol=1e-6)
 
 
 def test_quarter_period_and_gap_transit_exact():
@@ -298,8 +427,9 @@ def test_quarter_period_and_gap_transit_exact():
 
 
 def test_boundary_entries_json_and_markdown(diagnosed, tmp_path):
-    series = [dict(diagnosed[k], boundary="two-sided") for k in ("instability+scale", "instability+scale-noisy",
-                                                                  "null-2s")]
+    series = [
+        dict(diagnosed[k], boundary="two-sided") for k in ("instability+scale", "instability+scale-noisy", "null-2s")
+    ]
     b = D.diagnose_boundary(series, "two-sided", n_boot=200)
     assert b["scope"] == "boundary" and b["n_tests"] == 18 and b["n_series"] == 3
     assert set(b["verdict"]) == {"instability_angle", "restitution_scale"}

@@ -1,4 +1,4 @@
-"""rocklab.dissipation against exact free rocking, closed forms and the paper."""
+"""rocklab.dissipation.analysis against exact free rocking, closed forms and the paper."""
 
 from __future__ import annotations
 
@@ -8,15 +8,27 @@ import pytest
 from scipy.integrate import solve_ivp
 from test_motion import free_rocking_record
 
-from rocklab import restitution, virtual_lab
-from rocklab.campaign import open_campaign
-from rocklab.dissipation import (IMPACT_COLUMNS, TEST_COLUMNS, amplitude_law_fit, analyse_motion,
-                                 analyse_reduced_test, analytic_e, e_by_n, monitor_readings,
-                                 no_sliding_check, quarter_period_linear, table3_windows)
-from rocklab.impact import Constant
-from rocklab.reduction import reduce_test
-from rocklab.rocking import RockingModel, simulate_free
-from rocklab.wall import overturning_velocity, quarter_period_housner
+from rocklab.dissipation.analysis import (
+    IMPACT_COLUMNS,
+    TEST_COLUMNS,
+    amplitude_law_fit,
+    analyse_motion,
+    analyse_reduced_test,
+    analytic_e,
+    e_by_n,
+    monitor_readings,
+    no_sliding_check,
+    quarter_period_linear,
+    table3_windows,
+)
+from rocklab.lab import virtual_lab
+from rocklab.lab.campaign import open_campaign
+from rocklab.lab.reduction import reduce_test
+from rocklab.physics import restitution
+from rocklab.physics.impact import Constant
+from rocklab.physics.wall import overturning_velocity, quarter_period_housner
+from rocklab.simulation.model import RockingModel
+from rocklab.simulation.reference import simulate_free
 
 P = 3.4
 
@@ -26,7 +38,7 @@ def test_eq10_and_eq11_agree_in_the_small_angle_limit():
     peaks = alpha * np.array([0.8, 0.6, 0.45, 0.3])
     d = e_by_n(peaks, alpha, alpha, alpha, 1.0)
     assert np.allclose(d.e_exp_eq10, d.e_exp_eq11, rtol=1e-6)
-    alpha = 0.15   # stockiest wall (h/b = 6.5): they "coincide substantially"
+    alpha = 0.15  # stockiest wall (h/b = 6.5): they "coincide substantially"
     d = e_by_n(alpha * np.array([0.8, 0.6]), alpha, alpha, alpha, 1.0)
     diff = np.abs(d.e_exp_eq10 - d.e_exp_eq11)
     assert np.all((diff > 1e-5) & (diff < 1e-3))
@@ -34,8 +46,7 @@ def test_eq10_and_eq11_agree_in_the_small_angle_limit():
 
 @pytest.mark.parametrize("boundary,e,alpha", [("two-sided", 0.9, 0.15), ("one-sided", -0.45, 0.1)])
 def test_eq11_inverts_an_exact_motion_for_every_n(boundary, e, alpha):
-    _, _, truth = free_rocking_record(boundary=boundary, e=e, alpha=alpha, noise=0, hum=0,
-                                      ring=0, duration=6.0)
+    _, _, truth = free_rocking_record(boundary=boundary, e=e, alpha=alpha, noise=0, hum=0, ring=0, duration=6.0)
     peaks = np.abs(truth["peaks"])[:8]
     d = e_by_n(peaks, truth["theta0"], alpha, alpha, 1.0)
     assert np.allclose(d.e_exp_eq11, abs(e), atol=1e-6)
@@ -46,8 +57,9 @@ def test_eq11_inverts_an_exact_motion_for_every_n(boundary, e, alpha):
 def _simulated_peaks(boundary, e, alpha, form, frac=0.9, t_end=20.0):
     """theta0 and the peaks after impacts 1..N of an exact simulate_free motion."""
     law = None if e is None else Constant(e)
-    h = simulate_free(RockingModel(alpha=alpha, p=P, boundary=boundary, impact=law, form=form),
-                      frac * alpha, t_end=t_end)
+    h = simulate_free(
+        RockingModel(alpha=alpha, p=P, boundary=boundary, impact=law, form=form), frac * alpha, t_end=t_end
+    )
     peaks = np.abs(h.impacts.theta_peak_before.to_numpy())
     return peaks[0], peaks[1:9]
 
@@ -55,8 +67,8 @@ def _simulated_peaks(boundary, e, alpha, form, frac=0.9, t_end=20.0):
 @pytest.mark.parametrize("boundary,e", [("two-sided", 0.93), ("one-sided", None)])
 def test_eqs10_11_invert_simulate_free_with_known_e(boundary, e):
     """Eq. 11 inverts the exact rigid-block motion, Eq. 10 its piecewise-linear form."""
-    alpha = 0.12                                    # h/b = 8.3
-    e_true = abs(e if e is not None else restitution.one_sided(alpha))   # Eq. 14 by default
+    alpha = 0.12  # h/b = 8.3
+    e_true = abs(e if e is not None else restitution.one_sided(alpha))  # Eq. 14 by default
     theta0, peaks = _simulated_peaks(boundary, e, alpha, "exact")
     d = e_by_n(peaks, theta0, alpha, alpha, 1.0)
     assert len(d) == 8 and np.allclose(d.e_exp_eq11, e_true, rtol=1e-7)
@@ -94,8 +106,14 @@ def test_eq16_against_the_energy_balance():
     vr = overturning_velocity(alpha, P)
 
     def run(v):
-        sol = solve_ivp(lambda _, y: [y[1], -P**2 * np.sin(alpha - y[0])], (0, 10), [0, v],
-                        events=lambda _, y: y[1], rtol=1e-12, atol=1e-14)
+        sol = solve_ivp(
+            lambda _, y: [y[1], -(P**2) * np.sin(alpha - y[0])],
+            (0, 10),
+            [0, v],
+            events=lambda _, y: y[1],
+            rtol=1e-12,
+            atol=1e-14,
+        )
         return sol.y_events[0][0][0] if len(sol.t_events[0]) else np.inf
 
     assert run(vr * (1 - 1e-6)) == pytest.approx(alpha, rel=1e-2)
@@ -118,16 +136,17 @@ def test_table3_windows_are_equal_for_a_constant_e():
     assert all(v == pytest.approx(e / 0.5, abs=1e-6) for v in w.values())
 
 
-ALPHA_NOM = 0.08    # arctan(b/h), h/b = 12.5
-ALPHA_DYN = 0.074   # effective instability angle (rounded hinge)
+ALPHA_NOM = 0.08  # arctan(b/h), h/b = 12.5
+ALPHA_DYN = 0.074  # effective instability angle (rounded hinge)
 
 
 @pytest.mark.parametrize("boundary,e,seed", [("two-sided", 0.93, 0), ("one-sided", -0.5, 1)])
 def test_noisy_400hz_record_recovers_e_and_theta0(boundary, e, seed):
     """Done-when of the issue: e_exp and theta0/alpha within 0.005."""
     frac = 0.995
-    t, th, truth = free_rocking_record(boundary=boundary, e=e, alpha=ALPHA_DYN,
-                                       theta0_frac=frac, seed=seed, noise=1e-5, hum=2e-5)
+    t, th, truth = free_rocking_record(
+        boundary=boundary, e=e, alpha=ALPHA_DYN, theta0_frac=frac, seed=seed, noise=1e-5, hum=2e-5
+    )
     s, imp, e_n = analyse_motion(t, th, 400.0, boundary, ALPHA_NOM, P, "push")
     assert list(s)[: len(TEST_COLUMNS)] == TEST_COLUMNS
     assert list(imp.columns) == IMPACT_COLUMNS
@@ -154,8 +173,7 @@ def test_quarter_period_linear_against_housner_and_the_linear_simulator():
     assert np.allclose(quarter_period_linear(r), quarter_period_housner(r), rtol=1e-12)
     # released with a speed towards the vertical: the linear simulator's first impact
     alpha, w = 0.1, 0.05
-    h = simulate_free(RockingModel(alpha=alpha, p=P, form="linear"), 0.99 * alpha,
-                      thetadot0=-w * P * alpha, t_end=5.0)
+    h = simulate_free(RockingModel(alpha=alpha, p=P, form="linear"), 0.99 * alpha, thetadot0=-w * P * alpha, t_end=5.0)
     assert quarter_period_linear(0.99, w) == pytest.approx(P * h.impacts.t.iloc[0], rel=1e-6)
     assert quarter_period_linear(0.99, w) < quarter_period_linear(0.99)
     assert np.isnan(quarter_period_linear(1.2))
@@ -165,11 +183,14 @@ def test_quarter_period_linear_against_housner_and_the_linear_simulator():
 def virtual_tests(tmp_path_factory):
     """A two-sided and a one-sided test of the virtual lab: simulate_free, noisy 400 Hz
     transducer records with hum, ringing, the screw's creep and 3-decimal readings,
-    written in the lab's format, reduced by rocklab.reduction."""
+    written in the lab's format, reduced by rocklab.lab.reduction."""
     folder = tmp_path_factory.mktemp("vlab") / "campaign"
-    plan = [virtual_lab.VirtualTest("V0001", specimen="2a", theta0_ratio=0.996),
-            virtual_lab.VirtualTest("V0002", specimen="3b", boundary="one-sided",
-                                    contact_depth_mm=120.0, theta0_ratio=0.993)]
+    plan = [
+        virtual_lab.VirtualTest("V0001", specimen="2a", theta0_ratio=0.996),
+        virtual_lab.VirtualTest(
+            "V0002", specimen="3b", boundary="one-sided", contact_depth_mm=120.0, theta0_ratio=0.993
+        ),
+    ]
     truth = virtual_lab.write_campaign(folder, plan, seed=11).set_index("test_id")
     camp = open_campaign(folder)
     out = {}
@@ -194,7 +215,7 @@ def test_centre_amplification_of_a_reduced_test(virtual_tests):
     ds, s, _ = virtual_tests["V0002"]
     assert s["centre_amplification"] == pytest.approx(1.0, abs=2e-3)
     ch, measured, rigid = monitor_readings(ds)
-    assert ch == 5 and np.nanmax(np.abs(measured - rigid)) < 0.05      # mm
+    assert ch == 5 and np.nanmax(np.abs(measured - rigid)) < 0.05  # mm
     after = ds.time.values >= s["t_first_impact"]
     bulged = ds.copy(deep=True)
     bulged["elongation"].loc[{"channel": 5}] = np.where(after, 1.05, 1.0) * measured
@@ -221,10 +242,17 @@ def test_amplitude_law_fit_recovers_eq15_and_eq17():
     rng = np.random.default_rng(0)
     n = 60
     x = rng.uniform(0.05, 0.8, n)
-    tests = pd.DataFrame({"test_id": ["A", "B"], "e_an": [-0.45, -0.45],
-                          "series": ["s1", "s2"], "boundary": ["one-sided"] * 2})
-    imp = pd.DataFrame({"test_id": np.repeat(["A", "B"], n // 2), "peak_before_over_alpha": x,
-                        "v_over_vr": np.sqrt(x), "e_exp_k": 0.45 * (1.17 - 0.453 * x)})
+    tests = pd.DataFrame(
+        {"test_id": ["A", "B"], "e_an": [-0.45, -0.45], "series": ["s1", "s2"], "boundary": ["one-sided"] * 2}
+    )
+    imp = pd.DataFrame(
+        {
+            "test_id": np.repeat(["A", "B"], n // 2),
+            "peak_before_over_alpha": x,
+            "v_over_vr": np.sqrt(x),
+            "e_exp_k": 0.45 * (1.17 - 0.453 * x),
+        }
+    )
     f = amplitude_law_fit(imp, tests, by=("boundary",), law="peak")
     assert f.a.iloc[0] == pytest.approx(1.17) and f.b.iloc[0] == pytest.approx(0.453)
     assert f.r2.iloc[0] == pytest.approx(1.0)
@@ -238,5 +266,5 @@ def test_amplitude_law_fit_recovers_eq15_and_eq17():
 def test_no_sliding_check_eq9():
     d = no_sliding_check([6.5, 14.6])
     assert d.no_sliding.all()
-    assert (d.mu_required < d.b_over_h).all()     # Sect. 2.2: mu_s > b/h suffices
-    assert not no_sliding_check(0.5, mu_s=0.6).no_sliding.iloc[0]   # 3z/(1+4z^2) = 0.75
+    assert (d.mu_required < d.b_over_h).all()  # Sect. 2.2: mu_s > b/h suffices
+    assert not no_sliding_check(0.5, mu_s=0.6).no_sliding.iloc[0]  # 3z/(1+4z^2) = 0.75

@@ -1,4 +1,4 @@
-"""rocklab.figures: the Sect. 3-4 figures build from the dissipation tables."""
+"""rocklab.plots: the Sect. 3-4 figures build from the dissipation tables."""
 
 from __future__ import annotations
 
@@ -6,8 +6,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rocklab import figures
-from rocklab.statistics import SERIES_COLUMNS, series_stats
+from rocklab.dissipation.statistics import SERIES_COLUMNS, series_stats
+from rocklab.plots import dissipation as figures
 
 
 def tables(one_sided=True):
@@ -16,27 +16,47 @@ def tables(one_sided=True):
     rows, e_rows = [], []
     specs = [("5a-2s", "two-sided", 14.6, np.nan), ("5c-2s", "two-sided", 6.5, np.nan)]
     if one_sided:
-        specs += [("2a-1s-cd60", "one-sided", 14.4, 60.0),
-                  ("2a-1s-cd260", "one-sided", 14.4, 260.0)]
+        specs += [("2a-1s-cd60", "one-sided", 14.4, 60.0), ("2a-1s-cd260", "one-sided", 14.4, 260.0)]
     for series, boundary, hb, cd in specs:
         for k in range(6):
             tid = f"{series}-{k}"
             two = boundary == "two-sided"
             e = (0.95 if two else 1.2) + 0.01 * rng.standard_normal()
-            rows.append(dict(test_id=tid, series=series, boundary=boundary, h_over_b=hb,
-                             contact_depth_mm=cd, e_ratio=e,
-                             theta0_over_alpha=0.9 if two else 0.73, T_quarter_p=6.8,
-                             T_quarter_p_housner=7.5, T_quarter_p_linear=6.8,
-                             n_cycles=20.0 if two else 1.5, duration_p=40.0 if two else 9.0,
-                             centre_amplification=np.nan if two else 1.0 + 1e-4 * k,
-                             t_first_impact=2.0))
+            rows.append(
+                dict(
+                    test_id=tid,
+                    series=series,
+                    boundary=boundary,
+                    h_over_b=hb,
+                    contact_depth_mm=cd,
+                    e_ratio=e,
+                    theta0_over_alpha=0.9 if two else 0.73,
+                    T_quarter_p=6.8,
+                    T_quarter_p_housner=7.5,
+                    T_quarter_p_linear=6.8,
+                    n_cycles=20.0 if two else 1.5,
+                    duration_p=40.0 if two else 9.0,
+                    centre_amplification=np.nan if two else 1.0 + 1e-4 * k,
+                    t_first_impact=2.0,
+                )
+            )
             n = np.arange(1, 30 if two else 4)
-            e_rows.append(pd.DataFrame(dict(n=n, e_ratio_eq10=0.95 + 0.001 * n,
-                                            e_ratio_eq11=0.95 + 0.001 * n, test_id=tid,
-                                            series=series, boundary=boundary)))
+            e_rows.append(
+                pd.DataFrame(
+                    dict(
+                        n=n,
+                        e_ratio_eq10=0.95 + 0.001 * n,
+                        e_ratio_eq11=0.95 + 0.001 * n,
+                        test_id=tid,
+                        series=series,
+                        boundary=boundary,
+                    )
+                )
+            )
     tests = pd.DataFrame(rows)
     series = series_stats(tests, SERIES_COLUMNS).merge(
-        tests.groupby("series")[["boundary", "h_over_b", "contact_depth_mm"]].first().reset_index())
+        tests.groupby("series")[["boundary", "h_over_b", "contact_depth_mm"]].first().reset_index()
+    )
     return tests, pd.concat(e_rows, ignore_index=True), series.assign(stands_apart=False)
 
 

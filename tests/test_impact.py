@@ -1,9 +1,9 @@
-"""Impact laws against the closed forms of rocklab.restitution (Eqs. 2, 12-14, 17)."""
+"""Impact laws against the closed forms of rocklab.physics.restitution (Eqs. 2, 12-14, 17)."""
 
 import numpy as np
 import pytest
 
-from rocklab import impact, restitution, wall
+from rocklab.physics import impact, restitution, wall
 
 ALPHA, P = 0.12, 2.5
 

@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 from scipy.optimize import least_squares
 
-from rocklab.kinematics import (
+from rocklab.lab.kinematics import (
     normalised_peaks,
     simplified_channel,
     solve_wall_motion,
@@ -20,10 +20,10 @@ CAMPAIGN = Path(__file__).resolve().parents[1] / "raw" / "campaign"
 
 # Usual layout of specimen 1b, one-sided setup (spec; setups.csv S-1b-1s-*).
 B = 113.0
-WALL = np.array([[-710, 0, 280], [-710, 0, 680], [710, 0, 280], [710, 0, 680],
-                 [710, 0, 480], [0, 56.5, 400]], float)
-FRAME = np.array([[-710, -180, 280], [-710, -210, 680], [710, -185, 280],
-                  [710, -205, 680], [860, 0, 480], [0, 216.5, 400]], float)
+WALL = np.array([[-710, 0, 280], [-710, 0, 680], [710, 0, 280], [710, 0, 680], [710, 0, 480], [0, 56.5, 400]], float)
+FRAME = np.array(
+    [[-710, -180, 280], [-710, -210, 680], [710, -185, 280], [710, -205, 680], [860, 0, 480], [0, 216.5, 400]], float
+)
 
 
 def rocking_motion(n=4000, amp=0.12):
@@ -63,11 +63,12 @@ def test_sign_convention_channel5_pushed_reads_negative():
 
 
 def test_jacobian_matches_finite_differences():
-    from rocklab.kinematics import _pose
+    from rocklab.lab.kinematics import _pose
 
     rng = np.random.default_rng(1)
-    q = np.column_stack([rng.uniform(-0.1, 0.1, 50), rng.uniform(-0.01, 0.01, 50),
-                         rng.uniform(-5, 5, 50), rng.uniform(-5, 5, 50)])
+    q = np.column_stack(
+        [rng.uniform(-0.1, 0.1, 50), rng.uniform(-0.01, 0.01, 50), rng.uniform(-5, 5, 50), rng.uniform(-5, 5, 50)]
+    )
     q[np.abs(q[:, 0]) < 1e-3, 0] = 0.02  # away from the kink
     L, J = _pose(*q.T, WALL, FRAME, B, True)
     for a, h in enumerate([1e-7, 1e-7, 1e-5, 1e-5]):
@@ -109,10 +110,8 @@ def test_round_trip_with_v_fixed():
 
 def test_unusual_layout_round_trip():
     # Oblique and inclined transducers, frame on both sides, one vertical.
-    wall = np.array([[-600, -40, 150], [-500, 56.5, 900], [650, 0, 500],
-                     [300, -56.5, 700], [700, 20, 300]], float)
-    frame = np.array([[-650, -250, 100], [-450, 300, 950], [700, -190, 620],
-                      [350, -260, 650], [880, 40, 280]], float)
+    wall = np.array([[-600, -40, 150], [-500, 56.5, 900], [650, 0, 500], [300, -56.5, 700], [700, 20, 300]], float)
+    frame = np.array([[-650, -250, 100], [-450, 300, 950], [700, -190, 620], [350, -260, 650], [880, 40, 280]], float)
     theta, phi, v, w = rocking_motion(n=1500)
     e = transducer_elongation(theta, phi, v, w, wall, frame, B)
     sol = solve_wall_motion(e, wall, frame, B)
@@ -123,12 +122,12 @@ def test_unusual_layout_round_trip():
 def test_lost_samples_and_weights():
     theta, phi, v, w = rocking_motion(n=800)
     e = transducer_elongation(theta, phi, v, w, WALL[:5], FRAME[:5], B)
-    e[100:150, 1] = np.nan      # a gap: four channels left, still exact
-    e[200, [0, 1]] = np.nan     # two lost: three channels for four unknowns
+    e[100:150, 1] = np.nan  # a gap: four channels left, still exact
+    e[200, [0, 1]] = np.nan  # two lost: three channels for four unknowns
     wts = np.ones((800, 5))
     wts[300:310, 2] = 0
-    wts[300:310, 3] = 0          # only 0, 1, 4 left: unsolvable
-    e[400:410, 3] = 1e3          # garbage, excluded by weight
+    wts[300:310, 3] = 0  # only 0, 1, 4 left: unsolvable
+    e[400:410, 3] = 1e3  # garbage, excluded by weight
     wts[400:410, 3] = 0
     sol = solve_wall_motion(e, WALL[:5], FRAME[:5], B, weights=wts)
     good = np.ones(800, bool)
@@ -147,8 +146,10 @@ def test_least_squares_matches_scipy_per_step():
     e += rng.normal(0, 0.05, e.shape)
     sol = solve_wall_motion(e, WALL[ch], FRAME[ch], B)
     for k in range(len(theta)):
+
         def res(q, k=k):
             return transducer_elongation(*q[:, None], WALL[ch], FRAME[ch], B)[0] - e[k]
+
         q0 = [sol["theta"][k] + 1e-3, 0, 0, 0]
         ref = least_squares(res, q0, xtol=1e-15, ftol=1e-15, gtol=1e-15).x
         assert sol["theta"][k] == pytest.approx(ref[0], abs=1e-9)

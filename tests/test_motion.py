@@ -1,4 +1,4 @@
-"""rocklab.motion against exact free-rocking motions with known landmarks.
+"""rocklab.lab.motion against exact free-rocking motions with known landmarks.
 
 The truth is generated here, independently of rocklab: the exact nonlinear
 rocking equation theta'' = -p^2 sin(alpha sgn(theta) - theta) integrated by
@@ -12,16 +12,31 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from rocklab.motion import (centre_amplification, extract_motion, local_fit, model_velocity,
-                            noise_level)
+from rocklab.lab.motion import centre_amplification, extract_motion, local_fit, model_velocity, noise_level
 
-P = 3.4          # rad/s, a 1.1-1.6 m wall
-ALPHA = 0.075    # rad, effective instability angle of the dynamics (h/b ~ 13)
+P = 3.4  # rad/s, a 1.1-1.6 m wall
+ALPHA = 0.075  # rad, effective instability angle of the dynamics (h/b ~ 13)
 
 
-def free_rocking_record(*, alpha=ALPHA, p=P, e=0.93, theta0_frac=0.99, boundary="two-sided",
-                        fs=400.0, hold_s=1.0, duration=12.0, noise=1e-5, hum=2e-5,
-                        ring=3e-4, gap=0.0, e_base=0.9, sign=1, seed=0, min_peak=2e-6):
+def free_rocking_record(
+    *,
+    alpha=ALPHA,
+    p=P,
+    e=0.93,
+    theta0_frac=0.99,
+    boundary="two-sided",
+    fs=400.0,
+    hold_s=1.0,
+    duration=12.0,
+    noise=1e-5,
+    hum=2e-5,
+    ring=3e-4,
+    gap=0.0,
+    e_base=0.9,
+    sign=1,
+    seed=0,
+    min_peak=2e-6,
+):
     """Exact free rocking released from rest at theta0 = theta0_frac * alpha.
 
     Two-sided: e > 0 at every base impact.  One-sided: e < 0 (rebound); with
@@ -38,11 +53,12 @@ def free_rocking_record(*, alpha=ALPHA, p=P, e=0.93, theta0_frac=0.99, boundary=
     e_tr = e / e_base**2
 
     def rhs(_, y, side):
-        return [y[1], -p**2 * np.sin(alpha * side - y[0])]
+        return [y[1], -(p**2) * np.sin(alpha * side - y[0])]
 
     def level(target, direction):
         def ev(_, y, side):
             return y[0] - target
+
         ev.terminal, ev.direction = True, direction
         return ev
 
@@ -56,8 +72,17 @@ def free_rocking_record(*, alpha=ALPHA, p=P, e=0.93, theta0_frac=0.99, boundary=
         if gap and side < 0:
             events.append(level(-gap, -1))
         top.direction = -side
-        sol = solve_ivp(rhs, (tcur, hold_s + duration), y, args=(side,), events=events + [top],
-                        dense_output=True, rtol=1e-11, atol=1e-14, max_step=0.02)
+        sol = solve_ivp(
+            rhs,
+            (tcur, hold_s + duration),
+            y,
+            args=(side,),
+            events=events + [top],
+            dense_output=True,
+            rtol=1e-11,
+            atol=1e-14,
+            max_step=0.02,
+        )
         segs.append(sol)
         for tt, yy in zip(sol.t_events[-1], sol.y_events[-1]):
             if tt > tcur + 1e-9:
@@ -68,7 +93,7 @@ def free_rocking_record(*, alpha=ALPHA, p=P, e=0.93, theta0_frac=0.99, boundary=
             break
         ti, which = min(hits)
         v = sol.sol(ti)[1]
-        if which == 1:                       # transverse walls
+        if which == 1:  # transverse walls
             y = np.array([-gap, e_tr * v])
         elif boundary == "two-sided":
             impacts.append((ti, v, e * v))
@@ -76,10 +101,10 @@ def free_rocking_record(*, alpha=ALPHA, p=P, e=0.93, theta0_frac=0.99, boundary=
         elif not gap:
             impacts.append((ti, v, e * v))
             y = np.array([0.0, e * v])
-        elif side > 0:                       # base impact, into the gap
+        elif side > 0:  # base impact, into the gap
             pending = (ti, v)
             y, side = np.array([0.0, e_base * v]), -1.0
-        else:                                # base impact, back from the gap
+        else:  # base impact, back from the gap
             impacts.append((pending[0], pending[1], e_base * v))
             y, side = np.array([0.0, e_base * v]), 1.0
         tcur = ti
@@ -98,8 +123,16 @@ def free_rocking_record(*, alpha=ALPHA, p=P, e=0.93, theta0_frac=0.99, boundary=
         theta[m] += ring * abs(v) * np.exp(-dt[m] / 0.012) * np.cos(2 * np.pi * 30 * dt[m])
     theta += noise * rng.standard_normal(t.size)
     theta += hum * np.sin(2 * np.pi * 50.0 * t + rng.uniform(0, 2 * np.pi))
-    truth = dict(t_release=hold_s, theta0=theta0, impacts=np.array(impacts, float),
-                 peaks=np.array(peaks), peak_t=np.array(peak_t), alpha=alpha, p=p, e=e)
+    truth = dict(
+        t_release=hold_s,
+        theta0=theta0,
+        impacts=np.array(impacts, float),
+        peaks=np.array(peaks),
+        peak_t=np.array(peak_t),
+        alpha=alpha,
+        p=p,
+        e=e,
+    )
     return t, sign * theta, truth
 
 
@@ -159,7 +192,7 @@ def test_pull_direction_and_100hz():
     n = len(m.impacts)
     assert n >= 10
     assert np.allclose(m.peaks, np.abs(truth["peaks"][:n]), atol=5e-5)
-    assert np.all(m.impacts.thetadot_before.iloc[:20:2] > 0)   # theta < 0 falls back up
+    assert np.all(m.impacts.thetadot_before.iloc[:20:2] > 0)  # theta < 0 falls back up
 
 
 def test_end_of_motion_is_where_peaks_reach_the_noise(two_sided):
@@ -173,8 +206,7 @@ def test_end_of_motion_is_where_peaks_reach_the_noise(two_sided):
 
 
 def test_one_sided_rebounds():
-    t, th, truth = free_rocking_record(boundary="one-sided", e=-0.5, theta0_frac=0.98,
-                                       alpha=0.09, seed=1)
+    t, th, truth = free_rocking_record(boundary="one-sided", e=-0.5, theta0_frac=0.98, alpha=0.09, seed=1)
     m = extract_motion(t, th, 400.0, "one-sided", P)
     imp = truth["impacts"]
     n = len(m.impacts)
@@ -188,8 +220,7 @@ def test_one_sided_rebounds():
 
 def test_one_sided_gap_excursions_are_merged_and_reported():
     gap = 0.004
-    t, th, truth = free_rocking_record(boundary="one-sided", e=-0.35, theta0_frac=0.98,
-                                       alpha=0.09, gap=gap, seed=2)
+    t, th, truth = free_rocking_record(boundary="one-sided", e=-0.35, theta0_frac=0.98, alpha=0.09, gap=gap, seed=2)
     m = extract_motion(t, th, 400.0, "one-sided", P)
     n = len(m.impacts)
     assert n >= 3
@@ -215,17 +246,28 @@ def test_centre_amplification_ratio_after_first_impact():
     assert centre_amplification(np.r_[99.0, side[1:]], side, 1) == pytest.approx(1.0)
 
 
-@pytest.mark.parametrize("k_gap,hump,quiet", [
-    (None, 0.0, False),    # stops dead after its last small flight
-    (2, 0.0, False),       # stops dead coming back up from its 3rd swing into the gap
-    (None, 6e-4, False),   # then drifts (settling askew): no curvature of a flight
-    (0, 0.0, True),        # stops dead after the 1st impact: only a smoother overshoot
-])
+@pytest.mark.parametrize(
+    "k_gap,hump,quiet",
+    [
+        (None, 0.0, False),  # stops dead after its last small flight
+        (2, 0.0, False),  # stops dead coming back up from its 3rd swing into the gap
+        (None, 6e-4, False),  # then drifts (settling askew): no curvature of a flight
+        (0, 0.0, True),  # stops dead after the 1st impact: only a smoother overshoot
+    ],
+)
 def test_a_wall_that_stops_dead_ends_on_its_last_flight(k_gap, hump, quiet):
     """One-sided wall that stops dead at theta = 0 and may then drift slowly:
     every flight is kept, no spurious final impact is added."""
-    kw = dict(boundary="one-sided", e=-0.35, theta0_frac=0.98, alpha=0.09, gap=0.002, seed=6,
-              min_peak=1e-3, **(dict(noise=5e-6, hum=0.0) if quiet else {}))
+    kw = dict(
+        boundary="one-sided",
+        e=-0.35,
+        theta0_frac=0.98,
+        alpha=0.09,
+        gap=0.002,
+        seed=6,
+        min_peak=1e-3,
+        **(dict(noise=5e-6, hum=0.0) if quiet else {}),
+    )
     t, th, truth = free_rocking_record(**kw)
     _, clean, _ = free_rocking_record(**{**kw, "noise": 0.0, "hum": 0.0, "ring": 0.0})
     t_stop = t[np.flatnonzero(clean)[-1]]

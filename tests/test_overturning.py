@@ -13,14 +13,22 @@ import pandas as pd
 import pytest
 import xarray as xr
 
-from rocklab import restitution, wall
-from rocklab.accelerograms import load_record
-from rocklab.batch import overturning_batch
-from rocklab.impact import Constant
-from rocklab.overturning import (MODELS, check_against_reference, map_indices, named_model, overturning_map,
-                                 record_reductions, reductions, summary_table)
-from rocklab.rocking import RockingModel
-from rocklab.workflow import write_netcdf
+from rocklab.io import write_netcdf
+from rocklab.physics import restitution, wall
+from rocklab.physics.impact import Constant
+from rocklab.seismic.accelerograms import load_record
+from rocklab.seismic.overturning import (
+    MODELS,
+    check_against_reference,
+    map_indices,
+    named_model,
+    overturning_map,
+    record_reductions,
+    reductions,
+    summary_table,
+)
+from rocklab.simulation.batch import overturning_batch
+from rocklab.simulation.model import RockingModel
 
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
@@ -31,7 +39,7 @@ def pacoima():
     """The strong part of Pacoima Dam (Table 4 row 3): 4.5-9.5 s, with the 7.7 s peak."""
     tr = load_record("Pac164")
     dt = tr.stats.delta
-    return tr.data[int(4.5 / dt):int(9.5 / dt)].copy(), dt
+    return tr.data[int(4.5 / dt) : int(9.5 / dt)].copy(), dt
 
 
 # ---------------------------------------------------------------- indices
@@ -39,9 +47,7 @@ def pacoima():
 
 def test_indices_of_a_hand_made_map():
     # amplitude down the rows, duration across
-    o = np.array([[0, 0, 1, 1],
-                  [0, 1, 0, 1],
-                  [1, 1, 1, 1]], bool)
+    o = np.array([[0, 0, 1, 1], [0, 1, 0, 1], [1, 1, 1, 1]], bool)
     got = map_indices(o)
     # changes along rows: 1 + 3 + 0; along columns: (0,1,1,0) + (1,0,1,0)
     assert got["n_overturned"] == 8 and got["n_cells"] == 12
@@ -65,12 +71,14 @@ def test_indices_of_regular_and_empty_maps():
 
 
 def test_reductions_are_statistics_of_per_record_reductions():
-    s = pd.DataFrame({
-        "record": ["r1", "r1", "r2", "r2", "r3", "r3"],
-        "model": ["2s-housner", "2s-0.95"] * 3,
-        "N_O": [0.5, 0.25, 0.4, 0.36, 0.0, 0.0],
-        "scatter": [0.2, 0.1, 0.1, 0.1, np.nan, np.nan],
-    })
+    s = pd.DataFrame(
+        {
+            "record": ["r1", "r1", "r2", "r2", "r3", "r3"],
+            "model": ["2s-housner", "2s-0.95"] * 3,
+            "N_O": [0.5, 0.25, 0.4, 0.36, 0.0, 0.0],
+            "scatter": [0.2, 0.1, 0.1, 0.1, np.nan, np.nan],
+        }
+    )
     per = record_reductions(s, "2s-housner", "2s-0.95")
     assert per.loc["r1", "N_O"] == pytest.approx(50) and per.loc["r2", "N_O"] == pytest.approx(10)
     assert np.isnan(per.loc["r3", "N_O"])  # no overturning: undefined, not 0 %
@@ -183,9 +191,9 @@ def test_cells_at_the_onset_threshold_finish():
     instant (A_S/A, D_S/D cells found in the 201 maps).  Run in a subprocess, so a
     relapse fails instead of hanging the suite."""
     code = (
-        "from rocklab.accelerograms import load_record\n"
-        "from rocklab.batch import overturning_batch\n"
-        "from rocklab.overturning import named_model, scales\n"
+        "from rocklab.seismic.accelerograms import load_record\n"
+        "from rocklab.simulation.batch import overturning_batch\n"
+        "from rocklab.seismic.overturning import named_model, scales\n"
         "g = scales(201)\n"
         "for rec, i, j in [('LucN80W', 15, 4), ('Pac164', 27, 20), ('Pac164', 27, 7)]:\n"
         "    tr = load_record(rec)\n"
@@ -194,7 +202,7 @@ def test_cells_at_the_onset_threshold_finish():
     try:
         run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=30)
     except subprocess.TimeoutExpired:
-        pytest.fail("rocklab.rocking.run_history did not finish (endless onset/landing at the threshold)")
+        pytest.fail("rocklab.simulation.engine.run_history did not finish (endless onset/landing at the threshold)")
     assert run.returncode == 0, run.stderr[-2000:]
 
 
@@ -205,8 +213,20 @@ def test_map_dataset_is_self_describing(pacoima, tmp_path):
     ag, dt = pacoima
     ds = overturning_map(ag, dt, "1s-eq17", n=3, name="Pac164-strong", chunks=2)
     assert ds.overturned.dims == ("amplitude_scale", "duration_scale") and ds.overturned.dtype == bool
-    for key in ("alpha", "R", "p", "impact_law", "impact_e0", "impact_a", "impact_b", "overturning_criterion",
-                "record", "form", "boundary", "model"):
+    for key in (
+        "alpha",
+        "R",
+        "p",
+        "impact_law",
+        "impact_e0",
+        "impact_a",
+        "impact_b",
+        "overturning_criterion",
+        "record",
+        "form",
+        "boundary",
+        "model",
+    ):
         assert key in ds.attrs, key
     assert ds.attrs["R"] == 3.0 and ds.attrs["impact_b"] == 0.473
     write_netcdf(ds, tmp_path / "m.nc")
@@ -218,8 +238,7 @@ def test_map_dataset_is_self_describing(pacoima, tmp_path):
 
 @pytest.mark.skipif(not SNAKEMAKE.exists(), reason="snakemake not installed beside this interpreter")
 def test_slurm_profile_dry_run(tmp_path):
-    cmd = [str(SNAKEMAKE), "-n", "--profile", "workflow/profiles/slurm", "maps", "--config",
-           f"results_dir={tmp_path}"]
+    cmd = [str(SNAKEMAKE), "-n", "--profile", "workflow/profiles/slurm", "maps", "--config", f"results_dir={tmp_path}"]
     run = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env={**os.environ, "PYTHONWARNINGS": "ignore"})
     assert run.returncode == 0, run.stderr[-3000:]
     out = run.stdout + run.stderr
@@ -230,8 +249,17 @@ def test_slurm_profile_dry_run(tmp_path):
 def test_workflow_maps_one_record(tmp_path):
     cfg = tmp_path / "maps.yaml"
     cfg.write_text(f"results_dir: {tmp_path / 'out'}\nmaps:\n  records: [Pac164]\n  n: 3\n  chunks: 2\n  threads: 1\n")
-    cmd = [str(SNAKEMAKE), "maps", "--cores", "2", "--quiet", "all", "--configfile",
-           str(ROOT / "config" / "config.yaml"), str(cfg)]
+    cmd = [
+        str(SNAKEMAKE),
+        "maps",
+        "--cores",
+        "2",
+        "--quiet",
+        "all",
+        "--configfile",
+        str(ROOT / "config" / "config.yaml"),
+        str(cfg),
+    ]
     run = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env={**os.environ, "PYTHONWARNINGS": "ignore"})
     assert run.returncode == 0, run.stderr[-3000:]
     out = tmp_path / "out"

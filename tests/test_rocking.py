@@ -3,8 +3,9 @@
 import numpy as np
 import pytest
 
-from rocklab import impact, restitution, wall
-from rocklab.rocking import RockingModel, simulate_free, simulate_ground
+from rocklab.physics import impact, restitution, wall
+from rocklab.simulation.model import RockingModel
+from rocklab.simulation.reference import simulate_free, simulate_ground
 
 
 def _energy_drift(model, h, mask):
@@ -47,8 +48,10 @@ def test_housner_quarter_period(r):
 def test_exact_and_linear_converge_for_small_alpha():
     errs = []
     for alpha in (0.2, 0.1, 0.05):
-        t = [simulate_free(RockingModel(alpha=alpha, p=2.0, form=f), 0.8 * alpha, t_end=4.0).impacts.t.iloc[0]
-             for f in ("exact", "linear")]
+        t = [
+            simulate_free(RockingModel(alpha=alpha, p=2.0, form=f), 0.8 * alpha, t_end=4.0).impacts.t.iloc[0]
+            for f in ("exact", "linear")
+        ]
         errs.append(abs(t[0] - t[1]) / t[1])
     assert errs[0] > errs[1] > errs[2]
     assert errs[2] < 1e-3
@@ -101,8 +104,8 @@ def test_impacts_separated_by_their_excursion():
     """After an impact the wall needs at least 2|thetadot+| / max|thetaddot| to
     come back to the edge; a root search that returned the segment's start
     once logged 29 base impacts at one instant (Pac164 x1.25, D x0.70)."""
-    from rocklab.accelerograms import load_record
-    from rocklab.overturning import named_model
+    from rocklab.seismic.accelerograms import load_record
+    from rocklab.seismic.overturning import named_model
 
     tr = load_record("Pac164")
     model = named_model("2s-housner")  # the linearised Fig. 21 wall

@@ -1,4 +1,4 @@
-"""rocklab.statistics on synthetic campaigns with known structure."""
+"""rocklab.dissipation.statistics on synthetic campaigns with known structure."""
 
 from __future__ import annotations
 
@@ -7,9 +7,19 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from rocklab.statistics import (boundary_summary, bootstrap_ci, cluster_bootstrap_ci,
-                                factor_effect, flag_outlying_series, holm, series_stats,
-                                series_table, symmetry_test, table3, table3_markdown)
+from rocklab.dissipation.statistics import (
+    bootstrap_ci,
+    boundary_summary,
+    cluster_bootstrap_ci,
+    factor_effect,
+    flag_outlying_series,
+    holm,
+    series_stats,
+    series_table,
+    symmetry_test,
+    table3,
+    table3_markdown,
+)
 
 
 def campaign(seed=0, odd_series="5a-2s", shift=-0.08):
@@ -17,23 +27,54 @@ def campaign(seed=0, odd_series="5a-2s", shift=-0.08):
     one-sided series around 1.05 with three contact depths, no CD effect."""
     rng = np.random.default_rng(seed)
     rows = []
-    for i, sp in enumerate(["1a", "1b", "2a", "2b", "3a", "3b", "4b", "5a", "5b", "5c"]):
+    for _i, sp in enumerate(["1a", "1b", "2a", "2b", "3a", "3b", "4b", "5a", "5b", "5c"]):
         unit = "tuff" if sp[0] in "35" else "clay brick"
         s = f"{sp}-2s"
         mu = 0.95 + 0.01 * rng.standard_normal() + (shift if s == odd_series else 0)
         for _ in range(15):
-            rows.append((s, sp, "two-sided", np.nan, unit, "push",
-                         mu + 0.01 * rng.standard_normal(), 0.91 + 0.02 * rng.standard_normal()))
+            rows.append(
+                (
+                    s,
+                    sp,
+                    "two-sided",
+                    np.nan,
+                    unit,
+                    "push",
+                    mu + 0.01 * rng.standard_normal(),
+                    0.91 + 0.02 * rng.standard_normal(),
+                )
+            )
     for sp in ["1b", "1c", "2a", "2b", "3a", "3b"]:
         unit = "tuff" if sp[0] == "3" else "clay brick"
         for cd in (60, 120, 260):
             s = f"{sp}-1s-cd{cd}"
             mu = 1.05 + 0.05 * rng.standard_normal()
             for _ in range(12):
-                rows.append((s, sp, "one-sided", cd, unit, "push",
-                             mu + 0.1 * rng.standard_normal(), 0.73 + 0.03 * rng.standard_normal()))
-    return pd.DataFrame(rows, columns=["series", "specimen", "boundary", "contact_depth_mm",
-                                       "unit", "direction", "e_ratio", "theta0_over_alpha"])
+                rows.append(
+                    (
+                        s,
+                        sp,
+                        "one-sided",
+                        cd,
+                        unit,
+                        "push",
+                        mu + 0.1 * rng.standard_normal(),
+                        0.73 + 0.03 * rng.standard_normal(),
+                    )
+                )
+    return pd.DataFrame(
+        rows,
+        columns=[
+            "series",
+            "specimen",
+            "boundary",
+            "contact_depth_mm",
+            "unit",
+            "direction",
+            "e_ratio",
+            "theta0_over_alpha",
+        ],
+    )
 
 
 def test_bootstrap_ci_is_seeded_and_covers_the_t_interval():
@@ -91,9 +132,12 @@ def test_push_pull_symmetry():
 def test_series_table_counts_and_law():
     df = campaign()
     df["test_id"] = [f"T{i:04d}" for i in range(len(df))]
-    qc = pd.concat([df[["series"]].assign(valid=True, reason=""),
-                    pd.DataFrame({"series": ["1a-2s"] * 3, "valid": False,
-                                  "reason": ["residual_tilt", "channel", "channel"]})])
+    qc = pd.concat(
+        [
+            df[["series"]].assign(valid=True, reason=""),
+            pd.DataFrame({"series": ["1a-2s"] * 3, "valid": False, "reason": ["residual_tilt", "channel", "channel"]}),
+        ]
+    )
     df["e_an"] = np.where(df.boundary == "one-sided", -0.45, 0.98)
     rng = np.random.default_rng(0)
     imp = df[["test_id"]].loc[df.index.repeat(3)].reset_index(drop=True)
@@ -131,16 +175,16 @@ def test_boundary_summary_and_table3():
     df["e_ratio_without_first_half_cycle"] = df.e_ratio + 0.3 * (df.boundary == "one-sided")
     df["e_ratio_first_half_cycle"] = df.e_ratio - 0.3 * (df.boundary == "one-sided")
     b = boundary_summary(df, ["e_ratio", "theta0_over_alpha"]).set_index(["boundary", "quantity"])
-    assert b.loc[("one-sided", "e_ratio"), "mean"] == pytest.approx(
-        df[df.boundary == "one-sided"].e_ratio.mean())
+    assert b.loc[("one-sided", "e_ratio"), "mean"] == pytest.approx(df[df.boundary == "one-sided"].e_ratio.mean())
     assert b.loc[("two-sided", "theta0_over_alpha"), "n_series"] == 10
     assert (b.ci_low < b["mean"]).all() and (b["mean"] < b.ci_high).all()
     t3 = table3(df).set_index(["boundary", "column"])
     one = t3.loc["one-sided"]
     assert one.loc["e_ratio_without_first_half_cycle", "mean"] == pytest.approx(
-        one.loc["e_ratio_complete", "mean"] + 0.3)
+        one.loc["e_ratio_complete", "mean"] + 0.3
+    )
     assert list(one.paper) == [1.05, 1.34, 0.72]
     assert t3.loc["two-sided"].paper.isna().all()
     md = table3_markdown(table3(df))
     assert "disregarding the first half cycle" in md and "one-sided, paper" in md
-    assert md.count("\n") == 4        # header, rule, two boundaries, the paper's row
+    assert md.count("\n") == 4  # header, rule, two boundaries, the paper's row

@@ -4,18 +4,28 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rocklab.validity import (channel_roles, choose_channels, release_state, residual_out_of_plumb,
-                              top_displacement, verdict)
+from rocklab.lab.validity import (
+    channel_roles,
+    choose_channels,
+    release_state,
+    residual_out_of_plumb,
+    top_displacement,
+    verdict,
+)
 
 
 def _usual_setup():
     rows = [
-        (0, -710, 0, 382, -710, -180, 382), (1, -710, 0, 926, -710, -210, 926),
-        (2, 710, 0, 382, 710, -185, 382), (3, 710, 0, 926, 710, -205, 926),
-        (4, 710, 0, 654, 860, 0, 654), (5, 0, 56.5, 500, 0, 216.5, 500),
+        (0, -710, 0, 382, -710, -180, 382),
+        (1, -710, 0, 926, -710, -210, 926),
+        (2, 710, 0, 382, 710, -185, 382),
+        (3, 710, 0, 926, 710, -205, 926),
+        (4, 710, 0, 654, 860, 0, 654),
+        (5, 0, 56.5, 500, 0, 216.5, 500),
     ]
-    return pd.DataFrame(rows, columns=["channel", "wall_x_mm", "wall_y_mm", "wall_z_mm",
-                                       "frame_x_mm", "frame_y_mm", "frame_z_mm"])
+    return pd.DataFrame(
+        rows, columns=["channel", "wall_x_mm", "wall_y_mm", "wall_z_mm", "frame_x_mm", "frame_y_mm", "frame_z_mm"]
+    )
 
 
 def test_roles_from_geometry():

@@ -8,11 +8,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rocklab import kinematics, wall
-from rocklab import virtual_lab as vl
+from rocklab.lab import kinematics
+from rocklab.lab import virtual_lab as vl
+from rocklab.physics import wall
 
-HAVE_SIM = importlib.util.find_spec("rocklab.rocking") is not None
-needs_sim = pytest.mark.skipif(not HAVE_SIM, reason="rocklab.rocking not available")
+HAVE_SIM = importlib.util.find_spec("rocklab.simulation.model") is not None
+needs_sim = pytest.mark.skipif(not HAVE_SIM, reason="rocklab.simulation.model not available")
 
 SPEC = vl.DEFAULT_SPECIMENS.set_index("specimen").loc["1a"]
 LAYOUT = vl.usual_layout("S-1a-2s", SPEC.length_mm, SPEC.height_mm, SPEC.thickness_mm, False)
@@ -36,7 +37,7 @@ def read_raw(path):
     with gzip.open(path, "rt") as fh:
         lines = fh.read().splitlines()
     comments = [ln for ln in lines if ln.startswith("#")]
-    return comments, lines[len(comments)], lines[len(comments) + 1:]
+    return comments, lines[len(comments)], lines[len(comments) + 1 :]
 
 
 def solve(E, weights=None):
@@ -53,24 +54,24 @@ def test_usual_layout_matches_real_campaign_geometry():
 
 def test_exact_round_trip_with_effects_off():
     t, theta, impacts = free_motion()
-    tt, E, truth = vl.record_from_motion(t, theta, 400.0, LAYOUT, SPEC, impacts=impacts,
-                                         effects=vl.Effects.off(), rng=1)
+    tt, E, truth = vl.record_from_motion(
+        t, theta, 400.0, LAYOUT, SPEC, impacts=impacts, effects=vl.Effects.off(), rng=1
+    )
     sol = solve(E, [1, 1, 0, 1, 1])
     assert np.max(np.abs(sol["theta"] - truth["theta"])) < 1e-9
     i0 = int(round(truth["t_release"] * 400))
-    assert np.allclose(truth["theta"][i0:i0 + len(theta)][: len(theta)], theta[: len(truth["theta"]) - i0])
-    assert np.all(truth["theta"][:i0] == theta[0])      # held still without creep
+    assert np.allclose(truth["theta"][i0 : i0 + len(theta)][: len(theta)], theta[: len(truth["theta"]) - i0])
+    assert np.all(truth["theta"][:i0] == theta[0])  # held still without creep
     assert truth["residual_top_mm"] < 1e-9
 
 
 def test_hold_creep_release_and_rest_phases():
     t, theta, impacts = free_motion()
     eff = vl.Effects.off(creep_rad_s=3e-4, hold_s=(2.0, 2.0), rest_s=(3.0, 3.0))
-    tt, E, truth = vl.record_from_motion(t, theta, 400.0, LAYOUT, SPEC, impacts=impacts,
-                                         effects=eff, t_rest=5.0, rng=2)
+    tt, E, truth = vl.record_from_motion(t, theta, 400.0, LAYOUT, SPEC, impacts=impacts, effects=eff, t_rest=5.0, rng=2)
     assert truth["t_release"] == pytest.approx(2.0)
     assert tt[-1] == pytest.approx(2.0 + 5.0 + 3.0, abs=0.01)
-    hold = truth["theta"][: 800]
+    hold = truth["theta"][:800]
     assert np.all(np.diff(hold) < 0) and hold[0] - theta[0] == pytest.approx(6e-4, rel=0.01)
 
 
@@ -81,8 +82,7 @@ def test_noise_and_hum_levels_like_the_real_campaign():
     E0 = vl.instrument_readings(t, z + 0.05, z, z, z, LAYOUT, 113, 1090, vl.Effects.off(), rng=3)
     noise = E - E0
     assert np.allclose(noise.std(axis=0), 0.002, rtol=0.1)
-    E = vl.instrument_readings(t, z, z, z, z, LAYOUT, 113, 1090,
-                               vl.Effects(noise_mm=0.0, hum_mm=0.002), rng=3)
+    E = vl.instrument_readings(t, z, z, z, z, LAYOUT, 113, 1090, vl.Effects(noise_mm=0.0, hum_mm=0.002), rng=3)
     spec = np.abs(np.fft.rfft(E, axis=0)) * 2 / len(t)
     f = np.fft.rfftfreq(len(t), 1 / 400)
     k50 = np.argmin(np.abs(f - 50))
@@ -105,18 +105,22 @@ def test_ringing_follows_impacts_and_decays():
 
 def test_faults_are_injected_as_specified():
     t, theta, impacts = free_motion()
-    faults = [vl.Fault("dead", 0), vl.Fault("stuck", 1, start_s=4.0),
-              vl.Fault("clipped", 3, level=0.5), vl.Fault("spikes", 4, count=5),
-              vl.Fault("gaps", 2, count=3, max_len=4)]
-    tt, E, truth = vl.record_from_motion(t, theta, 400.0, LAYOUT, SPEC, impacts=impacts,
-                                         faults=faults, rng=5)
-    assert np.abs(E[:, 0]).max() < 0.02                         # dead: ~0
+    faults = [
+        vl.Fault("dead", 0),
+        vl.Fault("stuck", 1, start_s=4.0),
+        vl.Fault("clipped", 3, level=0.5),
+        vl.Fault("spikes", 4, count=5),
+        vl.Fault("gaps", 2, count=3, max_len=4),
+    ]
+    tt, E, truth = vl.record_from_motion(t, theta, 400.0, LAYOUT, SPEC, impacts=impacts, faults=faults, rng=5)
+    assert np.abs(E[:, 0]).max() < 0.02  # dead: ~0
     i4 = np.searchsorted(tt, 4.0)
     assert np.all(E[i4:, 1] == E[i4, 1]) and np.ptp(E[:i4, 1]) > 10  # stuck
-    clean = kinematics.transducer_elongation(truth["theta"], truth["phi"], truth["v"],
-                                             truth["w"], X, F, SPEC.thickness_mm)
-    assert E[:, 3].max() == pytest.approx(0.5 * clean[:, 3].max(), abs=0.02)   # clipped
-    assert np.sum(np.abs(E[:, 4] - clean[:, 4]) > 1.0) == 5                      # spikes
+    clean = kinematics.transducer_elongation(
+        truth["theta"], truth["phi"], truth["v"], truth["w"], X, F, SPEC.thickness_mm
+    )
+    assert E[:, 3].max() == pytest.approx(0.5 * clean[:, 3].max(), abs=0.02)  # clipped
+    assert np.sum(np.abs(E[:, 4] - clean[:, 4]) > 1.0) == 5  # spikes
     nan = np.isnan(E[:, 2])
     assert 3 <= nan.sum() <= 12 and not np.isnan(np.delete(E, 2, axis=1)).any()
 
@@ -139,8 +143,8 @@ def test_expected_verdicts():
     v = vl.expected_verdict
     b = 113.0
     assert v([], LAYOUT, b, 0.0, 0.3)[0] == "valid"
-    assert v([vl.Fault("dead", 1)], LAYOUT, b, 0.0, 0.3)[0] == "valid"        # backup
-    assert v([vl.Fault("stuck", 4)], LAYOUT, b, 0.0, 0.3)[0] == "valid"       # v = 0
+    assert v([vl.Fault("dead", 1)], LAYOUT, b, 0.0, 0.3)[0] == "valid"  # backup
+    assert v([vl.Fault("stuck", 4)], LAYOUT, b, 0.0, 0.3)[0] == "valid"  # v = 0
     assert v([vl.Fault("spikes", 0), vl.Fault("gaps", 1)], LAYOUT, b, 0, 0)[0] == "valid"
     assert v([vl.Fault("dead", 0), vl.Fault("clipped", 2)], LAYOUT, b, 0.0, 0.3)[0] == "instrument_malfunction"
     assert v([], LAYOUT, b, 0.2, 0.3)[0] == "disturbed_initial_conditions"
@@ -154,19 +158,20 @@ def test_expected_verdicts():
 @pytest.mark.parametrize("kind,top", [("rotation", 2.5), ("sliding", -3.0)])
 def test_residual_out_of_plumb_is_seen_at_the_top(kind, top):
     t, theta, impacts = free_motion()
-    tt, E, truth = vl.record_from_motion(t, theta, 400.0, LAYOUT, SPEC, impacts=impacts,
-                                         residual_top_mm=top, residual_kind=kind, t_rest=5.0, rng=6)
+    tt, E, truth = vl.record_from_motion(
+        t, theta, 400.0, LAYOUT, SPEC, impacts=impacts, residual_top_mm=top, residual_kind=kind, t_rest=5.0, rng=6
+    )
     assert truth["residual_top_mm"] == pytest.approx(abs(top), abs=0.05)
     sol = solve(E[-400:], [1, 1, 0, 1, 1])
-    seen = vl.top_offset_mm(sol["theta"], sol["phi"], sol["v"], sol["w"], SPEC.length_mm,
-                            SPEC.height_mm, SPEC.thickness_mm)
+    seen = vl.top_offset_mm(
+        sol["theta"], sol["phi"], sol["v"], sol["w"], SPEC.length_mm, SPEC.height_mm, SPEC.thickness_mm
+    )
     assert np.median(seen) == pytest.approx(abs(top), abs=0.05)
 
 
 def test_seed_reproducibility(tmp_path):
     t, theta, impacts = free_motion()
-    runs = [vl.record_from_motion(t, theta, 400.0, LAYOUT, SPEC, impacts=impacts, rng=s)[1]
-            for s in (7, 7, 8)]
+    runs = [vl.record_from_motion(t, theta, 400.0, LAYOUT, SPEC, impacts=impacts, rng=s)[1] for s in (7, 7, 8)]
     assert np.array_equal(runs[0], runs[1], equal_nan=True)
     assert not np.array_equal(runs[0], runs[2])
 
@@ -184,7 +189,7 @@ def test_simulated_test_truth():
     # The release velocity is in the readings: right after the release.
     sol = solve(E, [1, 1, 0, 1, 1])
     i = int(round(truth["t_release"] * 400))
-    rate = np.polyfit(t[i:i + 8] - t[i], sol["theta"][i:i + 8], 2)[1]
+    rate = np.polyfit(t[i : i + 8] - t[i], sol["theta"][i : i + 8], 2)[1]
     assert rate == pytest.approx(truth["thetadot0"], rel=0.1)
 
 
@@ -195,17 +200,24 @@ def test_virtual_campaign_default_plan(tmp_path):
     elapsed = time.perf_counter() - t0
     assert elapsed < 20.0
     camp = tmp_path / "camp"
-    for name, cols in [("specimens.csv", ["specimen", "wall", "unit", "length_mm", "height_mm",
-                                           "thickness_mm", "unit_weight_kN_m3"]),
-                       ("setups.csv", ["setup", "channel", "wall_x_mm", "wall_y_mm", "wall_z_mm",
-                                       "frame_x_mm", "frame_y_mm", "frame_z_mm"]),
-                       ("tests.csv", ["test_id", "specimen", "boundary", "contact_depth_mm",
-                                      "direction", "setup", "file", "note"])]:
+    for name, cols in [
+        ("specimens.csv", ["specimen", "wall", "unit", "length_mm", "height_mm", "thickness_mm", "unit_weight_kN_m3"]),
+        (
+            "setups.csv",
+            ["setup", "channel", "wall_x_mm", "wall_y_mm", "wall_z_mm", "frame_x_mm", "frame_y_mm", "frame_z_mm"],
+        ),
+        ("tests.csv", ["test_id", "specimen", "boundary", "contact_depth_mm", "direction", "setup", "file", "note"]),
+    ]:
         assert pd.read_csv(camp / name).columns.tolist() == cols
     tests = pd.read_csv(camp / "tests.csv", dtype=str, keep_default_na=False)
     assert set(tests.boundary) == {"two-sided", "one-sided"}
-    assert set(truth.expected_reason) == {"valid", "instrument_malfunction", "disturbed_initial_conditions",
-                                          "residual_out_of_plumb", "unreadable"}
+    assert set(truth.expected_reason) == {
+        "valid",
+        "instrument_malfunction",
+        "disturbed_initial_conditions",
+        "residual_out_of_plumb",
+        "unreadable",
+    }
     assert (truth.fs == 100).any()
     assert not truth.overturned.any()
     two = truth[truth.boundary == "two-sided"]

@@ -9,14 +9,14 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from rocklab.campaign import open_campaign
-from rocklab.reduction import qc_table, reduce_test
+from rocklab.lab.campaign import open_campaign
+from rocklab.lab.reduction import qc_table, reduce_test
 
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 
-rocking = pytest.importorskip("rocklab.rocking")
-from rocklab import virtual_lab  # noqa: E402
+rocking = pytest.importorskip("rocklab.simulation.model")
+from rocklab.lab import virtual_lab  # noqa: E402
 
 
 def _tree_hash(folder):
@@ -49,10 +49,21 @@ def test_workflow_reduces_any_campaign_and_never_writes_to_it(virtual_campaign, 
     folder, truth = virtual_campaign
     before = _tree_hash(folder)
     results = tmp_path / "results"
-    cmd = [str(SNAKEMAKE), "--cores", "2", "--quiet", "all", "--directory", str(ROOT),
-           "--config", f"raw_dir={folder}", f"results_dir={results}", "figures={'fig9_specimen': '1a'}",
-           # the overturning maps of one short record only (test_overturning covers the stage)
-           "maps={'records': ['Pac164']}"]
+    cmd = [
+        str(SNAKEMAKE),
+        "--cores",
+        "2",
+        "--quiet",
+        "all",
+        "--directory",
+        str(ROOT),
+        "--config",
+        f"raw_dir={folder}",
+        f"results_dir={results}",
+        "figures={'fig9_specimen': '1a'}",
+        # the overturning maps of one short record only (test_overturning covers the stage)
+        "maps={'records': ['Pac164']}",
+    ]
     run = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env={**os.environ, "PYTHONWARNINGS": "ignore"})
     assert run.returncode == 0, run.stderr[-3000:]
     assert _tree_hash(folder) == before
@@ -67,7 +78,7 @@ def test_workflow_reduces_any_campaign_and_never_writes_to_it(virtual_campaign, 
 
 def test_a_reduction_that_fails_does_not_stop_the_series(virtual_campaign, monkeypatch):
     """An error no rule foresaw becomes that test's unreadable entry, with the file and the error."""
-    from rocklab import kinematics, reduction
+    from rocklab.lab import kinematics, reduction
 
     folder, _ = virtual_campaign
     c = open_campaign(folder)
@@ -93,7 +104,7 @@ def test_a_reduction_that_fails_does_not_stop_the_series(virtual_campaign, monke
 def test_valid_tests_by_qc_table_or_by_their_own_verdict(tmp_path):
     import xarray as xr
 
-    from rocklab.workflow import valid_tests
+    from rocklab.io import valid_tests
 
     paths = []
     for tid, valid in (("T1", 1), ("T2", 0), ("T3", 1)):

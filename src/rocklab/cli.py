@@ -1,7 +1,7 @@
 """Command-line entry point ``rocklab`` (argparse with subcommands).
 
 ``rocklab simulate`` runs one wall, free or under a record, with the
-event-driven reference of :mod:`rocklab.rocking` and writes its history to
+event-driven reference of :mod:`rocklab.simulation.model` and writes its history to
 netCDF.  Further subcommands register themselves in :data:`COMMANDS`.
 """
 
@@ -12,8 +12,9 @@ import sys
 
 import numpy as np
 
-from rocklab import impact
-from rocklab.rocking import OVERTURN, RockingModel, simulate_free, simulate_ground
+from rocklab.physics import impact
+from rocklab.simulation.model import OVERTURN, RockingModel
+from rocklab.simulation.reference import simulate_free, simulate_ground
 
 LAWS = {"housner": impact.HousnerTwoSided, "one-sided": impact.OneSided, "zero": impact.Zero}
 
@@ -24,9 +25,9 @@ def _read_record(name, dt, units):
     With ``dt``: a one-column text file in ``units``.  Without: a Table 4
     record of the manifest (e.g. ``40EIC180``) or any file the accelerogram
     readers detect (PEER AT2, Caltech, K-NET, column text...), in m/s^2 and
-    baseline-corrected (:func:`rocklab.accelerograms.load_record`).
+    baseline-corrected (:func:`rocklab.seismic.accelerograms.load_record`).
     """
-    from rocklab.accelerograms import load_record, to_si
+    from rocklab.seismic.accelerograms import load_record, to_si
 
     if dt is not None:
         return to_si(np.loadtxt(name, ndmin=2)[:, 0], units), dt
@@ -34,7 +35,7 @@ def _read_record(name, dt, units):
     try:
         tr = load_record(name)
     except (FileNotFoundError, TypeError, ValueError) as err:
-        raise SystemExit(f"rocklab simulate: --record {name}: {err} (a one-column text file needs --dt)")
+        raise SystemExit(f"rocklab simulate: --record {name}: {err} (a one-column text file needs --dt)") from err
     return tr.data, tr.stats.delta
 
 
@@ -45,13 +46,22 @@ def _model(args):
     if args.impact is not None:
         law = LAWS[args.impact]()
     if args.e_scale != 1.0:
-        law = impact.Scaled(law or (impact.OneSided() if args.boundary == "one-sided" and args.gap == 0
-                                    else impact.HousnerTwoSided()), args.e_scale)
+        law = impact.Scaled(
+            law or (impact.OneSided() if args.boundary == "one-sided" and args.gap == 0 else impact.HousnerTwoSided()),
+            args.e_scale,
+        )
     if args.amplitude_law is not None:
         a, b = args.amplitude_law
         law = impact.AmplitudeLaw(law or impact.OneSided(), a, b)
-    kw = dict(boundary=args.boundary, impact=law, alpha_rock=args.alpha_rock, alpha_neg=args.alpha_neg,
-              flight_damping=args.flight_damping, gap=args.gap, form=args.form)
+    kw = dict(
+        boundary=args.boundary,
+        impact=law,
+        alpha_rock=args.alpha_rock,
+        alpha_neg=args.alpha_neg,
+        flight_damping=args.flight_damping,
+        gap=args.gap,
+        form=args.form,
+    )
     if args.height is not None:
         return RockingModel.from_wall(args.height, args.thickness, **kw)
     if args.alpha is None or args.p is None:
@@ -64,13 +74,22 @@ def simulate(args) -> int:
     model = _model(args)
     if args.record is not None:
         ag, dt = _read_record(args.record, args.dt, args.units)
-        hist = simulate_ground(model, args.scale * ag, dt, t_end=args.t_end, fs=args.fs, overturn=args.overturn,
-                               theta0=args.theta0, thetadot0=args.thetadot0)
+        hist = simulate_ground(
+            model,
+            args.scale * ag,
+            dt,
+            t_end=args.t_end,
+            fs=args.fs,
+            overturn=args.overturn,
+            theta0=args.theta0,
+            thetadot0=args.thetadot0,
+        )
     else:
         if args.theta0 == 0 and args.thetadot0 == 0:
             raise SystemExit("rocklab simulate: free rocking needs --theta0 or --thetadot0 (or give --record)")
-        hist = simulate_free(model, args.theta0, args.thetadot0, t_end=args.t_end or 30.0, fs=args.fs or 400.0,
-                             overturn=args.overturn)
+        hist = simulate_free(
+            model, args.theta0, args.thetadot0, t_end=args.t_end or 30.0, fs=args.fs or 400.0, overturn=args.overturn
+        )
     ds = hist.to_xarray()
     ds.attrs["history"] = "rocklab " + " ".join(sys.argv[1:]) if sys.argv else "rocklab simulate"
     ds.to_netcdf(args.output)
@@ -80,8 +99,9 @@ def simulate(args) -> int:
 
 
 def _add_simulate(sub):
-    p = sub.add_parser("simulate", help="simulate one rocking wall (free or under a record) to netCDF",
-                       description=simulate.__doc__)
+    p = sub.add_parser(
+        "simulate", help="simulate one rocking wall (free or under a record) to netCDF", description=simulate.__doc__
+    )
     g = p.add_argument_group("wall")
     g.add_argument("--height", type=float, help="wall height h [m]")
     g.add_argument("--thickness", type=float, help="wall thickness b [m]")
@@ -97,8 +117,11 @@ def _add_simulate(sub):
     g.add_argument("--amplitude-law", type=float, nargs=2, metavar=("A", "B"), help="Eq. 17 coefficients")
     g.add_argument("--flight-damping", type=float, default=0.0, help="zeta between impacts")
     m = p.add_argument_group("motion")
-    m.add_argument("--record", help="Table 4 record name (raw/accelerograms/manifest.csv) or accelerogram file "
-                                    "(any format rocklab reads; one-column text with --dt)")
+    m.add_argument(
+        "--record",
+        help="Table 4 record name (raw/accelerograms/manifest.csv) or accelerogram file "
+        "(any format rocklab reads; one-column text with --dt)",
+    )
     m.add_argument("--dt", type=float, help="sample interval of a one-column text record [s]")
     m.add_argument("--units", choices=["g", "m/s2", "cm/s2"], default="m/s2", help="units of a one-column record")
     m.add_argument("--scale", type=float, default=1.0, help="amplitude scale of the record")

@@ -3,7 +3,7 @@
 import re
 from pathlib import Path
 
-from rocklab.campaign import open_campaign, row_series
+from rocklab.lab.campaign import open_campaign, row_series
 
 RAW = Path(config["raw_dir"])
 RESULTS = Path(config["results_dir"])

@@ -1,8 +1,8 @@
 # Stage: overturning maps of Sect. 5 (Figs. 21-23). One job per (record,
 # model) map, since a map is the unit that takes time; then the indices of
 # Fig. 22 with the reductions between models, and the figures.
-from rocklab.accelerograms import accelerogram_dir, read_manifest
-from rocklab.overturning import MODELS
+from rocklab.seismic.accelerograms import accelerogram_dir, read_manifest
+from rocklab.seismic.overturning import MODELS
 
 MAPS = config.get("maps", {})
 MANIFEST = read_manifest()

@@ -1,0 +1,364 @@
+"""Restitution of free-rocking blocks from measured impact-by-impact velocity ratios.
+
+The restitution part of :mod:`rocklab.diagnosis` on data that hold only
+the ratio r_k = thetadot^+_k / thetadot^-_k of every impact k of every trial:
+the UMinho limestone blocks (Colombo et al., DOI 10.60756/uminho-jh25, CC BY
+4.0; ``raw/rocking-tests/uminho-limestone-free-rocking``), 134 trials on 12
+slendernesses H/B = 4-15.  Base model: Housner's e_an = 1 - 3/2 sin^2 alpha
+(Eq. 2), alpha = arctan(B/H).  Candidate causes, per block group (the trials
+of one H/B):
+
+``restitution_scale``     e = c e_an
+``restitution_amplitude`` e/e_an = a - b' (thetadot^-_k / thetadot^-_1)^2: Eq. 17
+                          with the impact speed relative to the first impact's
+                          (the release angle is not in the tables), so
+                          b' = b (thetadot^-_1 / thetadot_r)^2
+``hinge_asymmetry``       e exp(+-s_e/2) on odd and even impacts: the two base
+                          edges in turn (every trial taken as released to the
+                          same side)
+
+The speed before impact k relative to the first is the product of the
+measured ratios before it (a rigid block lands at the speed it took off
+with).  Velocity ratios above 1 or below 0 and late impacts are artefacts of
+the processing at small amplitudes (SOURCE.md): the diagnosis uses the first
+:data:`N_IMPACTS` impacts with 0 < r < :data:`R_MAX`, and a noise that grows
+as the impact speed falls (:func:`rocklab.diagnosis.noise_variance`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+from rocklab import diagnosis as D
+from rocklab.physics import restitution
+
+#: Impacts per trial used (later ones are dominated by the processing noise).
+N_IMPACTS = 10
+
+#: Measured ratios at or above this are artefacts (SOURCE.md: up to 28.9).
+R_MAX = 1.5
+
+#: Folder of the tables in the repository.
+RAW = Path(__file__).resolve().parents[3] / "raw" / "rocking-tests" / "uminho-limestone-free-rocking"
+
+CANDIDATES = ("restitution_scale", "restitution_amplitude", "hinge_asymmetry")
+
+
+def read_events(path=RAW / "limestone-rocking-events.csv"):
+    """Per-impact table of the non-duplicate trials (``limestone-rocking-events.csv``)."""
+    ev = pd.read_csv(path)
+    ev = ev[ev.duplicate_of.isna()].copy()
+    ev["alpha"] = np.arctan2(ev.B_m, ev.H_m)
+    return ev.sort_values(["group", "trial", "event"])
+
+
+@dataclass
+class _Trials:
+    """Trials of one group as padded (trials, impacts) arrays."""
+
+    ids: list
+    alpha: np.ndarray
+    r: np.ndarray  # measured ratio, NaN where unused
+    u: np.ndarray  # (thetadot^-_k / thetadot^-_1)^2
+    odd: np.ndarray  # impact leaves the release edge
+
+    def subset(self, idx):
+        return replace(
+            self, ids=[self.ids[i] for i in idx], alpha=self.alpha[idx], r=self.r[idx], u=self.u[idx], odd=self.odd[idx]
+        )
+
+
+def pooled(groups):
+    """All groups' trials as one :class:`_Trials` (a calibration common to every slenderness)."""
+    gs = list(groups.values())
+    return _Trials(
+        ids=[i for g in gs for i in g.ids],
+        alpha=np.concatenate([g.alpha for g in gs]),
+        r=np.vstack([g.r for g in gs]),
+        u=np.vstack([g.u for g in gs]),
+        odd=np.vstack([g.odd for g in gs]),
+    )
+
+
+def group_trials(events):
+    """One :class:`_Trials` per block group."""
+    out = {}
+    for g, ev in events.groupby("group"):
+        trials = list(ev.groupby("trial"))
+        r = np.full((len(trials), N_IMPACTS), np.nan)
+        for i, (_, t) in enumerate(trials):
+            x = t.measured_source_angular_ratio.to_numpy(float)[:N_IMPACTS]
+            r[i, : x.size] = x
+        bad = ~((r > 0) & (r < R_MAX))
+        # speed before impact k over the first: the product of the ratios before it (artefacts as 1)
+        step = np.where(bad, 1.0, np.nan_to_num(r, nan=1.0))
+        u = np.c_[np.ones(len(trials)), np.cumprod(step, axis=1)[:, :-1]] ** 2
+        out[int(g)] = _Trials(
+            ids=[f"{g}-{k}" for k, _ in trials],
+            alpha=np.full(len(trials), ev.alpha.iloc[0]),
+            r=np.where(bad, np.nan, r),
+            u=u,
+            odd=np.tile(np.arange(1, N_IMPACTS + 1) % 2 == 1, (len(trials), 1)),
+        )
+    return out
+
+
+class BlockProblem(D.Problem):
+    """The trials of one block group as a :class:`rocklab.diagnosis.Problem` (impact group only)."""
+
+    def __init__(self, trials: _Trials):
+        self.T = trials
+        self.n_tests = len(trials.ids)
+
+    def subset(self, idx):
+        return self.T.subset(np.asarray(idx))
+
+    def model_e(self, sub, values):
+        v = D.null_values()
+        v.update(values)
+        e_an = restitution.two_sided(sub.alpha)[:, None]
+        e = e_an * v["c"] * np.exp(np.where(sub.odd, 0.5, -0.5) * v["s_e"])
+        return e * np.clip(v["a"] - v["b"] * sub.u, 0.0, 1.0 / e)
+
+    def residuals(self, sub, ext, values):
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return {"impact": np.log(self.model_e(sub, values) / sub.r)}
+
+    def noise(self, sub):
+        return {"impact": 1.0 / np.sqrt(sub.u)}
+
+    def resolution(self, x):
+        # the noise covariate is a relative speed, not a resolution: significance decides
+        return 0.0
+
+    def covariates(self, sub):
+        k = np.tile(np.arange(1.0, N_IMPACTS + 1), (len(sub.ids), 1))
+        return {
+            "impact": {
+                "impact index": k,
+                "amplitude": np.log(sub.u),
+                "slenderness (B/H)^2": np.tan(sub.alpha)[:, None] ** 2,
+            }
+        }
+
+    def candidates(self):
+        return list(CANDIDATES)
+
+    def params(self, ext):
+        # no rotations in the tables: the asymmetry is that of e only
+        return [q for q in D.param_list(ext) if q[0] != "s_alpha"]
+
+    def starts(self, ext):
+        ratio = self.T.r / restitution.two_sided(self.T.alpha)[:, None]
+        med = float(np.nanmedian(ratio))
+        return {"c": med, "a": med}
+
+    def heldout_measures(self, sub, ext, values):
+        R = self.residuals(sub, ext, values)["impact"]
+        # the impact speed after n impacts relative to the first: the product of the ratios
+        decay = np.nancumsum(R, axis=1)
+        with np.errstate(invalid="ignore"):
+            return {"ratio_rms": np.sqrt(np.nanmean(R**2, axis=1)), "decay_rms": np.sqrt(np.nanmean(decay**2, axis=1))}
+
+
+def signatures(trials: _Trials):
+    """Evidence in the ratios that needs no fit: level, trend with the impact speed, odd/even."""
+    ratio = trials.r / restitution.two_sided(trials.alpha)[:, None]
+    ok = np.isfinite(ratio)
+    e, u = ratio[ok], trials.u[ok]
+    med = D.series_level(ratio, ok)
+    sl = stats.linregress(u, e)
+    odd, even = ratio[ok & trials.odd], ratio[ok & ~trials.odd]
+    mw = stats.mannwhitneyu(odd, even)
+    per = [
+        np.nanmedian(ratio[i][trials.odd[i]]) - np.nanmedian(ratio[i][~trials.odd[i]]) for i in range(len(trials.ids))
+    ]
+    return {
+        "restitution_scale": {
+            "value": med,
+            "supports": abs(med - 1) > D.PRACTICAL["c"],
+            "text": f"measured r/e_an = {med:.3f} (mean over trials of their medians, {e.size} impacts)",
+        },
+        "restitution_amplitude": {
+            "value": float(-sl.slope),
+            "supports": bool(sl.pvalue < 0.01),
+            "text": f"r/e_an against (thetadot^-_k/thetadot^-_1)^2: slope {sl.slope:+.3f} (p = {sl.pvalue:.2g})",
+        },
+        "hinge_asymmetry": {
+            "value": float(np.median(odd) / np.median(even)),
+            "supports": bool(mw.pvalue < 0.01),
+            "text": f"r/e_an on odd / even impacts {np.median(odd):.3f} / {np.median(even):.3f} "
+            f"(p = {mw.pvalue:.2g}); odd minus even per trial from {np.min(per):+.3f} to "
+            f"{np.max(per):+.3f}",
+        },
+    }
+
+
+def diagnose_group(trials: _Trials, *, n_boot=40, seed=0):
+    """Diagnosis of one block group (or of all, pooled): what Housner's e gets wrong, the causes, the gain."""
+    problem = BlockProblem(trials)
+    sig = signatures(trials)
+    sel = D.select_effects(problem, signature=sig, n_boot=n_boot, seed=seed)
+    e_an = float(np.median(restitution.two_sided(trials.alpha)))
+    measured = float(np.nanmedian(trials.r))
+    base_ho, final_ho = sel["base"], sel["final"]
+    n = np.isfinite(trials.r).sum(axis=1)
+    decay_meas = float(np.median(np.exp(np.nansum(np.log(trials.r), axis=1) / np.maximum(n, 1))))
+    findings = []
+    for eff in sel["effects"]:
+        own = [q[0] for q in problem.params((eff,))]
+        st = sel["steps"][eff]
+        findings.append(
+            {
+                "effect": eff,
+                "params": {k: sel["fit"].values[k] for k in own},
+                "ci95": {k: sel["ci"][k] for k in own if k in sel["ci"]},
+                "evidence": {
+                    "signature": sig[eff]["text"],
+                    "fit": f"held-out deviance per impact lowered by {st['gain']:.3g} (standard error "
+                    f"{st['se']:.2g}), dBIC = {st['dbic']:.1f}",
+                },
+                "error_heldout": {k: D.finite_mean(v) for k, v in st["heldout"].items()},
+                "gain": {k: D.finite_mean(base_ho[k]) - D.finite_mean(st["heldout"][k]) for k in base_ho}
+                | {"deviance": st["gain"]},
+            }
+        )
+    hb = 1.0 / np.tan(trials.alpha)
+    one = np.ptp(hb) == 0
+    return {
+        "scope": "block group" if one else "all blocks",
+        "key": f"H/B = {hb[0]:.0f}" if one else f"H/B = {hb.min():.0f}-{hb.max():.0f}",
+        "h_over_b": float(hb[0]) if one else None,
+        "n_tests": len(trials.ids),
+        "n_impacts": int(np.isfinite(trials.r).sum()),
+        "base": {
+            "model": "Housner e_an = 1 - 3/2 sin^2 alpha (Eq. 2)",
+            "e_an": e_an,
+            "measured_median_ratio": measured,
+            "measured_geometric_mean_ratio": decay_meas,
+        },
+        "what_is_wrong": (
+            f"Housner's e is {e_an:.3f} where the measured ratios have median {measured:.3f} and "
+            f"geometric mean {decay_meas:.3f} over the first {N_IMPACTS} impacts: the impact speed "
+            f"after {N_IMPACTS} impacts is {100 * e_an**N_IMPACTS:.0f}% of the first in the model, "
+            f"{100 * decay_meas**N_IMPACTS:.0f}% measured"
+        ),
+        "verdict": sel["effects"],
+        "unexplained": bool(sel["structure"]) and not sel["weak"],
+        "residual_structure": sel["structure"],
+        "findings": findings,
+        "weak_evidence": {k: {"params": v["params"], "reason": v["reason"]} for k, v in sel["weak"].items()},
+        "rejected": sel["rejected"],
+        "signatures": {k: v["text"] for k, v in sig.items()},
+        "heldout": {
+            "base": {k: D.finite_mean(v) for k, v in base_ho.items()},
+            "model": {k: D.finite_mean(v) for k, v in final_ho.items()},
+        },
+    }
+
+
+def slenderness_trend(trials: _Trials):
+    """How e/e_an varies with slenderness, trial by trial.
+
+    The median r/e_an of each trial regressed on (B/H)^2 ~ sin^2 alpha, the
+    variable of Housner's e: a slope means that Eq. 2 gets the trend with
+    slenderness wrong, not only the level.
+
+    Returns
+    -------
+    dict
+        ``intercept``, ``slope`` (per unit (B/H)^2), ``p``, and the level of
+        each group (mean over its trials of their medians).
+    """
+    ratio = trials.r / restitution.two_sided(trials.alpha)[:, None]
+    ok = np.isfinite(ratio)
+    med = np.array([np.median(ratio[i][ok[i]]) for i in range(len(trials.ids))])
+    x = np.tan(trials.alpha) ** 2
+    fit = stats.linregress(x, med)
+    hb = np.round(1.0 / np.tan(trials.alpha))
+    return {
+        "intercept": float(fit.intercept),
+        "slope": float(fit.slope),
+        "slope_se": float(fit.stderr),
+        "p": float(fit.pvalue),
+        "levels": {f"{h:.0f}": float(np.mean(med[hb == h])) for h in np.unique(hb)},
+    }
+
+
+def diagnose_blocks(events=None, *, n_boot=40, seed=0):
+    """Diagnose every block group of the limestone tables."""
+    events = read_events() if events is None else events
+    groups = group_trials(events)
+    entries = [diagnose_group(t, n_boot=n_boot, seed=seed) for t in groups.values()]
+    every = pooled(groups)
+    return {
+        "all": diagnose_group(every, n_boot=n_boot, seed=seed),
+        "groups": entries,
+        "slenderness": slenderness_trend(every),
+        "source": "Colombo et al., UMinho free-rocking limestone blocks, DOI 10.60756/uminho-jh25 (CC BY 4.0)",
+    }
+
+
+def blocks_markdown(result) -> str:
+    """Readable report of :func:`diagnose_blocks`."""
+    a = result["all"]
+    out = [
+        "# Restitution of the UMinho limestone blocks",
+        "",
+        f"Data: {result['source']}.",
+        "",
+        f"All {a['n_tests']} trials ({a['n_impacts']} impacts), one calibration for every slenderness: "
+        f"verdict **{', '.join(a['verdict']) or 'none'}**"
+        + "".join(
+            f"; {f['effect']}: "
+            + ", ".join(
+                f"{k} = {v:.4g} [{f['ci95'][k][0]:.4g}, {f['ci95'][k][1]:.4g}]"
+                for k, v in f["params"].items()
+                if k in f["ci95"]
+            )
+            for f in a["findings"]
+        )
+        + f"; held-out ratio rms {a['heldout']['base']['ratio_rms']:.4f} → {a['heldout']['model']['ratio_rms']:.4f}"
+        + (f"; **unexplained**: {'; '.join(a['residual_structure'])}" if a["unexplained"] else "")
+        + "".join(
+            f"; structure remains ({'; '.join(a['residual_structure'])}) that {k} "
+            f"({', '.join(f'{n} = {x:.4g}' for n, x in w['params'].items())}) would remove, short of the "
+            f"evidence to name it ({w['reason']})"
+            for k, w in a["weak_evidence"].items()
+        )
+        + ".",
+        "",
+        "| H/B | trials | e_an | measured r (median) | verdict | parameters [95% CI] "
+        "| held-out ratio rms base → model | unexplained |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for e in result["groups"]:
+        pars = "; ".join(
+            f"{k} = {v:.4g} [{f['ci95'][k][0]:.4g}, {f['ci95'][k][1]:.4g}]"
+            for f in e["findings"]
+            for k, v in f["params"].items()
+            if k in f["ci95"]
+        )
+        h = e["heldout"]
+        out.append(
+            f"| {e['h_over_b']:.0f} | {e['n_tests']} | {e['base']['e_an']:.3f} | "
+            f"{e['base']['measured_median_ratio']:.3f} | {', '.join(e['verdict']) or 'none'} | {pars} | "
+            f"{h['base']['ratio_rms']:.4f} → {h['model']['ratio_rms']:.4f} | "
+            f"{'; '.join(e['residual_structure']) if e['unexplained'] else 'no'}"
+            f"{' (weak: ' + ', '.join(e['weak_evidence']) + ')' if e['weak_evidence'] else ''} |"
+        )
+    st = result["slenderness"]
+    out += [
+        "",
+        f"Median r/e_an of each trial against (B/H)^2 (the variable of Eq. 2): {st['intercept']:.4f} "
+        f"{st['slope']:+.2f} (+-{st['slope_se']:.2f}) (B/H)^2, p = {st['p']:.2g}; level by H/B: "
+        + ", ".join(f"{k}: {v:.3f}" for k, v in st["levels"].items())
+        + ".",
+    ]
+    out += [""] + [f"- H/B = {e['h_over_b']:.0f}: {e['what_is_wrong']}." for e in result["groups"]]
+    return "\n".join(out) + "\n"

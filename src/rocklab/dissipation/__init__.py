@@ -1,0 +1,1 @@
+"""Energy dissipation of free-rocking tests (Sects. 3-4): per-test coefficients, series statistics, Table 3."""

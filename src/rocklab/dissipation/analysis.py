@@ -1,0 +1,400 @@
+"""Energy dissipation of free-rocking tests (Sects. 3-4 of the paper).
+
+Per test (:func:`analyse_motion`): e_exp after n impacts by Eq. 10 and
+Eq. 11 for every n (Fig. 11), the analytic e (Eq. 2 two-sided, Eq. 14
+one-sided, nominal alpha), e_exp / e_an, the windows of Table 3, the
+per-impact e_k, the impact velocity over the overturning velocity (Eq. 16),
+theta0/alpha (Figs. 10, 16), p T_1/4 against Housner's closed form
+(Fig. 17, :func:`quarter_period_linear`), cycles (Fig. 18), p D (Fig. 19)
+and, on a reduced test, the channel-5 amplification (Fig. 20,
+:func:`monitor_readings`).  Per table: the amplitude laws of Eqs. 15 and 17
+(:func:`amplitude_law_fit`) and the no-sliding check of Eq. 9.
+
+Conventions
+-----------
+* e_exp (Eqs. 10-11) is the positive 2n-th root; e_an keeps its sign
+  (negative for one-sided rocking, Eq. 14) and every ratio is
+  e_exp / |e_an|, as in Figs. 11, 13 and Table 3.
+* Eqs. 10-11 use alpha_ind = theta0 (Sect. 3); e_an, the normalisations
+  theta/alpha and Eq. 16 use the nominal alpha = arctan(b/h).
+* A half cycle is the motion from one peak to the next through one impact,
+  so n_cycles = n_impacts / 2 for both boundary conditions.
+* Only peaks above the noise threshold of :mod:`rocklab.lab.motion` are used;
+  "whole history" means from theta0 to the last reliable peak.
+* T_1/4 runs from the instant the wall leaves the screw to the first
+  impact (:mod:`rocklab.lab.motion`, "Release and first quarter period"); the
+  closed forms it is compared with use the instability angle of the fall
+  (alpha_fall), not the nominal alpha: with theta0 / alpha = 0.9 Housner's
+  p T_1/4 would be 2.9, while the wall was released a few 1e-4 rad from
+  its own instability point.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from rocklab.lab import kinematics
+from rocklab.lab.channels import LOST_STATUSES
+from rocklab.lab.motion import centre_amplification, extract_motion
+from rocklab.physics import restitution
+from rocklab.physics.wall import no_sliding_friction, overturning_velocity
+
+#: Keys of the per-test summary required by results/tests.csv (the lead
+#: adds test_id, series, specimen, boundary, contact_depth_mm).
+TEST_COLUMNS = [
+    "direction",
+    "h_over_b",
+    "alpha",
+    "theta0",
+    "theta0_over_alpha",
+    "n_impacts",
+    "e_an",
+    "e_exp_eq10",
+    "e_exp_eq11",
+    "e_ratio",
+    "T_quarter_p",
+    "duration_p",
+]
+#: Columns of the per-impact table (results/impacts.csv, less test_id).
+IMPACT_COLUMNS = ["k", "t_s", "peak_before_over_alpha", "thetadot_before", "thetadot_after", "v_over_vr", "e_exp_k"]
+#: Columns of the e_exp-versus-n table (Fig. 11).
+E_BY_N_COLUMNS = ["n", "peak_over_alpha", "e_exp_eq10", "e_exp_eq11", "e_ratio_eq10", "e_ratio_eq11"]
+
+
+def analytic_e(boundary, alpha):
+    """Analytic coefficient of restitution with the nominal alpha [-].
+
+    Eq. 2 for ``"two-sided"``, Eq. 14 (negative) for ``"one-sided"``.
+    """
+    if boundary == "two-sided":
+        return float(restitution.two_sided(alpha))
+    if boundary == "one-sided":
+        return float(restitution.one_sided(alpha))
+    raise ValueError(f"unknown boundary {boundary!r}")
+
+
+def e_by_n(peaks, theta0, alpha_ind, alpha, e_an):
+    """e_exp after n = 1..N impacts by Eqs. 10 and 11 (Fig. 11).
+
+    Parameters
+    ----------
+    peaks : array_like
+        |theta| of the reliable peaks after impacts 1..N [rad].
+    theta0 : float
+        Initial rotation [rad].
+    alpha_ind : float
+        Angle of Eqs. 10-11 (theta0 in the paper) [rad].
+    alpha : float
+        Nominal alpha for peak_over_alpha [rad].
+    e_an : float
+        Analytic coefficient (signed) for the ratios.
+    """
+    peaks = np.asarray(peaks, float)
+    n = np.arange(1, peaks.size + 1)
+    e10 = restitution.experimental_housner(peaks, theta0, alpha_ind, n)
+    e11 = restitution.experimental_pena(peaks, theta0, alpha_ind, n)
+    return pd.DataFrame(
+        {
+            "n": n,
+            "peak_over_alpha": peaks / alpha,
+            "e_exp_eq10": e10,
+            "e_exp_eq11": e11,
+            "e_ratio_eq10": e10 / abs(e_an),
+            "e_ratio_eq11": e11 / abs(e_an),
+        }
+    )
+
+
+def per_impact_e(peaks, theta0, alpha_ind):
+    """e_k by Eq. 11 with n = 1 from peak k-1 to peak k (peak 0 = theta0)."""
+    peaks = np.asarray(peaks, float)
+    before = np.r_[theta0, peaks[:-1]]
+    return restitution.experimental_pena(peaks, before, alpha_ind, 1)
+
+
+def table3_windows(peaks, theta0, alpha_ind, e_an):
+    """e_exp / |e_an| by Eq. 11 over the windows of Table 3.
+
+    complete: theta0 to peak N (n = N); without the first half cycle: peak 1
+    to peak N (n = N - 1); first half cycle only: theta0 to peak 1 (n = 1).
+    NaN where the window is empty.
+    """
+    peaks = np.asarray(peaks, float)
+    N = peaks.size
+    nan = np.nan
+    eq11 = restitution.experimental_pena
+    complete = eq11(peaks[-1], theta0, alpha_ind, N) if N else nan
+    without = eq11(peaks[-1], peaks[0], alpha_ind, N - 1) if N > 1 else nan
+    first = eq11(peaks[0], theta0, alpha_ind, 1) if N else nan
+    return {
+        "e_ratio_complete": float(complete) / abs(e_an),
+        "e_ratio_without_first_half_cycle": float(without) / abs(e_an),
+        "e_ratio_first_half_cycle": float(first) / abs(e_an),
+    }
+
+
+def quarter_period_linear(theta0_over_alpha, thetadot0_over_p_alpha=0.0):
+    """First quarter period p T_1/4 of the linearised rocking equation [-].
+
+    Released at theta0 with speed thetadot0 towards the vertical, a wall
+    obeying theta'' = p^2 (theta - alpha) (Housner 1963) reaches theta = 0
+    when (1 - r) cosh(pT) + w sinh(pT) = 1, r = theta0 / alpha,
+    w = thetadot0 / (p alpha), hence
+
+        p T_1/4 = ln[(1 + sqrt(1 - (1 - r)^2 + w^2)) / (1 - r + w)],
+
+    which is Housner's arccosh(1 / (1 - r)) from rest (w = 0,
+    :func:`rocklab.physics.wall.quarter_period_housner`; Sect. 4, Fig. 17).
+
+    Parameters
+    ----------
+    theta0_over_alpha : array_like
+        Release rotation over the instability angle of the motion [-].
+    thetadot0_over_p_alpha : array_like
+        Release speed towards the vertical over p alpha [-], >= 0.
+
+    Returns
+    -------
+    ndarray
+        p T_1/4; NaN where the wall does not fall (1 - r + w <= 0).
+    """
+    a = 1.0 - np.asarray(theta0_over_alpha, float)
+    w = np.asarray(thetadot0_over_p_alpha, float)
+    den = a + w
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = np.log((1.0 + np.sqrt(1.0 - a**2 + w**2)) / den)
+    return np.where(den > 0, out, np.nan)
+
+
+def analyse_motion(t, theta, fs, boundary, alpha, p, direction, *, alpha_ind=None, **motion_kw):
+    """Reduce one free-rocking record (Sects. 3-4).
+
+    Parameters
+    ----------
+    t, theta : ndarray
+        Time [s] and rotation [rad] (Eq. 8 or the four-dof solution).
+    fs : float
+        Sampling rate [Hz].
+    boundary : {"two-sided", "one-sided"}
+    alpha : float
+        Nominal slenderness angle arctan(b/h) [rad].
+    p : float
+        Frequency parameter [rad/s].
+    direction : {"push", "pull"}
+        Copied to the summary.
+    alpha_ind : float, optional
+        Angle of Eqs. 10-11; defaults to the measured theta0 (Sect. 3).
+    **motion_kw
+        Passed to :func:`rocklab.lab.motion.extract_motion`.
+
+    Returns
+    -------
+    summary : dict
+        :data:`TEST_COLUMNS` first, then diagnostics: alpha_ind,
+        e_ratio_complete / _without_first_half_cycle / _first_half_cycle,
+        n_cycles, alpha_fall (instability angle of the fitted fall),
+        theta0_over_alpha_fall, thetadot_release (speed leaving the screw),
+        T_quarter_p_housner (Housner's closed form from rest at
+        theta0/alpha_fall), T_quarter_p_linear (the same with the release
+        speed, :func:`quarter_period_linear`), t_release, t_first_impact,
+        t_end, noise_rad, n_negative_excursions, max_negative_over_alpha.
+        T_quarter_p is p (t_first_impact - t_release), the release being
+        where the wall leaves the screw (:mod:`rocklab.lab.motion`).
+    impacts : pandas.DataFrame
+        :data:`IMPACT_COLUMNS`, one row per impact followed by a reliable peak.
+    e_n : pandas.DataFrame
+        :data:`E_BY_N_COLUMNS`.
+    """
+    m = extract_motion(t, theta, fs, boundary, p, **motion_kw)
+    a_ind = m.theta0 if alpha_ind is None else float(alpha_ind)
+    e_an = analytic_e(boundary, alpha)
+    N = m.peaks.size
+    e_n = e_by_n(m.peaks, m.theta0, a_ind, alpha, e_an)
+    e10 = float(e_n.e_exp_eq10.iloc[-1]) if N else np.nan
+    e11 = float(e_n.e_exp_eq11.iloc[-1]) if N else np.nan
+    imp = m.impacts
+    vr = overturning_velocity(alpha, p)
+    impacts = pd.DataFrame(
+        {
+            "k": imp.k.to_numpy(int),
+            "t_s": imp.t_s.to_numpy(),
+            "peak_before_over_alpha": imp.peak_before.to_numpy() / alpha,
+            "thetadot_before": imp.thetadot_before.to_numpy(),
+            "thetadot_after": imp.thetadot_after.to_numpy(),
+            "v_over_vr": np.abs(imp.thetadot_before.to_numpy()) / vr,
+            "e_exp_k": per_impact_e(m.peaks, m.theta0, a_ind),
+        }
+    )
+    summary = {
+        "direction": direction,
+        "h_over_b": float(1.0 / np.tan(alpha)),
+        "alpha": float(alpha),
+        "theta0": m.theta0,
+        "theta0_over_alpha": m.theta0 / alpha,
+        "n_impacts": int(N),
+        "e_an": e_an,
+        "e_exp_eq10": e10,
+        "e_exp_eq11": e11,
+        "e_ratio": e11 / abs(e_an),
+        "T_quarter_p": p * (m.t_first_impact - m.t_release),
+        "duration_p": p * (m.t_end - m.t_release),
+        "alpha_ind": a_ind,
+        **table3_windows(m.peaks, m.theta0, a_ind, e_an),
+        "n_cycles": N / 2.0,
+        "alpha_fall": m.alpha_fall,
+        "theta0_over_alpha_fall": m.theta0 / m.alpha_fall,
+        "thetadot_release": m.thetadot_release,
+        "T_quarter_p_housner": float(quarter_period_linear(m.theta0 / m.alpha_fall)),
+        "T_quarter_p_linear": float(
+            quarter_period_linear(m.theta0 / m.alpha_fall, m.thetadot_release / (p * m.alpha_fall))
+        ),
+        "t_release": m.t_release,
+        "t_first_impact": m.t_first_impact,
+        "t_end": m.t_end,
+        "noise_rad": m.noise_rad,
+        "n_negative_excursions": m.n_negative_excursions,
+        "max_negative_over_alpha": float(imp.negative_excursion.max() / alpha) if N else 0.0,
+    }
+    return summary, impacts, e_n
+
+
+def _ols(x, y):
+    """y = a - b x by least squares: a, b, R^2, standard errors, n."""
+    ok = np.isfinite(x) & np.isfinite(y)
+    x, y = x[ok], y[ok]
+    n = x.size
+    if n < 3 or np.ptp(x) == 0:
+        return dict(a=np.nan, b=np.nan, r2=np.nan, a_se=np.nan, b_se=np.nan, n=n)
+    X = np.column_stack([np.ones(n), -x])
+    coef, *_ = np.linalg.lstsq(X, y, rcond=None)
+    res = y - X @ coef
+    ss_res, ss_tot = res @ res, ((y - y.mean()) ** 2).sum()
+    cov = ss_res / (n - 2) * np.linalg.inv(X.T @ X)
+    return dict(
+        a=coef[0],
+        b=coef[1],
+        r2=1 - ss_res / ss_tot if ss_tot > 0 else np.nan,
+        a_se=np.sqrt(cov[0, 0]),
+        b_se=np.sqrt(cov[1, 1]),
+        n=n,
+    )
+
+
+def amplitude_law_fit(impacts_df, tests_df, by=("series",), law="peak"):
+    """Fit the amplitude law of Eq. 15 or Eq. 17 by group, with R^2.
+
+    e_exp_k / |e_an| = a - b x, x = peak_before_over_alpha (``law="peak"``,
+    Eq. 15) or v_over_vr**2 (``law="velocity"``, Eq. 17).
+
+    Parameters
+    ----------
+    impacts_df : pandas.DataFrame
+        results/impacts.csv (test_id + :data:`IMPACT_COLUMNS`).
+    tests_df : pandas.DataFrame
+        results/tests.csv: test_id, e_an and the grouping columns.
+    by : sequence of str
+        Grouping columns of ``tests_df`` (e.g. ("series",), ("boundary",));
+        empty for one pooled fit.
+
+    Returns
+    -------
+    pandas.DataFrame
+        by-columns, law, a, b, r2, a_se, b_se, n.
+    """
+    if law not in ("peak", "velocity"):
+        raise ValueError("law must be 'peak' (Eq. 15) or 'velocity' (Eq. 17)")
+    by = list(by)
+    d = impacts_df.merge(tests_df[["test_id", "e_an", *by]], on="test_id", how="inner")
+    d["ratio"] = d.e_exp_k / d.e_an.abs()
+    d["x"] = d.peak_before_over_alpha if law == "peak" else d.v_over_vr**2
+    groups = d.groupby(by, sort=True) if by else [((), d)]
+    rows = []
+    for key, g in groups:
+        key = key if isinstance(key, tuple) else (key,)
+        rows.append({**dict(zip(by, key)), "law": law, **_ols(g.x.to_numpy(float), g.ratio.to_numpy(float))})
+    return pd.DataFrame(rows)
+
+
+def no_sliding_check(h_over_b, mu_s=0.6):
+    """No-sliding condition of free rocking, Eq. 9 (Shenton 1996).
+
+    Returns a DataFrame with h_over_b, mu_required = 3 zeta / (1 + 4 zeta^2),
+    the sufficient bound b/h and ``no_sliding`` (mu_s >= mu_required);
+    mu_s = 0.6 is the low end of masonry friction (Rankine 1863, Sect. 2.2).
+    """
+    z = np.atleast_1d(np.asarray(h_over_b, float))
+    mu = no_sliding_friction(z)
+    return pd.DataFrame({"h_over_b": z, "mu_required": mu, "b_over_h": 1.0 / z, "no_sliding": mu_s >= mu})
+
+
+META_COLUMNS = ["test_id", "series", "specimen", "boundary", "contact_depth_mm"]
+
+
+def monitor_readings(ds):
+    """Monitor transducer (channel 5 at the centre of the facade, Fig. 20a).
+
+    Its reading against the one the rigid-body motion of the reduced test
+    (theta, phi, v, w of Eqs. 3-7, forward model of
+    :func:`rocklab.lab.kinematics.transducer_elongation`) gives at the same
+    point.  The monitor is kept out of the kinematic fit, so any excess is
+    deformation of the facade (Sect. 4).  The rigid reading uses all four
+    degrees of freedom rather than theta alone so that twist and sliding are
+    not read as deformation.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A reduced test (``rocklab.lab.reduction``).
+
+    Returns
+    -------
+    (int, ndarray, ndarray) or None
+        Channel number, measured and rigid-body elongation [mm] on ``time``;
+        None when the setup has no working monitor channel.
+    """
+    role = ds.channel_role.values.astype(str)
+    status = ds.channel_status.values.astype(str)
+    k = np.flatnonzero((role == "monitor") & ~np.isin(status, LOST_STATUSES))
+    if k.size == 0:
+        return None
+    k = k[:1]
+    X = np.column_stack([ds[f"wall_{c}"].values[k] for c in "xyz"])
+    F = np.column_stack([ds[f"frame_{c}"].values[k] for c in "xyz"])
+    rigid = kinematics.transducer_elongation(
+        ds.theta.values, ds.phi.values, ds.v.values, ds.w.values, X, F, float(ds.attrs["thickness_mm"])
+    )
+    return int(ds.channel.values[k[0]]), ds.elongation.values[:, k[0]], rigid[:, 0]
+
+
+def analyse_reduced_test(ds):
+    """:func:`analyse_motion` on a reduced test (``rocklab.lab.reduction``).
+
+    Returns the three tables of :func:`analyse_motion`, each carrying the
+    test's metadata columns first; the summary also holds
+    ``centre_amplification``: the largest |reading| of the monitor channel
+    after the first impact over that of the rigid-body motion (Fig. 20b,
+    :func:`rocklab.lab.motion.centre_amplification`), NaN without a monitor.
+    """
+    a = ds.attrs
+    summary, impacts, e_n = analyse_motion(
+        ds.time.values,
+        ds.theta.values,
+        float(a["sampling_rate_hz"]),
+        a["boundary"],
+        float(a["alpha"]),
+        float(a["p"]),
+        a["direction"],
+    )
+    mon = monitor_readings(ds)
+    amp = np.nan
+    if mon is not None and np.isfinite(summary["t_first_impact"]):
+        i1 = int(np.searchsorted(ds.time.values, summary["t_first_impact"]))
+        amp = centre_amplification(mon[1], mon[2], i1)
+    summary["centre_amplification"] = amp
+    meta = {k: a.get(k, np.nan) for k in META_COLUMNS}
+    return (
+        {**meta, **summary},
+        impacts.assign(test_id=a["test_id"])[["test_id", *impacts.columns]],
+        e_n.assign(test_id=a["test_id"], series=a["series"], boundary=a["boundary"]),
+    )

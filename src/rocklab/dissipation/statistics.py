@@ -1,0 +1,426 @@
+"""Statistics of the per-test ratios by test series (Sects. 3-4).
+
+A series is specimen + boundary + contact depth (Table 2).  Tests within a
+series are repetitions of the same set-up and are *not* independent
+replicates of the factors that vary between series (h/b, unit material,
+contact depth): Fig. 13 shows ratios that are stable within a series and
+scattered between series.  Hence
+
+* per-series summaries use the tests (mean, sd, bootstrap 95 % CI);
+* "series that stand apart" are outliers among the series means:
+  Iglewicz-Hoaglin modified z = 0.6745 (m - median) / MAD over the series
+  means of one boundary condition, flagged at |z| > 3.5.  A test of each
+  series against the pooled rest (Welch t, Holm-corrected) is reported
+  too, but it is not the flag: with ~20 tests per series and a
+  within-series sd of ~0.01 it declares nearly every series "different",
+  whereas the question (Sect. 3, "only one test series shows much smaller
+  values") is which series is atypical of the population of series;
+* effects of contact depth and unit material are tested on the series
+  means (Kruskal-Wallis; the experimental unit is the series), so that
+  repeated tests do not inflate the sample size;
+* for the same reason, a value quoted for a whole boundary condition (the
+  paper's "0.95" and "1.05", Table 3) is the mean over its tests with a
+  series (cluster) bootstrap interval (:func:`cluster_bootstrap_ci`): a
+  test-level bootstrap treats 150 repeats of 10 set-ups as 150 independent
+  walls and gives an interval about three times too narrow.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+from rocklab.dissipation.analysis import amplitude_law_fit
+
+#: Per-series quantities of results/series.csv (Figs. 13, 16-20).
+SERIES_COLUMNS = (
+    "e_ratio",
+    "theta0_over_alpha",
+    "T_quarter_p",
+    "T_quarter_p_housner",
+    "T_quarter_p_linear",
+    "n_cycles",
+    "duration_p",
+    "centre_amplification",
+)
+#: The windows of Table 3 (tests.csv column -> the paper's heading).
+TABLE3_WINDOWS = {
+    "e_ratio_complete": "complete",
+    "e_ratio_without_first_half_cycle": "disregarding the first half cycle",
+    "e_ratio_first_half_cycle": "considering only the first half cycle",
+}
+#: Ratios summarised per series.
+RATIO_COLUMNS = (*SERIES_COLUMNS, *TABLE3_WINDOWS)
+#: Table 3 of the paper (one-sided rocking only), e_exp / e_an,1s.
+PAPER_TABLE3 = {
+    ("one-sided", "e_ratio_complete"): 1.05,
+    ("one-sided", "e_ratio_without_first_half_cycle"): 1.34,
+    ("one-sided", "e_ratio_first_half_cycle"): 0.72,
+}
+
+
+def bootstrap_ci(values, n_boot=4000, level=0.95, seed=0):
+    """Percentile bootstrap interval of the mean (vectorised, seeded).
+
+    Returns (low, high); NaN for fewer than 2 finite values.
+    """
+    x = np.asarray(values, float)
+    x = x[np.isfinite(x)]
+    if x.size < 2:
+        return np.nan, np.nan
+    rng = np.random.default_rng(seed)
+    means = x[rng.integers(0, x.size, size=(n_boot, x.size))].mean(axis=1)
+    q = (1 - level) / 2
+    lo, hi = np.quantile(means, [q, 1 - q])
+    return float(lo), float(hi)
+
+
+def cluster_bootstrap_ci(values, groups, n_boot=4000, level=0.95, seed=0):
+    """Percentile interval of the pooled mean, resampling whole groups.
+
+    Each resample draws as many groups (series) as there are, with
+    replacement, and takes the mean over all their values, so the interval
+    reflects the scatter between series, not only within them.
+
+    Parameters
+    ----------
+    values : array_like
+        One value per test.
+    groups : array_like
+        Group (series) of each value.
+
+    Returns
+    -------
+    (float, float)
+        NaN for fewer than 2 groups with finite values.
+    """
+    d = pd.DataFrame({"x": np.asarray(values, float), "g": np.asarray(groups)}).dropna()
+    agg = d.groupby("g").x.agg(["sum", "count"])
+    if len(agg) < 2:
+        return np.nan, np.nan
+    rng = np.random.default_rng(seed)
+    idx = rng.integers(0, len(agg), size=(n_boot, len(agg)))
+    means = agg["sum"].to_numpy()[idx].sum(axis=1) / agg["count"].to_numpy()[idx].sum(axis=1)
+    q = (1 - level) / 2
+    lo, hi = np.quantile(means, [q, 1 - q])
+    return float(lo), float(hi)
+
+
+def boundary_summary(tests_df, columns, by="series", within="boundary", n_boot=4000, seed=0):
+    """Mean of per-test quantities by boundary condition, series-bootstrap CI.
+
+    Returns one row per (boundary, quantity) with data: n_tests, n_series,
+    mean (over tests), sd (between tests), series_sd (between series
+    means), ci_low, ci_high (:func:`cluster_bootstrap_ci`).
+    """
+    rows = []
+    for key, g in tests_df.groupby(within, sort=True):
+        for c in columns:
+            d = g[[by, c]].dropna() if c in g else g.iloc[:0]
+            if d.empty:
+                continue
+            lo, hi = cluster_bootstrap_ci(d[c], d[by], n_boot=n_boot, seed=seed)
+            rows.append(
+                {
+                    within: key,
+                    "quantity": c,
+                    "n_tests": len(d),
+                    "n_series": d[by].nunique(),
+                    "mean": d[c].mean(),
+                    "sd": d[c].std(ddof=1),
+                    "series_sd": d.groupby(by)[c].mean().std(ddof=1),
+                    "ci_low": lo,
+                    "ci_high": hi,
+                }
+            )
+    return pd.DataFrame(rows)
+
+
+def table3(tests_df, n_boot=4000, seed=0):
+    """Table 3: e_exp / |e_an| over the paper's three windows, by boundary.
+
+    The paper gives the one-sided row only (1.05, 1.34, 0.72); the
+    two-sided row is computed the same way (Eq. 11 over the windows of
+    :func:`rocklab.dissipation.analysis.table3_windows`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        boundary, window (the paper's heading), column (of tests.csv), the
+        statistics of :func:`boundary_summary` and ``paper``.
+    """
+    out = boundary_summary(tests_df, list(TABLE3_WINDOWS), n_boot=n_boot, seed=seed)
+    out = out.rename(columns={"quantity": "column"})
+    out.insert(1, "window", out.column.map(TABLE3_WINDOWS))
+    out["paper"] = [PAPER_TABLE3.get(k, np.nan) for k in zip(out.boundary, out.column)]
+    return out
+
+
+def table3_markdown(t3):
+    """Table 3 as markdown: one row per boundary, mean [95 % CI], and the paper's row."""
+    t3 = t3.assign(cell=[f"{m:.3f} [{lo:.3f}, {hi:.3f}]" for m, lo, hi in zip(t3["mean"], t3.ci_low, t3.ci_high)])
+    wide = t3.pivot(index="boundary", columns="window", values="cell")
+    wide = wide[[w for w in TABLE3_WINDOWS.values() if w in wide]]
+    counts = t3.groupby("boundary").first()
+    wide.insert(0, "tests (series)", [f"{counts.n_tests[b]} ({counts.n_series[b]})" for b in wide.index])
+    for b, g in t3.dropna(subset=["paper"]).groupby("boundary"):
+        wide.loc[f"{b}, paper"] = ["", *(f"{v:.2f}" for v in g.set_index("window").paper.reindex(wide.columns[1:]))]
+    return wide.rename_axis("boundary").reset_index().to_markdown(index=False)
+
+
+def series_stats(tests_df, columns=RATIO_COLUMNS, by="series", n_boot=4000, seed=0):
+    """Mean, sd, bootstrap 95 % CI and count of each ratio by series.
+
+    Returns one row per series with columns ``n``, and for each ratio X
+    present in ``tests_df``: X_mean, X_sd, X_ci_low, X_ci_high.
+    """
+    cols = [c for c in columns if c in tests_df]
+    rows = []
+    for key, g in tests_df.groupby(by, sort=True):
+        row = {by: key, "n": len(g)}
+        for c in cols:
+            x = g[c].to_numpy(float)
+            lo, hi = bootstrap_ci(x, n_boot=n_boot, seed=seed)
+            row |= {
+                f"{c}_mean": np.nanmean(x) if np.isfinite(x).any() else np.nan,
+                f"{c}_sd": np.nanstd(x, ddof=1) if np.isfinite(x).sum() > 1 else np.nan,
+                f"{c}_ci_low": lo,
+                f"{c}_ci_high": hi,
+            }
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def holm(pvalues):
+    """Holm step-down adjusted p-values (family-wise error control)."""
+    p = np.asarray(pvalues, float)
+    order = np.argsort(p)
+    m = p.size
+    adj = np.minimum(1.0, np.maximum.accumulate((m - np.arange(m)) * p[order]))
+    out = np.empty_like(adj)
+    out[order] = adj
+    return out
+
+
+def flag_outlying_series(tests_df, value="e_ratio", by="series", within="boundary", z_crit=3.5, p_crit=0.05):
+    """Series that stand apart from the others (see module docstring).
+
+    Returns one row per series: within-group, n, mean, modified_z (over the
+    series means of the group), welch_p and welch_p_holm (series vs pooled
+    rest, Holm within the group), ``flagged`` (|modified_z| > z_crit) and
+    ``test`` naming the rule.
+    """
+    out = []
+    for gkey, grp in tests_df.groupby(within, sort=True):
+        means = grp.groupby(by)[value].mean()
+        med = means.median()
+        mad = np.median(np.abs(means - med))
+        z = 0.6745 * (means - med) / mad if mad > 0 else means * 0.0
+        pv = []
+        for s in means.index:
+            a = grp.loc[grp[by] == s, value].dropna()
+            b = grp.loc[grp[by] != s, value].dropna()
+            pv.append(stats.ttest_ind(a, b, equal_var=False).pvalue if len(a) > 1 and len(b) > 1 else np.nan)
+        pv = np.asarray(pv, float)
+        ph = np.full_like(pv, np.nan)
+        ok = np.isfinite(pv)
+        ph[ok] = holm(pv[ok])
+        for i, s in enumerate(means.index):
+            out.append(
+                {
+                    within: gkey,
+                    by: s,
+                    "n": int((grp[by] == s).sum()),
+                    "mean": means[s],
+                    "modified_z": z[s],
+                    "welch_p": pv[i],
+                    "welch_p_holm": ph[i],
+                    "welch_significant": ph[i] < p_crit,
+                    "flagged": abs(z[s]) > z_crit,
+                    "test": f"modified z of series means > {z_crit} (Iglewicz-Hoaglin)",
+                }
+            )
+    return pd.DataFrame(out)
+
+
+def symmetry_test(tests_df, value, by="series", direction="direction"):
+    """Push/pull symmetry in the series tested both ways (Sect. 4).
+
+    Per series: mean push, mean pull, relative change (pull - push)/push as
+    in the paper (13 % and 3 % for theta0), Welch t and Mann-Whitney p.
+    """
+    rows = []
+    for key, g in tests_df.groupby(by, sort=True):
+        a = g.loc[g[direction] == "push", value].dropna()
+        b = g.loc[g[direction] == "pull", value].dropna()
+        if len(a) < 2 or len(b) < 2:
+            continue
+        rows.append(
+            {
+                by: key,
+                "value": value,
+                "n_push": len(a),
+                "n_pull": len(b),
+                "mean_push": a.mean(),
+                "mean_pull": b.mean(),
+                "relative_change": (b.mean() - a.mean()) / a.mean(),
+                "welch_p": stats.ttest_ind(a, b, equal_var=False).pvalue,
+                "mannwhitney_p": stats.mannwhitneyu(a, b).pvalue,
+            }
+        )
+    return pd.DataFrame(rows)
+
+
+def factor_effect(tests_df, factor, value="e_ratio", by="series", within="boundary", p_crit=0.05):
+    """Systematic effect of a between-series factor (contact depth, unit).
+
+    Kruskal-Wallis on the series means grouped by the factor's levels, per
+    boundary condition (the series is the experimental unit).  Returns one
+    row per boundary: levels, n_series per level, level means, H, p,
+    ``systematic`` (p < p_crit) and the test used.
+    """
+    rows = []
+    d = tests_df.dropna(subset=[factor, value])
+    for gkey, grp in d.groupby(within, sort=True):
+        sm = grp.groupby(by).agg(level=(factor, "first"), m=(value, "mean"))
+        groups = {lvl: s.m.to_numpy() for lvl, s in sm.groupby("level", sort=True)}
+        if len(groups) < 2 or sum(len(v) for v in groups.values()) <= len(groups):
+            continue
+        H, p = stats.kruskal(*groups.values())
+        rows.append(
+            {
+                within: gkey,
+                "factor": factor,
+                "value": value,
+                "levels": list(groups),
+                "n_series": [len(v) for v in groups.values()],
+                "level_means": [float(np.mean(v)) for v in groups.values()],
+                "statistic": H,
+                "p": p,
+                "systematic": p < p_crit,
+                "test": "Kruskal-Wallis on series means",
+            }
+        )
+    return pd.DataFrame(rows)
+
+
+def series_table(tests_df, qc_df, impacts_df=None, by="series", n_boot=4000, seed=0):
+    """results/series.csv: counts, statistics of :data:`SERIES_COLUMNS`, law.
+
+    Parameters
+    ----------
+    tests_df : pandas.DataFrame
+        results/tests.csv (valid tests).
+    qc_df : pandas.DataFrame
+        One row per test with ``series``, ``valid`` (bool) and ``reason``
+        (rejection reason, ignored when valid).
+    impacts_df : pandas.DataFrame, optional
+        results/impacts.csv; adds the Eq. 15 fit (law_a, law_b, law_r2).
+
+    Returns
+    -------
+    pandas.DataFrame
+        series, n_valid, n_rejected, rejected_<reason>..., the statistics of
+        :func:`series_stats` for the :data:`SERIES_COLUMNS` present in
+        ``tests_df``, law columns.
+    """
+    counts = qc_df.assign(valid=qc_df.valid.astype(bool))
+    base = counts.groupby(by).valid.agg(n_valid="sum", n_tests="size").reset_index()
+    base["n_rejected"] = base.n_tests - base.n_valid
+    rej = counts[~counts.valid]
+    if len(rej):
+        rc = pd.crosstab(rej[by], rej.reason).add_prefix("rejected_").reset_index()
+        base = base.merge(rc, on=by, how="left")
+    st = series_stats(tests_df, SERIES_COLUMNS, by, n_boot, seed)
+    out = base.merge(st.drop(columns="n"), on=by, how="left")
+    if impacts_df is not None:
+        law = amplitude_law_fit(impacts_df, tests_df, by=(by,), law="peak")
+        law = law[[by, "a", "b", "r2"]].rename(columns={"a": "law_a", "b": "law_b", "r2": "law_r2"})
+        out = out.merge(law, on=by, how="left")
+    rcols = [c for c in out if c.startswith("rejected_")]
+    out[rcols] = out[rcols].fillna(0).astype(int)
+    return out.drop(columns="n_tests")
+
+
+def campaign_tables(datasets, qc_df, n_boot=4000, seed=0):
+    """Every table of Sects. 3-4 for the valid tests of a campaign.
+
+    Parameters
+    ----------
+    datasets : iterable of xarray.Dataset
+        Reduced valid tests (``rocklab.lab.reduction``).
+    qc_df : pandas.DataFrame
+        ``results/qc.csv``.
+
+    Returns
+    -------
+    dict of pandas.DataFrame, and a list of (test_id, message)
+        ``tests``, ``impacts``, ``e_by_n``, ``series``, ``laws`` (Eqs. 15 and
+        17 by series and by boundary), ``effects`` (contact depth and unit
+        material on e_ratio, contact depth on the channel-5 amplification,
+        push/pull), ``table3`` (:func:`table3`) and ``summary``
+        (:func:`boundary_summary` of :data:`SERIES_COLUMNS`); the second item
+        lists the valid tests whose motion could not be analysed, with the
+        reason.
+    """
+    from rocklab.dissipation.analysis import analyse_reduced_test
+
+    tests, impacts, e_n, failed = [], [], [], []
+    for ds in datasets:
+        try:
+            s, i, e = analyse_reduced_test(ds)
+        except ValueError as exc:
+            failed.append((ds.attrs["test_id"], str(exc)))
+            continue
+        tests.append({**s, "unit": ds.attrs.get("unit", "")})
+        impacts.append(i)
+        e_n.append(e)
+    tests = pd.DataFrame(tests)
+    impacts = pd.concat(impacts, ignore_index=True) if impacts else pd.DataFrame()
+    e_n = pd.concat(e_n, ignore_index=True) if e_n else pd.DataFrame()
+    qc = qc_df.rename(columns={"reject_reason": "reason"})
+    series = series_table(tests, qc, impacts, n_boot=n_boot, seed=seed)
+    meta = tests.groupby("series").agg(
+        boundary=("boundary", "first"),
+        specimen=("specimen", "first"),
+        contact_depth_mm=("contact_depth_mm", "first"),
+        h_over_b=("h_over_b", "first"),
+    )
+    series = series.merge(meta, left_on="series", right_index=True, how="left")
+    outliers = flag_outlying_series(tests)
+    if len(outliers):
+        series = series.merge(
+            outliers[["series", "modified_z", "flagged"]].rename(columns={"flagged": "stands_apart"}),
+            on="series",
+            how="left",
+        )
+    laws = pd.concat(
+        [
+            amplitude_law_fit(impacts, tests, by=(by,), law=law).assign(grouping=by)
+            for law in ("peak", "velocity")
+            for by in ("series", "boundary")
+        ],
+        ignore_index=True,
+    )
+    one = tests[tests.boundary == "one-sided"]
+    effects = pd.concat(
+        [
+            factor_effect(one, "contact_depth_mm"),
+            factor_effect(tests, "unit"),
+            factor_effect(one, "contact_depth_mm", value="centre_amplification"),
+            symmetry_test(tests, "theta0_over_alpha").assign(factor="push/pull"),
+            symmetry_test(tests, "e_ratio").assign(factor="push/pull"),
+        ],
+        ignore_index=True,
+    )
+    return {
+        "tests": tests,
+        "impacts": impacts,
+        "e_by_n": e_n,
+        "series": series,
+        "laws": laws,
+        "effects": effects,
+        "table3": table3(tests, n_boot, seed),
+        "summary": boundary_summary(tests, SERIES_COLUMNS, n_boot=n_boot, seed=seed),
+    }, failed

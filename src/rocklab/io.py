@@ -1,0 +1,128 @@
+"""Input/output helpers shared by the workflow scripts (no Snakemake needed).
+
+Tables are validated against the JSON schemas of ``workflow/schemas`` before
+they are written, netCDF files are written compressed and atomically, and
+logging goes to the rule's log file.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import tempfile
+from pathlib import Path
+from types import SimpleNamespace
+
+import jsonschema
+import numpy as np
+import pandas as pd
+import yaml
+
+
+def setup_logging(path):
+    """Send log records and warnings of this process to ``path``."""
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    logging.basicConfig(
+        filename=path, filemode="w", level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s", force=True
+    )
+    logging.captureWarnings(True)
+
+
+def write_netcdf(ds, path):
+    """Write a dataset compressed, through a temporary file, so an interrupted
+    run never leaves a truncated output that looks complete."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    ds = ds.copy(deep=False)
+    encoding = {
+        name: {"zlib": True, "complevel": 4}
+        for name, var in ds.variables.items()
+        if var.dtype.kind in "fiu" and var.ndim > 0
+    }
+    for name, var in ds.variables.items():
+        if var.dtype == object:
+            ds[name] = var.astype(str)
+    fd, tmp = tempfile.mkstemp(suffix=".nc", dir=path.parent)
+    os.close(fd)
+    try:
+        ds.to_netcdf(tmp, engine="netcdf4", encoding=encoding)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+
+
+def read_attrs(paths):
+    """The global attributes of netCDF files, without loading their data."""
+    import netCDF4
+
+    out = []
+    for p in paths:
+        with netCDF4.Dataset(p) as nc:
+            out.append(SimpleNamespace(attrs={k: nc.getncattr(k) for k in nc.ncattrs()}, path=str(p)))
+    return out
+
+
+def load_schema(path):
+    with open(path) as fh:
+        return yaml.safe_load(fh)
+
+
+def validate_table(df: pd.DataFrame, schema) -> None:
+    """Check every row of a table against a JSON schema (``workflow/schemas``).
+
+    Raises
+    ------
+    jsonschema.ValidationError
+        Naming the first offending row and column.
+    """
+    schema = load_schema(schema) if isinstance(schema, (str, Path)) else schema
+    required = schema.get("required", [])
+    missing = [c for c in required if c not in df.columns]
+    if missing:
+        raise jsonschema.ValidationError(f"missing column(s) {', '.join(missing)}")
+    validator = jsonschema.Draft202012Validator(schema)
+    records = df.replace({np.nan: None}).to_dict("records")
+    for i, rec in enumerate(records):
+        err = jsonschema.exceptions.best_match(validator.iter_errors(rec))
+        if err is not None:
+            col = "/".join(str(x) for x in err.path) or "row"
+            raise jsonschema.ValidationError(f"row {i + 1}, {col}: {err.message}")
+
+
+def write_table(df: pd.DataFrame, path, schema=None, float_format="%.6g") -> None:
+    """Validate (when a schema is given) and write a CSV table."""
+    if schema is not None:
+        validate_table(df, schema)
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    df.to_csv(path, index=False, float_format=float_format)
+
+
+def valid_test_ids(qc_path) -> list:
+    """Test ids that ``qc.csv`` marks valid, in its order."""
+    qc = pd.read_csv(qc_path, keep_default_na=False)
+    return qc.test_id[qc.valid.astype(str) == "True"].tolist()
+
+
+def load_datasets(paths, keep=None):
+    """Yield the netCDF files at ``paths`` loaded into memory (files closed),
+    those for which ``keep(dataset)`` is true if given."""
+    import xarray as xr
+
+    for path in paths:
+        with xr.open_dataset(path) as ds:
+            if keep is None or keep(ds):
+                yield ds.load()
+
+
+def valid_tests(paths, qc_path=None):
+    """Yield the reduced datasets of the valid tests, loaded.
+
+    Valid: marked so in ``qc.csv``, or without it by the test's own verdict
+    (its ``valid`` attribute, of which qc.csv is made), so that a job over
+    a few tests need not depend on the QC of the whole campaign.
+    """
+    if qc_path is None:
+        return load_datasets(paths, lambda ds: int(ds.attrs.get("valid", 0)))
+    valid = set(valid_test_ids(qc_path))
+    return load_datasets(p for p in paths if Path(p).stem in valid)

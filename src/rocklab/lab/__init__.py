@@ -1,0 +1,5 @@
+"""From the lab's raw records to wall motion.
+
+Raw format, channel health, four-DOF kinematics (Eqs. 3-8), validity,
+release and motion, reduction of one test, and the virtual lab.
+"""

@@ -1,0 +1,326 @@
+"""Reduction of one test: raw record to wall motion and validity, as netCDF.
+
+Composes :mod:`rocklab.lab.campaign` (reader), :mod:`rocklab.lab.channels` (health),
+:mod:`rocklab.lab.kinematics` (four degrees of freedom) and
+:mod:`rocklab.lab.validity` (the lab's rules) into one ``xarray.Dataset`` per
+test with CF-style attributes, and turns a set of them into the QC table.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+
+from rocklab.lab import channels as health
+from rocklab.lab import kinematics, validity
+from rocklab.lab.campaign import Campaign, RawFormatError, read_record, row_series
+from rocklab.physics import wall
+
+log = logging.getLogger(__name__)
+
+DEFAULTS = {
+    "channels": {
+        "flat_run_s": health.FLAT_RUN_S,
+        "max_gap_s": health.MAX_GAP_S,
+        "dead_span_mm": health.DEAD_SPAN_MM,
+        "backup": [2],
+        "policy": "primary",
+    },
+    "validity": {"residual_top_mm": 1.5, "release_velocity_ratio": 0.10, "max_lost_out_of_plane": 1},
+}
+
+QC_COLUMNS = [
+    "test_id",
+    "series",
+    "valid",
+    "reject_reason",
+    "reject_detail",
+    "residual_top_mm",
+    "release_velocity_ratio",
+    "channels_used",
+    "flags",
+]
+
+
+def _options(options):
+    out = {k: dict(v) for k, v in DEFAULTS.items()}
+    for key, val in (options or {}).items():
+        if key in out and isinstance(val, dict):
+            out[key].update(val)
+    return out
+
+
+def test_metadata(campaign: Campaign, test_id: str) -> dict:
+    """Specimen, setup and wall constants of a test (lengths in mm, SI for p)."""
+    row = campaign.test_row(test_id)
+    spec = campaign.specimen(row.specimen)
+    h, b = float(spec.height_mm), float(spec.thickness_mm)
+    alpha = float(wall.slenderness_angle(h, b))
+    R = float(wall.half_diagonal(h, b)) / 1000.0
+    p = float(wall.frequency_parameter(R))
+    cd = float(row.contact_depth_mm) if row.boundary == "one-sided" else np.nan
+    return {
+        "test_id": test_id,
+        "specimen": row.specimen,
+        "series": row_series(row),
+        "boundary": row.boundary,
+        "contact_depth_mm": cd,
+        "direction": row.direction,
+        "setup": row.setup,
+        "note": row.note,
+        "unit": spec.unit,
+        "wall": str(spec.wall),
+        "length_mm": float(spec.length_mm),
+        "height_mm": h,
+        "thickness_mm": b,
+        "unit_weight_kN_m3": float(spec.unit_weight_kN_m3),
+        "h_over_b": h / b,
+        "alpha": alpha,
+        "R_m": R,
+        "p": p,
+        "overturning_velocity": float(wall.overturning_velocity(alpha, p)),
+    }
+
+
+def _row_metadata(campaign: Campaign, test_id: str) -> dict:
+    row = campaign.test_row(test_id)
+    return {"test_id": test_id, "specimen": row.specimen, "series": "", "boundary": row.boundary}
+
+
+def _unreadable(meta: dict, error: Exception) -> xr.Dataset:
+    ds = xr.Dataset(attrs={k: v for k, v in meta.items() if v is not None})
+    ds.attrs.update(valid=0, reject_reason="unreadable", reject_detail=str(error), flags="", channels_used="")
+    return ds
+
+
+def reduce_test(campaign: Campaign, test_id: str, options=None) -> xr.Dataset:
+    """Reduce one test to a dataset: raw and repaired readings, motion, QC.
+
+    Never raises for a bad record: an unreadable one gives a dataset with
+    ``reject_reason = 'unreadable'`` and the reader's message (file, row,
+    problem) in ``reject_detail``.
+
+    Parameters
+    ----------
+    campaign : Campaign
+        From :func:`rocklab.lab.campaign.open_campaign`.
+    test_id : str
+    options : dict, optional
+        ``channels`` and ``validity`` sections of the workflow config.
+    """
+    opt = _options(options)
+    if test_id in campaign.log.errors:
+        return _unreadable(_row_metadata(campaign, test_id), campaign.log.errors[test_id])
+    meta = test_metadata(campaign, test_id)
+    path = campaign.record_path(test_id)
+    meta["source_file"] = str(path)
+    try:
+        rec = read_record(path, expected_test_id=test_id)
+    except RawFormatError as exc:
+        return _unreadable(meta, exc)
+    setup = campaign.setup(meta["setup"])
+    missing = sorted(set(rec.channels) - set(setup.channel))
+    if missing:
+        return _unreadable(
+            meta,
+            RawFormatError(path, None, f"channel(s) {missing} not described in setups.csv for setup {meta['setup']}"),
+        )
+    setup = setup.set_index("channel").loc[rec.channels].reset_index()
+
+    c = opt["channels"]
+    repaired, reports = health.assess_channels(
+        rec.readings, rec.fs, rec.channels, c["flat_run_s"], c["max_gap_s"], c["dead_span_mm"]
+    )
+    roles = validity.channel_roles(setup, meta["thickness_mm"])
+    lost = {r.channel for r in reports if r.lost}
+    choice = validity.choose_channels(roles, lost, c["backup"], c["policy"], opt["validity"]["max_lost_out_of_plane"])
+
+    wall_xyz = setup[["wall_x_mm", "wall_y_mm", "wall_z_mm"]].to_numpy(float)
+    frame_xyz = setup[["frame_x_mm", "frame_y_mm", "frame_z_mm"]].to_numpy(float)
+    col = {ch: i for i, ch in enumerate(rec.channels)}
+    weights = np.zeros(len(rec.channels))
+    weights[[col[ch] for ch in choice.used]] = 1.0
+    motion = kinematics.wall_motion_dataset(
+        rec.time,
+        repaired,
+        wall_xyz,
+        frame_xyz,
+        meta["thickness_mm"],
+        alpha=meta["alpha"],
+        weights=weights,
+        solve_v=choice.solve_v,
+    )
+
+    top = validity.top_displacement(
+        motion.theta.values,
+        motion.phi.values,
+        motion.v.values,
+        motion.w.values,
+        meta["length_mm"],
+        meta["height_mm"],
+        meta["thickness_mm"],
+    )
+    residual = validity.residual_out_of_plumb(top, rec.fs)
+    release = validity.release_state(rec.time, motion.theta.values, meta["p"])
+    ratio = release["thetadot0"] / meta["overturning_velocity"]
+    valid, reason, detail = validity.verdict(choice, ratio, residual, opt["validity"])
+
+    flags = [d for d in (r.describe() for r in reports) if d] + choice.flags
+    ds = motion
+    ds = ds.assign_coords(channel=("channel", np.asarray(rec.channels, int)))
+    ds["raw"] = (("time", "channel"), rec.readings, {"units": "mm", "long_name": "transducer elongation as recorded"})
+    ds["elongation"] = (
+        ("time", "channel"),
+        repaired,
+        {"units": "mm", "long_name": "transducer elongation, spikes and short gaps repaired, frozen stretches removed"},
+    )
+    ds["channel_status"] = (
+        "channel",
+        np.array([r.status for r in reports], dtype=object),
+        {"long_name": "ok, repaired, dead, stuck, clipped or dropout"},
+    )
+    ds["channel_role"] = (
+        "channel",
+        roles.role.to_numpy().astype(object),
+        {"long_name": "out_of_plane, in_plane or monitor (from geometry)"},
+    )
+    ds["channel_used"] = ("channel", weights.astype(np.int8), {"long_name": "1 if used in the kinematics"})
+    ds["channel_noise"] = (
+        "channel",
+        np.array([r.noise_mm for r in reports]),
+        {"units": "mm", "long_name": "robust noise standard deviation"},
+    )
+    for axis in "xyz":
+        ds[f"wall_{axis}"] = (
+            "channel",
+            setup[f"wall_{axis}_mm"].to_numpy(float),
+            {"units": "mm", "long_name": f"transducer point on the wall, {axis} (body frame)"},
+        )
+        ds[f"frame_{axis}"] = (
+            "channel",
+            setup[f"frame_{axis}_mm"].to_numpy(float),
+            {"units": "mm", "long_name": f"transducer point on the frame, {axis} (lab frame)"},
+        )
+    ds["top_y"] = (
+        ("time", "corner"),
+        top,
+        {"units": "mm", "long_name": "y displacement of the top corners (x = -L/2, +L/2)"},
+    )
+    ds.theta.attrs.update(long_name="rocking rotation about the active base edge (Eqs. 3-7)")
+    ds.phi.attrs.update(long_name="twist about the vertical axis")
+    ds.v.attrs.update(long_name="base sliding along x")
+    ds.w.attrs.update(long_name="base sliding along y")
+    ds.time.attrs.update(long_name="time", standard_name="time")
+
+    ds.attrs.update({k: v for k, v in meta.items() if not (isinstance(v, float) and np.isnan(v))})
+    ds.attrs.update(
+        Conventions="CF-1.10",
+        title=f"rocklab reduction of test {test_id}",
+        sha256=rec.sha256,
+        sampling_rate_hz=rec.fs,
+        valid=int(valid),
+        reject_reason=reason,
+        reject_detail=detail or "",
+        residual_top_mm=residual,
+        release_velocity_ratio=ratio,
+        t_release=release["t_release"],
+        theta0_release=release["theta0"],
+        alpha_fit_release=release["alpha_fit"],
+        channels_used=" ".join(f"ch{c}" for c in choice.used),
+        flags="; ".join(flags),
+        channel_reports=json.dumps([r.__dict__ for r in reports], default=float),
+        residual_rms_median_mm=float(np.nanmedian(ds.residual_rms.values))
+        if np.isfinite(ds.residual_rms.values).any()
+        else np.nan,
+    )
+    return ds
+
+
+def reduce_tests(campaign: Campaign, test_ids, options=None):
+    """:func:`reduce_test` of each test, one bad test never stopping the rest.
+
+    A reduction that fails on a record the reader accepted (a defect of
+    ours or a record no rule foresaw) gives that test an ``unreadable``
+    entry naming the file and the error, and is logged with its traceback.
+
+    Yields
+    ------
+    (test_id, xarray.Dataset)
+    """
+    for test_id in test_ids:
+        try:
+            ds = reduce_test(campaign, test_id, options)
+        except Exception as exc:  # isolate the test: the error is kept in its entry
+            log.exception("%s: reduction failed", test_id)
+            ds = _unreadable(
+                _row_metadata(campaign, test_id),
+                RuntimeError(f"{campaign.record_path(test_id)}: reduction failed: {exc!r}"),
+            )
+        yield test_id, ds
+
+
+def qc_row(ds: xr.Dataset) -> dict:
+    """One row of ``qc.csv`` from a reduced test."""
+    a = ds.attrs
+    return {
+        "test_id": a["test_id"],
+        "series": a["series"],
+        "valid": bool(a["valid"]),
+        "reject_reason": a.get("reject_reason", ""),
+        "reject_detail": a.get("reject_detail", ""),
+        "residual_top_mm": a.get("residual_top_mm", np.nan),
+        "release_velocity_ratio": a.get("release_velocity_ratio", np.nan),
+        "channels_used": a.get("channels_used", ""),
+        "flags": a.get("flags", ""),
+    }
+
+
+def qc_table(datasets, campaign: Campaign) -> pd.DataFrame:
+    """QC table, one row per row of ``tests.csv`` (duplicates included)."""
+    rows = {ds.attrs["test_id"]: qc_row(ds) for ds in datasets}
+    out = []
+    for key, err in campaign.log.errors.items():
+        if "@" in key:
+            tid, line = key.split("@")
+            out.append(
+                {
+                    "test_id": tid,
+                    "series": "",
+                    "valid": False,
+                    "reject_reason": "unreadable",
+                    "reject_detail": str(err),
+                    "residual_top_mm": np.nan,
+                    "release_velocity_ratio": np.nan,
+                    "channels_used": "",
+                    "flags": "",
+                }
+            )
+    seen = set()
+    table = []
+    for tid in campaign.tests.test_id:
+        if tid in seen or tid not in rows:
+            continue
+        seen.add(tid)
+        table.append(rows[tid])
+    return pd.DataFrame(table + out, columns=QC_COLUMNS)
+
+
+KINEMATICS_COLUMNS = [
+    "test_id",
+    "series",
+    "peak_theta",
+    "peak_phi",
+    "peak_v",
+    "peak_w",
+    "theta_eq8_max_abs_diff",
+    "residual_rms_median_mm",
+]
+
+
+def kinematics_row(attrs: dict) -> dict:
+    """One row of ``kinematics.csv``: Fig. 9b peaks and the Eq. 8 difference (Fig. 9a)."""
+    return {k: attrs.get(k, np.nan) for k in KINEMATICS_COLUMNS}

@@ -1,0 +1,206 @@
+"""Impact laws of a rocking wall as interchangeable objects.
+
+An impact law returns the *signed* coefficient of restitution
+``e = thetadot^+ / thetadot^-`` of one impact.  A positive ``e`` (two-sided
+rocking, Eqs. 1-2) keeps the sign of the angular velocity, so the wall passes
+to the other hinge; a negative ``e`` (one-sided rocking, Eq. 14, or the
+transverse-wall impact of Eqs. 12-13) is a rebound on the same hinge.
+
+Arguments of :meth:`ImpactLaw.coefficient`:
+
+``thetadot_before``
+    angular velocity just before the impact [rad/s];
+``side``
+    +1 or -1, the sign of the rotation before the impact, i.e. the hinge the
+    wall is *leaving* (+1: it was rocking with theta > 0);
+``alpha``
+    nominal slenderness angle [rad] used by the analytic coefficients
+    (the paper computes e_an with the nominal alpha, Sect. 3);
+``p``
+    frequency parameter [rad/s], needed by the amplitude law (Eq. 16).
+
+Laws that the numba engines can evaluate expose :meth:`ImpactLaw.flat`: for
+each side a triple ``(e0, a, b)`` meaning
+``e = e0 * clip(a - b (|thetadot^-| / thetadot_r)^2, 0, 1/|e0|)``, with
+``thetadot_r`` of Eq. 16.  Constant laws have ``a = 1, b = 0``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from rocklab.physics import restitution
+from rocklab.physics.wall import overturning_velocity
+
+
+def amplitude_factor(e0, a, b, thetadot_before, alpha, p):
+    """a - b (thetadot^-/thetadot_r)^2 clipped to [0, 1/|e0|] (the bracket of Eq. 17).
+
+    The lower clip keeps the sign of e (a fitted law extrapolated to large
+    velocities must not turn a rebound into a pass-through); the upper clip
+    keeps |e| <= 1, so an impact never creates energy.
+    """
+    ratio = np.abs(thetadot_before) / overturning_velocity(alpha, p)
+    factor = a - b * ratio**2
+    hi = np.where(np.abs(e0) > 0, 1.0 / np.maximum(np.abs(e0), 1e-300), np.inf)
+    return np.clip(factor, 0.0, hi)
+
+
+class ImpactLaw:
+    """Base class: signed coefficient of restitution of one impact."""
+
+    def coefficient(self, thetadot_before, side, alpha, p):
+        """Signed e = thetadot^+ / thetadot^- [-] (see module docstring)."""
+        e0, a, b = self._triple(side, alpha)
+        if a == 1.0 and b == 0.0:
+            return e0 * np.ones_like(np.asarray(thetadot_before, float))
+        return e0 * amplitude_factor(e0, a, b, thetadot_before, alpha, p)
+
+    def flat(self, alpha):
+        """Parameters for the numba engines: array (2, 3), rows side +1, -1.
+
+        Raises
+        ------
+        NotImplementedError
+            For laws that are not of the form e0 * (a - b (v/v_r)^2).
+        """
+        return np.array([self._triple(+1, alpha), self._triple(-1, alpha)], float)
+
+    def _triple(self, side, alpha):
+        raise NotImplementedError(f"{type(self).__name__} has no flat form")
+
+
+class HousnerTwoSided(ImpactLaw):
+    """Housner's analytic e_an,2s, Eqs. 1-2 (homogeneous wall by default)."""
+
+    def __init__(self, mR2_over_Io=None):
+        self.mR2_over_Io = mR2_over_Io
+
+    def _triple(self, side, alpha):
+        return (float(restitution.two_sided(alpha, self.mR2_over_Io)), 1.0, 0.0)
+
+
+class OneSided(ImpactLaw):
+    """Analytic e_an,1s of one-sided rocking, Eq. 14 (negative: a rebound)."""
+
+    def __init__(self, mR2_over_Io=None):
+        self.mR2_over_Io = mR2_over_Io
+
+    def _triple(self, side, alpha):
+        return (float(restitution.one_sided(alpha, self.mR2_over_Io)), 1.0, 0.0)
+
+
+class Transverse(ImpactLaw):
+    """Impact on the transverse walls, e_an,tr of Eqs. 12-13 (a rebound).
+
+    Used by the gap model of one-sided rocking (see :mod:`rocklab.simulation.model`).
+    """
+
+    def __init__(self, mR2_over_Io=None):
+        self.mR2_over_Io = mR2_over_Io
+
+    def _triple(self, side, alpha):
+        return (float(restitution.transverse(alpha, self.mR2_over_Io)), 1.0, 0.0)
+
+
+class Constant(ImpactLaw):
+    """A given signed coefficient, the same on both sides."""
+
+    def __init__(self, e):
+        self.e = float(e)
+
+    def _triple(self, side, alpha):
+        return (self.e, 1.0, 0.0)
+
+
+class Zero(Constant):
+    """e = 0: the wall stops at the first impact (Liberatore & Spera 2003)."""
+
+    def __init__(self):
+        super().__init__(0.0)
+
+
+class Scaled(ImpactLaw):
+    """c times another law, e.g. 0.95 e_an,2s or 1.05 e_an,1s (Sect. 5)."""
+
+    def __init__(self, law: ImpactLaw, c: float):
+        self.law, self.c = law, float(c)
+
+    def coefficient(self, thetadot_before, side, alpha, p):
+        return self.c * self.law.coefficient(thetadot_before, side, alpha, p)
+
+    def _triple(self, side, alpha):
+        e0, a, b = self.law._triple(side, alpha)
+        return (self.c * e0, a, b)
+
+
+class AmplitudeLaw(ImpactLaw):
+    """Amplitude-dependent law, Eq. 17 with any coefficients.
+
+    e = e_law * (a - b (|thetadot^-| / thetadot_r)^2), thetadot_r of Eq. 16
+    (nominal alpha and p).  The bracket is clipped to [0, 1/|e_law|]: e keeps
+    the sign of the underlying law and |e| <= 1.  The paper's fit for
+    one-sided rocking is ``AmplitudeLaw(OneSided(), 1.18, 0.473)``.
+    """
+
+    def __init__(self, law: ImpactLaw, a: float = 1.18, b: float = 0.473):
+        self.law, self.a, self.b = law, float(a), float(b)
+
+    def coefficient(self, thetadot_before, side, alpha, p):
+        e = self.law.coefficient(thetadot_before, side, alpha, p)
+        return e * amplitude_factor(e, self.a, self.b, thetadot_before, alpha, p)
+
+    def _triple(self, side, alpha):
+        e0, a, b = self.law._triple(side, alpha)
+        if (a, b) != (1.0, 0.0):
+            raise NotImplementedError("nested amplitude laws have no flat form")
+        return (e0, self.a, self.b)
+
+
+class Sided(ImpactLaw):
+    """A different law for each hinge being left (hinge asymmetry)."""
+
+    def __init__(self, law_pos: ImpactLaw, law_neg: ImpactLaw):
+        self.law_pos, self.law_neg = law_pos, law_neg
+
+    def coefficient(self, thetadot_before, side, alpha, p):
+        law = self.law_pos if side > 0 else self.law_neg
+        return law.coefficient(thetadot_before, side, alpha, p)
+
+    def _triple(self, side, alpha):
+        return (self.law_pos if side > 0 else self.law_neg)._triple(side, alpha)
+
+
+class Sticking(ImpactLaw):
+    """Another law, but a landing slower than ``v_stick`` thetadot_r (Eq. 16)
+    stops the wall dead (e = 0).
+
+    A hinge that is not a sharp edge (mortar, chipped corners: the
+    "imperfection of the rocking hinge" of Sect. 4) absorbs the last, small
+    landings whole, so the walls stop after fewer impacts than any
+    coefficient of restitution predicts, a number that scatters from test to
+    test (Fig. 18).  Only the event-driven reference integrator accepts it.
+    """
+
+    def __init__(self, law: ImpactLaw, v_stick: float):
+        self.law, self.v_stick = law, float(v_stick)
+
+    def coefficient(self, thetadot_before, side, alpha, p):
+        e = self.law.coefficient(thetadot_before, side, alpha, p)
+        slow = np.abs(thetadot_before) < self.v_stick * overturning_velocity(alpha, p)
+        return np.where(slow, 0.0, e)
+
+
+class Custom(ImpactLaw):
+    """User-defined ``func(thetadot_before, side, alpha, p) -> e``.
+
+    Only the event-driven reference integrator accepts it.
+    """
+
+    def __init__(self, func: Callable):
+        self.func = func
+
+    def coefficient(self, thetadot_before, side, alpha, p):
+        return self.func(thetadot_before, side, alpha, p)

@@ -1,0 +1,1 @@
+"""The paper's figures, regenerated from reduced data and tables (matplotlib, no display)."""

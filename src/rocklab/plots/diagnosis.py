@@ -1,0 +1,118 @@
+"""Figs. 14-15 of the paper for any campaign: measured, literature and extended models.
+
+For a sample test of a series, theta/alpha against time from the release:
+panel a, the measured motion with the literature models (Housner's e, Eq. 2,
+for two-sided walls; Eq. 14, the two-sided e of Hogan 1992 and e = 0 of
+Liberatore & Spera 2003 for one-sided walls, Fig. 15a); panel b, the same
+motion with the extended model that :mod:`rocklab.diagnosis` chose for the
+series (Figs. 14b, 15b).  Every model runs on the exact simulator
+(:func:`rocklab.diagnosis.simulate_test`) from the test's measured release.
+"""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import xarray as xr
+
+from rocklab.diagnosis import measured_test, records_by_series, simulate_test
+
+#: Literature models of panel a: label -> base of :func:`rocklab.diagnosis.rocking_model`.
+LITERATURE = {
+    "two-sided": {"Housner e_an,2s (Eq. 2)": "analytic"},
+    "one-sided": {
+        "e_an,1s (Eq. 14)": "analytic",
+        "two-sided e (Hogan 1992)": "two-sided-e",
+        "e = 0 (Liberatore & Spera 2003)": "zero",
+    },
+}
+
+
+def _plot(ax, t, theta, test, **kw):
+    sel = t >= test.t_release
+    ax.plot(t[sel] - test.t_release, theta[sel] / test.alpha, **kw)
+
+
+def history_figure(test, entry):
+    """Figs. 14-15 for one test: measured motion, literature models, extended model.
+
+    Parameters
+    ----------
+    test : rocklab.diagnosis.MeasuredTest
+        With its record (``t``, ``theta``).
+    entry : dict
+        The series' entry of results/diagnosis.json.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig, axes = plt.subplots(2, 1, figsize=(9, 6.5), sharex=True)
+    t_end = (test.t_end - test.t_release) * 1.3 + 0.5
+    for ax in axes:
+        _plot(ax, test.t, test.theta, test, color="k", lw=1.2, label=f"measured ({test.test_id})")
+    for (label, base), style in zip(LITERATURE[test.boundary].items(), ("-", "--", ":")):
+        t, th = simulate_test(test, base=base, t_end=t_end)
+        _plot(axes[0], t, th, test, ls=style, lw=0.9, label=label)
+    ext = entry.get("extended")
+    if ext:
+        t, th = simulate_test(
+            test, ext["effects"], ext["params"], t_end=t_end, stop=ext["params"].get("v_stop_over_vr", 0.0)
+        )
+        params = ", ".join(f"{k} = {v:.3g}" for k, v in ext["params"].items())
+        _plot(axes[1], t, th, test, color="C3", lw=0.9, label=f"{' + '.join(ext['effects'])}\n({params})")
+    else:
+        axes[1].text(0.5, 0.5, "no extension carried by the data", transform=axes[1].transAxes, ha="center")
+    n = "14" if test.boundary == "two-sided" else "15"
+    axes[0].set_title(f"Fig. {n} - series {entry['key']} ({test.boundary}): a, literature models")
+    axes[1].set_title("b, the model extended by the causes the diagnosis found")
+    for ax in axes:
+        ax.set_ylabel("theta / alpha")
+        ax.set_xlim(0, t_end)
+        ax.axhline(0, color="0.7", lw=0.5)
+        ax.legend(fontsize=7, loc="upper right")
+    axes[1].set_xlabel("t - t_release [s]")
+    fig.tight_layout()
+    return fig
+
+
+def series_figures(entries, test_paths):
+    """Figs. 14-15 for the sample test of every series of results/diagnosis.json.
+
+    Parameters
+    ----------
+    entries : list of dict
+        results/diagnosis.json.
+    test_paths : sequence of path
+        Reduced tests (``results/tests/<test_id>.nc``).
+
+    Returns
+    -------
+    dict
+        Series id -> Figure, plus ``fig14`` and ``fig15``: the largest
+        two-sided and one-sided series, as the paper's figures (a note when
+        the campaign has none).
+    """
+    paths = {Path(p).stem: p for p in test_paths}
+    series = [e for e in entries if e["scope"] == "series"]
+    out = {}
+    for e in series:
+        with xr.open_dataset(paths[e["sample_test"]]) as ds:
+            (recs,) = records_by_series([ds.load()]).values()
+        out[e["key"]] = history_figure(measured_test(recs[0]), e)
+    for name, boundary in (("fig14", "two-sided"), ("fig15", "one-sided")):
+        own = [e for e in series if e["boundary"] == boundary]
+        out[name] = out[max(own, key=lambda e: e["n_tests"])["key"]] if own else _empty(boundary)
+    return out
+
+
+def _empty(boundary):
+    """The figure of a campaign without a diagnosed series of this boundary condition."""
+    fig, ax = plt.subplots(figsize=(9, 2))
+    ax.text(0.5, 0.5, f"no {boundary} series with two tests of two impacts or more", ha="center", va="center")
+    ax.set_axis_off()
+    return fig

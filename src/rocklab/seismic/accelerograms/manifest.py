@@ -1,0 +1,225 @@
+"""Table 4 records shipped in ``raw/accelerograms``: manifest, loading, comparison with Table 4.
+
+``records.csv`` (package data) says which shipped file stands for which
+Table 4 row (file, format, column, units, identity, source, notes);
+:func:`build_manifest` reads each file, baseline-corrects it with
+:data:`DEFAULT_PROCESSING` and adds what it measures (dt, npts, PGA, PGV,
+record length, D5-95) next to Table 4's values and their differences.  The
+result is ``raw/accelerograms/manifest.csv``; regenerate it with
+``python -c "from rocklab.seismic.accelerograms import write_manifest; write_manifest()"``.
+
+Comparison rules: PGA and PGV differences are signed percentages of the
+Table 4 value; ``pga_ok`` is ``|pga_match_pct| <= 2``.  The record length is
+``(npts - 1) dt``, which reproduces Table 4's D (e.g. 2990 x 0.005 s ->
+14.945 s); ``duration_match`` says ``match`` (within 1 %), ``truncated`` or
+``longer``, and for longer records ``arias_beyond_t4_pct`` is the share of the
+Arias intensity after Table 4's D.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from . import processing
+from .native import read_accelerogram
+
+#: Baseline correction applied by :func:`load_record` and :func:`build_manifest`
+#: (the records are already corrected; see :mod:`rocklab.seismic.accelerograms.processing`).
+DEFAULT_PROCESSING = {"pre_event": None, "velocity_order": 1, "freqmin": None, "freqmax": None}
+
+#: Environment variable overriding the folder of shipped records.
+ENV_DIR = "ROCKLAB_ACCELEROGRAMS"
+
+PGA_TOLERANCE_PCT = 2.0
+DURATION_TOLERANCE_PCT = 1.0
+
+MANIFEST_COLUMNS = [
+    "record",
+    "table4_row",
+    "identity",
+    "file",
+    "format",
+    "column",
+    "component",
+    "units",
+    "dt",
+    "npts",
+    "pga_g",
+    "pgv_cm_s",
+    "duration_s",
+    "d5_95_s",
+    "t4_pga_g",
+    "t4_pgv_cm_s",
+    "t4_duration_s",
+    "pga_match_pct",
+    "pgv_match_pct",
+    "duration_match_pct",
+    "pga_ok",
+    "duration_match",
+    "arias_beyond_t4_pct",
+    "processing",
+    "source",
+    "sha256",
+    "notes",
+]
+
+
+def accelerogram_dir():
+    """Folder of the shipped records: ``$ROCKLAB_ACCELEROGRAMS`` or ``<repo>/raw/accelerograms``."""
+    if os.environ.get(ENV_DIR):
+        return Path(os.environ[ENV_DIR])
+    return Path(__file__).resolve().parents[4] / "raw" / "accelerograms"
+
+
+def read_table4():
+    """Table 4 of the paper (20 rows): row, event, mw, station, record, distance_km, pga_g, pgv_cm_s, duration_s."""
+    with resources.files(__package__).joinpath("table4.csv").open() as fh:
+        return pd.read_csv(fh)
+
+
+def read_selection():
+    """Which shipped file stands for which Table 4 row (``records.csv``)."""
+    with resources.files(__package__).joinpath("records.csv").open() as fh:
+        return pd.read_csv(fh, dtype={"column": "Int64"}, keep_default_na=False, na_values={"column": [""]})
+
+
+def read_manifest(path=None):
+    """The manifest (one row per shipped Table 4 record) as a DataFrame.
+
+    Parameters
+    ----------
+    path : str or Path, optional
+        Manifest CSV; default ``accelerogram_dir() / "manifest.csv"``.
+    """
+    path = Path(path) if path is not None else accelerogram_dir() / "manifest.csv"
+    return pd.read_csv(
+        path, dtype={"column": "Int64"}, keep_default_na=False, na_values={"column": [""], "arias_beyond_t4_pct": [""]}
+    )
+
+
+def _reader_kwargs(row):
+    kwargs = {"format": row["format"]}
+    if row["format"] in ("TWO_COLUMN", "MULTI_COLUMN", "SOMERVILLE"):
+        kwargs["units"] = row["units"]
+    return kwargs
+
+
+def _pick(stream, column, path):
+    if len(stream) == 1:
+        return stream[0]
+    if column is None or pd.isna(column):
+        raise ValueError(f"{path} holds {len(stream)} traces: say which column/component to load")
+    for tr in stream:
+        if tr.stats.get("text_columns", {}).get("column") == int(column) or tr.stats.channel == str(column):
+            return tr
+    raise ValueError(f"{path}: no trace for column/component {column!r}")
+
+
+def _find(name, manifest):
+    key = str(name).lower()
+    hits = manifest[(manifest["record"].str.lower() == key) | (manifest["file"].str.lower() == key)]
+    return None if hits.empty else hits.iloc[0]
+
+
+def load_record(name, corrected=True, column=None, manifest=None, **kwargs):
+    """One accelerogram as an obspy Trace in m/s^2, baseline-corrected by default.
+
+    Parameters
+    ----------
+    name : str or Path
+        Table 4 record name (``"Pac164"``, case-insensitive), a shipped file
+        name from the manifest, or the path of any supported file.
+    corrected : bool
+        Apply :func:`~rocklab.seismic.accelerograms.processing.baseline_correct` with
+        :data:`DEFAULT_PROCESSING` (recorded in ``stats.processing``).
+    column : int or str, optional
+        For multi-trace files not in the manifest: 1-based file column
+        (column text) or channel name.
+    manifest : DataFrame, optional
+        Defaults to :func:`read_manifest`.
+    **kwargs
+        Passed to the reader for files not in the manifest (``units=``...).
+
+    Returns
+    -------
+    obspy.Trace
+        With ``stats.record`` and ``stats.table4_row`` for manifest records.
+    """
+    row = _find(name, manifest if manifest is not None else read_manifest())
+    if row is not None:
+        path = accelerogram_dir() / row["file"]
+        tr = _pick(read_accelerogram(path, **_reader_kwargs(row)), row["column"], path)
+        tr.stats.record, tr.stats.table4_row = row["record"], int(row["table4_row"])
+    else:
+        path = Path(name)
+        if not path.exists():
+            raise FileNotFoundError(f"{name!r} is neither a manifest record nor an existing file")
+        tr = _pick(read_accelerogram(path, **kwargs), column, path)
+    return processing.baseline_correct(tr, **DEFAULT_PROCESSING) if corrected else tr
+
+
+def _pct(value, reference):
+    return round(100.0 * (value - reference) / reference, 2)
+
+
+def _sha256(path):
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def build_manifest(raw_dir=None):
+    """Manifest DataFrame measured from the files in ``raw_dir`` (default :func:`accelerogram_dir`)."""
+    raw_dir = Path(raw_dir) if raw_dir is not None else accelerogram_dir()
+    table4 = read_table4().set_index("row")
+    rows = []
+    for _, sel in read_selection().iterrows():
+        path = raw_dir / sel["file"]
+        tr = _pick(read_accelerogram(path, **_reader_kwargs(sel)), sel["column"], path)
+        tr = processing.baseline_correct(tr, **DEFAULT_PROCESSING)
+        gm = processing.ground_motion_parameters(tr)
+        t4 = table4.loc[int(sel["table4_row"])]
+        dur_pct = _pct(gm["duration_s"], t4["duration_s"])
+        if abs(dur_pct) <= DURATION_TOLERANCE_PCT:
+            dur_match, beyond = "match", np.nan
+        elif dur_pct < 0:
+            dur_match, beyond = "truncated", np.nan
+        else:
+            ia = processing.arias_intensity(tr.data, tr.stats.delta)
+            k = int(np.floor(t4["duration_s"] / tr.stats.delta))
+            dur_match, beyond = "longer", round(100.0 * (1.0 - ia[k] / ia[-1]), 2)
+        rows.append(
+            {
+                **sel.to_dict(),
+                "dt": tr.stats.delta,
+                "npts": tr.stats.npts,
+                "pga_g": round(gm["pga_g"], 4),
+                "pgv_cm_s": round(gm["pgv_cm_s"], 2),
+                "duration_s": round(gm["duration_s"], 4),
+                "d5_95_s": round(gm["d5_95_s"], 2),
+                "t4_pga_g": t4["pga_g"],
+                "t4_pgv_cm_s": t4["pgv_cm_s"],
+                "t4_duration_s": t4["duration_s"],
+                "pga_match_pct": _pct(gm["pga_g"], t4["pga_g"]),
+                "pgv_match_pct": _pct(gm["pgv_cm_s"], t4["pgv_cm_s"]),
+                "duration_match_pct": dur_pct,
+                "pga_ok": bool(abs(_pct(gm["pga_g"], t4["pga_g"])) <= PGA_TOLERANCE_PCT),
+                "duration_match": dur_match,
+                "arias_beyond_t4_pct": beyond,
+                "processing": processing.describe(**DEFAULT_PROCESSING),
+                "sha256": _sha256(path),
+            }
+        )
+    return pd.DataFrame(rows)[MANIFEST_COLUMNS].astype({"column": "Int64"})
+
+
+def write_manifest(raw_dir=None):
+    """Write ``manifest.csv`` into ``raw_dir`` and return its path."""
+    raw_dir = Path(raw_dir) if raw_dir is not None else accelerogram_dir()
+    out = raw_dir / "manifest.csv"
+    build_manifest(raw_dir).to_csv(out, index=False)
+    return out

@@ -1,0 +1,498 @@
+"""Overturning maps of rocking walls under scaled records (Sect. 5, Figs. 21-23).
+
+A map is the overturning decision of one wall under one record whose
+amplitude A and duration D are scaled to A_S and D_S, on a grid of ``n x n``
+values of A_S/A and D_S/D between ``lo`` and ``hi`` (the paper: 201 values,
+50-150 %, i.e. 40401 histories per map).  The amplitude scale multiplies the
+ground acceleration; the duration scale stretches time (the record is read
+with interval ``dt D_S/D``).
+
+Form of the equation of motion
+------------------------------
+The maps use Housner's piecewise-linear form (``form="linear"``, see
+:mod:`rocklab.simulation.model`).  Sect. 5 reads the maps through the scaling
+equivalences of that model, and for the paper's wall (alpha = 0.1 rad) the
+linearisation changes the restoring moment by less than 0.2 %; the batch
+engine integrates the linear form in closed form per record interval, so the
+map carries no time-step error, and it is about twice as fast as the exact
+form.  ``form="exact"`` is available for comparison.
+
+Scaling equivalences (Sect. 5)
+------------------------------
+Duration <-> size
+    Scaling the duration by ``s = D_S/D`` is the same as multiplying ``p`` by
+    ``s``, i.e. R by ``(D/D_S)^2``.  Only ``p`` sets the time scale of the
+    equation of motion and of Eq. 16, so this holds for both forms and every
+    impact law of this module (up to the free-motion tail followed after the
+    record, which is not rescaled).
+Amplitude <-> slenderness
+    Scaling the amplitude by ``lambda = A_S/A`` is the same as dividing alpha
+    by ``lambda`` (the rotation scales by ``lambda``), but only for the linear
+    form, and only if the coefficient of restitution and the overturning
+    rotation are scaled with it: e stays that of the unscaled alpha (Eqs. 2,
+    14 depend on alpha) and the wall overturns at ``pi/2 / lambda``.  For the
+    exact form (sin, cos of alpha - theta) it does not hold.
+The maps are computed by simulating the scaled records themselves, so they
+use neither equivalence; the tests check both where they hold.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+
+from rocklab import __version__
+from rocklab.physics import impact, wall
+from rocklab.simulation.batch import overturning_batch
+from rocklab.simulation.model import OVERTURN, RockingModel
+from rocklab.simulation.reference import simulate_ground
+
+log = logging.getLogger(__name__)
+
+#: Paper's wall of Figs. 21 and 23: slenderness [rad] and half diagonal [m].
+ALPHA = 0.1
+R = 3.0
+
+#: e_exp / e_an,2s of two-sided walls without the outlier series (Sect. 3).
+E_RATIO_2S = 0.95
+#: Mean e_exp / e_an,1s of one-sided walls over the complete histories (Table 3).
+E_RATIO_1S = 1.05
+
+#: The five maps of Sect. 5: name -> (boundary, description).
+MODELS = {
+    "2s-housner": ("two-sided", "two-sided, e = e_an,2s (Housner, Eq. 2); Fig. 21a"),
+    "2s-0.95": ("two-sided", "two-sided, e = 0.95 e_an,2s (experimentally calibrated, Sect. 3); Fig. 21b"),
+    "1s-zero": ("one-sided", "one-sided, e = 0 (Liberatore & Spera 2003: motion stops at impact); Fig. 23a"),
+    "1s-1.05": ("one-sided", "one-sided, e = 1.05 e_an,1s (Eq. 14 calibrated, Table 3); Fig. 23b"),
+    "1s-eq17": ("one-sided", "one-sided, e = e_an,1s (a - b (thetadot^-/thetadot_r)^2) (amplitude law, Eq. 17)"),
+}
+
+#: Pairs (baseline, model) compared record by record (Sect. 5).
+COMPARISONS = (("2s-housner", "2s-0.95"), ("1s-zero", "1s-1.05"), ("1s-1.05", "1s-eq17"))
+
+#: What the paper reports for a comparison: (baseline, model, index) -> {statistic: %}.
+PAPER_REDUCTIONS = {
+    ("2s-housner", "2s-0.95", "N_O"): {"mean": 25.0, "min": 3.0, "max": 89.0},
+    ("2s-housner", "2s-0.95", "scatter"): {"mean": 43.0},
+}
+
+OVERTURNING_CRITERION = (
+    "|theta| >= {overturn:.6g} rad (wall lying on the ground); after the record a wall still rocking is "
+    "followed in free motion up to {tail:g} s while its energy can reach alpha (rocklab.simulation.model)"
+)
+
+
+def impact_law(name, eq17=None):
+    """Impact law of a named map model.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`MODELS`.
+    eq17 : tuple of float, optional
+        (a, b) of the one-sided amplitude law, Eq. 17; default the paper's
+        fit 1.18, 0.473 (:class:`rocklab.physics.impact.AmplitudeLaw`).
+
+    Returns
+    -------
+    rocklab.physics.impact.ImpactLaw
+    """
+    if name == "2s-housner":
+        return impact.HousnerTwoSided()
+    if name == "2s-0.95":
+        return impact.Scaled(impact.HousnerTwoSided(), E_RATIO_2S)
+    if name == "1s-zero":
+        return impact.Zero()
+    if name == "1s-1.05":
+        return impact.Scaled(impact.OneSided(), E_RATIO_1S)
+    if name == "1s-eq17":
+        return impact.AmplitudeLaw(impact.OneSided(), *(eq17 or ()))
+    raise KeyError(f"unknown map model {name!r}; choose one of {', '.join(MODELS)}")
+
+
+def named_model(name, alpha=ALPHA, R=R, form="linear", eq17=None):
+    """The wall of a named map model (:data:`MODELS`).
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`MODELS`.
+    alpha : float
+        Slenderness angle [rad] (Fig. 21: 0.1).
+    R : float
+        Half diagonal [m] of the homogeneous wall (Fig. 21: 3), giving
+        p = sqrt(3 g / 4 R).
+    form : {"linear", "exact"}
+        Equation of motion (module docstring: the maps use "linear").
+    eq17 : tuple of float, optional
+        (a, b) of Eq. 17 for ``"1s-eq17"``.
+
+    Returns
+    -------
+    rocklab.simulation.model.RockingModel
+    """
+    law = impact_law(name, eq17)
+    return RockingModel(
+        alpha=float(alpha), p=float(wall.frequency_parameter(R)), boundary=MODELS[name][0], impact=law, form=form
+    )
+
+
+def scales(n=201, lo=0.5, hi=1.5):
+    """Grid of A_S/A (or D_S/D) values: ``n`` values from ``lo`` to ``hi``."""
+    return np.linspace(float(lo), float(hi), int(n))
+
+
+def overturning_map(
+    record,
+    dt=None,
+    model="2s-housner",
+    n=201,
+    lo=0.5,
+    hi=1.5,
+    *,
+    alpha=ALPHA,
+    R=R,
+    form="linear",
+    eq17=None,
+    polarity=1,
+    chunks=10,
+    overturn=OVERTURN,
+    tail=120.0,
+    name=None,
+):
+    """Overturning map of a named wall under one record (Sect. 5, Figs. 21, 23).
+
+    Parameters
+    ----------
+    record : obspy.Trace or array_like
+        Ground acceleration [m/s^2], positive towards +theta (a positive
+        value pushes the wall towards negative rotations, i.e. a one-sided
+        wall against the transverse walls); a Trace gives ``dt`` and the
+        record's name.
+    dt : float, optional
+        Sample interval [s]; required for an array.
+    model : str
+        A key of :data:`MODELS`.
+    n, lo, hi : int, float, float
+        Grid of A_S/A and D_S/D (:func:`scales`); the paper: 201, 0.5, 1.5.
+    alpha, R, form, eq17
+        Wall and law, see :func:`named_model`.
+    polarity : {1, -1}
+        Multiplies the record: the maps of one-sided walls depend on it.
+    chunks : int
+        The map is computed in this many blocks of amplitude rows, each
+        logged (logger ``rocklab.seismic.overturning``) as it completes.
+    overturn, tail
+        Overturning rotation [rad] and longest free motion after the record
+        [s], see :func:`rocklab.simulation.batch.overturning_batch`.
+    name : str, optional
+        Record name for the attributes; default the Trace's ``stats.record``.
+
+    Returns
+    -------
+    xarray.Dataset
+        Boolean ``overturned`` on (``amplitude_scale``, ``duration_scale``),
+        with the wall (alpha, R, p, form, boundary), the impact law, the
+        overturning criterion and the record in the attributes.
+    """
+    if dt is None:
+        if not hasattr(record, "stats"):
+            raise TypeError("an array record needs its sample interval dt")
+        ag, dt = np.asarray(record.data, float), float(record.stats.delta)
+        name = name or record.stats.get("record") or record.id
+    else:
+        ag = np.asarray(record, float)
+    if polarity not in (1, -1):
+        raise ValueError(f"polarity must be 1 or -1, not {polarity!r}")
+    wall_model = named_model(model, alpha, R, form, eq17)
+    amp, dur = scales(n, lo, hi), scales(n, lo, hi)
+    over = np.zeros((amp.size, dur.size), bool)
+    signed = polarity * ag
+    t0 = time.perf_counter()
+    for rows in np.array_split(np.arange(amp.size), max(1, min(int(chunks), amp.size))):
+        over[rows] = overturning_batch(signed, dt, wall_model, amp[rows], dur, overturn=overturn, tail=tail)
+        log.info(
+            "%s %s: amplitude rows %d-%d of %d done, %.1f s",
+            name,
+            model,
+            rows[0] + 1,
+            rows[-1] + 1,
+            amp.size,
+            time.perf_counter() - t0,
+        )
+    e0, a, b = wall_model.base_law.flat(wall_model.alpha)[0]
+    return xr.Dataset(
+        {
+            "overturned": (
+                ("amplitude_scale", "duration_scale"),
+                over,
+                {"long_name": "wall overturned", "flag_values": "0 1", "flag_meanings": "standing overturned"},
+            )
+        },
+        coords={
+            "amplitude_scale": (
+                "amplitude_scale",
+                amp,
+                {"long_name": "A_S/A, amplitude scale of the record", "units": "1"},
+            ),
+            "duration_scale": (
+                "duration_scale",
+                dur,
+                {"long_name": "D_S/D, duration scale of the record", "units": "1"},
+            ),
+        },
+        attrs={
+            "Conventions": "CF-1.8",
+            "title": f"overturning map, record {name}, model {model} (Sect. 5)",
+            "record": str(name),
+            "dt": dt,
+            "npts": int(ag.size),
+            "polarity": int(polarity),
+            "model": model,
+            "model_description": MODELS[model][1],
+            "alpha": wall_model.alpha,
+            "R": float(R),
+            "p": wall_model.p,
+            "form": form,
+            "boundary": wall_model.boundary,
+            "impact_law": type(wall_model.base_law).__name__,
+            # the engines' law e = e0 clip(a - b (thetadot^-/thetadot_r)^2) (rocklab.physics.impact)
+            "impact_e0": float(e0),
+            "impact_a": float(a),
+            "impact_b": float(b),
+            "overturning_criterion": OVERTURNING_CRITERION.format(overturn=overturn, tail=tail),
+            "compute_s": time.perf_counter() - t0,
+            "rocklab_version": __version__,
+        },
+    )
+
+
+def map_indices(overturned):
+    """Normalised overturning and change counts of one map (Sect. 5, Fig. 22).
+
+    N_O is the number of overturnings over the number of histories (Fig. 22a).
+    N_D and N_A are the numbers of changes overturning <-> no overturning met
+    scaling up the duration (along each row of constant A_S/A) and the
+    amplitude (along each column of constant D_S/D), normalised by the number
+    of overturnings, "to take into account how many changes were actually
+    possible".  Their average is the scatter of Fig. 22b.
+
+    Parameters
+    ----------
+    overturned : xarray.DataArray or array_like of bool
+        A map; a DataArray is read on (amplitude_scale, duration_scale), an
+        array with amplitude along axis 0.
+
+    Returns
+    -------
+    dict
+        N_O, N_D, N_A, scatter = (N_D + N_A)/2 (N_D, N_A, scatter NaN without
+        overturnings), n_overturned, n_cells, changes_duration,
+        changes_amplitude, and reversals_duration, reversals_amplitude: the
+        changes from overturning to standing as the scale grows (a map
+        regular in that direction has none).
+    """
+    if isinstance(overturned, xr.DataArray):
+        overturned = overturned.transpose("amplitude_scale", "duration_scale").values
+    o = np.asarray(overturned, bool)
+    n_over = int(o.sum())
+    ch_d = int(np.count_nonzero(o[:, 1:] != o[:, :-1]))
+    ch_a = int(np.count_nonzero(o[1:, :] != o[:-1, :]))
+    n_d = ch_d / n_over if n_over else np.nan
+    n_a = ch_a / n_over if n_over else np.nan
+    return {
+        "N_O": n_over / o.size,
+        "N_D": n_d,
+        "N_A": n_a,
+        "scatter": 0.5 * (n_d + n_a),
+        "n_overturned": n_over,
+        "n_cells": int(o.size),
+        "changes_duration": ch_d,
+        "changes_amplitude": ch_a,
+        "reversals_duration": int(np.count_nonzero(o[:, :-1] & ~o[:, 1:])),
+        "reversals_amplitude": int(np.count_nonzero(o[:-1, :] & ~o[1:, :])),
+    }
+
+
+def summary_table(maps):
+    """One row of :func:`map_indices` per map, with its record and model.
+
+    Parameters
+    ----------
+    maps : iterable of xarray.Dataset
+        Results of :func:`overturning_map`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        record, model and the fields of :func:`map_indices`.
+    """
+    rows = [{"record": ds.attrs["record"], "model": ds.attrs["model"], **map_indices(ds["overturned"])} for ds in maps]
+    return pd.DataFrame(rows)
+
+
+def record_reductions(summary, baseline, model):
+    """Per-record reduction [%] of N_O and of the scatter from ``baseline`` to ``model``.
+
+    100 (1 - x_model / x_baseline); NaN where the baseline's index is zero or
+    undefined (no overturning).  A negative value is an increase.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Indexed by record: N_O and scatter reductions [%].
+    """
+    wide = summary.set_index(["record", "model"])[["N_O", "scatter"]].unstack("model")
+    out = {}
+    for index in ("N_O", "scatter"):
+        base, new = wide[(index, baseline)], wide[(index, model)]
+        out[index] = 100.0 * (1.0 - new / base.where(base > 0))
+    return pd.DataFrame(out)
+
+
+def reductions(summary, comparisons=COMPARISONS):
+    """Mean, min and max over records of the per-record reductions (Sect. 5).
+
+    The paper reports, from e_an,2s to 0.95 e_an,2s over its 20 records, an
+    N_O reduction of 25 % on average (3 % min, 89 % max) and a scatter
+    reduction of 43 % on average: statistics over maps of the per-map
+    reduction (:func:`record_reductions`), as computed here.
+
+    Parameters
+    ----------
+    summary : pandas.DataFrame
+        :func:`summary_table`.
+    comparisons : sequence of (baseline, model)
+        Default :data:`COMPARISONS`; pairs missing from ``summary`` are skipped.
+
+    Returns
+    -------
+    pandas.DataFrame
+        baseline, model, index (N_O | scatter), statistic (mean | min | max),
+        reduction_pct, n_records (records where it is defined), paper_pct.
+    """
+    rows = []
+    present = set(summary["model"])
+    for baseline, model in comparisons:
+        if not {baseline, model} <= present:
+            continue
+        red = record_reductions(summary, baseline, model)
+        for index in ("N_O", "scatter"):
+            values = red[index].dropna()
+            paper = PAPER_REDUCTIONS.get((baseline, model, index), {})
+            for stat in ("mean", "min", "max"):
+                rows.append(
+                    {
+                        "baseline": baseline,
+                        "model": model,
+                        "index": index,
+                        "statistic": stat,
+                        "reduction_pct": getattr(values, stat)() if len(values) else np.nan,
+                        "n_records": int(len(values)),
+                        "paper_pct": paper.get(stat, np.nan),
+                    }
+                )
+    return pd.DataFrame(
+        rows, columns=["baseline", "model", "index", "statistic", "reduction_pct", "n_records", "paper_pct"]
+    )
+
+
+# ---------------------------------------------------------------------------
+# validation against the event-driven reference
+
+
+def _reference_one(args):
+    model, ag, dt, a, d, rtol, atol, overturn, tail = args
+    return simulate_ground(model, a * ag, dt * d, overturn=overturn, rtol=rtol, atol=atol, tail=tail).overturned
+
+
+def reference_decisions(ag, dt, model, cells, *, rtol=1e-10, atol=1e-12, overturn=OVERTURN, tail=120.0, pool=None):
+    """Overturning of the scipy event-driven reference at given (A_S/A, D_S/D) cells.
+
+    Parameters
+    ----------
+    ag, dt : array_like, float
+        Record [m/s^2] (polarity applied) and sample interval [s].
+    model : rocklab.simulation.model.RockingModel
+    cells : sequence of (float, float)
+        Amplitude and duration scales.
+    rtol, atol : float
+        Tolerances of :func:`rocklab.simulation.reference.simulate_ground`.
+    pool : multiprocessing.pool.Pool, optional
+        Spreads the histories over its workers.
+
+    Returns
+    -------
+    ndarray of bool
+    """
+    ag = np.asarray(ag, float)
+    jobs = [(model, ag, dt, float(a), float(d), rtol, atol, overturn, tail) for a, d in cells]
+    results = pool.map(_reference_one, jobs, chunksize=4) if pool is not None else map(_reference_one, jobs)
+    return np.fromiter(results, bool, count=len(jobs))
+
+
+def check_against_reference(ag, dt, model, amplitude_scales, duration_scales, fast, step, *, pool=None, **kw):
+    """Compare a map with the reference and explain each difference by the boundary.
+
+    Criterion: a cell where the map and the reference disagree lies on the
+    boundary of the map when the reference itself reaches the map's decision
+    at one of the cell's four neighbours of the full grid (A_S/A or D_S/D
+    moved by one grid step ``step``); both engines then place the boundary
+    within one grid step of each other.
+
+    Parameters
+    ----------
+    ag, dt, model
+        As :func:`reference_decisions`.
+    amplitude_scales, duration_scales : array_like
+        Scales of the checked cells (a subgrid).
+    fast : array_like of bool
+        The map's decisions on that subgrid, amplitude along axis 0.
+    step : float
+        Grid step of the full map (0.005 for 201 values over 0.5-1.5).
+    **kw
+        rtol, atol, overturn, tail of :func:`reference_decisions`.
+
+    Returns
+    -------
+    dict
+        cells, agree, agreement_pct, mismatches (list of {amplitude_scale,
+        duration_scale, map, reference, boundary}), unexplained (count),
+        reference (the reference decisions, nested lists).
+    """
+    amp = np.asarray(amplitude_scales, float)
+    dur = np.asarray(duration_scales, float)
+    fast = np.asarray(fast, bool)
+    cells = [(a, d) for a in amp for d in dur]
+    ref = reference_decisions(ag, dt, model, cells, pool=pool, **kw).reshape(fast.shape)
+    bad = np.argwhere(ref != fast)
+    # the neighbours of every difference in one call, spread over the pool
+    around = [
+        (a, d)
+        for i, j in bad
+        for a, d in ((amp[i] - step, dur[j]), (amp[i] + step, dur[j]), (amp[i], dur[j] - step), (amp[i], dur[j] + step))
+    ]
+    neighbours = reference_decisions(ag, dt, model, around, pool=pool, **kw).reshape(-1, 4)
+    mismatches = [
+        {
+            "amplitude_scale": float(amp[i]),
+            "duration_scale": float(dur[j]),
+            "map": bool(fast[i, j]),
+            "reference": bool(ref[i, j]),
+            "boundary": bool((nb == fast[i, j]).any()),
+        }
+        for (i, j), nb in zip(bad, neighbours)
+    ]
+    agree = int((ref == fast).sum())
+    return {
+        "cells": int(fast.size),
+        "agree": agree,
+        "agreement_pct": 100.0 * agree / fast.size,
+        "mismatches": mismatches,
+        "unexplained": sum(not m["boundary"] for m in mismatches),
+        "reference": ref.tolist(),
+    }

@@ -1,0 +1,1 @@
+"""The rocking simulator: model (Sect. 1), solve_ivp reference, numba engine, batch runs."""

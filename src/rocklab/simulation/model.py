@@ -1,0 +1,308 @@
+"""Rocking wall of Housner (1963), Sect. 1 and Fig. 1 of the paper.
+
+Equation of motion (per unit I_O) on the hinge ``s = sign(theta)`` with
+rocking angle ``alpha_s`` (``alpha_rock`` for s = +1, ``alpha_neg`` for -1)::
+
+    exact:   thetaddot = -p^2 [sin(s alpha_s - theta) + (ag/g) cos(s alpha_s - theta)]
+    linear:  thetaddot =  p^2 theta - p^2 (s alpha_s + ag/g)         (Housner, small alpha)
+
+each with the optional viscous-like loss ``- 2 zeta p thetadot`` between impacts.
+
+Conventions
+-----------
+Sign of ``ag``
+    ``ag`` is the ground acceleration [m/s^2], positive in the direction the
+    top of the wall moves for theta > 0 (outwards, away from the transverse
+    walls).  Its d'Alembert force pushes the wall the other way: a positive
+    ``ag`` drives theta negative.  The record is linearly interpolated between
+    samples and is zero after its last sample (a ramp to zero over one step).
+Rocking onset
+    A wall at rest starts to rock at the linearly interpolated instant its
+    angular acceleration at rest changes sign: for the exact form when
+    ``-ag > g tan(alpha_rock)`` (positive hinge) or ``ag > g tan(alpha_neg)``
+    (negative hinge); for the linear form the same with ``tan(alpha)``
+    replaced by ``alpha``, consistently with its equation of motion.
+Impacts
+    Located at the root of theta = 0 (or theta = -gap), then
+    ``thetadot^+ = e thetadot^-`` with the signed e of :mod:`rocklab.physics.impact`.
+Rest
+    After an impact with ``|thetadot^+| < REST_TOL * thetadot_r`` (Eq. 16,
+    nominal alpha) the wall is at rest: the geometric series of ever smaller
+    impacts (chattering) is cut there.  ``REST_TOL = 1e-3`` leaves a peak
+    rotation of about 5e-7 alpha.  Under ground motion it stays at rest until
+    the onset condition holds again.
+Overturning
+    ``|theta| >= overturn`` with default ``pi/2`` for both forms: the wall
+    lies on the ground, where even the linear form cannot be recovered by any
+    realistic record (it would need |ag| > g (pi/2 - alpha)).  ``alpha`` itself
+    would be premature under ground motion, which can push a wall back from
+    beyond alpha.  After the end of the record, a wall still rocking is
+    followed in free motion until it overturns, comes to rest, or its energy
+    can no longer reach the instability rotation of a reachable hinge (every
+    law with |e| <= 1 then keeps it standing).
+One-sided rocking and the gap
+    ``boundary="one-sided"`` keeps theta >= 0 and with ``gap == 0`` applies the
+    impact law (default Eq. 14, negative: a rebound) at theta = 0.  With
+    ``gap > 0`` the wall rocks two-sided on its inner hinge in
+    ``-gap <= theta < 0``: crossing theta = 0 is a base impact (default Eq. 2),
+    reaching theta = -gap the impact on the transverse walls (default
+    Eqs. 12-13, a rebound).  Base + transverse + base reproduces Eq. 14 as
+    gap -> 0 (Fig. 12).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+
+from rocklab.physics import impact as _impact
+from rocklab.physics import wall
+
+#: Rest threshold: |thetadot^+| below REST_TOL * thetadot_r (Eq. 16) is rest.
+REST_TOL = 1e-3
+
+#: Default overturning rotation [rad] (wall lying on the ground).
+OVERTURN = math.pi / 2
+
+
+def _restoring(theta, a, ag_g, linear, sin, cos):
+    """thetaddot / p^2 without the flight loss on the hinge at signed angle
+    ``a`` (module docstring, exact or linear); ``sin``, ``cos`` from math or
+    numpy."""
+    if linear:
+        return theta - a - ag_g
+    return -(sin(a - theta) + ag_g * cos(a - theta))
+
+
+@dataclass(frozen=True)
+class RockingModel:
+    """A rocking wall: geometry, boundary condition, impact law and form.
+
+    Attributes
+    ----------
+    alpha : float
+        Nominal slenderness angle [rad], used by the analytic e (Sect. 3).
+    p : float
+        Frequency parameter sqrt(m g R / I_O) [rad/s].
+    boundary : {"two-sided", "one-sided"}
+    impact : ImpactLaw, optional
+        Law of the base impacts.  Default: Eq. 2 for two-sided rocking and
+        for one-sided rocking with a gap, Eq. 14 for one-sided without gap.
+    alpha_rock : float, optional
+        Rocking angle of the positive hinge, alpha_ind <= alpha (rounded
+        hinge, Sect. 3) [rad]; default alpha.
+    alpha_neg : float, optional
+        Rocking angle of the negative hinge (asymmetry) [rad]; default
+        alpha_rock.
+    flight_damping : float
+        zeta of the viscous-like term -2 zeta p thetadot between impacts [-].
+    gap : float
+        One-sided only: inward rotation [rad] through which the wall rocks
+        two-sided before striking the transverse walls.
+    form : {"exact", "linear"}
+    transverse_impact : ImpactLaw, optional
+        Law of the impact on the transverse walls (gap > 0); default Eqs. 12-13.
+    """
+
+    alpha: float
+    p: float
+    boundary: str = "two-sided"
+    impact: _impact.ImpactLaw | None = None
+    alpha_rock: float | None = None
+    alpha_neg: float | None = None
+    flight_damping: float = 0.0
+    gap: float = 0.0
+    form: str = "exact"
+    transverse_impact: _impact.ImpactLaw | None = field(default=None)
+
+    def __post_init__(self):
+        if self.boundary not in ("two-sided", "one-sided"):
+            raise ValueError(f"boundary must be 'two-sided' or 'one-sided', not {self.boundary!r}")
+        if self.form not in ("exact", "linear"):
+            raise ValueError(f"form must be 'exact' or 'linear', not {self.form!r}")
+        if self.gap < 0 or (self.gap > 0 and self.boundary != "one-sided"):
+            raise ValueError("gap must be >= 0 and is only meaningful for one-sided rocking")
+
+    @classmethod
+    def from_wall(cls, height_m, thickness_m, **kw):
+        """Homogeneous wall of height h and thickness b [m] (rocklab.physics.wall)."""
+        alpha = float(wall.slenderness_angle(height_m, thickness_m))
+        p = float(wall.frequency_parameter(wall.half_diagonal(height_m, thickness_m)))
+        return cls(alpha=alpha, p=p, **kw)
+
+    @property
+    def alpha_pos(self) -> float:
+        return self.alpha if self.alpha_rock is None else float(self.alpha_rock)
+
+    @property
+    def alpha_minus(self) -> float:
+        return self.alpha_pos if self.alpha_neg is None else float(self.alpha_neg)
+
+    @property
+    def one_sided(self) -> bool:
+        return self.boundary == "one-sided"
+
+    @property
+    def base_law(self) -> _impact.ImpactLaw:
+        if self.impact is not None:
+            return self.impact
+        if self.one_sided and self.gap == 0:
+            return _impact.OneSided()
+        return _impact.HousnerTwoSided()
+
+    @property
+    def transverse_law(self) -> _impact.ImpactLaw:
+        return _impact.Transverse() if self.transverse_impact is None else self.transverse_impact
+
+    @property
+    def thetadot_r(self) -> float:
+        """Overturning velocity of Eq. 16 (nominal alpha) [rad/s]."""
+        return float(wall.overturning_velocity(self.alpha, self.p))
+
+    def alpha_side(self, side):
+        """Rocking angle of hinge ``side`` (+1 / -1, array_like) [rad]."""
+        if np.ndim(side) == 0:
+            return self.alpha_pos if side > 0 else self.alpha_minus
+        return np.where(np.asarray(side) > 0, self.alpha_pos, self.alpha_minus)
+
+    def acceleration(self, theta, thetadot, side, ag):
+        """Angular acceleration [rad/s^2] on hinge ``side`` under ``ag`` [m/s^2]."""
+        a = side * self.alpha_side(side)
+        restoring = _restoring(theta, a, ag / wall.G, self.form == "linear", np.sin, np.cos)
+        return self.p**2 * restoring - 2.0 * self.flight_damping * self.p * thetadot
+
+    def equation_of_motion(self, side, a0, slope, t0):
+        """Right-hand side f(t, y) for solve_ivp, y = (theta, thetadot), on hinge
+        ``side`` under ag(t) = a0 + slope (t - t0) [m/s^2]; scalar (math, not
+        numpy), since the event-driven reference calls it millions of times."""
+        a = side * float(self.alpha_side(side))
+        p2, c, g, lin = self.p**2, 2.0 * self.flight_damping * self.p, wall.G, self.form == "linear"
+
+        def rhs(t, y):
+            return [y[1], p2 * _restoring(y[0], a, (a0 + slope * (t - t0)) / g, lin, math.sin, math.cos) - c * y[1]]
+
+        return rhs
+
+    def energy(self, theta, thetadot, side):
+        """Energy per unit I_O measured as 1/2 thetadot^2 at theta = 0 [rad^2/s^2].
+
+        Conserved between impacts in free undamped motion; the wall can reach
+        the instability rotation of hinge s only if it exceeds
+        :meth:`critical_energy` (s).
+        """
+        a = self.alpha_side(side)
+        th = np.abs(theta)
+        if self.form == "linear":
+            pot = self.p**2 * (a * th - 0.5 * th**2)
+        else:
+            pot = self.p**2 * (np.cos(a - th) - np.cos(a))
+        return 0.5 * thetadot**2 + pot
+
+    def critical_energy(self, side):
+        a = self.alpha_side(side)
+        if self.form == "linear":
+            return 0.5 * self.p**2 * a**2
+        return self.p**2 * (1.0 - math.cos(a))
+
+    def reachable_sides(self):
+        return (1,) if self.one_sided else (1, -1)
+
+    def numba_params(self, overturn=OVERTURN, rest_tol=REST_TOL, substeps=1):
+        """Flat parameter vector of the numba engines (see ``_P_*`` indices)."""
+        return np.array(
+            [
+                self.alpha_pos,
+                self.alpha_minus,
+                self.p,
+                self.flight_damping,
+                self.gap,
+                float(self.one_sided),
+                float(self.form == "linear"),
+                overturn,
+                rest_tol * self.thetadot_r,
+                wall.G,
+                float(substeps),
+                self.thetadot_r,
+            ]
+        )
+
+    def numba_law(self):
+        """Impact laws as a (3, 3) array: rows base +, base -, transverse."""
+        base = self.base_law.flat(self.alpha)
+        tr = self.transverse_law.flat(self.alpha)
+        return np.vstack([base, tr[1:2]])
+
+
+@dataclass
+class RockingHistory:
+    """Response of one wall on a uniform time grid.
+
+    Attributes
+    ----------
+    t, theta, thetadot : ndarray
+        Time [s], rotation [rad], angular velocity [rad/s]; NaN after
+        overturning.
+    impacts : pandas.DataFrame
+        One row per impact: t [s], kind ('base' | 'transverse'),
+        thetadot_before, thetadot_after [rad/s], theta_peak_before [rad]
+        (largest |theta| since the previous impact or the release).
+    overturned : bool
+    t_overturn : float or None
+    t_rest : float or None
+        Start of the final rest, if the wall ends at rest.
+    """
+
+    t: np.ndarray
+    theta: np.ndarray
+    thetadot: np.ndarray
+    impacts: pd.DataFrame
+    overturned: bool
+    t_overturn: float | None
+    t_rest: float | None
+    model: RockingModel | None = None
+    ag: np.ndarray | None = None
+
+    def to_xarray(self) -> xr.Dataset:
+        """CF-style dataset: theta, thetadot (and ag) on time; impacts on their own dim."""
+        ds = xr.Dataset(
+            {
+                "theta": ("time", self.theta, {"long_name": "rotation of the wall", "units": "rad"}),
+                "thetadot": ("time", self.thetadot, {"long_name": "angular velocity", "units": "rad/s"}),
+            },
+            coords={"time": ("time", self.t, {"standard_name": "time", "units": "s"})},
+        )
+        if self.ag is not None:
+            ds["ag"] = ("time", self.ag, {"long_name": "ground acceleration (+ towards +theta)", "units": "m/s2"})
+        imp = self.impacts
+        ds = ds.assign_coords(impact=("impact", np.arange(len(imp))))
+        ds["impact_time"] = ("impact", imp["t"].to_numpy(float), {"units": "s"})
+        ds["impact_kind"] = ("impact", imp["kind"].to_numpy(str).astype("U10"))
+        ds["thetadot_before"] = ("impact", imp["thetadot_before"].to_numpy(float), {"units": "rad/s"})
+        ds["thetadot_after"] = ("impact", imp["thetadot_after"].to_numpy(float), {"units": "rad/s"})
+        ds["theta_peak_before"] = ("impact", imp["theta_peak_before"].to_numpy(float), {"units": "rad"})
+        attrs = {
+            "Conventions": "CF-1.8",
+            "title": "rocking wall history (rocklab.simulation.model)",
+            "overturned": int(self.overturned),
+            "t_overturn": np.nan if self.t_overturn is None else self.t_overturn,
+            "t_rest": np.nan if self.t_rest is None else self.t_rest,
+        }
+        if self.model is not None:
+            m = self.model
+            attrs.update(
+                alpha=m.alpha,
+                p=m.p,
+                boundary=m.boundary,
+                form=m.form,
+                alpha_rock=m.alpha_pos,
+                alpha_neg=m.alpha_minus,
+                flight_damping=m.flight_damping,
+                gap=m.gap,
+                impact=type(m.base_law).__name__,
+            )
+        ds.attrs.update(attrs)
+        return ds
