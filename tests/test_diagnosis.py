@@ -416,16 +416,6 @@ def test_free_run_matches_the_exact_simulator(kw, ext, values, boundary, rtol):
     np.testing.assert_allclose(imp.theta_peak_before.to_numpy()[1 : ts.n_impacts + 1][big], ts.peaks[big], rtol=1e-6)
 
 
-def test_quarter_period_and_gap_transit_exact():
-    h = simulate_free(RockingModel(alpha=ALPHA, p=P), 0.9 * ALPHA, 0.0, t_end=2.0, fs=400)
-    assert D.quarter_period(0.9 * ALPHA, ALPHA, P) == pytest.approx(h.impacts.t.iloc[0], rel=1e-6)
-    assert P * D.quarter_period(0.9 * 0.01, 0.01, P) == pytest.approx(wall.quarter_period_housner(0.9), rel=1e-4)
-    # turning inside the gap: twice the time to the turning point
-    v = 0.05
-    d = D.apex(0.5 * v**2, ALPHA, P)
-    assert D.transit_time(v, d, ALPHA, P) == pytest.approx(D.quarter_period(d, ALPHA, P), rel=1e-4)
-
-
 def test_boundary_entries_json_and_markdown(diagnosed, tmp_path):
     series = [
         dict(diagnosed[k], boundary="two-sided") for k in ("instability+scale", "instability+scale-noisy", "null-2s")

@@ -38,6 +38,7 @@ from rocklab.lab import kinematics
 from rocklab.lab.channels import LOST_STATUSES
 from rocklab.lab.motion import centre_amplification, extract_motion
 from rocklab.physics import restitution
+from rocklab.physics.flight import quarter_period_linear
 from rocklab.physics.wall import no_sliding_friction, overturning_velocity
 
 #: Keys of the per-test summary required by results/tests.csv (the lead
@@ -60,18 +61,6 @@ TEST_COLUMNS = [
 IMPACT_COLUMNS = ["k", "t_s", "peak_before_over_alpha", "thetadot_before", "thetadot_after", "v_over_vr", "e_exp_k"]
 #: Columns of the e_exp-versus-n table (Fig. 11).
 E_BY_N_COLUMNS = ["n", "peak_over_alpha", "e_exp_eq10", "e_exp_eq11", "e_ratio_eq10", "e_ratio_eq11"]
-
-
-def analytic_e(boundary, alpha):
-    """Analytic coefficient of restitution with the nominal alpha [-].
-
-    Eq. 2 for ``"two-sided"``, Eq. 14 (negative) for ``"one-sided"``.
-    """
-    if boundary == "two-sided":
-        return float(restitution.two_sided(alpha))
-    if boundary == "one-sided":
-        return float(restitution.one_sided(alpha))
-    raise ValueError(f"unknown boundary {boundary!r}")
 
 
 def e_by_n(peaks, theta0, alpha_ind, alpha, e_an):
@@ -134,39 +123,6 @@ def table3_windows(peaks, theta0, alpha_ind, e_an):
     }
 
 
-def quarter_period_linear(theta0_over_alpha, thetadot0_over_p_alpha=0.0):
-    """First quarter period p T_1/4 of the linearised rocking equation [-].
-
-    Released at theta0 with speed thetadot0 towards the vertical, a wall
-    obeying theta'' = p^2 (theta - alpha) (Housner 1963) reaches theta = 0
-    when (1 - r) cosh(pT) + w sinh(pT) = 1, r = theta0 / alpha,
-    w = thetadot0 / (p alpha), hence
-
-        p T_1/4 = ln[(1 + sqrt(1 - (1 - r)^2 + w^2)) / (1 - r + w)],
-
-    which is Housner's arccosh(1 / (1 - r)) from rest (w = 0,
-    :func:`rocklab.physics.wall.quarter_period_housner`; Sect. 4, Fig. 17).
-
-    Parameters
-    ----------
-    theta0_over_alpha : array_like
-        Release rotation over the instability angle of the motion [-].
-    thetadot0_over_p_alpha : array_like
-        Release speed towards the vertical over p alpha [-], >= 0.
-
-    Returns
-    -------
-    ndarray
-        p T_1/4; NaN where the wall does not fall (1 - r + w <= 0).
-    """
-    a = 1.0 - np.asarray(theta0_over_alpha, float)
-    w = np.asarray(thetadot0_over_p_alpha, float)
-    den = a + w
-    with np.errstate(invalid="ignore", divide="ignore"):
-        out = np.log((1.0 + np.sqrt(1.0 - a**2 + w**2)) / den)
-    return np.where(den > 0, out, np.nan)
-
-
 def analyse_motion(t, theta, fs, boundary, alpha, p, direction, *, alpha_ind=None, **motion_kw):
     """Reduce one free-rocking record (Sects. 3-4).
 
@@ -208,7 +164,7 @@ def analyse_motion(t, theta, fs, boundary, alpha, p, direction, *, alpha_ind=Non
     """
     m = extract_motion(t, theta, fs, boundary, p, **motion_kw)
     a_ind = m.theta0 if alpha_ind is None else float(alpha_ind)
-    e_an = analytic_e(boundary, alpha)
+    e_an = float(restitution.analytic(boundary, alpha))
     N = m.peaks.size
     e_n = e_by_n(m.peaks, m.theta0, a_ind, alpha, e_an)
     e10 = float(e_n.e_exp_eq10.iloc[-1]) if N else np.nan

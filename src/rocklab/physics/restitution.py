@@ -63,6 +63,21 @@ def one_sided(alpha, mR2_over_Io=None):
     return two_sided(alpha, mR2_over_Io) ** 2 * transverse(alpha, mR2_over_Io)
 
 
+def analytic(boundary, alpha, mR2_over_Io=None):
+    """Analytic coefficient of restitution of a boundary condition [-].
+
+    Eq. 2 for ``"two-sided"`` rocking, Eq. 14 (negative: a rebound off the
+    transverse walls) for ``"one-sided"``; ``boundary`` may be an array of
+    those names, broadcast against ``alpha``.
+    """
+    b = np.asarray(boundary)
+    unknown = set(np.unique(b)) - {"two-sided", "one-sided"}
+    if unknown:
+        raise ValueError(f"unknown boundary {sorted(unknown)[0]!r}")
+    out = np.where(b == "one-sided", one_sided(alpha, mR2_over_Io), two_sided(alpha, mR2_over_Io))
+    return out if out.ndim else float(out)
+
+
 def peak_energy_ratio(theta_peak, alpha):
     """Squared impact velocity reached from a peak, over that from alpha.
 

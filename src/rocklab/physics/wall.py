@@ -69,22 +69,6 @@ def overturning_velocity(alpha, p):
     return np.sqrt(2.0 * np.asarray(p, float) ** 2 * (1.0 - np.cos(alpha)))
 
 
-def quarter_period_housner(theta0_over_alpha):
-    """Non-dimensional first quarter period p T_1/4 of Housner (1963).
-
-    Released from rest at theta0, the piecewise-linear equation gives
-    theta(t) = alpha - (alpha - theta0) cosh(p t), hence
-    p T_1/4 = arccosh(1 / (1 - theta0/alpha))  (used against Fig. 17).
-
-    Parameters
-    ----------
-    theta0_over_alpha : array_like
-        Release rotation over the slenderness angle, in (0, 1).
-    """
-    r = np.asarray(theta0_over_alpha, float)
-    return np.arccosh(1.0 / (1.0 - r))
-
-
 def no_sliding_friction(zeta):
     """Least static friction coefficient that prevents sliding, Eq. 9 [-].
 
