@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from rocklab.lab.motion import centre_amplification, extract_motion, local_fit, model_velocity, noise_level
+from rocklab.lab.flight_fit import local_fit, model_velocity
+from rocklab.lab.motion import centre_amplification, extract_motion, noise_level
 
 P = 3.4  # rad/s, a 1.1-1.6 m wall
 ALPHA = 0.075  # rad, effective instability angle of the dynamics (h/b ~ 13)
