@@ -350,7 +350,7 @@ def campaign_tables(datasets, qc_df, n_boot=4000, seed=0):
     Parameters
     ----------
     datasets : iterable of xarray.Dataset
-        Reduced valid tests (``rocklab.lab.reduction``).
+        Stored motions of the valid tests (:func:`rocklab.lab.motion.stored_motion`).
     qc_df : pandas.DataFrame
         ``results/qc.csv``.
 
@@ -365,12 +365,12 @@ def campaign_tables(datasets, qc_df, n_boot=4000, seed=0):
         lists the valid tests whose motion could not be analysed, with the
         reason.
     """
-    from rocklab.dissipation.analysis import analyse_reduced_test
+    from rocklab.dissipation.analysis import analyse_stored_motion
 
     tests, impacts, e_n, failed = [], [], [], []
     for ds in datasets:
         try:
-            s, i, e = analyse_reduced_test(ds)
+            s, i, e = analyse_stored_motion(ds)
         except ValueError as exc:
             failed.append((ds.attrs["test_id"], str(exc)))
             continue

@@ -34,6 +34,16 @@ of Eq. 15, and 24 of the 154 two-sided tests on a mis-fitted last peak;
 with them, none.  Take-off velocities are not used for this: those of the
 short last flights are too uncertain and would cut real ones.
 
+Stored motion
+-------------
+The workflow extracts the motion of each test once, in the reduction job of
+its series, and stores it beside the reduced test as
+``results/motion/<test_id>.nc`` (:func:`stored_motion`): the :class:`Motion`
+(:func:`motion_to_dataset`, read back by :func:`read_motion`), who the test
+is and the constants of its wall (:data:`TEST_ATTRS`), and the channel-5
+amplification of Fig. 20b.  The dissipation tables and the diagnosis read
+it instead of extracting the motion again.
+
 All angles are returned as magnitudes of the rotation measured on the side
 of release (``sign`` gives that side); velocities keep the sign of the input.
 """
@@ -44,13 +54,57 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
+import xarray as xr
 from scipy.signal import find_peaks, savgol_filter
 
+from rocklab.lab import kinematics
+from rocklab.lab.channels import LOST_STATUSES
 from rocklab.lab.flight_fit import local_fit, model_value, model_velocity, odd_samples, root_tau, stationary_tau
 from rocklab.lab.release import screw_departure
 
 #: Boundary conditions of Sect. 2.1.
 BOUNDARIES = ("two-sided", "one-sided")
+#: Columns of :attr:`Motion.impacts`, in order.
+IMPACT_FIELDS = (
+    "k",
+    "t_s",
+    "t_after_s",
+    "thetadot_before",
+    "thetadot_after",
+    "negative_excursion",
+    "e_velocity",
+    "peak_before",
+    "peak_after",
+)
+#: Scalar fields of :class:`Motion` and their types.
+SCALAR_FIELDS = {
+    "sign": int,
+    "t_release": float,
+    "theta0": float,
+    "noise_rad": float,
+    "peak_threshold": float,
+    "t_first_impact": float,
+    "t_end": float,
+    "n_negative_excursions": int,
+    "alpha_fall": float,
+    "thetadot_release": float,
+}
+#: Attributes of a reduced test that its stored motion carries: who the test
+#: is, its verdict and the constants of its wall.
+TEST_ATTRS = (
+    "test_id",
+    "series",
+    "specimen",
+    "boundary",
+    "contact_depth_mm",
+    "direction",
+    "unit",
+    "alpha",
+    "p",
+    "sampling_rate_hz",
+    "valid",
+    "reject_reason",
+)
 
 
 @dataclass(frozen=True)
@@ -291,8 +345,9 @@ def extract_motion(t, theta, fs, boundary, p, *, k_noise=10.0, ring_guard_s=0.06
     n_ok = int(np.argmin(reliable)) if not reliable.all() else peaks.size
     rows = rows[:n_ok] if n_ok < len(rows) else rows
     peaks = peaks[:n_ok]
-    imp = pd.DataFrame(
-        rows, columns=["k", "t_s", "t_after_s", "thetadot_before", "thetadot_after", "negative_excursion"]
+    # typed even when empty, so that a stored motion reads back the same
+    imp = pd.DataFrame(rows, columns=list(IMPACT_FIELDS[:6])).astype(
+        {"k": int} | dict.fromkeys(IMPACT_FIELDS[1:6], float)
     )
     imp["thetadot_before"] *= sign
     imp["thetadot_after"] *= sign
@@ -324,3 +379,110 @@ def centre_amplification(disp_centre, disp_side_from_theta, i_first_impact):
     c = np.abs(np.asarray(disp_centre, float)[i_first_impact:])
     s = np.abs(np.asarray(disp_side_from_theta, float)[i_first_impact:])
     return float(np.nanmax(c) / np.nanmax(s))
+
+
+def monitor_readings(ds):
+    """Monitor transducer (channel 5 at the centre of the facade, Fig. 20a).
+
+    Its reading against the one the rigid-body motion of the reduced test
+    (theta, phi, v, w of Eqs. 3-7, forward model of
+    :func:`rocklab.lab.kinematics.transducer_elongation`) gives at the same
+    point.  The monitor is kept out of the kinematic fit, so any excess is
+    deformation of the facade (Sect. 4).  The rigid reading uses all four
+    degrees of freedom rather than theta alone so that twist and sliding are
+    not read as deformation.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A reduced test (``rocklab.lab.reduction``).
+
+    Returns
+    -------
+    (int, ndarray, ndarray) or None
+        Channel number, measured and rigid-body elongation [mm] on ``time``;
+        None when the setup has no working monitor channel.
+    """
+    role = ds.channel_role.values.astype(str)
+    status = ds.channel_status.values.astype(str)
+    k = np.flatnonzero((role == "monitor") & ~np.isin(status, LOST_STATUSES))
+    if k.size == 0:
+        return None
+    k = k[:1]
+    X = np.column_stack([ds[f"wall_{c}"].values[k] for c in "xyz"])
+    F = np.column_stack([ds[f"frame_{c}"].values[k] for c in "xyz"])
+    rigid = kinematics.transducer_elongation(
+        ds.theta.values, ds.phi.values, ds.v.values, ds.w.values, X, F, float(ds.attrs["thickness_mm"])
+    )
+    return int(ds.channel.values[k[0]]), ds.elongation.values[:, k[0]], rigid[:, 0]
+
+
+def motion_to_dataset(m: Motion, attrs=None) -> xr.Dataset:
+    """A :class:`Motion` as a dataset: impacts on ``impact``, peaks on ``peak``,
+    the scalars as attributes (after ``attrs``); :func:`motion_from_dataset`
+    reads it back."""
+    data = {name: ("impact", m.impacts[name].to_numpy()) for name in IMPACT_FIELDS}
+    data["peaks"] = ("peak", np.asarray(m.peaks, float), {"units": "rad", "long_name": "reliable peaks |theta|"})
+    ds = xr.Dataset(data, attrs={**(attrs or {}), **{name: getattr(m, name) for name in SCALAR_FIELDS}})
+    for name in ("t_s", "t_after_s"):
+        ds[name].attrs["units"] = "s"
+    for name in ("thetadot_before", "thetadot_after"):
+        ds[name].attrs["units"] = "rad/s"
+    for name in ("negative_excursion", "peak_before", "peak_after"):
+        ds[name].attrs["units"] = "rad"
+    return ds
+
+
+def motion_from_dataset(ds) -> Motion:
+    """The :class:`Motion` of a dataset of :func:`motion_to_dataset` or :func:`stored_motion`.
+
+    Raises
+    ------
+    ValueError
+        When no motion could be extracted from the test (the reason).
+    """
+    a = ds.attrs
+    if "sign" not in a:
+        raise ValueError(a.get("motion_error", "no motion stored"))
+    return Motion(
+        impacts=pd.DataFrame({name: ds[name].values for name in IMPACT_FIELDS}),
+        peaks=ds.peaks.values,
+        **{name: kind(a[name]) for name, kind in SCALAR_FIELDS.items()},
+    )
+
+
+def read_motion(path) -> Motion:
+    """The :class:`Motion` stored at ``path`` (``results/motion/<test_id>.nc``)."""
+    with xr.open_dataset(path) as ds:
+        return motion_from_dataset(ds.load())
+
+
+def stored_motion(ds) -> xr.Dataset:
+    """The motion of a reduced test as the workflow stores it (module docstring).
+
+    :func:`extract_motion` of theta with the default settings, the test's
+    :data:`TEST_ATTRS`, and ``centre_amplification``: the largest |reading|
+    of the monitor channel after the first impact over that of the
+    rigid-body motion (:func:`monitor_readings`,
+    :func:`centre_amplification`; NaN without a working monitor).  A test
+    with no rotation (unreadable) or no motion found keeps the reason in
+    ``motion_error`` instead of the motion.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A reduced test (``rocklab.lab.reduction``).
+    """
+    a = ds.attrs
+    attrs = {k: a[k] for k in TEST_ATTRS if k in a}
+    if "theta" not in ds:
+        return xr.Dataset(attrs={**attrs, "motion_error": f"no rotation: {a.get('reject_detail', '')}"})
+    try:
+        m = extract_motion(ds.time.values, ds.theta.values, float(a["sampling_rate_hz"]), a["boundary"], float(a["p"]))
+    except ValueError as exc:
+        return xr.Dataset(attrs={**attrs, "motion_error": str(exc)})
+    amp = np.nan
+    mon = monitor_readings(ds)
+    if mon is not None and np.isfinite(m.t_first_impact):
+        amp = centre_amplification(mon[1], mon[2], int(np.searchsorted(ds.time.values, m.t_first_impact)))
+    return motion_to_dataset(m, {**attrs, "centre_amplification": amp})
