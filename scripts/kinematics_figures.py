@@ -1,6 +1,4 @@
-"""Snakemake shim: Figs. 6, 8 and 9 from the reduced tests."""
-
-from pathlib import Path
+"""Snakemake shim: Figs. 6, 8 and 9 from the sample test and kinematics.csv."""
 
 import pandas as pd
 import xarray as xr
@@ -9,15 +7,12 @@ from rocklab.io import setup_logging, valid_test_ids
 from rocklab.plots import kinematics as figures
 
 setup_logging(snakemake.log[0])
-valid = valid_test_ids(snakemake.input.qc)
-sample = snakemake.params.sample_test or valid[0]
-paths = {Path(p).stem: p for p in snakemake.input.tests}
-with xr.open_dataset(paths[sample]) as ds:
+with xr.open_dataset(snakemake.input.sample) as ds:
     ds = ds.load()
 figures.sample_record(ds).savefig(snakemake.output.fig6, dpi=120)
 figures.degrees_of_freedom(ds).savefig(snakemake.output.fig8, dpi=120)
 kin = pd.read_csv(snakemake.input.kinematics)
-kin = kin[kin.test_id.isin(valid)]
+kin = kin[kin.test_id.isin(valid_test_ids(snakemake.input.qc))]
 peaks = kin[kin.series.str.startswith(f"{snakemake.params.specimen}-")].reset_index(drop=True)
 peaks.attrs["specimen"] = snakemake.params.specimen
 figures.eq8_and_peaks(ds, peaks).savefig(snakemake.output.fig9, dpi=120)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
+import xarray as xr
 from scipy.integrate import solve_ivp
 from test_motion import free_rocking_record
 
@@ -14,13 +15,15 @@ from rocklab.dissipation.analysis import (
     amplitude_law_fit,
     analyse_motion,
     analyse_reduced_test,
+    analyse_stored_motion,
     e_by_n,
-    monitor_readings,
     no_sliding_check,
     table3_windows,
 )
+from rocklab.io import write_netcdf
 from rocklab.lab import virtual_lab
 from rocklab.lab.campaign import open_campaign
+from rocklab.lab.motion import monitor_readings, stored_motion
 from rocklab.lab.reduction import reduce_test
 from rocklab.physics import restitution
 from rocklab.physics.impact import Constant
@@ -245,6 +248,20 @@ def virtual_tests(tmp_path_factory):
         ds = reduce_test(camp, tid)
         out[tid] = (ds, analyse_reduced_test(ds)[0], truth.loc[tid])
     return out
+
+
+@pytest.mark.parametrize("test_id", ["V0001", "V0002"])
+def test_the_stored_motion_gives_the_tables_of_the_reduced_test(virtual_tests, test_id, tmp_path):
+    """results/motion/<test_id>.nc, written and read back, gives the same three tables."""
+    ds = virtual_tests[test_id][0]
+    write_netcdf(stored_motion(ds), tmp_path / "m.nc")
+    with xr.open_dataset(tmp_path / "m.nc") as stored:
+        s, imp, e_n = analyse_stored_motion(stored.load())
+    s0, imp0, e_n0 = analyse_reduced_test(ds)
+    assert s.keys() == s0.keys()
+    assert all(s[k] == s0[k] or (pd.isna(s[k]) and pd.isna(s0[k])) for k in s)
+    pd.testing.assert_frame_equal(imp, imp0)
+    pd.testing.assert_frame_equal(e_n, e_n0)
 
 
 @pytest.mark.parametrize("test_id", ["V0001", "V0002"])

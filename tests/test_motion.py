@@ -9,10 +9,23 @@ transducer noise, 50 Hz hum and post-impact ringing are added.
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
+import xarray as xr
 from scipy.integrate import solve_ivp
 
-from rocklab.lab.motion import centre_amplification, extract_motion, local_fit, model_velocity, noise_level
+from rocklab.io import write_netcdf
+from rocklab.lab.flight_fit import local_fit, model_velocity
+from rocklab.lab.motion import (
+    SCALAR_FIELDS,
+    centre_amplification,
+    extract_motion,
+    motion_from_dataset,
+    motion_to_dataset,
+    noise_level,
+    read_motion,
+    stored_motion,
+)
 
 P = 3.4  # rad/s, a 1.1-1.6 m wall
 ALPHA = 0.075  # rad, effective instability angle of the dynamics (h/b ~ 13)
@@ -285,3 +298,37 @@ def test_a_wall_that_stops_dead_ends_on_its_last_flight(k_gap, hump, quiet):
         # the end is the impact (arrival at zero) after the last flight
         t_arrival = t[(t > truth["peak_t"][kept][-1]) & (clean <= 0)][0]
         assert m.t_end == pytest.approx(t_arrival, abs=0.01)
+
+
+def test_a_stored_motion_reads_back_equal(two_sided, tmp_path):
+    """results/motion/<test_id>.nc: the Motion read back equals the one extracted."""
+    t, th, _ = two_sided
+    m = extract_motion(t, th, 400.0, "two-sided", P)
+    write_netcdf(motion_to_dataset(m, {"test_id": "T1"}), tmp_path / "T1.nc")
+    back = read_motion(tmp_path / "T1.nc")
+    for name in SCALAR_FIELDS:
+        assert getattr(back, name) == getattr(m, name) or (np.isnan(getattr(m, name)) and np.isnan(getattr(back, name)))
+        assert type(getattr(back, name)) is type(getattr(m, name))
+    pd.testing.assert_frame_equal(back.impacts, m.impacts)
+    np.testing.assert_array_equal(back.peaks, m.peaks)
+    assert len(m.impacts) >= 5
+
+
+def test_a_motion_without_impacts_reads_back_equal(tmp_path):
+    """A record that ends before its first impact stores typed, empty impacts."""
+    t, th, truth = free_rocking_record(seed=4)
+    n = int((truth["impacts"][0, 0] + 0.05) * 400)
+    m = extract_motion(t[:n], th[:n], 400.0, "two-sided", P)
+    assert m.impacts.empty
+    write_netcdf(motion_to_dataset(m), tmp_path / "T2.nc")
+    back = read_motion(tmp_path / "T2.nc")
+    pd.testing.assert_frame_equal(back.impacts, m.impacts)
+    assert back.peaks.size == 0
+
+
+def test_a_test_without_motion_stores_the_reason():
+    ds = xr.Dataset(attrs={"test_id": "T3", "valid": 0, "reject_reason": "unreadable", "reject_detail": "truncated"})
+    stored = stored_motion(ds)
+    assert stored.attrs["test_id"] == "T3"
+    with pytest.raises(ValueError, match="truncated"):
+        motion_from_dataset(stored)

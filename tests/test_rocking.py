@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from rocklab.physics import impact, restitution, wall
+from rocklab.physics import flight, impact, restitution, wall
 from rocklab.simulation.model import RockingModel
 from rocklab.simulation.reference import simulate_free, simulate_ground
 
@@ -12,6 +12,18 @@ def _energy_drift(model, h, mask):
     side = np.where(h.theta > 0, 1, -1)
     e = model.energy(h.theta, h.thetadot, side)[mask]
     return np.max(np.abs(e - e[0])) / e[0]
+
+
+def test_block_energy_closed_forms():
+    """flight.energy: the centre of mass lifted from theta = 0 (exact) and
+    Housner's linearisation, at rest at the instability rotation (Eq. 16)."""
+    a, p = 0.15, 2.2
+    assert flight.energy(a, 0.0, a, p) == pytest.approx(p**2 * (1 - np.cos(a)), rel=1e-14)
+    assert flight.energy(a, 0.0, a, p, linear=True) == pytest.approx(0.5 * p**2 * a**2, rel=1e-14)
+    assert flight.energy(0.0, 0.3, a, p) == flight.energy(0.0, 0.3, a, p, linear=True) == pytest.approx(0.045)
+    # the linear form is the exact one for a slender wall: relative error ~ a^2/6
+    assert flight.potential(1e-4, 0.01, p) == pytest.approx(flight.potential_linear(1e-4, 0.01, p), rel=3e-5)
+    assert wall.overturning_velocity(a, p) == pytest.approx(np.sqrt(2 * p**2 * (1 - np.cos(a))), rel=1e-14)
 
 
 @pytest.mark.parametrize("form", ["exact", "linear"])

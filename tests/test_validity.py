@@ -4,10 +4,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from rocklab.lab.release import release_state
 from rocklab.lab.validity import (
     channel_roles,
     choose_channels,
-    release_state,
     residual_out_of_plumb,
     top_displacement,
     verdict,

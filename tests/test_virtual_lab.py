@@ -179,7 +179,7 @@ def test_seed_reproducibility(tmp_path):
 @needs_sim
 def test_simulated_test_truth():
     test = vl.VirtualTest("V1", "1a", release_ratio=0.2)
-    t, E, truth = vl.simulate_test(test, SPEC, LAYOUT, rng=9)
+    t, E, truth = vl.simulate_virtual_test(test, SPEC, LAYOUT, rng=9)
     alpha = wall.slenderness_angle(1.09, 0.113)
     assert truth["alpha_rock"] == pytest.approx(0.91 * alpha)
     assert truth["theta0"] == pytest.approx(0.995 * 0.91 * alpha)

@@ -74,6 +74,8 @@ def test_workflow_reduces_any_campaign_and_never_writes_to_it(virtual_campaign, 
     assert set(tests.test_id) == set(qc.test_id[qc.valid.astype(str) == "True"])
     for name in ("impacts.csv", "series.csv", "figures/fig09.png"):
         assert (results / name).exists()
+    # the motion of every test, extracted once by its reduction job
+    assert {p.stem for p in (results / "motion").glob("*.nc")} == set(qc.test_id)
 
 
 def test_a_reduction_that_fails_does_not_stop_the_series(virtual_campaign, monkeypatch):

@@ -1,8 +1,14 @@
-# Stage: figures of Sect. 2 (Figs. 6, 8, 9) from the reduced tests and of
+# Stage: figures of Sect. 2 (Figs. 6, 8, 9) from one reduced test and of
 # Sects. 3-4 (Figs. 10, 11, 13, 16-20) from the dissipation tables, with
-# their captions for `snakemake --report`.
+# their captions for `snakemake --report`.  Each figure rule depends on the
+# test it draws only, chosen from the QC table or tests.csv once their
+# checkpoint has run, or named in the config.
 
 FIG_SPECIMEN = config.get("figures", {}).get("fig9_specimen", "5a")
+#: Test of Figs. 6, 8 and 9; empty: the first valid test.
+KINEMATICS_SAMPLE = config.get("figures", {}).get("sample_test", "")
+#: Test of Fig. 20a; empty: rocklab.plots.dissipation.fig20_sample of tests.csv.
+FIG20_SAMPLE = config.get("figures", {}).get("fig20_test", "")
 DISSIPATION_FIGS = ("10", "11", "13", "16", "17", "18", "19", "20")
 
 
@@ -19,17 +25,33 @@ def figure_outputs():
     return [res("figures", f"fig{n}.png") for n in ("06", "08", "09", *DISSIPATION_FIGS)]
 
 
+def kinematics_sample(wildcards):
+    """The reduced test that Figs. 6, 8 and 9 draw."""
+    from rocklab.io import valid_test_ids
+
+    test_id = KINEMATICS_SAMPLE or valid_test_ids(checkpoints.qc_table.get().output.qc)[0]
+    return res("tests", f"{test_id}.nc")
+
+
+def fig20_sample_test(wildcards):
+    """The reduced test that Fig. 20a draws (none without a one-sided test with a monitor)."""
+    import pandas as pd
+    from rocklab.plots.dissipation import fig20_sample
+
+    test_id = FIG20_SAMPLE or fig20_sample(pd.read_csv(checkpoints.dissipation_tables.get().output.tests))
+    return [res("tests", f"{test_id}.nc")] if test_id else []
+
+
 rule kinematics_figures:
     input:
         qc=res("qc.csv"),
         kinematics=res("kinematics.csv"),
-        tests=expand(res("tests", "{test_id}.nc"), test_id=TEST_IDS),
+        sample=kinematics_sample,
     output:
         fig6=report_figure("06", "Kinematics (Sect. 2)"),
         fig8=report_figure("08", "Kinematics (Sect. 2)"),
         fig9=report_figure("09", "Kinematics (Sect. 2)"),
     params:
-        sample_test=config.get("figures", {}).get("sample_test", ""),
         specimen=FIG_SPECIMEN,
     log:
         res("logs", "kinematics_figures.log"),
@@ -44,7 +66,7 @@ rule dissipation_figures:
         tests=res("tests.csv"),
         e_by_n=res("e_by_n.csv"),
         series=res("series.csv"),
-        tests_nc=expand(res("tests", "{test_id}.nc"), test_id=TEST_IDS),
+        sample=fig20_sample_test,
     output:
         fig10=report_figure("10", "Energy dissipation (Sects. 3-4)"),
         fig11=report_figure("11", "Energy dissipation (Sects. 3-4)"),
@@ -54,8 +76,6 @@ rule dissipation_figures:
         fig18=report_figure("18", "Energy dissipation (Sects. 3-4)"),
         fig19=report_figure("19", "Energy dissipation (Sects. 3-4)"),
         fig20=report_figure("20", "Energy dissipation (Sects. 3-4)"),
-    params:
-        sample_test=config.get("figures", {}).get("fig20_test", ""),
     log:
         res("logs", "dissipation_figures.log"),
     benchmark:

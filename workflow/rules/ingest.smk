@@ -1,5 +1,7 @@
 # Stage 1: each test's raw record to its wall motion (reader, channel health,
-# four-DOF kinematics, validity by the lab's rules), one netCDF per test.
+# four-DOF kinematics, validity by the lab's rules), one netCDF per test, and
+# the motion extracted from it (release, impacts, peaks), stored once for the
+# dissipation tables and the diagnosis.
 #
 # One job per series, not per test: a job spends ten times longer starting
 # Python and importing the library (1.0 s) than reducing one test (0.1 s).
@@ -13,7 +15,8 @@ for _k, (_series, _ids) in enumerate(TESTS_BY_SERIES.items()):
         input:
             lambda wildcards, ids=_ids: record_inputs(ids),
         output:
-            [res("tests", f"{t}.nc") for t in _ids],
+            tests=[res("tests", f"{t}.nc") for t in _ids],
+            motion=[res("motion", f"{t}.nc") for t in _ids],
         params:
             tests=lambda wildcards, ids=_ids: {t: test_params(t) for t in ids},
             raw_dir=config["raw_dir"],

@@ -1,7 +1,8 @@
 # Stage 2: the QC table of the whole campaign, one row per row of tests.csv.
+# A checkpoint: the test drawn in Figs. 6, 8 and 9 is chosen from its verdicts.
 
 
-rule qc_table:
+checkpoint qc_table:
     input:
         tests=expand(res("tests", "{test_id}.nc"), test_id=TEST_IDS),
         log=str(RAW / "tests.csv"),

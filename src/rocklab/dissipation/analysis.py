@@ -1,14 +1,15 @@
 """Energy dissipation of free-rocking tests (Sects. 3-4 of the paper).
 
-Per test (:func:`analyse_motion`): e_exp after n impacts by Eq. 10 and
-Eq. 11 for every n (Fig. 11), the analytic e (Eq. 2 two-sided, Eq. 14
-one-sided, nominal alpha), e_exp / e_an, the windows of Table 3, the
-per-impact e_k, the impact velocity over the overturning velocity (Eq. 16),
-theta0/alpha (Figs. 10, 16), p T_1/4 against Housner's closed form
-(Fig. 17, :func:`quarter_period_linear`), cycles (Fig. 18), p D (Fig. 19)
-and, on a reduced test, the channel-5 amplification (Fig. 20,
-:func:`monitor_readings`).  Per table: the amplitude laws of Eqs. 15 and 17
-(:func:`amplitude_law_fit`) and the no-sliding check of Eq. 9.
+Per test (:func:`motion_tables` of its motion, :mod:`rocklab.lab.motion`):
+e_exp after n impacts by Eq. 10 and Eq. 11 for every n (Fig. 11), the
+analytic e (Eq. 2 two-sided, Eq. 14 one-sided, nominal alpha), e_exp /
+e_an, the windows of Table 3, the per-impact e_k, the impact velocity over
+the overturning velocity (Eq. 16), theta0/alpha (Figs. 10, 16), p T_1/4
+against Housner's closed form (Fig. 17, :func:`quarter_period_linear`),
+cycles (Fig. 18), p D (Fig. 19) and, from the stored motion of a test
+(:func:`analyse_stored_motion`), the channel-5 amplification (Fig. 20).  Per
+table: the amplitude laws of Eqs. 15 and 17 (:func:`amplitude_law_fit`) and
+the no-sliding check of Eq. 9.
 
 Conventions
 -----------
@@ -34,9 +35,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from rocklab.lab import kinematics
-from rocklab.lab.channels import LOST_STATUSES
-from rocklab.lab.motion import centre_amplification, extract_motion
+from rocklab.lab.motion import extract_motion, motion_from_dataset, stored_motion
 from rocklab.physics import restitution
 from rocklab.physics.flight import quarter_period_linear
 from rocklab.physics.wall import no_sliding_friction, overturning_velocity
@@ -124,7 +123,7 @@ def table3_windows(peaks, theta0, alpha_ind, e_an):
 
 
 def analyse_motion(t, theta, fs, boundary, alpha, p, direction, *, alpha_ind=None, **motion_kw):
-    """Reduce one free-rocking record (Sects. 3-4).
+    """:func:`motion_tables` of a free-rocking record (Sects. 3-4).
 
     Parameters
     ----------
@@ -132,6 +131,22 @@ def analyse_motion(t, theta, fs, boundary, alpha, p, direction, *, alpha_ind=Non
         Time [s] and rotation [rad] (Eq. 8 or the four-dof solution).
     fs : float
         Sampling rate [Hz].
+    boundary, alpha, p, direction, alpha_ind
+        As :func:`motion_tables`.
+    **motion_kw
+        Passed to :func:`rocklab.lab.motion.extract_motion`.
+    """
+    m = extract_motion(t, theta, fs, boundary, p, **motion_kw)
+    return motion_tables(m, boundary, alpha, p, direction, alpha_ind=alpha_ind)
+
+
+def motion_tables(m, boundary, alpha, p, direction, *, alpha_ind=None):
+    """Energy dissipation of one free-rocking motion (Sects. 3-4).
+
+    Parameters
+    ----------
+    m : rocklab.lab.motion.Motion
+        The motion of the record (:func:`rocklab.lab.motion.extract_motion`).
     boundary : {"two-sided", "one-sided"}
     alpha : float
         Nominal slenderness angle arctan(b/h) [rad].
@@ -141,8 +156,6 @@ def analyse_motion(t, theta, fs, boundary, alpha, p, direction, *, alpha_ind=Non
         Copied to the summary.
     alpha_ind : float, optional
         Angle of Eqs. 10-11; defaults to the measured theta0 (Sect. 3).
-    **motion_kw
-        Passed to :func:`rocklab.lab.motion.extract_motion`.
 
     Returns
     -------
@@ -162,7 +175,6 @@ def analyse_motion(t, theta, fs, boundary, alpha, p, direction, *, alpha_ind=Non
     e_n : pandas.DataFrame
         :data:`E_BY_N_COLUMNS`.
     """
-    m = extract_motion(t, theta, fs, boundary, p, **motion_kw)
     a_ind = m.theta0 if alpha_ind is None else float(alpha_ind)
     e_an = float(restitution.analytic(boundary, alpha))
     N = m.peaks.size
@@ -287,70 +299,31 @@ def no_sliding_check(h_over_b, mu_s=0.6):
 META_COLUMNS = ["test_id", "series", "specimen", "boundary", "contact_depth_mm"]
 
 
-def monitor_readings(ds):
-    """Monitor transducer (channel 5 at the centre of the facade, Fig. 20a).
+def analyse_stored_motion(ds):
+    """:func:`motion_tables` of a stored motion (:func:`rocklab.lab.motion.stored_motion`).
 
-    Its reading against the one the rigid-body motion of the reduced test
-    (theta, phi, v, w of Eqs. 3-7, forward model of
-    :func:`rocklab.lab.kinematics.transducer_elongation`) gives at the same
-    point.  The monitor is kept out of the kinematic fit, so any excess is
-    deformation of the facade (Sect. 4).  The rigid reading uses all four
-    degrees of freedom rather than theta alone so that twist and sliding are
-    not read as deformation.
-
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A reduced test (``rocklab.lab.reduction``).
-
-    Returns
-    -------
-    (int, ndarray, ndarray) or None
-        Channel number, measured and rigid-body elongation [mm] on ``time``;
-        None when the setup has no working monitor channel.
-    """
-    role = ds.channel_role.values.astype(str)
-    status = ds.channel_status.values.astype(str)
-    k = np.flatnonzero((role == "monitor") & ~np.isin(status, LOST_STATUSES))
-    if k.size == 0:
-        return None
-    k = k[:1]
-    X = np.column_stack([ds[f"wall_{c}"].values[k] for c in "xyz"])
-    F = np.column_stack([ds[f"frame_{c}"].values[k] for c in "xyz"])
-    rigid = kinematics.transducer_elongation(
-        ds.theta.values, ds.phi.values, ds.v.values, ds.w.values, X, F, float(ds.attrs["thickness_mm"])
-    )
-    return int(ds.channel.values[k[0]]), ds.elongation.values[:, k[0]], rigid[:, 0]
-
-
-def analyse_reduced_test(ds):
-    """:func:`analyse_motion` on a reduced test (``rocklab.lab.reduction``).
-
-    Returns the three tables of :func:`analyse_motion`, each carrying the
+    Returns the three tables of :func:`motion_tables`, each carrying the
     test's metadata columns first; the summary also holds
-    ``centre_amplification``: the largest |reading| of the monitor channel
-    after the first impact over that of the rigid-body motion (Fig. 20b,
-    :func:`rocklab.lab.motion.centre_amplification`), NaN without a monitor.
+    ``centre_amplification`` (Fig. 20b) from the stored motion.
+
+    Raises
+    ------
+    ValueError
+        When no motion could be extracted from the test.
     """
     a = ds.attrs
-    summary, impacts, e_n = analyse_motion(
-        ds.time.values,
-        ds.theta.values,
-        float(a["sampling_rate_hz"]),
-        a["boundary"],
-        float(a["alpha"]),
-        float(a["p"]),
-        a["direction"],
+    summary, impacts, e_n = motion_tables(
+        motion_from_dataset(ds), a["boundary"], float(a["alpha"]), float(a["p"]), a["direction"]
     )
-    mon = monitor_readings(ds)
-    amp = np.nan
-    if mon is not None and np.isfinite(summary["t_first_impact"]):
-        i1 = int(np.searchsorted(ds.time.values, summary["t_first_impact"]))
-        amp = centre_amplification(mon[1], mon[2], i1)
-    summary["centre_amplification"] = amp
+    summary["centre_amplification"] = float(a["centre_amplification"])
     meta = {k: a.get(k, np.nan) for k in META_COLUMNS}
     return (
         {**meta, **summary},
         impacts.assign(test_id=a["test_id"])[["test_id", *impacts.columns]],
         e_n.assign(test_id=a["test_id"], series=a["series"], boundary=a["boundary"]),
     )
+
+
+def analyse_reduced_test(ds):
+    """:func:`analyse_stored_motion` of a reduced test (``rocklab.lab.reduction``)."""
+    return analyse_stored_motion(stored_motion(ds))

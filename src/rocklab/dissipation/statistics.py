@@ -32,6 +32,7 @@ import pandas as pd
 from scipy import stats
 
 from rocklab.dissipation.analysis import amplitude_law_fit
+from rocklab.physics.restitution import CALIBRATED_RATIO_ONE_SIDED
 
 #: Per-series quantities of results/series.csv (Figs. 13, 16-20).
 SERIES_COLUMNS = (
@@ -54,7 +55,7 @@ TABLE3_WINDOWS = {
 RATIO_COLUMNS = (*SERIES_COLUMNS, *TABLE3_WINDOWS)
 #: Table 3 of the paper (one-sided rocking only), e_exp / e_an,1s.
 PAPER_TABLE3 = {
-    ("one-sided", "e_ratio_complete"): 1.05,
+    ("one-sided", "e_ratio_complete"): CALIBRATED_RATIO_ONE_SIDED,
     ("one-sided", "e_ratio_without_first_half_cycle"): 1.34,
     ("one-sided", "e_ratio_first_half_cycle"): 0.72,
 }
@@ -349,7 +350,7 @@ def campaign_tables(datasets, qc_df, n_boot=4000, seed=0):
     Parameters
     ----------
     datasets : iterable of xarray.Dataset
-        Reduced valid tests (``rocklab.lab.reduction``).
+        Stored motions of the valid tests (:func:`rocklab.lab.motion.stored_motion`).
     qc_df : pandas.DataFrame
         ``results/qc.csv``.
 
@@ -364,12 +365,12 @@ def campaign_tables(datasets, qc_df, n_boot=4000, seed=0):
         lists the valid tests whose motion could not be analysed, with the
         reason.
     """
-    from rocklab.dissipation.analysis import analyse_reduced_test
+    from rocklab.dissipation.analysis import analyse_stored_motion
 
     tests, impacts, e_n, failed = [], [], [], []
     for ds in datasets:
         try:
-            s, i, e = analyse_reduced_test(ds)
+            s, i, e = analyse_stored_motion(ds)
         except ValueError as exc:
             failed.append((ds.attrs["test_id"], str(exc)))
             continue

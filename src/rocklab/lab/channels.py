@@ -26,8 +26,22 @@ DEAD_SPAN_MM = 0.1
 #: A spike exceeds this many noise sigmas and this many mm.
 SPIKE_SIGMAS = 10.0
 SPIKE_MIN_MM = 0.5
+#: Out-of-plane channels held in reserve, each standing in for a lost one.
+BACKUP_CHANNELS = (2,)
+#: Out-of-plane channels of the kinematics: 'primary' (backups stand in) or 'all'.
+CHANNEL_POLICY = "primary"
 #: Statuses that lose a channel (the rest keep it, repaired or not).
 LOST_STATUSES = ("dead", "stuck", "clipped", "dropout")
+
+
+#: Defaults of the workflow config's ``channels`` section.
+OPTIONS = {
+    "flat_run_s": FLAT_RUN_S,
+    "max_gap_s": MAX_GAP_S,
+    "dead_span_mm": DEAD_SPAN_MM,
+    "backup": list(BACKUP_CHANNELS),
+    "policy": CHANNEL_POLICY,
+}
 
 
 @dataclass

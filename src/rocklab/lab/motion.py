@@ -8,51 +8,13 @@ includes the impact on the transverse walls), the peak |theta| between
 impacts, the angular velocity just before and just after each impact and the
 end of the motion.
 
-Derivative filter
------------------
-Velocities are never obtained by differentiating the record.  Each side of an
-impact is fitted, by linear least squares on the *raw* samples, with the
-local model
-
-    theta(tau) = c0 + c1 sinh(p tau)/p + c2 (cosh(p tau) - 1)/p^2
-                 + sum_f [a_f cos(2 pi f tau) + b_f sin(2 pi f tau)],
-
-where the first three terms span exactly the solutions of the linearised
-rocking equation theta'' = p^2 (theta -+ alpha) (Housner 1963) whatever the
-effective alpha, and the sinusoids absorb the mains hum (50 Hz).  c1 is the
-velocity and c2 the acceleration at tau = 0.  The window on each side
-reaches at most ``0.6/p`` from the impact, stops ``pre_guard_s`` before it
-(the impact instant is only known to a sample) and starts ``ring_guard_s``
-after it, which drops the transducer ringing: on the campaign records the
-post-impact transient is 0.05-0.1 mm at ~0.9 m (1e-4 rad) and dies out in
-40-50 ms, hence the 60 ms default.
-
-Why this and not a Savitzky-Golay (SG) or low-pass derivative.  Measured
-on the exact two-sided record of tests/test_motion.py (p = 3.4 rad/s,
-alpha = 0.075, 400 Hz, 1e-5 rad noise, 2e-5 rad hum, ringing), error of
-thetadot^- at impacts 1 and 6:
-
-* centred SG derivative (25 ms, order 2) at the last sample before the
-  impact: -5 % and -6 % (it straddles the velocity jump and lets the hum
-  through; moving it 12 ms earlier still gives -4 %, the wall accelerates
-  by p^2 alpha ~ 0.9 rad/s^2);
-* one-sided quadratic (constant acceleration) over the same 0.6/p window:
-  -3 %; one-sided cubic: -0.3 % and -0.6 % (jerk p^2 thetadot, snap);
-* this model: +0.005 % and +0.02 %; scatter over noise seeds 1.1e-4 rad/s,
-  0.04 % of the 0.25 rad/s impact velocity.  The residual nonlinearity
-  (sin x vs x, < alpha^2/6 = 0.4 % of the restoring moment at h/b = 6.5)
-  is absorbed by the free c2.  Fitting the hum rather than notch-filtering
-  it avoids smearing the impact kink over the notch's ~0.2 s response.
-
-Peaks and the release are refined with the same model (its extremum), the
-peak with a local fit over +-0.6/p clipped to the flight between the two
-impacts (a "local parabola" that stays exact away from the apex).  The
-release instant is the zero-velocity point of the model fitted to the fall
-(from the departure from the hold down to half the initial rotation): the
-fall from rest is theta = a - C cosh(p (t - t_r)), so t_r and theta0 = a - C
-come out of a linear fit instead of from a threshold.  When the hold is the
-slow creep of the screw device (the wall leaves the screw with the screw's
-speed) the release is where the fitted fall had that speed.
+Velocities come from the linearised flight fitted on each side of an
+impact, the transducer ringing excluded (:mod:`rocklab.lab.flight_fit`, the
+derivative filter); a peak is the extremum of the same model fitted over
++-0.6/p clipped to the flight between its two impacts (a "local parabola"
+that stays exact away from the apex).  The release (the instant the wall
+leaves the screw, theta0, the instability angle of the fall and the speed
+at the release) is :func:`rocklab.lab.release.screw_departure`.
 
 End of the motion
 -----------------
@@ -72,29 +34,15 @@ of Eq. 15, and 24 of the 154 two-sided tests on a mis-fitted last peak;
 with them, none.  Take-off velocities are not used for this: those of the
 short last flights are too uncertain and would cut real ones.
 
-Release and first quarter period
---------------------------------
-The paper does not define the release instant beyond "the wall was very
-slowly pushed by means of a screw device" (Sect. 2.1), and T_1/4 is "the
-first quarter of the first cycle" (Sect. 4, Fig.  17).  Here the release is
-the instant the wall leaves the screw, not the instant its fall becomes
-visible, and the choice matters.  Pushed just past its instability angle
-alpha_fall with the screw's speed v_s, the wall falls as alpha_fall - theta
-= x0 cosh(p t) + (v_s / p) sinh(p t), x0 = alpha_fall - theta0, so almost
-the whole quarter period is spent on an exponential departure and p T_1/4 ~
-ln(2 alpha_fall / (x0 + v_s / p)): 6.5-7 on the embedded campaign (theta0 /
-alpha_fall = 0.998-0.999, v_s ~ 3e-4 rad/s; at the release the wall is
-already on the exponential departure, x0 ~ v_s / p, so Housner's closed form
-from rest at the same theta0 is longer by ln 2 ~ 0.7).  A clock started when
-theta has dropped by a fraction f instead gives ln(1/f) whatever the wall
-and its release: 4.6 for 1 %, 3.5 for 3 % (measured on the campaign: 4.4-4.5
-and 3.4-3.5).  The paper's "close to or larger than 4" is what a visibility
-threshold of 1-2 % gives.  Only the screw-departure instant makes T_1/4 a
-property of the wall and of its release that Housner's closed form predicts,
-so it is the one used; :class:`Motion` carries the instability angle of the
-fitted fall (``alpha_fall``, the asymptote of the hyperbolic model) and the
-velocity at the release, the inputs of that closed form
-(:func:`rocklab.dissipation.analysis.quarter_period_linear`).
+Stored motion
+-------------
+The workflow extracts the motion of each test once, in the reduction job of
+its series, and stores it beside the reduced test as
+``results/motion/<test_id>.nc`` (:func:`stored_motion`): the :class:`Motion`
+(:func:`motion_to_dataset`, read back by :func:`read_motion`), who the test
+is and the constants of its wall (:data:`TEST_ATTRS`), and the channel-5
+amplification of Fig. 20b.  The dissipation tables and the diagnosis read
+it instead of extracting the motion again.
 
 All angles are returned as magnitudes of the rotation measured on the side
 of release (``sign`` gives that side); velocities keep the sign of the input.
@@ -106,11 +54,57 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
-from scipy.optimize import brentq
+import xarray as xr
 from scipy.signal import find_peaks, savgol_filter
+
+from rocklab.lab import kinematics
+from rocklab.lab.channels import LOST_STATUSES
+from rocklab.lab.flight_fit import local_fit, model_value, model_velocity, odd_samples, root_tau, stationary_tau
+from rocklab.lab.release import screw_departure
 
 #: Boundary conditions of Sect. 2.1.
 BOUNDARIES = ("two-sided", "one-sided")
+#: Columns of :attr:`Motion.impacts`, in order.
+IMPACT_FIELDS = (
+    "k",
+    "t_s",
+    "t_after_s",
+    "thetadot_before",
+    "thetadot_after",
+    "negative_excursion",
+    "e_velocity",
+    "peak_before",
+    "peak_after",
+)
+#: Scalar fields of :class:`Motion` and their types.
+SCALAR_FIELDS = {
+    "sign": int,
+    "t_release": float,
+    "theta0": float,
+    "noise_rad": float,
+    "peak_threshold": float,
+    "t_first_impact": float,
+    "t_end": float,
+    "n_negative_excursions": int,
+    "alpha_fall": float,
+    "thetadot_release": float,
+}
+#: Attributes of a reduced test that its stored motion carries: who the test
+#: is, its verdict and the constants of its wall.
+TEST_ATTRS = (
+    "test_id",
+    "series",
+    "specimen",
+    "boundary",
+    "contact_depth_mm",
+    "direction",
+    "unit",
+    "alpha",
+    "p",
+    "sampling_rate_hz",
+    "valid",
+    "reject_reason",
+)
 
 
 @dataclass(frozen=True)
@@ -170,12 +164,6 @@ class Motion:
     thetadot_release: float
 
 
-def odd_samples(n, lo=5):
-    """Odd Savitzky-Golay window length nearest ``n`` samples, at least ``lo``."""
-    n = max(int(round(n)), lo)
-    return n + 1 - n % 2
-
-
 def noise_level(theta, fs):
     """Robust rms of the noise plus mains hum of a rotation record [rad].
 
@@ -191,96 +179,6 @@ def noise_level(theta, fs):
     return float(1.4826 * np.median(np.abs(r - np.median(r))))
 
 
-def _design(tau, p, hum_hz, fs):
-    cols = [np.ones_like(tau), np.sinh(p * tau) / p, (np.cosh(p * tau) - 1.0) / p**2]
-    span = tau[-1] - tau[0] if tau.size else 0.0
-    for f in hum_hz:
-        # A hum column is only separable from the motion over >= 1 period;
-        # at exactly Nyquist the sine column vanishes and only cos is kept.
-        if f <= fs / 2 and span >= 1.0 / f:
-            cols.append(np.cos(2 * np.pi * f * tau))
-            if f < fs / 2 - 1e-9:
-                cols.append(np.sin(2 * np.pi * f * tau))
-    return np.column_stack(cols)
-
-
-def local_fit(t, theta, t_ref, t_lo, t_hi, p, fs, hum_hz=(50.0,), min_samples=5):
-    """Least-squares fit of the linearised rocking solution on [t_lo, t_hi].
-
-    Parameters
-    ----------
-    t, theta : ndarray
-        Time [s] and rotation [rad].
-    t_ref : float
-        Origin of tau; the coefficients are value, velocity, acceleration
-        at ``t_ref``.
-    t_lo, t_hi : float
-        Fit window [s].
-    p : float
-        Frequency parameter [rad/s].
-    fs : float
-        Sampling rate [Hz].
-    hum_hz : sequence of float
-        Mains frequencies fitted as nuisance sinusoids.
-
-    Returns
-    -------
-    ndarray of shape (3,) or None
-        (c0, c1, c2); None with fewer than ``min_samples`` samples.
-    """
-    i0, i1 = np.searchsorted(t, [t_lo, t_hi], side="left")
-    i1 = min(i1 + (i1 < t.size and t[i1] <= t_hi), t.size)
-    if i1 - i0 < min_samples:
-        return None
-    tau = t[i0:i1] - t_ref
-    A = _design(tau, p, hum_hz, fs)
-    if i1 - i0 < A.shape[1] + 2:
-        A = A[:, :3]
-    coef = np.linalg.lstsq(A, theta[i0:i1], rcond=None)[0]
-    return coef[:3]
-
-
-def model_value(c, tau, p):
-    """Value of the local model at tau [rad]."""
-    return c[0] + c[1] * np.sinh(p * tau) / p + c[2] * (np.cosh(p * tau) - 1.0) / p**2
-
-
-def model_velocity(c, tau, p):
-    """Velocity of the local model at tau [rad/s]."""
-    return c[1] * np.cosh(p * tau) + c[2] * np.sinh(p * tau) / p
-
-
-def _stationary_tau(c, p):
-    """tau where the model velocity vanishes (NaN if it has none)."""
-    if c[2] == 0.0:
-        return np.nan
-    r = -p * c[1] / c[2]
-    return np.arctanh(r) / p if abs(r) < 1.0 else np.nan
-
-
-def _inflection_tau(c, p):
-    """tau where the model acceleration vanishes, i.e. theta = c0 - c2/p^2
-    and the speed is least (NaN if it has none)."""
-    if c[1] == 0.0:
-        return np.nan
-    r = -c[2] / (p * c[1])
-    return np.arctanh(r) / p if abs(r) < 1.0 else np.nan
-
-
-def _root_tau(c, p, tau0=0.0):
-    """Zero of the model nearest tau0 by Newton (NaN if it does not converge)."""
-    tau = tau0
-    for _ in range(30):
-        v = model_velocity(c, tau, p)
-        if v == 0.0:
-            return np.nan
-        step = model_value(c, tau, p) / v
-        tau -= step
-        if abs(step) < 1e-9:
-            return tau
-    return np.nan
-
-
 def _crossings(u, lo, hi):
     """Indices i where u passes from >= 0 at i to < 0 at i+1 (or vice versa)."""
     s = np.signbit(u[lo:hi])
@@ -292,63 +190,6 @@ def _arrival(us, i, level):
     ``level`` of zero (None if the record ends first)."""
     back = np.flatnonzero(us[i:] <= level)
     return i + int(back[0]) if back.size else None
-
-
-def find_release(t, u, p, fs, noise, smooth_win):
-    """Release instant and initial rotation of a record u = sign * theta.
-
-    Returns (t_release, theta0, i_half, alpha_fall, v_release): ``i_half`` is
-    the first sample below theta0 / 2 (the fall), ``alpha_fall`` the
-    asymptote c0 - c2 / p^2 of the model fitted to the fall (NaN without a
-    fit) and ``v_release`` the speed towards the vertical at the release.
-    See the module docstring for the method.
-    """
-    us = savgol_filter(u, smooth_win, 2)
-    i_max = int(np.argmax(us))
-    below = np.flatnonzero(us[i_max:] < 0.5 * us[i_max])
-    if below.size == 0:
-        raise ValueError("no fall from the hold plateau: the wall was not released")
-    i_half = i_max + int(below[0])
-    # Hold velocity: zero on a plateau, the screw speed on a slow ramp (the
-    # campaign records creep at ~3e-4 rad/s before the wall leaves the screw).
-    vwin = odd_samples(0.1 * fs)
-    vs = savgol_filter(u, vwin, 2, deriv=1, delta=1.0 / fs)
-    drop = np.flatnonzero(us[i_max:i_half] < 0.98 * us[i_max])
-    i_q = i_max + (int(drop[0]) if drop.size else 0)
-    v_hold = float(np.median(vs[: max(i_q // 2, 3)])) if i_q > 2 * vwin else 0.0
-    v_hold = min(v_hold, 0.0)
-    # Departure: the last sample before the fall whose velocity is still the
-    # hold's within 8 sigma of a 0.1 s slope estimate.
-    sigma_v = noise * fs * np.sqrt(12.0 / (vwin * (vwin**2 - 1.0)))
-    v_th = max(8.0 * sigma_v, 1e-3 * p * us[i_max])
-    still = np.flatnonzero(vs[: i_half + 1] > v_hold - v_th)
-    i_dep = int(still[-1]) if still.size else 0
-    i_dep = min(i_dep, i_half - 5)
-    c = local_fit(t, u, t[i_dep], t[i_dep], t[i_half], p, fs, hum_hz=())
-    if c is not None:
-        # Release: where the fitted fall had the hold velocity (zero from
-        # rest).  A wall leaving the screw with the screw's speed passes its
-        # instability angle moving, so the fit may have no zero-velocity
-        # point: search from its slowest point instead, and take that point
-        # when the fit never slows down to the hold's speed.  Extrapolating
-        # further back would meet the unphysical branch on which the fitted
-        # speed grows again.
-        f = lambda tau: model_velocity(c, tau, p) - v_hold  # noqa: E731
-        tau_lo = _stationary_tau(c, p)
-        tau_lo = tau_lo if np.isfinite(tau_lo) else _inflection_tau(c, p)
-        tau_lo = tau_lo if np.isfinite(tau_lo) and tau_lo > -3.0 / p else -3.0 / p
-        tau_hi = 0.5 * (t[i_half] - t[i_dep])
-        if f(tau_hi) < 0.0:
-            tau_r = brentq(f, tau_lo, tau_hi, xtol=1e-7) if f(tau_lo) >= 0.0 else tau_lo
-            return (
-                t[i_dep] + tau_r,
-                float(model_value(c, tau_r, p)),
-                i_half,
-                float(c[0] - c[2] / p**2),
-                -float(model_velocity(c, tau_r, p)),
-            )
-    i0 = max(0, i_dep - int(0.05 * fs))
-    return t[i_dep], float(np.median(u[i0 : i_dep + 1])), i_half, np.nan, -v_hold
 
 
 def extract_motion(t, theta, fs, boundary, p, *, k_noise=10.0, ring_guard_s=0.06, window_p=0.6, hum_hz=(50.0,)):
@@ -393,7 +234,7 @@ def extract_motion(t, theta, fs, boundary, p, *, k_noise=10.0, ring_guard_s=0.06
     sm = savgol_filter(theta, smooth_win, 2)
     sign = 1 if sm[np.argmax(np.abs(sm))] >= 0 else -1
     u = sign * theta
-    t_rel, theta0, i_half, alpha_fall, v_rel = find_release(t, u, p, fs, noise, smooth_win)
+    t_rel, theta0, i_half, alpha_fall, v_rel = screw_departure(t, u, p, fs, noise, smooth_win)
     us = sign * sm
     threshold = k_noise * noise
     hyst = 5.0 * noise
@@ -453,7 +294,7 @@ def extract_motion(t, theta, fs, boundary, p, *, k_noise=10.0, ring_guard_s=0.06
         c_b = local_fit(t, u, tb, lo, tb - g_pre, p, fs, hum_hz)
         vb = np.nan
         if c_b is not None:
-            r = _root_tau(c_b, p)
+            r = root_tau(c_b, p)
             tau = r if np.isfinite(r) and abs(r) < 4 * g_pre else 0.0
             tb = tb + tau
             vb = model_velocity(c_b, tau, p)
@@ -464,7 +305,7 @@ def extract_motion(t, theta, fs, boundary, p, *, k_noise=10.0, ring_guard_s=0.06
         c_a = local_fit(t, u, ta, ta + guard, hi, p, fs, hum_hz)
         va = np.nan
         if c_a is not None:
-            r = _root_tau(c_a, p)
+            r = root_tau(c_a, p)
             tau = r if np.isfinite(r) and abs(r) < ring_guard_s else 0.0
             ta = ta + tau
             va = model_velocity(c_a, tau, p)
@@ -490,7 +331,7 @@ def extract_motion(t, theta, fs, boundary, p, *, k_noise=10.0, ring_guard_s=0.06
         side = np.sign(us[i])
         flight = True
         if c is not None:
-            tau = _stationary_tau(c, p)
+            tau = stationary_tau(c, p)
             if np.isfinite(tau) and lo - t[i] <= tau <= hi - t[i]:
                 val = abs(float(model_value(c, tau, p)))
             flight = -side * c[2] >= 0.5 * p**2 * (theta0 - val)
@@ -504,8 +345,9 @@ def extract_motion(t, theta, fs, boundary, p, *, k_noise=10.0, ring_guard_s=0.06
     n_ok = int(np.argmin(reliable)) if not reliable.all() else peaks.size
     rows = rows[:n_ok] if n_ok < len(rows) else rows
     peaks = peaks[:n_ok]
-    imp = pd.DataFrame(
-        rows, columns=["k", "t_s", "t_after_s", "thetadot_before", "thetadot_after", "negative_excursion"]
+    # typed even when empty, so that a stored motion reads back the same
+    imp = pd.DataFrame(rows, columns=list(IMPACT_FIELDS[:6])).astype(
+        {"k": int} | dict.fromkeys(IMPACT_FIELDS[1:6], float)
     )
     imp["thetadot_before"] *= sign
     imp["thetadot_after"] *= sign
@@ -537,3 +379,110 @@ def centre_amplification(disp_centre, disp_side_from_theta, i_first_impact):
     c = np.abs(np.asarray(disp_centre, float)[i_first_impact:])
     s = np.abs(np.asarray(disp_side_from_theta, float)[i_first_impact:])
     return float(np.nanmax(c) / np.nanmax(s))
+
+
+def monitor_readings(ds):
+    """Monitor transducer (channel 5 at the centre of the facade, Fig. 20a).
+
+    Its reading against the one the rigid-body motion of the reduced test
+    (theta, phi, v, w of Eqs. 3-7, forward model of
+    :func:`rocklab.lab.kinematics.transducer_elongation`) gives at the same
+    point.  The monitor is kept out of the kinematic fit, so any excess is
+    deformation of the facade (Sect. 4).  The rigid reading uses all four
+    degrees of freedom rather than theta alone so that twist and sliding are
+    not read as deformation.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A reduced test (``rocklab.lab.reduction``).
+
+    Returns
+    -------
+    (int, ndarray, ndarray) or None
+        Channel number, measured and rigid-body elongation [mm] on ``time``;
+        None when the setup has no working monitor channel.
+    """
+    role = ds.channel_role.values.astype(str)
+    status = ds.channel_status.values.astype(str)
+    k = np.flatnonzero((role == "monitor") & ~np.isin(status, LOST_STATUSES))
+    if k.size == 0:
+        return None
+    k = k[:1]
+    X = np.column_stack([ds[f"wall_{c}"].values[k] for c in "xyz"])
+    F = np.column_stack([ds[f"frame_{c}"].values[k] for c in "xyz"])
+    rigid = kinematics.transducer_elongation(
+        ds.theta.values, ds.phi.values, ds.v.values, ds.w.values, X, F, float(ds.attrs["thickness_mm"])
+    )
+    return int(ds.channel.values[k[0]]), ds.elongation.values[:, k[0]], rigid[:, 0]
+
+
+def motion_to_dataset(m: Motion, attrs=None) -> xr.Dataset:
+    """A :class:`Motion` as a dataset: impacts on ``impact``, peaks on ``peak``,
+    the scalars as attributes (after ``attrs``); :func:`motion_from_dataset`
+    reads it back."""
+    data = {name: ("impact", m.impacts[name].to_numpy()) for name in IMPACT_FIELDS}
+    data["peaks"] = ("peak", np.asarray(m.peaks, float), {"units": "rad", "long_name": "reliable peaks |theta|"})
+    ds = xr.Dataset(data, attrs={**(attrs or {}), **{name: getattr(m, name) for name in SCALAR_FIELDS}})
+    for name in ("t_s", "t_after_s"):
+        ds[name].attrs["units"] = "s"
+    for name in ("thetadot_before", "thetadot_after"):
+        ds[name].attrs["units"] = "rad/s"
+    for name in ("negative_excursion", "peak_before", "peak_after"):
+        ds[name].attrs["units"] = "rad"
+    return ds
+
+
+def motion_from_dataset(ds) -> Motion:
+    """The :class:`Motion` of a dataset of :func:`motion_to_dataset` or :func:`stored_motion`.
+
+    Raises
+    ------
+    ValueError
+        When no motion could be extracted from the test (the reason).
+    """
+    a = ds.attrs
+    if "sign" not in a:
+        raise ValueError(a.get("motion_error", "no motion stored"))
+    return Motion(
+        impacts=pd.DataFrame({name: ds[name].values for name in IMPACT_FIELDS}),
+        peaks=ds.peaks.values,
+        **{name: kind(a[name]) for name, kind in SCALAR_FIELDS.items()},
+    )
+
+
+def read_motion(path) -> Motion:
+    """The :class:`Motion` stored at ``path`` (``results/motion/<test_id>.nc``)."""
+    with xr.open_dataset(path) as ds:
+        return motion_from_dataset(ds.load())
+
+
+def stored_motion(ds) -> xr.Dataset:
+    """The motion of a reduced test as the workflow stores it (module docstring).
+
+    :func:`extract_motion` of theta with the default settings, the test's
+    :data:`TEST_ATTRS`, and ``centre_amplification``: the largest |reading|
+    of the monitor channel after the first impact over that of the
+    rigid-body motion (:func:`monitor_readings`,
+    :func:`centre_amplification`; NaN without a working monitor).  A test
+    with no rotation (unreadable) or no motion found keeps the reason in
+    ``motion_error`` instead of the motion.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A reduced test (``rocklab.lab.reduction``).
+    """
+    a = ds.attrs
+    attrs = {k: a[k] for k in TEST_ATTRS if k in a}
+    if "theta" not in ds:
+        return xr.Dataset(attrs={**attrs, "motion_error": f"no rotation: {a.get('reject_detail', '')}"})
+    try:
+        m = extract_motion(ds.time.values, ds.theta.values, float(a["sampling_rate_hz"]), a["boundary"], float(a["p"]))
+    except ValueError as exc:
+        return xr.Dataset(attrs={**attrs, "motion_error": str(exc)})
+    amp = np.nan
+    mon = monitor_readings(ds)
+    if mon is not None and np.isfinite(m.t_first_impact):
+        amp = centre_amplification(mon[1], mon[2], int(np.searchsorted(ds.time.values, m.t_first_impact)))
+    return motion_to_dataset(m, {**attrs, "centre_amplification": amp})

@@ -16,22 +16,14 @@ import pandas as pd
 import xarray as xr
 
 from rocklab.lab import channels as health
-from rocklab.lab import kinematics, validity
+from rocklab.lab import kinematics, release, validity
 from rocklab.lab.campaign import Campaign, RawFormatError, read_record, row_series
 from rocklab.physics import wall
 
 log = logging.getLogger(__name__)
 
-DEFAULTS = {
-    "channels": {
-        "flat_run_s": health.FLAT_RUN_S,
-        "max_gap_s": health.MAX_GAP_S,
-        "dead_span_mm": health.DEAD_SPAN_MM,
-        "backup": [2],
-        "policy": "primary",
-    },
-    "validity": {"residual_top_mm": 1.5, "release_velocity_ratio": 0.10, "max_lost_out_of_plane": 1},
-}
+#: Defaults of the config sections a reduction reads.
+DEFAULTS = {"channels": health.OPTIONS, "validity": validity.RULES}
 
 QC_COLUMNS = [
     "test_id",
@@ -165,8 +157,8 @@ def reduce_test(campaign: Campaign, test_id: str, options=None) -> xr.Dataset:
         meta["thickness_mm"],
     )
     residual = validity.residual_out_of_plumb(top, rec.fs)
-    release = validity.release_state(rec.time, motion.theta.values, meta["p"])
-    ratio = release["thetadot0"] / meta["overturning_velocity"]
+    state = release.release_state(rec.time, motion.theta.values, meta["p"])
+    ratio = state["thetadot0"] / meta["overturning_velocity"]
     valid, reason, detail = validity.verdict(choice, ratio, residual, opt["validity"])
 
     flags = [d for d in (r.describe() for r in reports) if d] + choice.flags
@@ -227,9 +219,9 @@ def reduce_test(campaign: Campaign, test_id: str, options=None) -> xr.Dataset:
         reject_detail=detail or "",
         residual_top_mm=residual,
         release_velocity_ratio=ratio,
-        t_release=release["t_release"],
-        theta0_release=release["theta0"],
-        alpha_fit_release=release["alpha_fit"],
+        t_release=state["t_release"],
+        theta0_release=state["theta0"],
+        alpha_fit_release=state["alpha_fit"],
         channels_used=" ".join(f"ch{c}" for c in choice.used),
         flags="; ".join(flags),
         channel_reports=json.dumps([r.__dict__ for r in reports], default=float),

@@ -6,7 +6,8 @@
   within 1.5 mm of where it was at rest before the test (the vertical wall,
   where the transducers were zeroed);
 * undisturbed initial conditions: a release angular velocity above 10 % of
-  the overturning velocity of Eq. 16 is disturbed;
+  the overturning velocity of Eq. 16 is disturbed (the release speed of
+  :func:`rocklab.lab.release.release_state`);
 * working instruments: with two of the out-of-plane kinematic channels lost
   the test is rejected; one is replaced by the backup; a lost in-plane
   channel leaves v unsolved (v = 0, flagged).
@@ -22,7 +23,20 @@ import numpy as np
 import pandas as pd
 
 from rocklab.lab import kinematics
+from rocklab.lab.channels import BACKUP_CHANNELS, CHANNEL_POLICY
 
+#: Largest residual out-of-plumb of the wall top after the motion [mm].
+RESIDUAL_TOP_MM = 1.5
+#: Largest release speed of an undisturbed release, over Eq. 16 [-].
+RELEASE_VELOCITY_RATIO = 0.10
+#: Most out-of-plane kinematic channels lost (the backup stands in) before a reject.
+MAX_LOST_OUT_OF_PLANE = 1
+#: The rules above: the defaults of the workflow config's ``validity`` section.
+RULES = {
+    "residual_top_mm": RESIDUAL_TOP_MM,
+    "release_velocity_ratio": RELEASE_VELOCITY_RATIO,
+    "max_lost_out_of_plane": MAX_LOST_OUT_OF_PLANE,
+}
 #: Reject reasons, in the order they are reported when several apply.
 REASONS = ("unreadable", "instrument_malfunction", "disturbed_initial_conditions", "residual_out_of_plumb")
 
@@ -62,7 +76,9 @@ class ChannelChoice:
     malfunction: str | None = None
 
 
-def choose_channels(roles: pd.DataFrame, lost: set, backup=(2,), policy="primary", max_lost=1) -> ChannelChoice:
+def choose_channels(
+    roles: pd.DataFrame, lost: set, backup=BACKUP_CHANNELS, policy=CHANNEL_POLICY, max_lost=MAX_LOST_OUT_OF_PLANE
+) -> ChannelChoice:
     """Pick the kinematic channels as the lab does.
 
     Parameters
@@ -138,85 +154,7 @@ def residual_out_of_plumb(top_y, fs, tail_s=1.0):
     return float(np.nanmax(np.abs(np.nanmedian(tail, axis=0))))
 
 
-def release_state(t, theta, p):
-    """Release instant, rotation and angular velocity of a free-rocking record.
-
-    The wall falls from its held rotation to the first impact under
-    theta'' = p^2 (theta - alpha_ind) (Housner's piecewise-linear equation),
-    so over the fall theta = alpha_ind + A e^{pt} + B e^{-pt}, linear in
-    (alpha_ind, A, B) once p is known from the geometry.  That fit over the
-    stretch between 97 % and 50 % of the held rotation ignores noise and the
-    screw's creep, and its invariant (theta - alpha_ind)^2 - (theta'/p)^2 =
-    4AB gives the velocity with which the wall left its held rotation:
-    zero for a wall that fell from rest at its instability point, the kick
-    for a disturbed release.
-
-    Parameters
-    ----------
-    t, theta : ndarray
-        Time [s] and rotation [rad].
-    p : float
-        Frequency parameter [rad/s].
-
-    Returns
-    -------
-    dict
-        ``t_release`` [s], ``theta0`` [rad] (signed, the held rotation),
-        ``thetadot0`` [rad/s] (magnitude), ``alpha_fit`` [rad], ``i_release``
-        (last sample at the held rotation); NaN where no fall is found.
-    """
-    nan = {"t_release": np.nan, "theta0": np.nan, "thetadot0": np.nan, "alpha_fit": np.nan, "i_release": -1}
-    ok = np.isfinite(theta)
-    if ok.sum() < 20:
-        return nan
-    t, theta = np.asarray(t)[ok], np.asarray(theta)[ok]
-    k0 = max(int(0.05 * len(theta)), 1)
-    sign = np.sign(np.median(theta[:k0]))
-    if sign == 0:
-        return nan
-    y = sign * theta
-    below = np.flatnonzero(y < 0.5 * np.median(y[:k0]))
-    if below.size == 0:
-        return nan
-    i50 = int(below[0])
-    fs = 1.0 / np.median(np.diff(t))
-    look = max(int(fs), 1)
-    y_top = float(np.max(y[max(i50 - look, 0) : i50 + 1]))
-    i_top = max(i50 - look, 0) + int(np.argmax(y[max(i50 - look, 0) : i50 + 1]))
-    seg = np.arange(i_top, i50 + 1)
-    seg = seg[(y[seg] <= 0.97 * y_top) & (y[seg] >= 0.5 * y_top)]
-    if seg.size < 5:
-        return nan
-    tau = t[seg] - t[seg[0]]
-    M = np.column_stack([np.ones_like(tau), np.exp(p * tau), np.exp(-p * tau)])
-    (a_ind, A, B), *_ = np.linalg.lstsq(M, y[seg], rcond=None)
-    held = np.flatnonzero(y[: seg[0] + 1] >= 0.997 * y_top)
-    i_rel = int(held[-1]) if held.size else int(seg[0])
-    # The held level is the plateau's median, not its noisy maximum, which
-    # would read as a release velocity of a few per cent of Eq. 16.
-    y_hold = float(np.median(y[max(i_rel - look // 4, 0) : i_rel + 1]))
-    v2 = p**2 * ((y_hold - a_ind) ** 2 - 4.0 * A * B)
-    # Released from rest the fitted trajectory turns at theta' = 0; released
-    # with a kick it crosses the held level going down: u = e^{p tau} solves
-    # A u^2 + (alpha_ind - theta_hold) u + B = 0 there.
-    if v2 <= 0 and A * B > 0:
-        tau_rel = 0.5 * np.log(B / A) / p
-    else:
-        roots = np.roots([A, a_ind - y_hold, B])
-        roots = roots[np.isreal(roots) & (roots.real > 0)].real
-        down = roots[p * (A * roots - B / roots) < 0] if roots.size else roots
-        tau_rel = np.log(down.max()) / p if down.size else t[i_rel] - t[seg[0]]
-    t_rel = float(np.clip(t[seg[0]] + tau_rel, t[0], t[seg[0]]))
-    return {
-        "t_release": t_rel,
-        "theta0": float(sign * y_hold),
-        "thetadot0": float(np.sqrt(max(v2, 0.0))),
-        "alpha_fit": float(a_ind),
-        "i_release": i_rel,
-    }
-
-
-def verdict(choice: ChannelChoice, release_ratio, residual_top_mm, rules) -> tuple[bool, str, str]:
+def verdict(choice: ChannelChoice, release_ratio, residual_top_mm, rules=RULES) -> tuple[bool, str, str]:
     """Valid flag, reject reason and its explanation by the lab's rules.
 
     Parameters

@@ -17,7 +17,7 @@ Layers, from the bottom:
 * :func:`instrument_readings` / :func:`apply_faults`: readings from a motion;
 * :func:`record_from_motion`: a whole record (hold, release, rocking, rest)
   from a free-rocking history theta(t) given as arrays;
-* :func:`simulate_test`: the same from :func:`rocklab.simulation.reference.simulate_free`;
+* :func:`simulate_virtual_test`: the same from :func:`rocklab.simulation.reference.simulate_free`;
 * :func:`write_campaign`: a folder in the lab's format plus ``truth.csv``;
   :func:`default_plan` a campaign that looks like the real one.
 
@@ -35,17 +35,9 @@ import numpy as np
 import pandas as pd
 
 from rocklab.lab import kinematics
-
-#: The lab's validity limits (spec, "What makes a test valid").
+from rocklab.lab.validity import MAX_LOST_OUT_OF_PLANE, RELEASE_VELOCITY_RATIO, RESIDUAL_TOP_MM
 from rocklab.physics import restitution, wall
 
-#: The lab's validity limits (spec, "What makes a test valid").
-RESIDUAL_TOP_LIMIT_MM = 1.5
-RELEASE_RATIO_LIMIT = 0.10
-#: Default e_exp / e_an,2s of two-sided tests (paper, Sect. 4: ~0.95).
-TWO_SIDED_RATIO = 0.95
-#: Reject reasons, in the order they prevail when several apply.
-REASONS = ("unreadable", "instrument_malfunction", "disturbed_initial_conditions", "residual_out_of_plumb")
 #: Faults that lose a channel, and those that are repaired.
 LOSING_FAULTS = ("dead", "stuck", "clipped")
 REPAIRABLE_FAULTS = ("spikes", "gaps")
@@ -523,7 +515,7 @@ def expected_verdict(faults, layout, thickness_mm, release_ratio, residual_top_m
     Returns
     -------
     (str, str)
-        Reason (``valid`` or one of :data:`REASONS`, the first that applies)
+        Reason (``valid`` or one of :data:`rocklab.lab.validity.REASONS`, the first that applies)
         and its explanation.
     """
     if any(f.kind == "unreadable" for f in faults):
@@ -534,11 +526,11 @@ def expected_verdict(faults, layout, thickness_mm, release_ratio, residual_top_m
         layout.channel[(np.abs(d[:, 1]) >= np.abs(d[:, 0])) & ~np.isclose(np.abs(X[:, 1]), thickness_mm / 2, atol=1.0)]
     )
     lost = sorted({f.channel for f in faults if f.kind in LOSING_FAULTS} & oop)
-    if len(lost) >= 2:
+    if len(lost) > MAX_LOST_OUT_OF_PLANE:
         return "instrument_malfunction", f"{len(lost)} out-of-plane channels lost ({lost})"
-    if release_ratio > RELEASE_RATIO_LIMIT:
+    if release_ratio > RELEASE_VELOCITY_RATIO:
         return "disturbed_initial_conditions", f"release velocity {release_ratio:.0%} of Eq. 16"
-    if abs(residual_top_mm) > RESIDUAL_TOP_LIMIT_MM:
+    if abs(residual_top_mm) > RESIDUAL_TOP_MM:
         return "residual_out_of_plumb", f"top residual {abs(residual_top_mm):.2f} mm"
     return "valid", ""
 
@@ -552,7 +544,7 @@ def _law_name(law):
     return f"{type(law).__name__}({inner})"
 
 
-def simulate_test(test: VirtualTest, specimen, layout, rng=None, t_end=40.0):
+def simulate_virtual_test(test: VirtualTest, specimen, layout, rng=None, t_end=40.0):
     """Simulate one test with :func:`rocklab.simulation.reference.simulate_free` and record it.
 
     Parameters
@@ -585,7 +577,7 @@ def simulate_test(test: VirtualTest, specimen, layout, rng=None, t_end=40.0):
     kw = {"alpha_rock": ratio * alpha, **test.model}
     if not one and "impact" not in kw:
         # The campaign's mean e_exp / e_an,2s (Sect. 4): records of ~10 s.
-        kw["impact"] = Scaled(HousnerTwoSided(), TWO_SIDED_RATIO)
+        kw["impact"] = Scaled(HousnerTwoSided(), restitution.CALIBRATED_RATIO_TWO_SIDED)
     model = RockingModel.from_wall(h, b, boundary=test.boundary, **kw)
     sgn = 1.0 if test.direction == "push" else -1.0
     a_side = model.alpha_pos if sgn > 0 else model.alpha_minus
@@ -611,7 +603,8 @@ def simulate_test(test: VirtualTest, specimen, layout, rng=None, t_end=40.0):
     imp = hist.impacts
     base = imp[imp["kind"] == "base"] if len(imp) else imp
     ratios = (base["thetadot_after"] / base["thetadot_before"]).to_numpy() if len(base) else np.array([])
-    e_an = restitution.one_sided(alpha) if (one and model.gap == 0) else restitution.two_sided(alpha)
+    # a one-sided wall with a gap rocks on the base impacts of Eq. 2
+    e_an = restitution.analytic("one-sided" if one and model.gap == 0 else "two-sided", alpha)
     reason, why = expected_verdict(
         test.faults, layout, specimen["thickness_mm"], test.release_ratio, truth["residual_top_mm"]
     )
@@ -687,7 +680,7 @@ def write_campaign(out_dir, tests, specimens=None, layouts=None, seed=0, t_end=4
                 test.setup, sp.length_mm, sp.height_mm, sp.thickness_mm, test.boundary == "one-sided"
             )
         layout = layouts[test.setup]
-        t, E, truth = simulate_test(test, sp, layout, np.random.default_rng(ss), t_end)
+        t, E, truth = simulate_virtual_test(test, sp, layout, np.random.default_rng(ss), t_end)
         rel = f"tests/{test.test_id}.csv.gz"
         write_record(
             out / rel,

@@ -30,6 +30,24 @@ def potential(theta, a, p):
     return p**2 * (np.cos(a - theta) - np.cos(a))
 
 
+def potential_linear(theta, a, p):
+    """:func:`potential` of Housner's linearised equation theta'' = p^2 (theta - a) [rad^2/s^2].
+
+    p^2 (a |theta| - theta^2 / 2), the energy balance behind Eq. 10.
+    """
+    return p**2 * (a * theta - 0.5 * theta**2)
+
+
+def energy(theta, thetadot, a, p, linear=False):
+    """Energy per unit I_O of a wall at |theta| with speed thetadot on hinge a [rad^2/s^2].
+
+    1/2 thetadot^2 plus :func:`potential` (or :func:`potential_linear`): the
+    kinetic energy it would have at theta = 0, conserved in free undamped
+    flight; the wall overturns if it exceeds the potential at theta = a.
+    """
+    return 0.5 * thetadot**2 + (potential_linear if linear else potential)(theta, a, p)
+
+
 def apex(E, a, p):
     """|theta| at which a wall with energy E per unit I_O stops on hinge a [rad] (a if it overturns)."""
     c = np.cos(a) + np.maximum(E, 0.0) / p**2

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from rocklab.physics.flight import potential
+
 #: Standard gravity [m/s^2].
 G = 9.80665
 
@@ -66,7 +68,7 @@ def overturning_velocity(alpha, p):
     the kinetic energy that lifts the centre of mass from theta = 0 to the
     instability rotation theta = alpha.
     """
-    return np.sqrt(2.0 * np.asarray(p, float) ** 2 * (1.0 - np.cos(alpha)))
+    return np.sqrt(2.0 * potential(alpha, alpha, np.asarray(p, float)))
 
 
 def no_sliding_friction(zeta):

@@ -195,7 +195,7 @@ def centre_amplification(tests, ds=None, monitor=None, t_first_impact=None):
         The sample test (reduced); panel a is left empty without one (a
         campaign without a monitor channel).
     monitor : (int, ndarray, ndarray)
-        :func:`rocklab.dissipation.analysis.monitor_readings` of ``ds``.
+        :func:`rocklab.lab.motion.monitor_readings` of ``ds``.
     t_first_impact : float
         First impact of the sample test [s].
     """
@@ -258,7 +258,7 @@ def dissipation_figures(tests, e_by_n, series, sample=None):
     dict
         ``"fig10"`` ... ``"fig20"`` -> Figure.
     """
-    from rocklab.dissipation.analysis import monitor_readings
+    from rocklab.lab.motion import monitor_readings
 
     both = ("two-sided", "one-sided")
     figs = {

@@ -47,6 +47,7 @@ import xarray as xr
 
 from rocklab import __version__
 from rocklab.physics import impact, wall
+from rocklab.physics.restitution import CALIBRATED_RATIO_ONE_SIDED, CALIBRATED_RATIO_TWO_SIDED
 from rocklab.simulation.batch import overturning_batch
 from rocklab.simulation.model import OVERTURN, RockingModel
 from rocklab.simulation.reference import simulate_ground
@@ -56,11 +57,6 @@ log = logging.getLogger(__name__)
 #: Paper's wall of Figs. 21 and 23: slenderness [rad] and half diagonal [m].
 ALPHA = 0.1
 R = 3.0
-
-#: e_exp / e_an,2s of two-sided walls without the outlier series (Sect. 3).
-E_RATIO_2S = 0.95
-#: Mean e_exp / e_an,1s of one-sided walls over the complete histories (Table 3).
-E_RATIO_1S = 1.05
 
 #: The five maps of Sect. 5: name -> (boundary, description).
 MODELS = {
@@ -104,11 +100,11 @@ def impact_law(name, eq17=None):
     if name == "2s-housner":
         return impact.HousnerTwoSided()
     if name == "2s-0.95":
-        return impact.Scaled(impact.HousnerTwoSided(), E_RATIO_2S)
+        return impact.Scaled(impact.HousnerTwoSided(), CALIBRATED_RATIO_TWO_SIDED)
     if name == "1s-zero":
         return impact.Zero()
     if name == "1s-1.05":
-        return impact.Scaled(impact.OneSided(), E_RATIO_1S)
+        return impact.Scaled(impact.OneSided(), CALIBRATED_RATIO_ONE_SIDED)
     if name == "1s-eq17":
         return impact.AmplitudeLaw(impact.OneSided(), *(eq17 or ()))
     raise KeyError(f"unknown map model {name!r}; choose one of {', '.join(MODELS)}")

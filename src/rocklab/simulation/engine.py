@@ -13,6 +13,8 @@ import math
 import numba
 import numpy as np
 
+from rocklab.physics import flight
+
 _P_APOS, _P_ANEG, _P_P, _P_ZETA, _P_GAP, _P_ONE, _P_LIN, _P_OV, _P_VREST, _P_G, _P_SUB, _P_VR = range(12)
 
 
@@ -90,21 +92,26 @@ def _coefficient(law, row, v, prm):
     return e0 * f
 
 
+# the one definition of the block's energy, compiled for the engine
+_potential = numba.njit(cache=True, inline="always")(flight.potential)
+_potential_linear = numba.njit(cache=True, inline="always")(flight.potential_linear)
+
+
 @numba.njit(cache=True)
 def _can_overturn(x, v, s, prm):
-    p2 = prm[_P_P] ** 2
+    p = prm[_P_P]
     a = prm[_P_APOS] if s > 0 else prm[_P_ANEG]
     th = abs(x)
     if prm[_P_LIN] > 0:
-        en = 0.5 * v * v + p2 * (a * th - 0.5 * th * th)
-        crit = 0.5 * p2 * prm[_P_APOS] ** 2
+        en = 0.5 * v * v + _potential_linear(th, a, p)
+        crit = _potential_linear(prm[_P_APOS], prm[_P_APOS], p)
         if prm[_P_ONE] == 0:
-            crit = min(crit, 0.5 * p2 * prm[_P_ANEG] ** 2)
+            crit = min(crit, _potential_linear(prm[_P_ANEG], prm[_P_ANEG], p))
     else:
-        en = 0.5 * v * v + p2 * (math.cos(a - th) - math.cos(a))
-        crit = p2 * (1.0 - math.cos(prm[_P_APOS]))
+        en = 0.5 * v * v + _potential(th, a, p)
+        crit = _potential(prm[_P_APOS], prm[_P_APOS], p)
         if prm[_P_ONE] == 0:
-            crit = min(crit, p2 * (1.0 - math.cos(prm[_P_ANEG])))
+            crit = min(crit, _potential(prm[_P_ANEG], prm[_P_ANEG], p))
     return en >= crit
 
 

@@ -59,8 +59,8 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from rocklab.physics import flight, wall
 from rocklab.physics import impact as _impact
-from rocklab.physics import wall
 
 #: Rest threshold: |thetadot^+| below REST_TOL * thetadot_r (Eq. 16) is rest.
 REST_TOL = 1e-3
@@ -194,19 +194,12 @@ class RockingModel:
         the instability rotation of hinge s only if it exceeds
         :meth:`critical_energy` (s).
         """
-        a = self.alpha_side(side)
-        th = np.abs(theta)
-        if self.form == "linear":
-            pot = self.p**2 * (a * th - 0.5 * th**2)
-        else:
-            pot = self.p**2 * (np.cos(a - th) - np.cos(a))
-        return 0.5 * thetadot**2 + pot
+        return flight.energy(np.abs(theta), thetadot, self.alpha_side(side), self.p, self.form == "linear")
 
     def critical_energy(self, side):
+        """Energy that reaches the instability rotation of hinge ``side`` [rad^2/s^2]."""
         a = self.alpha_side(side)
-        if self.form == "linear":
-            return 0.5 * self.p**2 * a**2
-        return self.p**2 * (1.0 - math.cos(a))
+        return flight.energy(a, 0.0, a, self.p, self.form == "linear")
 
     def reachable_sides(self):
         return (1,) if self.one_sided else (1, -1)
