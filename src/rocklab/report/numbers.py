@@ -147,13 +147,13 @@ def quality_control(results: Path) -> dict:
 
 def _laws(laws: pd.DataFrame) -> dict:
     pooled = laws[laws["grouping"] == "boundary"]
-    out = {}
+    out = {key: {} for key in BOUNDARIES.values()}
     for r in pooled.itertuples():
-        out.setdefault(BOUNDARIES[r.boundary], {})[r.law] = {"a": r.a, "b": r.b, "r2": r.r2, "n": r.n}
+        out[BOUNDARIES[r.boundary]][r.law] = {"a": r.a, "b": r.b, "r2": r.r2, "n": r.n}
     per_series = laws[(laws["grouping"] == "series") & (laws["law"] == "peak")]
     boundary = per_series["series"].str.endswith("-2s").map({True: "two_sided", False: "one_sided"})
     for key, r2 in per_series.groupby(boundary)["r2"]:
-        out[key]["peak"]["series_median_r2"] = r2.median()
+        out[key].setdefault("peak", {})["series_median_r2"] = r2.median()
     return out
 
 
@@ -164,7 +164,8 @@ def _effects(effects: pd.DataFrame) -> dict:
         means = ast.literal_eval(r.level_means)
         out["kruskal"].setdefault(BOUNDARIES[r.boundary], {})[f"{r.factor}__{r.value}"] = {
             "p": r.p,
-            "levels": {_level(k): m for k, m in zip(levels, means, strict=True)},
+            # pairs, not a mapping: the levels keep their order in the sorted file
+            "levels": [[_level(k), m] for k, m in zip(levels, means, strict=True)],
         }
     for r in effects[effects["factor"] == "push/pull"].itertuples():
         out["push_pull"].setdefault(r.series, {})[r.value] = {
@@ -177,10 +178,8 @@ def _effects(effects: pd.DataFrame) -> dict:
 
 
 def _level(value) -> str:
-    """A factor level as a key: contact depth 60.0 -> 'cd60', 'clay brick' -> 'clay_brick'."""
-    if isinstance(value, (int, float)):
-        return f"cd{value:g}"
-    return str(value).replace(" ", "_")
+    """A factor level as text: contact depth 60.0 -> '60', 'clay brick' as is."""
+    return f"{value:g}" if isinstance(value, (int, float)) else str(value)
 
 
 def dissipation(results: Path) -> dict:
@@ -250,7 +249,7 @@ def _stop_gain(series_entries: list[dict]) -> dict:
                     )
                 )
     if not rows:
-        return {}
+        return None
     n, *cols = np.asarray(rows, dtype=float).T
 
     def pooled(x):
@@ -267,6 +266,7 @@ def diagnosis(results: Path) -> dict:
     entries = json.loads((results / "diagnosis.json").read_text())
     series = [e for e in entries if e["scope"] == "series"]
     out = {"series": [], "n_series": len(series), "n_unexplained": sum(bool(s["unexplained"]) for s in series)}
+    out.update({key: None for key in BOUNDARIES.values()})
     for s in series:
         out["series"].append(
             {
@@ -386,7 +386,7 @@ def maps(results: Path) -> dict:
         "records": records,
         "n_cells": s["n_cells"].iloc[0] if len(s) else None,
         "by_record": {
-            rec: {m: {"N_O": s.loc[(rec, m), "N_O"], "scatter": s.loc[(rec, m), "scatter"]} for m in models}
+            rec: {m: {"N_O": row.N_O, "scatter": row.scatter} for (_, m), row in s.loc[[rec]].iterrows()}
             for rec in records
         },
         "reductions": {},

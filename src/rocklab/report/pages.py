@@ -31,10 +31,16 @@ NOT_MEASURED = "not measured"
 
 
 def lookup(tree: Mapping, path: str):
-    """The value at a dotted ``path`` of ``tree``; keys may hold dots."""
+    """The value at a dotted ``path`` of ``tree``; keys may hold dots.
+
+    Raises KeyError (or IndexError) when ``tree`` does not hold ``path``; a
+    ``None`` met on the way is the value (a section that was not measured).
+    """
     parts = path.split(".")
     node, i = tree, 0
     while i < len(parts):
+        if node is None:
+            return None
         if isinstance(node, list):
             node, i = node[int(parts[i])], i + 1
             continue
@@ -44,8 +50,6 @@ def lookup(tree: Mapping, path: str):
                 node, i = node[key], j
                 break
         else:
-            if node is None:
-                return None
             raise KeyError(f"the numbers file has no {path!r} (missing {parts[i]!r})")
     return node
 
@@ -106,18 +110,66 @@ def table3(n: Mapping) -> str:
     rows, paper = [], None
     for key, name in (("one_sided", "one-sided"), ("two_sided", "two-sided")):
         t3 = n["dissipation"][key]["table3"]
-        first = t3[columns[0]]
+        if not t3:
+            continue
+        first = t3.get(columns[0], {})
         rows.append(
-            [name, f"{show(first['n_tests'])} ({show(first['n_series'])})"] + [_interval(t3[c], ".3f") for c in columns]
+            [name, f"{show(first.get('n_tests'))} ({show(first.get('n_series'))})"]
+            + [_interval(t3.get(c, {}), ".3f") for c in columns]
         )
-        if all(t3[c].get("paper") is not None for c in columns):
+        if all(t3.get(c, {}).get("paper") is not None for c in columns):
             paper = [f"{name}, paper", ""] + [show(t3[c]["paper"]) for c in columns]
     return markdown_table(header, rows + ([paper] if paper else []))
+
+
+def stands_apart(n: Mapping) -> str:
+    """Series whose mean e_exp/e_an stands apart within their boundary condition."""
+    rows = [
+        [name, s["series"], show(s["e_ratio_mean"], ".3f"), show(s["modified_z"], ".1f")]
+        for key, name in (("two_sided", "two-sided"), ("one_sided", "one-sided"))
+        for s in n["dissipation"][key]["stands_apart"]
+    ]
+    return markdown_table(["boundary", "series", "e_exp/e_an", "modified z"], rows) if rows else "None."
+
+
+def effects(n: Mapping) -> str:
+    """Kruskal-Wallis tests of the series means by factor (``effects.csv``)."""
+    rows = [
+        [
+            name,
+            test.split("__")[0],
+            test.split("__")[1],
+            ", ".join(f"{level}: {show(mean, '.6g')}" for level, mean in e["levels"]),
+            show(e["p"], ".2f"),
+        ]
+        for key, name in (("two_sided", "two-sided"), ("one_sided", "one-sided"))
+        for test, e in n["dissipation"]["effects"]["kruskal"].get(key, {}).items()
+    ]
+    return markdown_table(["boundary", "factor", "quantity", "series means by level", "p"], rows)
+
+
+def push_pull(n: Mapping) -> str:
+    """Pushed against pulled tests of the series released both ways."""
+    rows = [
+        [
+            series,
+            quantity,
+            f"{show(e['n_push'], '.0f')} / {show(e['n_pull'], '.0f')}",
+            show(e["relative_change_pct"], ".3g"),
+            show(e["welch_p"], ".2g"),
+        ]
+        for series, by in n["dissipation"]["effects"]["push_pull"].items()
+        for quantity, e in by.items()
+    ]
+    header = ["series", "quantity", "tests pushed / pulled", "change by pulling (%)", "Welch p"]
+    return markdown_table(header, rows) if rows else "No series was released both ways."
 
 
 def findings(n: Mapping, boundary: str) -> str:
     """The causes named for one boundary condition, with their parameters."""
     d = n["diagnosis"][boundary]
+    if d is None:
+        return NOT_MEASURED + "."
     rows = []
     for effect, f in d["findings"].items():
         for param, value in f["params"].items():
@@ -137,6 +189,8 @@ def findings(n: Mapping, boundary: str) -> str:
 
 def minority(n: Mapping, boundary: str) -> str:
     """Causes named in fewer than half of the series of a boundary condition."""
+    if n["diagnosis"][boundary] is None:
+        return NOT_MEASURED + "."
     rows = [
         [f"`{m['effect']}`", m["series"], "; ".join(f"{k} = {show(v, '.4g')}" for k, v in m["params"].items())]
         for m in n["diagnosis"][boundary]["minority"]
@@ -186,12 +240,12 @@ def maps_records(n: Mapping) -> str:
     rows = []
     for record in m["records"]:
         r = m["by_record"][record]
-        row = [record, *(show(r[model]["N_O"], ".3f") for model in m["models"])]
+        row = [record, *(show(r.get(model, {}).get("N_O"), ".3f") for model in m["models"])]
         if two_sided:
-            base, new = r["2s-housner"], r["2s-0.95"]
-            sb, sn = base["scatter"], new["scatter"]
+            base, new = r.get("2s-housner", {}), r.get("2s-0.95", {})
+            sb, sn = base.get("scatter"), new.get("scatter")
             row += [
-                _reduction(base["N_O"], new["N_O"]),
+                _reduction(base.get("N_O"), new.get("N_O")),
                 f"{show(sb, '.3f') if sb is not None else '-'} → {show(sn, '.3f') if sn is not None else '-'}",
                 _reduction(sb, sn),
             ]
@@ -213,6 +267,9 @@ def performance_jobs(n: Mapping) -> str:
 TABLES: dict[str, Callable[[Mapping], str]] = {
     "qc_series": qc_series,
     "table3": table3,
+    "stands_apart": stands_apart,
+    "effects": effects,
+    "push_pull": push_pull,
     "findings_two_sided": lambda n: findings(n, "two_sided"),
     "findings_one_sided": lambda n: findings(n, "one_sided"),
     "minority_two_sided": lambda n: minority(n, "two_sided"),
@@ -224,25 +281,40 @@ TABLES: dict[str, Callable[[Mapping], str]] = {
 }
 
 
-def render(template: str, numbers: Mapping) -> str:
-    """``template`` with every placeholder replaced from ``numbers``."""
+def render(template: str, numbers: Mapping, strict: bool = True) -> str:
+    """``template`` with every placeholder replaced from ``numbers``.
+
+    ``strict``: a path that ``numbers`` does not hold is an error (the check
+    of the committed pages: a template cannot quote what was not
+    generated); otherwise it reads "not measured" (the pages of a campaign
+    that lacks some of the embedded campaign's series or records).
+    """
 
     def fill(match):
         path, spec = match.group(1), match.group(2) or ""
         if path == "table":
             return TABLES[spec](numbers)
-        return show(lookup(numbers, path), spec)
+        try:
+            return show(lookup(numbers, path), spec)
+        except (KeyError, IndexError, ValueError):
+            if strict:
+                raise
+            return NOT_MEASURED
 
     return PLACEHOLDER.sub(fill, template)
 
 
-def render_pages(template_dir, numbers: Mapping) -> dict[str, str]:
-    """Every template of ``template_dir`` rendered: {file name: page text}."""
-    return {p.name: render(p.read_text(), numbers) for p in sorted(Path(template_dir).glob("*.md"))}
+def render_pages(template_dir, numbers: Mapping, strict: bool = True) -> dict[str, str]:
+    """Every template of ``template_dir`` rendered (:func:`render`): {file name: page text}."""
+    return {p.name: render(p.read_text(), numbers, strict) for p in sorted(Path(template_dir).glob("*.md"))}
 
 
-def write_docs(results_dir, template_dir, out_dir) -> list[Path]:
+def write_docs(results_dir, template_dir, out_dir, strict: bool = False) -> list[Path]:
     """Write the numbers file and every page of ``template_dir`` into ``out_dir``.
+
+    Not ``strict`` by default: any campaign gets its pages, with "not
+    measured" where it lacks what a template quotes; the committed pages are
+    checked strictly by ``tests/test_docs.py``.
 
     Returns the paths written: ``out_dir/numbers.json`` first, then the pages.
     """
@@ -253,7 +325,7 @@ def write_docs(results_dir, template_dir, out_dir) -> list[Path]:
     # The pages are filled from the file as written (its key order), so that
     # they are a function of the numbers file alone.
     numbers = _numbers.read_numbers(written[0])
-    for name, text in render_pages(template_dir, numbers).items():
+    for name, text in render_pages(template_dir, numbers, strict).items():
         (out / name).write_text(text)
         written.append(out / name)
     return written
