@@ -29,7 +29,7 @@ SIGNIFICANT = 6
 #: Sections whose values change from run to run (timings).
 VOLATILE = ("performance",)
 
-#: The two boundary conditions, as keys (a dotted key cannot hold '-').
+#: The two boundary conditions and their keys in the numbers file.
 BOUNDARIES = {"two-sided": "two_sided", "one-sided": "one_sided"}
 
 #: The QC verdicts of ``qc.csv``, valid first.
@@ -60,14 +60,15 @@ SUMMARY_QUANTITIES = (
     "T_quarter_p_housner",
     "n_cycles",
     "duration_p",
-    "centre_amplification",
 )
 
 
 def number(x):
     """A float kept to :data:`SIGNIFICANT` digits, an int as is, NaN as ``None``."""
-    if x is None or isinstance(x, (bool, np.bool_)):
-        return None if x is None else bool(x)
+    if x is None:
+        return None
+    if isinstance(x, (bool, np.bool_)):
+        return bool(x)
     if isinstance(x, (int, np.integer)):
         return int(x)
     x = float(x)
@@ -88,7 +89,7 @@ def _tree(x):
 
 
 def _csv(results: Path, name: str) -> pd.DataFrame:
-    return pd.read_csv(results / name, keep_default_na=True)
+    return pd.read_csv(results / name)
 
 
 def _stats(row) -> dict:
@@ -109,8 +110,8 @@ def quality_control(results: Path) -> dict:
     flags = qc["flags"].fillna("")
     valid = reason == "valid"
 
-    def span(column, mask):
-        values = qc.loc[mask, column].dropna()
+    def span(column, mask, scale=1.0):
+        values = scale * qc.loc[mask, column].dropna()
         return {"min": values.min(), "max": values.max()} if len(values) else {"min": None, "max": None}
 
     series = _csv(results, "series.csv")
@@ -119,12 +120,8 @@ def quality_control(results: Path) -> dict:
         "n_series": qc["series"].nunique(),
         "verdicts": {v: int((reason == v).sum()) for v in VERDICTS},
         "release_velocity_pct": {
-            "valid": {k: 100 * v for k, v in span("release_velocity_ratio", valid).items() if v is not None},
-            "disturbed": {
-                k: 100 * v
-                for k, v in span("release_velocity_ratio", reason == "disturbed_initial_conditions").items()
-                if v is not None
-            },
+            "valid": span("release_velocity_ratio", valid, 100),
+            "disturbed": span("release_velocity_ratio", reason == "disturbed_initial_conditions", 100),
         },
         "residual_top_mm": {
             "valid_max": span("residual_top_mm", valid)["max"],
@@ -145,19 +142,22 @@ def quality_control(results: Path) -> dict:
     }
 
 
-def _laws(laws: pd.DataFrame) -> dict:
+def _laws(laws: pd.DataFrame, series: pd.DataFrame) -> dict:
+    """Amplitude laws pooled by boundary condition, and the median R² of the
+    series' own fits of the peak law."""
     pooled = laws[laws["grouping"] == "boundary"]
     out = {key: {} for key in BOUNDARIES.values()}
     for r in pooled.itertuples():
         out[BOUNDARIES[r.boundary]][r.law] = {"a": r.a, "b": r.b, "r2": r.r2, "n": r.n}
     per_series = laws[(laws["grouping"] == "series") & (laws["law"] == "peak")]
-    boundary = per_series["series"].str.endswith("-2s").map({True: "two_sided", False: "one_sided"})
+    boundary = per_series["series"].map(series.set_index("series")["boundary"].map(BOUNDARIES))
     for key, r2 in per_series.groupby(boundary)["r2"]:
         out[key].setdefault("peak", {})["series_median_r2"] = r2.median()
     return out
 
 
 def _effects(effects: pd.DataFrame) -> dict:
+    """Kruskal-Wallis tests by boundary and factor; push/pull by series."""
     out = {"kruskal": {}, "push_pull": {}}
     for r in effects[effects["factor"] != "push/pull"].itertuples():
         levels = ast.literal_eval(r.levels)
@@ -205,6 +205,7 @@ def dissipation(results: Path) -> dict:
             "thetadot_release_median": t["thetadot_release"].median(),
             "centre_amplification": {
                 **(_stats(rows.loc["centre_amplification"]) if "centre_amplification" in rows.index else {}),
+                # every test, not the series means: how far from rigid any facade went
                 "test_min": t["centre_amplification"].min(),
                 "test_max": t["centre_amplification"].max(),
             },
@@ -216,7 +217,7 @@ def dissipation(results: Path) -> dict:
             "e_ratio_mean_without_apart": kept["e_ratio"].mean() if len(apart) else None,
         }
     out["eq10_eq11_max_abs_diff"] = (tests["e_exp_eq10"] - tests["e_exp_eq11"]).abs().max()
-    out["amplitude_laws"] = _laws(_csv(results, "amplitude_laws.csv"))
+    out["amplitude_laws"] = _laws(_csv(results, "amplitude_laws.csv"), series)
     out["effects"] = _effects(_csv(results, "effects.csv"))
     return out
 
@@ -230,7 +231,7 @@ def _finding(f: dict) -> dict:
     }
 
 
-def _stop_gain(series_entries: list[dict]) -> dict:
+def _stop_gain(series_entries: list[dict]) -> dict | None:
     """Held-out errors of the free run with and without the stop threshold,
     pooled over the series that name it: the root of the test-weighted mean
     of each series' squared rms error."""

@@ -11,8 +11,9 @@ A template is a markdown page whose numbers are placeholders:
 - ``${table:name}``: a markdown table built by :data:`TABLES` from the
   numbers file.
 
-No template engine is needed; a path that the numbers file does not hold is
-an error, so a template cannot quote a number that was not generated.
+No template engine is needed. Rendered strictly (the check of the committed
+pages), a path that the numbers file does not hold is an error, so a
+template cannot quote a number that was not generated.
 """
 
 from __future__ import annotations
@@ -33,17 +34,14 @@ NOT_MEASURED = "not measured"
 def lookup(tree: Mapping, path: str):
     """The value at a dotted ``path`` of ``tree``; keys may hold dots.
 
-    Raises KeyError (or IndexError) when ``tree`` does not hold ``path``; a
-    ``None`` met on the way is the value (a section that was not measured).
+    Raises KeyError when ``tree`` does not hold ``path``; a ``None`` met on
+    the way is the value (a section that was not measured).
     """
     parts = path.split(".")
     node, i = tree, 0
     while i < len(parts):
         if node is None:
             return None
-        if isinstance(node, list):
-            node, i = node[int(parts[i])], i + 1
-            continue
         for j in range(len(parts), i, -1):
             key = ".".join(parts[i:j])
             if isinstance(node, Mapping) and key in node:
@@ -296,7 +294,7 @@ def render(template: str, numbers: Mapping, strict: bool = True) -> str:
             return TABLES[spec](numbers)
         try:
             return show(lookup(numbers, path), spec)
-        except (KeyError, IndexError, ValueError):
+        except (KeyError, ValueError):
             if strict:
                 raise
             return NOT_MEASURED
