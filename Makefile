@@ -1,13 +1,14 @@
 # Two commands set everything up on a fresh machine with Python >= 3.11 and make:
 #   make run    reduce the embedded campaign (raw/) into results/
 #   make test   run the test suite
+#   make docs   write the docs/ pages from the results (docs/templates + results/)
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 CORES  ?= 2
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test lint bench venv clean dryrun
+.PHONY: run test lint bench docs venv clean dryrun
 
 $(STAMP): requirements.lock pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -33,6 +34,15 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	set -e; for b in bench/*.py; do $(BIN)/python $$b --out results/bench; done
+
+# The pages of docs/ from the results of `make run` (rule docs, results/docs/),
+# copied into docs/. mtime triggers: a change of the library's code does not
+# recompute the campaign; --forcerun: a new results/bench/*.json is read.
+RESULTS ?= results
+
+docs: $(STAMP)
+	$(BIN)/snakemake docs --cores $(CORES) --rerun-triggers=mtime --forcerun=docs --config results_dir=$(RESULTS)
+	cp $(RESULTS)/docs/numbers.json $(RESULTS)/docs/*.md docs/
 
 clean:
 	rm -rf results .snakemake

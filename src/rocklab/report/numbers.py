@@ -1,0 +1,527 @@
+"""The numbers the documentation quotes, read from a results folder.
+
+:func:`extract` reads the outputs of the workflow (``qc.csv``, the
+dissipation tables, ``diagnosis.json``, ``limestone_diagnosis.json``, the
+map tables, the job benchmarks and, when ``make bench`` has run,
+``bench/*.json``) into one nested dictionary, one section per stage, saved
+as the numbers file by :func:`write_numbers`. A quantity that the results do
+not hold is ``None`` (the pages say "not measured"). The sections listed in
+``numbers["volatile"]`` change from run to run (timings); comparisons of two
+numbers files leave them out (:func:`stable`).
+
+Floats are kept to :data:`SIGNIFICANT` significant digits, enough for any
+number a page prints, so that the file reads well and compares exactly.
+"""
+
+from __future__ import annotations
+
+import ast
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+#: Significant digits kept of every float.
+SIGNIFICANT = 6
+
+#: Sections whose values change from run to run (timings).
+VOLATILE = ("performance",)
+
+#: The two boundary conditions and their keys in the numbers file.
+BOUNDARIES = {"two-sided": "two_sided", "one-sided": "one_sided"}
+
+#: The QC verdicts of ``qc.csv``, valid first.
+VERDICTS = (
+    "valid",
+    "instrument_malfunction",
+    "residual_out_of_plumb",
+    "disturbed_initial_conditions",
+    "unreadable",
+)
+
+#: Channel faults as ``qc.csv`` flags name them.
+CHANNEL_FLAGS = {
+    "spikes_repaired": "spike(s) repaired",
+    "dead": " dead",
+    "stuck": " stuck from",
+    "clipped": " clipped from",
+    "dropout": " dropout from",
+    "backup_used": "backup ch",
+    "in_plane_lost": "in-plane channel lost",
+}
+
+#: Quantities of ``summary.csv`` the pages quote.
+SUMMARY_QUANTITIES = (
+    "e_ratio",
+    "theta0_over_alpha",
+    "T_quarter_p",
+    "T_quarter_p_housner",
+    "n_cycles",
+    "duration_p",
+)
+
+
+def number(x):
+    """A float kept to :data:`SIGNIFICANT` digits, an int as is, NaN as ``None``."""
+    if x is None:
+        return None
+    if isinstance(x, (bool, np.bool_)):
+        return bool(x)
+    if isinstance(x, (int, np.integer)):
+        return int(x)
+    x = float(x)
+    if not math.isfinite(x):
+        return None
+    return float(f"{x:.{SIGNIFICANT}g}")
+
+
+def _tree(x):
+    """``x`` with every number passed through :func:`number`."""
+    if isinstance(x, dict):
+        return {str(k): _tree(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_tree(v) for v in x]
+    if isinstance(x, str):
+        return x
+    return number(x)
+
+
+def _csv(results: Path, name: str) -> pd.DataFrame:
+    return pd.read_csv(results / name)
+
+
+def _stats(row) -> dict:
+    """Mean and 95 % interval of one row of ``summary.csv`` or ``table3.csv``."""
+    return {
+        "mean": row["mean"],
+        "ci_low": row["ci_low"],
+        "ci_high": row["ci_high"],
+        "n_tests": row["n_tests"],
+        "n_series": row["n_series"],
+    }
+
+
+def quality_control(results: Path) -> dict:
+    """Verdicts, the margins of the decisions and the channel faults (``qc.csv``)."""
+    qc = _csv(results, "qc.csv")
+    reason = qc["reject_reason"].fillna("valid")
+    flags = qc["flags"].fillna("")
+    valid = reason == "valid"
+
+    def span(column, mask, scale=1.0):
+        values = scale * qc.loc[mask, column].dropna()
+        return {"min": values.min(), "max": values.max()} if len(values) else {"min": None, "max": None}
+
+    series = _csv(results, "series.csv")
+    return {
+        "n_tests": len(qc),
+        "n_series": qc["series"].nunique(),
+        "verdicts": {v: int((reason == v).sum()) for v in VERDICTS},
+        "release_velocity_pct": {
+            "valid": span("release_velocity_ratio", valid, 100),
+            "disturbed": span("release_velocity_ratio", reason == "disturbed_initial_conditions", 100),
+        },
+        "residual_top_mm": {
+            "valid_max": span("residual_top_mm", valid)["max"],
+            "out_of_plumb_min": span("residual_top_mm", reason == "residual_out_of_plumb")["min"],
+        },
+        "channel_faults": {k: int(flags.str.contains(v, regex=False).sum()) for k, v in CHANNEL_FLAGS.items()},
+        "series": [
+            {
+                "series": r.series,
+                "n_valid": r.n_valid,
+                "n_rejected": r.n_rejected,
+                "instrument_malfunction": r.rejected_instrument_malfunction,
+                "residual_out_of_plumb": r.rejected_residual_out_of_plumb,
+                "disturbed_initial_conditions": r.rejected_disturbed_initial_conditions,
+            }
+            for r in series.itertuples()
+        ],
+    }
+
+
+def _laws(laws: pd.DataFrame, series: pd.DataFrame) -> dict:
+    """Amplitude laws pooled by boundary condition, and the median R² of the
+    series' own fits of the peak law."""
+    pooled = laws[laws["grouping"] == "boundary"]
+    out = {key: {} for key in BOUNDARIES.values()}
+    for r in pooled.itertuples():
+        out[BOUNDARIES[r.boundary]][r.law] = {"a": r.a, "b": r.b, "r2": r.r2, "n": r.n}
+    per_series = laws[(laws["grouping"] == "series") & (laws["law"] == "peak")]
+    boundary = per_series["series"].map(series.set_index("series")["boundary"].map(BOUNDARIES))
+    for key, r2 in per_series.groupby(boundary)["r2"]:
+        out[key].setdefault("peak", {})["series_median_r2"] = r2.median()
+    return out
+
+
+def _effects(effects: pd.DataFrame) -> dict:
+    """Kruskal-Wallis tests by boundary and factor; push/pull by series."""
+    out = {"kruskal": {}, "push_pull": {}}
+    for r in effects[effects["factor"] != "push/pull"].itertuples():
+        levels = ast.literal_eval(r.levels)
+        means = ast.literal_eval(r.level_means)
+        out["kruskal"].setdefault(BOUNDARIES[r.boundary], {})[f"{r.factor}__{r.value}"] = {
+            "p": r.p,
+            # pairs, not a mapping: the levels keep their order in the sorted file
+            "levels": [[_level(k), m] for k, m in zip(levels, means, strict=True)],
+        }
+    for r in effects[effects["factor"] == "push/pull"].itertuples():
+        out["push_pull"].setdefault(r.series, {})[r.value] = {
+            "relative_change_pct": 100 * r.relative_change,
+            "welch_p": r.welch_p,
+            "n_push": r.n_push,
+            "n_pull": r.n_pull,
+        }
+    return out
+
+
+def _level(value) -> str:
+    """A factor level as text: contact depth 60.0 -> '60', 'clay brick' as is."""
+    return f"{value:g}" if isinstance(value, (int, float)) else str(value)
+
+
+def dissipation(results: Path) -> dict:
+    """Sects. 3-4: the boundary summaries, Table 3, amplitude laws, effects, outliers."""
+    summary = _csv(results, "summary.csv")
+    table3 = _csv(results, "table3.csv")
+    tests = _csv(results, "tests.csv")
+    series = _csv(results, "series.csv")
+    out = {}
+    for boundary, key in BOUNDARIES.items():
+        rows = summary[summary["boundary"] == boundary].set_index("quantity")
+        t = tests[tests["boundary"] == boundary]
+        s = series[series["boundary"] == boundary]
+        apart = s[s["stands_apart"].astype(bool)]
+        kept = t[~t["series"].isin(apart["series"])]
+        out[key] = {
+            **{q: _stats(rows.loc[q]) for q in SUMMARY_QUANTITIES if q in rows.index},
+            "table3": {
+                r.column: {**_stats(r._asdict()), "paper": r.paper}
+                for r in table3[table3["boundary"] == boundary].itertuples()
+            },
+            "theta0_over_alpha_fall_mean": t["theta0_over_alpha_fall"].mean(),
+            "thetadot_release_median": t["thetadot_release"].median(),
+            "centre_amplification": {
+                **(_stats(rows.loc["centre_amplification"]) if "centre_amplification" in rows.index else {}),
+                # every test, not the series means: how far from rigid any facade went
+                "test_min": t["centre_amplification"].min(),
+                "test_max": t["centre_amplification"].max(),
+            },
+            "stands_apart": [
+                {"series": r.series, "e_ratio_mean": r.e_ratio_mean, "modified_z": r.modified_z}
+                for r in apart.itertuples()
+            ],
+            "max_abs_modified_z": s["modified_z"].abs().max(),
+            "e_ratio_mean_without_apart": kept["e_ratio"].mean() if len(apart) else None,
+        }
+    out["eq10_eq11_max_abs_diff"] = (tests["e_exp_eq10"] - tests["e_exp_eq11"]).abs().max()
+    out["amplitude_laws"] = _laws(_csv(results, "amplitude_laws.csv"), series)
+    out["effects"] = _effects(_csv(results, "effects.csv"))
+    return out
+
+
+def _finding(f: dict) -> dict:
+    return {
+        "params": f["params"],
+        "ci95": f["ci95"],
+        "range": f.get("evidence", {}).get("range", {}),
+        "n_series": f.get("n_series"),
+    }
+
+
+def _stop_gain(series_entries: list[dict]) -> dict | None:
+    """Held-out errors of the free run with and without the stop threshold,
+    pooled over the series that name it: the root of the test-weighted mean
+    of each series' squared rms error."""
+    rows = []
+    for s in series_entries:
+        for f in s["findings"]:
+            if f["effect"] == "stop_threshold":
+                err, gain = f["error_heldout"], f["gain"]
+                rows.append(
+                    (
+                        s["n_tests"],
+                        err["n_impacts_rms"] + gain["n_impacts_rms"],
+                        err["n_impacts_rms"],
+                        err["duration_pct_rms"] + gain["duration_pct_rms"],
+                        err["duration_pct_rms"],
+                    )
+                )
+    if not rows:
+        return None
+    n, *cols = np.asarray(rows, dtype=float).T
+
+    def pooled(x):
+        return math.sqrt(np.sum(n * x**2) / np.sum(n))
+
+    return {
+        "n_impacts_rms": {"base": pooled(cols[0]), "model": pooled(cols[1])},
+        "duration_pct_rms": {"base": pooled(cols[2]), "model": pooled(cols[3])},
+    }
+
+
+def diagnosis(results: Path) -> dict:
+    """The model diagnosis of the campaign by boundary condition and series."""
+    entries = json.loads((results / "diagnosis.json").read_text())
+    series = [e for e in entries if e["scope"] == "series"]
+    out = {"series": [], "n_series": len(series), "n_unexplained": sum(bool(s["unexplained"]) for s in series)}
+    out.update({key: None for key in BOUNDARIES.values()})
+    for s in series:
+        out["series"].append(
+            {
+                "series": s["key"],
+                "boundary": s["boundary"],
+                "n_tests": s["n_tests"],
+                "verdict": ", ".join(s["verdict"]) or "none",
+                "unexplained": bool(s["unexplained"]),
+            }
+        )
+    for e in entries:
+        if e["scope"] != "boundary":
+            continue
+        mine = [s for s in series if s["boundary"] == e["boundary"]]
+        out[BOUNDARIES[e["boundary"]]] = {
+            "n_tests": e["n_tests"],
+            "n_series": e["n_series"],
+            "n_impacts": e["n_impacts"],
+            "base_model": e["base"]["model"],
+            "base": e["base"]["errors"],
+            "what_is_wrong": e["what_is_wrong"],
+            "verdict": ", ".join(e["verdict"]) or "none",
+            "unexplained": bool(e["unexplained"]),
+            "findings": {f["effect"]: _finding(f) for f in e["findings"]},
+            "heldout": e["heldout"],
+            "extended": e["extended"]["statement"],
+            "stop_heldout": _stop_gain(mine),
+            "no_stop": [s["key"] for s in mine if "stop_threshold" not in s["verdict"]],
+            "minority": [
+                {"series": s["key"], "effect": f["effect"], "params": f["params"]}
+                for s in mine
+                for f in s["findings"]
+                if f["effect"] not in e["verdict"]
+            ],
+        }
+    return out
+
+
+def limestone(results: Path) -> dict:
+    """The restitution diagnosis of the UMinho limestone blocks."""
+    d = json.loads((results / "limestone_diagnosis.json").read_text())
+    a = d["all"]
+    return {
+        "source": d["source"],
+        "n_tests": a["n_tests"],
+        "n_impacts": a["n_impacts"],
+        "n_groups": len(d["groups"]),
+        "h_over_b": {"min": min(g["h_over_b"] for g in d["groups"]), "max": max(g["h_over_b"] for g in d["groups"])},
+        "e_an": a["base"]["e_an"],
+        "measured_median_ratio": a["base"]["measured_median_ratio"],
+        "what_is_wrong": a["what_is_wrong"],
+        "verdict": ", ".join(a["verdict"]) or "none",
+        "unexplained": bool(a["unexplained"]),
+        "residual_structure": "; ".join(a["residual_structure"]) or "none",
+        "rejected": a["rejected"],
+        "signatures": a["signatures"],
+        "heldout_ratio_rms": {"base": a["heldout"]["base"]["ratio_rms"], "model": a["heldout"]["model"]["ratio_rms"]},
+        "slenderness": d["slenderness"],
+        "groups": [
+            {
+                "h_over_b": round(g["h_over_b"]),
+                "n_tests": g["n_tests"],
+                "e_an": g["base"]["e_an"],
+                "measured_median_ratio": g["base"]["measured_median_ratio"],
+                "verdict": ", ".join(g["verdict"]) or "none",
+                "weak": ", ".join(g["weak_evidence"]) or "",
+                "ratio_rms_base": g["heldout"]["base"]["ratio_rms"],
+                "ratio_rms_model": g["heldout"]["model"]["ratio_rms"],
+            }
+            for g in d["groups"]
+        ],
+    }
+
+
+def _scatter_reductions(summary: pd.DataFrame, baseline: str, model: str) -> dict:
+    """Reductions (%) of the map scatter from ``baseline`` to ``model`` under
+    two other normalisations of the changes than the paper's (by the number
+    of overturnings): the reversals only (overturning to standing as the
+    scale grows), and by the smaller of the overturned and standing cells;
+    and of the raw count of changes. Over the records where both maps
+    overturn (where the scatter is defined)."""
+    s = summary.set_index(["record", "model"])
+    b, m = s.xs(baseline, level="model"), s.xs(model, level="model")
+    both = (b["n_overturned"] > 0) & (m["n_overturned"] > 0)
+    b, m = b[both], m[both]
+
+    def changes(x):
+        return (x["changes_duration"] + x["changes_amplitude"]) / 2
+
+    def reversals(x):
+        return (x["reversals_duration"] + x["reversals_amplitude"]) / 2 / x["n_overturned"]
+
+    def bounded(x):
+        return changes(x) / np.minimum(x["n_overturned"], x["n_cells"] - x["n_overturned"])
+
+    def reduction(f):
+        r = 100 * (1 - f(m) / f(b))
+        return {"mean": r.mean(), "min": r.min(), "max": r.max()}
+
+    return {
+        "n_records": int(both.sum()),
+        "reversals_only": reduction(reversals),
+        "by_min_of_overturned_and_standing": reduction(bounded),
+        "raw_changes": reduction(changes),
+    }
+
+
+def maps(results: Path) -> dict:
+    """Sect. 5: the overturning indices of every record and model, the reductions."""
+    summary = _csv(results / "maps", "summary.csv")
+    reductions = _csv(results / "maps", "reductions.csv")
+    records = list(dict.fromkeys(summary["record"]))
+    models = list(dict.fromkeys(summary["model"]))
+    s = summary.set_index(["record", "model"])
+    out = {
+        "models": models,
+        "records": records,
+        "n_cells": s["n_cells"].iloc[0] if len(s) else None,
+        "by_record": {
+            rec: {m: {"N_O": row.N_O, "scatter": row.scatter} for (_, m), row in s.loc[[rec]].iterrows()}
+            for rec in records
+        },
+        "reductions": {},
+    }
+    for r in reductions.itertuples():
+        key = f"{r.baseline}__{r.model}"
+        entry = out["reductions"].setdefault(key, {})
+        entry.setdefault(r.index, {"n_records": r.n_records})[r.statistic] = r.reduction_pct
+        if not pd.isna(r.paper_pct):
+            entry[r.index][f"paper_{r.statistic}"] = r.paper_pct
+    if {"2s-housner", "2s-0.95"} <= set(models):
+        out["scatter_2s"] = _scatter_reductions(summary, "2s-housner", "2s-0.95")
+        n_o = s["N_O"].unstack("model")
+        low = n_o["2s-housner"].idxmin()
+        out["weakest_2s_record"] = {"record": low, "N_O": n_o.loc[low, "2s-housner"]}
+    if {"1s-zero", "1s-1.05"} <= set(models):
+        n_o = s["N_O"].unstack("model")
+        out["one_sided"] = {
+            "n_records": len(records),
+            "n_zero_at_most_1.05": int((n_o["1s-zero"] <= n_o["1s-1.05"]).sum()),
+            "only_with_1.05": [r for r in records if n_o.loc[r, "1s-zero"] == 0 < n_o.loc[r, "1s-1.05"]],
+        }
+    return out
+
+
+def _benchmarks(results: Path) -> dict:
+    """Job times of the workflow from Snakemake's benchmark files: one entry
+    per single-job rule (``<rule>.tsv``) and one per folder of jobs
+    (``<folder>/<job>.tsv``, keyed ``<folder>_jobs``)."""
+    root = results / "benchmarks"
+    out = {}
+    for tsv in sorted(root.rglob("*.tsv")) if root.is_dir() else []:
+        parts = tsv.relative_to(root).parts
+        rule = f"{parts[0]}_jobs" if len(parts) > 1 else tsv.stem
+        s = float(pd.read_csv(tsv, sep="\t")["s"].iloc[0])
+        entry = out.setdefault(rule, {"jobs": 0, "total_s": 0.0, "longest_s": 0.0})
+        entry["jobs"] += 1
+        entry["total_s"] += s
+        entry["longest_s"] = max(entry["longest_s"], s)
+    return out
+
+
+def _bench(results: Path, name: str):
+    path = results / "bench" / f"{name}.json"
+    return json.loads(path.read_text()) if path.is_file() else None
+
+
+def performance(results: Path) -> dict:
+    """Timings: the workflow's job times and, when measured, ``make bench``."""
+    jobs = _benchmarks(results)
+    out = {
+        "jobs": jobs,
+        "n_jobs": sum(j["jobs"] for j in jobs.values()),
+        "total_job_s": sum(j["total_s"] for j in jobs.values()),
+    }
+    kin = _bench(results, "kinematics")
+    out["kinematics"] = (
+        {k: kin[k] for k in ("record", "n_steps", "batched_s", "scipy_loop_s", "ratio", "max_abs_diff_theta_rad")}
+        if kin
+        else None
+    )
+    sim = _bench(results, "simulator")
+    keys = ("histories", "t_batch_s", "t_reference_s", "speedup", "overturned_batch", "overturned_reference")
+    out["simulator"] = (
+        {
+            **{k: sim[k] for k in keys},
+            "mismatches": sim["mismatches"],
+            "mismatches_beyond_tolerance": len(sim["mismatches_beyond_tolerance"]),
+            "pass": sim["pass"],
+        }
+        if sim
+        else None
+    )
+    mp = _bench(results, "maps")
+    out["maps"] = (
+        {
+            "map_s": {m: v["map_s"] for m, v in mp["models"].items()},
+            **{
+                k: mp[k]
+                for k in ("reference_s_per_history", "speedup_vs_reference", "all_maps_count", "all_maps_s", "pass")
+            },
+        }
+        if mp
+        else None
+    )
+    ref = _bench(results, "maps_reference")
+    out["maps_reference"] = (
+        {
+            "n_maps": len(ref["maps"]),
+            "agreement_pct_min": min(m["agreement_pct"] for m in ref["maps"]),
+            "n_full_agreement": sum(m["agreement_pct"] == 100 for m in ref["maps"]),
+            "off_boundary": sum(m["unexplained"] for m in ref["maps"]),
+            "pass": ref["pass"],
+        }
+        if ref
+        else None
+    )
+    return out
+
+
+#: One section of the numbers file per stage, and the function that reads it.
+SECTIONS = {
+    "quality_control": quality_control,
+    "dissipation": dissipation,
+    "diagnosis": diagnosis,
+    "limestone": limestone,
+    "maps": maps,
+    "performance": performance,
+}
+
+
+def extract(results_dir) -> dict:
+    """Every number the documentation quotes, read from ``results_dir``.
+
+    Returns a dictionary with one section per stage (:data:`SECTIONS`) and
+    ``volatile``, the sections that change from run to run.
+    """
+    results = Path(results_dir)
+    return {"volatile": list(VOLATILE), **{name: _tree(read(results)) for name, read in SECTIONS.items()}}
+
+
+def stable(numbers: dict) -> dict:
+    """``numbers`` without its volatile sections: what two runs must agree on."""
+    return {k: v for k, v in numbers.items() if k not in numbers.get("volatile", ()) and k != "volatile"}
+
+
+def dumps(numbers: dict) -> str:
+    """The numbers file's text: sorted keys, so that a change shows as a diff."""
+    return json.dumps(numbers, indent=1, sort_keys=True, ensure_ascii=False) + "\n"
+
+
+def write_numbers(numbers: dict, path) -> None:
+    Path(path).write_text(dumps(numbers))
+
+
+def read_numbers(path) -> dict:
+    return json.loads(Path(path).read_text())

@@ -1,0 +1,329 @@
+"""The documentation pages: templates filled with the numbers file.
+
+A template is a markdown page whose numbers are placeholders:
+
+- ``${section.key.subkey}`` or ``${section.key:.3f}``: a value of the
+  numbers file (:mod:`rocklab.report.numbers`) by its dotted path, with an
+  optional format specification (Python's format mini-language). A key
+  holding a dot (``2s-0.95``) is found too: each step takes the longest key
+  that matches. ``None`` reads "not measured", a list its items joined by
+  commas, a boolean "yes" or "no".
+- ``${table:name}``: a markdown table built by :data:`TABLES` from the
+  numbers file.
+
+No template engine is needed. Rendered strictly (the check of the committed
+pages), a path that the numbers file does not hold is an error, so a
+template cannot quote a number that was not generated.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Mapping
+from pathlib import Path
+
+from rocklab.report import numbers as _numbers
+
+#: A placeholder: ${path} or ${path:format} or ${table:name}.
+PLACEHOLDER = re.compile(r"\$\{([A-Za-z0-9_.\-]+)(?::([^}]*))?\}")
+
+#: What a page says for a quantity the results do not hold.
+NOT_MEASURED = "not measured"
+
+
+def lookup(tree: Mapping, path: str):
+    """The value at a dotted ``path`` of ``tree``; keys may hold dots.
+
+    Raises KeyError when ``tree`` does not hold ``path``; a ``None`` met on
+    the way is the value (a section that was not measured).
+    """
+    parts = path.split(".")
+    node, i = tree, 0
+    while i < len(parts):
+        if node is None:
+            return None
+        for j in range(len(parts), i, -1):
+            key = ".".join(parts[i:j])
+            if isinstance(node, Mapping) and key in node:
+                node, i = node[key], j
+                break
+        else:
+            raise KeyError(f"the numbers file has no {path!r} (missing {parts[i]!r})")
+    return node
+
+
+def show(value, spec: str = "") -> str:
+    """One value as a page prints it."""
+    if value is None:
+        return NOT_MEASURED
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, list):
+        return ", ".join(show(v, spec) for v in value) or "none"
+    if isinstance(value, str):
+        return value
+    return format(value, spec) if spec else format(value, "g")
+
+
+def _row(cells) -> str:
+    return "| " + " | ".join(cells) + " |"
+
+
+def markdown_table(header, rows) -> str:
+    """A markdown table of strings."""
+    return "\n".join([_row(header), _row(["---"] * len(header)), *(_row(r) for r in rows)])
+
+
+def _interval(stats: Mapping, spec: str) -> str:
+    return f"{show(stats.get('mean'), spec)} [{show(stats.get('ci_low'), spec)}, {show(stats.get('ci_high'), spec)}]"
+
+
+def qc_series(n: Mapping) -> str:
+    """Verdicts of every series (``series.csv``)."""
+    rows = [
+        [
+            s["series"],
+            show(s["n_valid"]),
+            show(s["n_rejected"]),
+            show(s["instrument_malfunction"]),
+            show(s["residual_out_of_plumb"]),
+            show(s["disturbed_initial_conditions"]),
+        ]
+        for s in n["quality_control"]["series"]
+    ]
+    header = ["series", "valid", "rejected", "instrument_malfunction", "residual_out_of_plumb", "disturbed"]
+    return markdown_table(header, rows)
+
+
+def table3(n: Mapping) -> str:
+    """Table 3 of the paper: e_exp/e_an by window, both boundary conditions and the paper."""
+    columns = ["e_ratio_complete", "e_ratio_without_first_half_cycle", "e_ratio_first_half_cycle"]
+    header = [
+        "boundary",
+        "tests (series)",
+        "whole history",
+        "disregarding the first half cycle",
+        "first half cycle only",
+    ]
+    rows, paper = [], None
+    for key, name in (("one_sided", "one-sided"), ("two_sided", "two-sided")):
+        t3 = n["dissipation"][key]["table3"]
+        if not t3:
+            continue
+        first = t3.get(columns[0], {})
+        rows.append(
+            [name, f"{show(first.get('n_tests'))} ({show(first.get('n_series'))})"]
+            + [_interval(t3.get(c, {}), ".3f") for c in columns]
+        )
+        if all(t3.get(c, {}).get("paper") is not None for c in columns):
+            paper = [f"{name}, paper", ""] + [show(t3[c]["paper"]) for c in columns]
+    return markdown_table(header, rows + ([paper] if paper else []))
+
+
+def stands_apart(n: Mapping) -> str:
+    """Series whose mean e_exp/e_an stands apart within their boundary condition."""
+    rows = [
+        [name, s["series"], show(s["e_ratio_mean"], ".3f"), show(s["modified_z"], ".1f")]
+        for key, name in (("two_sided", "two-sided"), ("one_sided", "one-sided"))
+        for s in n["dissipation"][key]["stands_apart"]
+    ]
+    return markdown_table(["boundary", "series", "e_exp/e_an", "modified z"], rows) if rows else "None."
+
+
+def effects(n: Mapping) -> str:
+    """Kruskal-Wallis tests of the series means by factor (``effects.csv``)."""
+    rows = [
+        [
+            name,
+            test.split("__")[0],
+            test.split("__")[1],
+            ", ".join(f"{level}: {show(mean, '.6g')}" for level, mean in e["levels"]),
+            show(e["p"], ".2f"),
+        ]
+        for key, name in (("two_sided", "two-sided"), ("one_sided", "one-sided"))
+        for test, e in n["dissipation"]["effects"]["kruskal"].get(key, {}).items()
+    ]
+    return markdown_table(["boundary", "factor", "quantity", "series means by level", "p"], rows)
+
+
+def push_pull(n: Mapping) -> str:
+    """Pushed against pulled tests of the series released both ways."""
+    rows = [
+        [
+            series,
+            quantity,
+            f"{show(e['n_push'], '.0f')} / {show(e['n_pull'], '.0f')}",
+            show(e["relative_change_pct"], ".3g"),
+            show(e["welch_p"], ".2g"),
+        ]
+        for series, by in n["dissipation"]["effects"]["push_pull"].items()
+        for quantity, e in by.items()
+    ]
+    header = ["series", "quantity", "tests pushed / pulled", "change by pulling (%)", "Welch p"]
+    return markdown_table(header, rows) if rows else "No series was released both ways."
+
+
+def findings(n: Mapping, boundary: str) -> str:
+    """The causes named for one boundary condition, with their parameters."""
+    d = n["diagnosis"][boundary]
+    if d is None:
+        return NOT_MEASURED + "."
+    rows = []
+    for effect, f in d["findings"].items():
+        for param, value in f["params"].items():
+            ci = f["ci95"].get(param) or [None, None]
+            span = f["range"].get(param) or [None, None]
+            rows.append(
+                [
+                    f"`{effect}`",
+                    param,
+                    f"{show(value, '.4g')} [{show(ci[0], '.4g')}, {show(ci[1], '.4g')}]",
+                    f"{show(span[0], '.4g')}-{show(span[1], '.4g')}",
+                    f"{show(f['n_series'])} of {show(d['n_series'])}",
+                ]
+            )
+    return markdown_table(["cause", "parameter", "value [95 % CI]", "range over series", "named in"], rows)
+
+
+def minority(n: Mapping, boundary: str) -> str:
+    """Causes named in fewer than half of the series of a boundary condition."""
+    if n["diagnosis"][boundary] is None:
+        return NOT_MEASURED + "."
+    rows = [
+        [f"`{m['effect']}`", m["series"], "; ".join(f"{k} = {show(v, '.4g')}" for k, v in m["params"].items())]
+        for m in n["diagnosis"][boundary]["minority"]
+    ]
+    return markdown_table(["cause", "series", "parameters"], rows) if rows else "None."
+
+
+def diagnosis_series(n: Mapping) -> str:
+    """The verdict of every series."""
+    rows = [
+        [s["series"], s["boundary"], show(s["n_tests"]), s["verdict"], show(s["unexplained"])]
+        for s in n["diagnosis"]["series"]
+    ]
+    return markdown_table(["series", "boundary", "tests", "causes named", "unexplained"], rows)
+
+
+def limestone_groups(n: Mapping) -> str:
+    """The limestone blocks by slenderness."""
+    rows = [
+        [
+            show(g["h_over_b"]),
+            show(g["n_tests"]),
+            show(g["e_an"], ".3f"),
+            show(g["measured_median_ratio"], ".3f"),
+            g["verdict"] + (f" (weak: {g['weak']})" if g["weak"] else ""),
+            f"{show(g['ratio_rms_base'], '.4f')} → {show(g['ratio_rms_model'], '.4f')}",
+        ]
+        for g in n["limestone"]["groups"]
+    ]
+    header = ["H/B", "trials", "e_an (Eq. 2)", "measured ratio (median)", "causes named", "held-out rms of the ratio"]
+    return markdown_table(header, rows)
+
+
+def _reduction(base, new) -> str:
+    if base in (None, 0) or new is None:
+        return "-"
+    return f"{100 * (1 - new / base):.0f}"
+
+
+def maps_records(n: Mapping) -> str:
+    """N_O of every record and model, and the reductions from 2s-housner to 2s-0.95."""
+    m = n["maps"]
+    header = ["record", *(f"N_O `{model}`" for model in m["models"])]
+    two_sided = {"2s-housner", "2s-0.95"} <= set(m["models"])
+    if two_sided:
+        header += ["N_O red. %", "scatter `2s-housner` → `2s-0.95`", "scatter red. %"]
+    rows = []
+    for record in m["records"]:
+        r = m["by_record"][record]
+        row = [record, *(show(r.get(model, {}).get("N_O"), ".3f") for model in m["models"])]
+        if two_sided:
+            base, new = r.get("2s-housner", {}), r.get("2s-0.95", {})
+            sb, sn = base.get("scatter"), new.get("scatter")
+            row += [
+                _reduction(base.get("N_O"), new.get("N_O")),
+                f"{show(sb, '.3f') if sb is not None else '-'} → {show(sn, '.3f') if sn is not None else '-'}",
+                _reduction(sb, sn),
+            ]
+        rows.append(row)
+    return markdown_table(header, rows)
+
+
+def performance_jobs(n: Mapping) -> str:
+    """Job times of the workflow by rule."""
+    jobs = n["performance"]["jobs"]
+    rows = [
+        [f"`{rule}`", show(j["jobs"]), show(j["total_s"], ".0f"), show(j["longest_s"], ".1f")]
+        for rule, j in jobs.items()
+    ]
+    return markdown_table(["rule (or folder of jobs)", "jobs", "job time, total (s)", "longest job (s)"], rows)
+
+
+#: The tables a template may place with ${table:name}.
+TABLES: dict[str, Callable[[Mapping], str]] = {
+    "qc_series": qc_series,
+    "table3": table3,
+    "stands_apart": stands_apart,
+    "effects": effects,
+    "push_pull": push_pull,
+    "findings_two_sided": lambda n: findings(n, "two_sided"),
+    "findings_one_sided": lambda n: findings(n, "one_sided"),
+    "minority_two_sided": lambda n: minority(n, "two_sided"),
+    "minority_one_sided": lambda n: minority(n, "one_sided"),
+    "diagnosis_series": diagnosis_series,
+    "limestone_groups": limestone_groups,
+    "maps_records": maps_records,
+    "performance_jobs": performance_jobs,
+}
+
+
+def render(template: str, numbers: Mapping, strict: bool = True) -> str:
+    """``template`` with every placeholder replaced from ``numbers``.
+
+    ``strict``: a path that ``numbers`` does not hold is an error (the check
+    of the committed pages: a template cannot quote what was not
+    generated); otherwise it reads "not measured" (the pages of a campaign
+    that lacks some of the embedded campaign's series or records).
+    """
+
+    def fill(match):
+        path, spec = match.group(1), match.group(2) or ""
+        if path == "table":
+            return TABLES[spec](numbers)
+        try:
+            return show(lookup(numbers, path), spec)
+        except (KeyError, ValueError):
+            if strict:
+                raise
+            return NOT_MEASURED
+
+    return PLACEHOLDER.sub(fill, template)
+
+
+def render_pages(template_dir, numbers: Mapping, strict: bool = True) -> dict[str, str]:
+    """Every template of ``template_dir`` rendered (:func:`render`): {file name: page text}."""
+    return {p.name: render(p.read_text(), numbers, strict) for p in sorted(Path(template_dir).glob("*.md"))}
+
+
+def write_docs(results_dir, template_dir, out_dir, strict: bool = False) -> list[Path]:
+    """Write the numbers file and every page of ``template_dir`` into ``out_dir``.
+
+    Not ``strict`` by default: any campaign gets its pages, with "not
+    measured" where it lacks what a template quotes; the committed pages are
+    checked strictly by ``tests/test_docs.py``.
+
+    Returns the paths written: ``out_dir/numbers.json`` first, then the pages.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    written = [out / "numbers.json"]
+    _numbers.write_numbers(_numbers.extract(results_dir), written[0])
+    # The pages are filled from the file as written (its key order), so that
+    # they are a function of the numbers file alone.
+    numbers = _numbers.read_numbers(written[0])
+    for name, text in render_pages(template_dir, numbers, strict).items():
+        (out / name).write_text(text)
+        written.append(out / name)
+    return written

@@ -1,0 +1,557 @@
+"""The documentation: generated pages that are not stale, a short README
+whose example runs, links that resolve, and the numbers extractor on a tiny
+results folder (CI has no results/)."""
+
+import json
+import math
+import re
+from pathlib import Path
+
+import pandas as pd
+import pytest
+import yaml
+
+from rocklab.report import numbers as nb
+from rocklab.report import pages
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs"
+TEMPLATES = DOCS / "templates"
+#: Pages written by hand: they quote no result.
+HAND_WRITTEN = {"index.md", "raw-format.md", "diagnosis-method.md"}
+
+
+def committed_numbers():
+    return nb.read_numbers(DOCS / "numbers.json")
+
+
+# --- (a) the committed pages are what their templates and numbers write ---------------------
+
+
+@pytest.mark.parametrize("template", sorted(p.name for p in TEMPLATES.glob("*.md")))
+def test_committed_page_is_its_template_filled_with_the_committed_numbers(template):
+    rendered = pages.render((TEMPLATES / template).read_text(), committed_numbers())
+    page = DOCS / template
+    assert page.is_file(), f"docs/{template} missing: run `make docs`"
+    assert page.read_text() == rendered, (
+        f"docs/{template} differs from docs/templates/{template} filled with docs/numbers.json: "
+        "edit the template, not the page, and run `make docs`"
+    )
+
+
+def test_every_page_is_generated_or_written_by_hand():
+    generated = {p.name for p in TEMPLATES.glob("*.md")}
+    on_disk = {p.name for p in DOCS.glob("*.md")}
+    assert on_disk - generated - HAND_WRITTEN == set(), "a page without a template: remove it or add its template"
+    assert not generated & HAND_WRITTEN
+
+
+def test_the_index_lists_every_page():
+    index = (DOCS / "index.md").read_text()
+    linked = set(re.findall(r"\]\(([\w.-]+\.md)\)", index))
+    expected = {p.name for p in TEMPLATES.glob("*.md")} | (HAND_WRITTEN - {"index.md"})
+    assert expected <= linked
+
+
+def test_committed_numbers_file_is_as_the_extractor_writes_it():
+    text = (DOCS / "numbers.json").read_text()
+    assert nb.dumps(json.loads(text)) == text
+    assert committed_numbers()["volatile"] == list(nb.VOLATILE)
+
+
+# --- (b) the committed numbers are what the current results give ---------------------------
+
+
+def results_dir() -> Path:
+    config = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    return ROOT / config["results_dir"]
+
+
+#: The outputs of `make run` that the numbers are read from.
+READ = (
+    "qc.csv",
+    "series.csv",
+    "tests.csv",
+    "table3.csv",
+    "summary.csv",
+    "amplitude_laws.csv",
+    "effects.csv",
+    "diagnosis.json",
+    "limestone_diagnosis.json",
+    "maps/summary.csv",
+    "maps/reductions.csv",
+)
+
+
+def differences(a, b, path=""):
+    """Dotted paths where two trees differ."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        return [d for k in sorted(set(a) | set(b)) for d in differences(a.get(k), b.get(k), f"{path}.{k}")]
+    return [] if a == b else [f"{path.lstrip('.')}: {b!r} committed, {a!r} from the results"]
+
+
+def test_committed_numbers_are_those_of_the_current_results():
+    results = results_dir()
+    if not results.is_dir():
+        pytest.skip(f"no {results.name}/ from `make run` here (CI has none): nothing to compare the pages with")
+    missing = [name for name in READ if not (results / name).is_file()]
+    if missing:
+        pytest.skip(f"{results.name}/ is incomplete (no {', '.join(missing)}): run `make run`")
+    diff = differences(nb.stable(nb.extract(results)), nb.stable(committed_numbers()))
+    assert not diff, "docs/ is stale, run `make docs`:\n" + "\n".join(diff[:30])
+
+
+# --- README ---------------------------------------------------------------------------------
+
+
+def test_readme_is_short_and_quotes_no_result():
+    text = (ROOT / "README.md").read_text()
+    assert len(text.splitlines()) <= 200
+    assert not re.search(r"\b0\.\d{3}\b", text), "a result in the README: it belongs to a generated page"
+
+
+def test_readme_library_example_runs(monkeypatch, capsys):
+    block = re.search(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), re.S).group(1)
+    monkeypatch.chdir(ROOT)
+    exec(compile(block, "README.md", "exec"), {})
+    verdict, numbers = capsys.readouterr().out.splitlines()
+    assert verdict.startswith("1 ")  # T0001 is valid (qc.csv of the embedded campaign)
+    e_ratio, t_quarter = map(float, numbers.split())
+    assert 0.5 < e_ratio < 1.5 and 1 < t_quarter < 20
+
+
+@pytest.mark.parametrize("page", ["README.md", "CHANGELOG.md", *(f"docs/{p.name}" for p in sorted(DOCS.glob("*.md")))])
+def test_relative_links_resolve(page):
+    path = ROOT / page
+    for target in re.findall(r"\]\((?!https?:)([^)#\s]+)(?:#[^)]*)?\)", path.read_text()):
+        assert (path.parent / target).exists(), f"{page} links to {target}, which does not exist"
+
+
+# --- the extractor and the renderer on a tiny results folder --------------------------------
+
+
+def _write(path: Path, rows):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    pd.DataFrame(rows).to_csv(path, index=False)
+
+
+def _diagnosis_entries():
+    def stop(error, gain):
+        return {
+            "effect": "stop_threshold",
+            "params": {"v_stop_over_vr": 0.1},
+            "ci95": {"v_stop_over_vr": [0.09, 0.11]},
+            "error_heldout": {"n_impacts_rms": error, "duration_pct_rms": error},
+            "gain": {"n_impacts_rms": gain, "duration_pct_rms": gain},
+        }
+
+    def series(key, n_tests, findings):
+        return {
+            "scope": "series",
+            "key": key,
+            "boundary": "two-sided",
+            "n_tests": n_tests,
+            "verdict": [f["effect"] for f in findings],
+            "unexplained": False,
+            "findings": findings,
+        }
+
+    heldout = {"free_run_log_peak_rms": 2.0, "impact_rms": 0.05, "time_rms": 0.06}
+    boundary = {
+        "scope": "boundary",
+        "key": "two-sided",
+        "boundary": "two-sided",
+        "n_tests": 45,
+        "n_series": 3,
+        "n_impacts": 900,
+        "base": {"model": "Housner", "errors": {"lag_s": 16.0}},
+        "what_is_wrong": "it rocks too long.",
+        "verdict": ["stop_threshold"],
+        "unexplained": False,
+        "findings": [{**stop(None, None), "evidence": {"range": {"v_stop_over_vr": [0.09, 0.12]}}, "n_series": 2}],
+        "heldout": {"base": heldout, "model": heldout},
+        "extended": {"statement": "the extended model rocks as long as the wall."},
+    }
+    asym = {"effect": "hinge_asymmetry", "params": {"s_alpha": 0.03}, "ci95": {}}
+    return [
+        series("1a-2s", 10, [stop(2.0, 8.0)]),
+        series("2b-2s", 30, [stop(4.0, 16.0), asym]),
+        series("5c-2s", 5, []),
+        boundary,
+    ]
+
+
+@pytest.fixture
+def tiny_results(tmp_path):
+    """A results folder of a few rows: two-sided series 1a-2s and 3a-2s (apart), one-sided 1b-1s-cd60."""
+    r = tmp_path / "results"
+    qc = [
+        ("T1", "1a-2s", True, None, 0.2, 0.005, ""),
+        ("T2", "1a-2s", True, None, 1.1, 0.019, "ch1 3 spike(s) repaired"),
+        ("T3", "3a-2s", True, None, 0.4, 0.010, "ch4 dead; in-plane channel lost: v = 0"),
+        ("T4", "1b-1s-cd60", False, "instrument_malfunction", None, None, "ch0 dead; ch2 stuck from 1.00 s"),
+        ("T5", "1b-1s-cd60", False, "disturbed_initial_conditions", 0.3, 0.2, ""),
+        ("T6", "1b-1s-cd60", False, "residual_out_of_plumb", 1.9, 0.01, "ch0 dropout from 2.00 s; backup ch2 used"),
+    ]
+    columns = ("test_id", "series", "valid", "reject_reason", "residual_top_mm", "release_velocity_ratio", "flags")
+    _write(r / "qc.csv", [dict(zip(columns, row, strict=True)) for row in qc])
+    series = [
+        ("1a-2s", "two-sided", 2, 0, 0.95, 0.5, False, 0),
+        ("3a-2s", "two-sided", 1, 0, 0.86, -9.0, True, 0),
+        ("1b-1s-cd60", "one-sided", 0, 3, None, -2.5, False, 1),
+    ]
+    _write(
+        r / "series.csv",
+        [
+            {
+                "series": name,
+                "boundary": boundary,
+                "n_valid": valid,
+                "n_rejected": rejected,
+                "e_ratio_mean": e,
+                "modified_z": z,
+                "stands_apart": apart,
+                "rejected_instrument_malfunction": each,
+                "rejected_residual_out_of_plumb": each,
+                "rejected_disturbed_initial_conditions": each,
+            }
+            for name, boundary, valid, rejected, e, z, apart, each in series
+        ],
+    )
+    test = {"theta0_over_alpha_fall": 0.999, "thetadot_release": 3e-4, "centre_amplification": None}
+    _write(
+        r / "tests.csv",
+        [
+            {
+                "test_id": "T1",
+                "series": "1a-2s",
+                "boundary": "two-sided",
+                "e_exp_eq10": 0.9301,
+                "e_exp_eq11": 0.9300,
+                "e_ratio": 0.94,
+                **test,
+            },
+            {
+                "test_id": "T2",
+                "series": "1a-2s",
+                "boundary": "two-sided",
+                "e_exp_eq10": 0.9400,
+                "e_exp_eq11": 0.9403,
+                "e_ratio": 0.96,
+                **test,
+            },
+            {
+                "test_id": "T3",
+                "series": "3a-2s",
+                "boundary": "two-sided",
+                "e_exp_eq10": 0.8500,
+                "e_exp_eq11": 0.8500,
+                "e_ratio": 0.86,
+                **test,
+            },
+        ],
+    )
+    stats = {"n_tests": 3, "n_series": 2, "sd": 0.1, "series_sd": 0.1}
+    _write(
+        r / "summary.csv",
+        [{"boundary": "two-sided", "quantity": "e_ratio", "mean": 0.92, "ci_low": 0.86, "ci_high": 0.96, **stats}],
+    )
+    _write(
+        r / "table3.csv",
+        [
+            {
+                "boundary": "two-sided",
+                "window": "complete",
+                "column": "e_ratio_complete",
+                "mean": 0.92,
+                "ci_low": 0.86,
+                "ci_high": 0.96,
+                "paper": None,
+                **stats,
+            }
+        ],
+    )
+    law = {"a_se": 0.01, "b_se": 0.01}
+    _write(
+        r / "amplitude_laws.csv",
+        [
+            {
+                "series": None,
+                "law": "peak",
+                "a": 0.96,
+                "b": 0.035,
+                "r2": 0.16,
+                "n": 90,
+                "grouping": "boundary",
+                "boundary": "two-sided",
+                **law,
+            },
+            {
+                "series": "1a-2s",
+                "law": "peak",
+                "a": 0.95,
+                "b": 0.03,
+                "r2": 0.8,
+                "n": 60,
+                "grouping": "series",
+                "boundary": None,
+                **law,
+            },
+            {
+                "series": "3a-2s",
+                "law": "peak",
+                "a": 0.86,
+                "b": 0.03,
+                "r2": 0.9,
+                "n": 30,
+                "grouping": "series",
+                "boundary": None,
+                **law,
+            },
+        ],
+    )
+    _write(
+        r / "effects.csv",
+        [
+            {
+                "boundary": "two-sided",
+                "factor": "unit",
+                "value": "e_ratio",
+                "levels": "['clay brick', 'tuff']",
+                "level_means": "[0.95, 0.86]",
+                "p": 0.4,
+            },
+            {
+                "boundary": "one-sided",
+                "factor": "contact_depth_mm",
+                "value": "e_ratio",
+                "levels": "[60.0, 120.0]",
+                "level_means": "[1.2, 1.3]",
+                "p": 0.3,
+            },
+            {
+                "factor": "push/pull",
+                "value": "e_ratio",
+                "series": "2b-2s",
+                "n_push": 10,
+                "n_pull": 9,
+                "relative_change": -0.0008,
+                "welch_p": 0.06,
+            },
+        ],
+    )
+    (r / "diagnosis.json").write_text(json.dumps(_diagnosis_entries()))
+    group = {
+        "n_tests": 2,
+        "n_impacts": 20,
+        "base": {"e_an": 0.9},
+        "verdict": [],
+        "weak_evidence": {},
+        "heldout": {"base": {"ratio_rms": 0.05}, "model": {"ratio_rms": 0.05}},
+    }
+    (r / "limestone_diagnosis.json").write_text(
+        json.dumps(
+            {
+                "source": "blocks",
+                "all": {
+                    **group,
+                    "base": {"e_an": 0.985, "measured_median_ratio": 0.97},
+                    "what_is_wrong": "e too high",
+                    "unexplained": True,
+                    "residual_structure": ["impact: bias +0.011"],
+                    "rejected": {},
+                    "signatures": {},
+                },
+                "groups": [
+                    {**group, "h_over_b": 3.9999999, "base": {"e_an": 0.91, "measured_median_ratio": 0.93}},
+                    {**group, "h_over_b": 15.0, "base": {"e_an": 0.99, "measured_median_ratio": 0.97}},
+                ],
+                "slenderness": {"intercept": 0.98, "slope": 0.6, "levels": {"4": 1.02, "15": 0.97}},
+            }
+        )
+    )
+    cells = 100
+
+    def cell(record, model, n_o, changes, reversals):
+        return {
+            "record": record,
+            "model": model,
+            "N_O": n_o / cells,
+            "scatter": changes / n_o if n_o else None,
+            "n_overturned": n_o,
+            "n_cells": cells,
+            "changes_duration": changes,
+            "changes_amplitude": changes,
+            "reversals_duration": reversals,
+            "reversals_amplitude": reversals,
+        }
+
+    _write(
+        r / "maps" / "summary.csv",
+        [
+            cell("A", "2s-housner", 50, 10, 4),
+            cell("A", "2s-0.95", 40, 6, 2),
+            cell("B", "2s-housner", 90, 5, 5),
+            cell("B", "2s-0.95", 80, 8, 2),
+            cell("C", "2s-housner", 5, 1, 1),
+            cell("C", "2s-0.95", 0, 0, 0),
+        ],
+    )
+    _write(
+        r / "maps" / "reductions.csv",
+        [
+            {
+                "baseline": "2s-housner",
+                "model": "2s-0.95",
+                "index": "N_O",
+                "statistic": s,
+                "reduction_pct": v,
+                "n_records": 3,
+                "paper_pct": p,
+            }
+            for s, v, p in (("mean", 39.3, 25), ("min", 11.1, 3), ("max", 100, None))
+        ],
+    )
+    (r / "benchmarks" / "reduce").mkdir(parents=True)
+    bench = "s\th:m:s\tmax_rss\n{}\t0:00:01\t10\n"
+    (r / "benchmarks" / "qc_table.tsv").write_text(bench.format(9.5))
+    (r / "benchmarks" / "reduce" / "1a-2s.tsv").write_text(bench.format(3.0))
+    (r / "benchmarks" / "reduce" / "3a-2s.tsv").write_text(bench.format(5.0))
+    (r / "bench").mkdir()
+    (r / "bench" / "simulator.json").write_text(
+        json.dumps(
+            {
+                "histories": 1000,
+                "t_batch_s": 0.02,
+                "t_reference_s": 270.0,
+                "speedup": 13500.0,
+                "overturned_batch": 496,
+                "overturned_reference": 495,
+                "mismatches": 5,
+                "mismatches_beyond_tolerance": [],
+                "pass": True,
+            }
+        )
+    )
+    return r
+
+
+def test_quality_control_numbers(tiny_results):
+    qc = nb.extract(tiny_results)["quality_control"]
+    assert qc["n_tests"] == 6 and qc["n_series"] == 3
+    assert qc["verdicts"] == {
+        "valid": 3,
+        "instrument_malfunction": 1,
+        "residual_out_of_plumb": 1,
+        "disturbed_initial_conditions": 1,
+        "unreadable": 0,
+    }
+    assert qc["release_velocity_pct"]["valid"] == {"min": 0.5, "max": 1.9}
+    assert qc["release_velocity_pct"]["disturbed"] == {"min": 20.0, "max": 20.0}
+    assert qc["residual_top_mm"] == {"valid_max": 1.1, "out_of_plumb_min": 1.9}
+    faults = qc["channel_faults"]
+    assert (faults["dead"], faults["stuck"], faults["dropout"], faults["spikes_repaired"]) == (2, 1, 1, 1)
+    assert (faults["backup_used"], faults["in_plane_lost"], faults["clipped"]) == (1, 1, 0)
+    assert qc["series"][2]["disturbed_initial_conditions"] == 1
+
+
+def test_dissipation_numbers(tiny_results):
+    d = nb.extract(tiny_results)["dissipation"]
+    assert d["eq10_eq11_max_abs_diff"] == pytest.approx(3e-4)
+    two = d["two_sided"]
+    assert two["e_ratio"] == {"mean": 0.92, "ci_low": 0.86, "ci_high": 0.96, "n_tests": 3, "n_series": 2}
+    assert two["table3"]["e_ratio_complete"]["paper"] is None
+    assert two["stands_apart"] == [{"series": "3a-2s", "e_ratio_mean": 0.86, "modified_z": -9.0}]
+    assert two["e_ratio_mean_without_apart"] == pytest.approx(0.95)  # T1, T2 only
+    assert d["one_sided"]["max_abs_modified_z"] == 2.5
+    assert d["amplitude_laws"]["two_sided"]["peak"]["series_median_r2"] == pytest.approx(0.85)
+    assert d["effects"]["kruskal"]["one_sided"]["contact_depth_mm__e_ratio"]["levels"] == [["60", 1.2], ["120", 1.3]]
+    assert d["effects"]["push_pull"]["2b-2s"]["e_ratio"]["relative_change_pct"] == pytest.approx(-0.08)
+
+
+def test_diagnosis_numbers_pool_the_stop_gain_over_tests(tiny_results):
+    d = nb.extract(tiny_results)["diagnosis"]
+    two = d["two_sided"]
+    # base = error + gain per series: 10 (10 tests) and 20 (30 tests); model 2 and 4
+    assert two["stop_heldout"]["n_impacts_rms"]["base"] == pytest.approx(
+        math.sqrt((10 * 100 + 30 * 400) / 40), rel=1e-5
+    )
+    assert two["stop_heldout"]["n_impacts_rms"]["model"] == pytest.approx(math.sqrt((10 * 4 + 30 * 16) / 40), rel=1e-5)
+    assert two["no_stop"] == ["5c-2s"]
+    assert two["minority"] == [{"series": "2b-2s", "effect": "hinge_asymmetry", "params": {"s_alpha": 0.03}}]
+    assert d["series"][2]["verdict"] == "none" and d["n_unexplained"] == 0
+    lime = nb.extract(tiny_results)["limestone"]
+    assert [g["h_over_b"] for g in lime["groups"]] == [4, 15]
+    assert lime["residual_structure"] == "impact: bias +0.011"
+
+
+def test_map_numbers_and_the_other_normalisations_of_the_scatter(tiny_results):
+    m = nb.extract(tiny_results)["maps"]
+    assert m["records"] == ["A", "B", "C"] and m["n_cells"] == 100
+    assert m["by_record"]["C"]["2s-0.95"] == {"N_O": 0.0, "scatter": None}
+    assert m["weakest_2s_record"] == {"record": "C", "N_O": 0.05}
+    assert m["reductions"]["2s-housner__2s-0.95"]["N_O"] == {
+        "n_records": 3,
+        "mean": 39.3,
+        "min": 11.1,
+        "max": 100,
+        "paper_mean": 25,
+        "paper_min": 3,
+    }
+    s = m["scatter_2s"]
+    assert s["n_records"] == 2  # C: no overturning left
+    # reversals per overturning: A 4/50 -> 2/40, B 5/90 -> 2/80
+    expected = [100 * (1 - (2 / 40) / (4 / 50)), 100 * (1 - (2 / 80) / (5 / 90))]
+    assert s["reversals_only"]["mean"] == pytest.approx(sum(expected) / 2, rel=1e-5)
+    # changes over min(overturned, standing): A 10/50 -> 6/40, B 5/10 -> 8/20
+    expected = [100 * (1 - (6 / 40) / (10 / 50)), 100 * (1 - (8 / 20) / (5 / 10))]
+    assert s["by_min_of_overturned_and_standing"]["min"] == pytest.approx(min(expected), rel=1e-5)
+
+
+def test_performance_is_volatile_and_absent_benchmarks_are_not_measured(tiny_results):
+    n = nb.extract(tiny_results)
+    perf = n["performance"]
+    assert perf["jobs"]["reduce_jobs"] == {"jobs": 2, "total_s": 8.0, "longest_s": 5.0}
+    assert perf["jobs"]["qc_table"]["jobs"] == 1 and perf["n_jobs"] == 3
+    assert perf["simulator"]["mismatches_beyond_tolerance"] == 0
+    assert perf["kinematics"] is None and perf["maps"] is None
+    assert "performance" not in nb.stable(n) and "volatile" not in nb.stable(n)
+    assert pages.render("${performance.kinematics.ratio:.0f} / ${performance.simulator.speedup:,.0f}", n) == (
+        "not measured / 13,500"
+    )
+
+
+def test_numbers_are_rounded_and_nan_is_none():
+    assert nb.number(0.123456789) == 0.123457
+    assert nb.number(float("nan")) is None
+    assert nb.number(True) is True and nb.number(7) == 7
+
+
+def test_render_finds_dotted_keys_formats_and_tables():
+    numbers = {"maps": {"by": {"2s-0.95": {"N_O": 0.33229}}, "records": ["A", "B"], "ok": False}}
+    text = "N_O ${maps.by.2s-0.95.N_O:.3f} on ${maps.records}; ok ${maps.ok}; $5 stays"
+    assert pages.render(text, numbers) == "N_O 0.332 on A, B; ok no; $5 stays"
+    with pytest.raises(KeyError, match="maps.missing"):
+        pages.render("${maps.missing}", numbers)
+    with pytest.raises(KeyError):
+        pages.render("${table:no_such_table}", numbers)
+
+
+def test_write_docs_writes_the_numbers_and_every_page(tiny_results, tmp_path):
+    templates = tmp_path / "templates"
+    templates.mkdir()
+    (templates / "qc.md").write_text("${quality_control.verdicts.valid} valid\n\n${table:qc_series}\n")
+    written = pages.write_docs(tiny_results, templates, tmp_path / "out")
+    assert [p.name for p in written] == ["numbers.json", "qc.md"]
+    page = (tmp_path / "out" / "qc.md").read_text()
+    assert page.startswith("3 valid\n\n| series | valid |")
+    assert "| 1b-1s-cd60 | 0 | 3 | 1 | 1 | 1 |" in page
+    assert nb.read_numbers(written[0]) == nb.extract(tiny_results)
+
+
+def test_every_template_renders_on_a_campaign_that_lacks_most_of_it(tiny_results):
+    """The docs rule writes pages for any campaign: what it lacks reads "not measured"."""
+    rendered = pages.render_pages(TEMPLATES, nb.extract(tiny_results), strict=False)
+    assert set(rendered) == {p.name for p in TEMPLATES.glob("*.md")}
+    assert "not measured" in rendered["dissipation.md"]
+    assert "${" not in "".join(rendered.values())
