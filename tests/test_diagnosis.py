@@ -54,7 +54,7 @@ def virtual_series(
             model=model(i) if callable(model) else dict(model),
             effects=vl.Effects(noise_mm=noise_mm, hum_mm=noise_mm),
         )
-        t, E, truth = vl.simulate_test(vt, sp, layout, rng=rng, t_end=60.0)
+        t, E, truth = vl.simulate_virtual_test(vt, sp, layout, rng=rng, t_end=60.0)
         theta = kinematics.solve_wall_motion(E, X, F, sp.thickness_mm, weights=used)["theta"]
         recs.append(
             dict(
