@@ -2,7 +2,7 @@
 # Sects. 3-4 (Figs. 10, 11, 13, 16-20) from the dissipation tables, with
 # their captions for `snakemake --report`.
 
-FIG_SPECIMEN = config.get("figures", {}).get("fig9_specimen", "5a")
+FIG_SPECIMEN = config["figures"]["fig9_specimen"]
 DISSIPATION_FIGS = ("10", "11", "13", "16", "17", "18", "19", "20")
 
 
@@ -29,7 +29,7 @@ rule kinematics_figures:
         fig8=report_figure("08", "Kinematics (Sect. 2)"),
         fig9=report_figure("09", "Kinematics (Sect. 2)"),
     params:
-        sample_test=config.get("figures", {}).get("sample_test", ""),
+        sample_test=config["figures"]["sample_test"],
         specimen=FIG_SPECIMEN,
     log:
         res("logs", "kinematics_figures.log"),
@@ -55,7 +55,7 @@ rule dissipation_figures:
         fig19=report_figure("19", "Energy dissipation (Sects. 3-4)"),
         fig20=report_figure("20", "Energy dissipation (Sects. 3-4)"),
     params:
-        sample_test=config.get("figures", {}).get("fig20_test", ""),
+        sample_test=config["figures"]["fig20_test"],
     log:
         res("logs", "dissipation_figures.log"),
     benchmark:
