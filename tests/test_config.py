@@ -162,3 +162,11 @@ def _dry_run(*config):
 def test_the_workflow_refuses_a_bad_configuration(config, message):
     rc, out = _dry_run(*config)
     assert rc != 0 and message in out, out[-2000:]
+
+
+def test_the_raw_format_is_specified_in_the_repository():
+    """The format's page ships with the code; nothing points outside the repository for it."""
+    assert "## tests.csv" in (ROOT / "docs" / "raw-format.md").read_text()
+    folders = ("src", "scripts", "workflow", "config", "tests", "docs")
+    files = [p for f in folders for p in (ROOT / f).rglob("*") if p.suffix in {".py", ".smk", ".yaml", ".md"}]
+    assert not [p for p in files if "shared/spec" in p.read_text() and p.name != "test_config.py"]
