@@ -13,6 +13,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+import jsonschema
+
 #: The schema of the workflow's configuration, relative to the checkout.
 SCHEMA = "workflow/schemas/config.schema.yaml"
 
@@ -38,8 +40,6 @@ def schema_error(exc) -> ConfigError:
         (a misspelt ``result_dir`` reads "unknown config key result_dir"),
         a bad value with what the schema asks of it.
     """
-    import jsonschema
-
     errors = [exc, *exc.args, exc.__context__]
     err = next((e for e in errors if isinstance(e, jsonschema.ValidationError)), None)
     if err is None:
@@ -100,6 +100,10 @@ def recorded_path(path, workdir=None) -> str:
     path : path-like
     workdir : path-like, optional
         Default: the current directory (Snakemake's working directory).
+
+    Returns
+    -------
+    str
     """
     path = Path(path).resolve()
     workdir = Path(os.getcwd() if workdir is None else workdir).resolve()
