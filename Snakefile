@@ -1,6 +1,9 @@
 # rocklab: reduce a free-rocking campaign in the lab's raw format.
 # This file only wires the rules; each stage lives in workflow/rules/.
+from snakemake.exceptions import WorkflowError
 from snakemake.utils import min_version, validate
+
+from rocklab.config import SCHEMA, schema_error
 
 min_version("8.0")
 
@@ -8,7 +11,12 @@ min_version("8.0")
 configfile: "config/config.yaml"
 
 
-validate(config, "workflow/schemas/config.schema.yaml")
+# Every key, its meaning and its default: the schema, which fills in what the
+# config files and --config leave out; an unknown key stops here, named.
+try:
+    validate(config, SCHEMA)
+except WorkflowError as exc:
+    raise schema_error(exc) from None
 
 
 include: "workflow/rules/common.smk"

@@ -9,7 +9,6 @@ from rocklab.seismic.overturning import overturning_map
 setup_logging(snakemake.log[0])
 numba.set_num_threads(min(snakemake.threads, numba.config.NUMBA_NUM_THREADS))
 p = snakemake.params
-eq17 = (p.eq17["a"], p.eq17["b"]) if p.eq17 else None
 ds = overturning_map(
     load_record(snakemake.wildcards.record),
     model=snakemake.wildcards.model,
@@ -19,7 +18,7 @@ ds = overturning_map(
     alpha=p.alpha,
     R=p.R,
     form=p.form,
-    eq17=eq17,
+    eq17=(p.eq17["a"], p.eq17["b"]),
     polarity=p.polarity,
     chunks=p.chunks,
 )

@@ -3,13 +3,16 @@
 import re
 from pathlib import Path
 
+from rocklab.config import check_paths, recorded_path
 from rocklab.lab.campaign import open_campaign, row_series
 
+# config is validated by the Snakefile, every default filled in from
+# workflow/schemas/config.schema.yaml: the rules read it without defaults.
+check_paths(config["raw_dir"], config["results_dir"])
 RAW = Path(config["raw_dir"])
 RESULTS = Path(config["results_dir"])
 CAMPAIGN = open_campaign(RAW)
 TEST_IDS = list(dict.fromkeys(CAMPAIGN.tests.test_id))
-SAMPLE_TESTS = config.get("sample_tests", {})
 
 #: The tests of each series, in the order of tests.csv (the unit of one reduction job).
 TESTS_BY_SERIES = {}
@@ -21,10 +24,16 @@ def res(*parts):
     return str(RESULTS.joinpath(*parts))
 
 
+def repo_path(*parts):
+    """A file of the checkout as a stable param or input: relative, so that
+    moving the checkout reruns nothing (workflow.source_path() would point
+    into a per-run cache and rerun the rule every time)."""
+    return recorded_path(Path(workflow.basedir, *parts))
+
+
 def schema_path(name):
-    """A table schema by a stable path: workflow.source_path() points into a
-    per-run cache, which changes the params and reruns the rule every time."""
-    return str(Path(workflow.basedir, "workflow", "schemas", name))
+    """A table schema of workflow/schemas (see repo_path)."""
+    return repo_path("workflow", "schemas", name)
 
 
 def record_inputs(test_ids):

@@ -3,8 +3,8 @@
 # one job per series, then the boundary conditions over the series;
 # Figs. 14-15 per series; the restitution of the UMinho limestone blocks.
 
-DIAGNOSIS = config.get("diagnosis", {})
-BLOCKS = Path(workflow.basedir, "raw", "rocking-tests", "uminho-limestone-free-rocking")
+DIAGNOSIS = config["diagnosis"]
+BLOCKS = Path(repo_path("raw", "rocking-tests", "uminho-limestone-free-rocking"))
 
 
 def diagnosis_outputs():
@@ -22,9 +22,9 @@ rule diagnose_series:
     wildcard_constraints:
         series="|".join(map(re.escape, TESTS_BY_SERIES)),
     params:
-        n_boot=DIAGNOSIS.get("n_boot", 40),
-        n_history=DIAGNOSIS.get("n_history", 2),
-        seed=DIAGNOSIS.get("seed", 0),
+        n_boot=DIAGNOSIS["n_boot"],
+        n_history=DIAGNOSIS["n_history"],
+        seed=DIAGNOSIS["seed"],
     log:
         res("logs", "diagnosis", "{series}.log"),
     benchmark:
@@ -40,7 +40,7 @@ rule diagnosis:
         json=report(res("diagnosis.json"), caption="../report/diagnosis.rst", category="Model diagnosis"),
         md=res("diagnosis.md"),
     params:
-        seed=DIAGNOSIS.get("seed", 0),
+        seed=DIAGNOSIS["seed"],
     log:
         res("logs", "diagnosis.log"),
     benchmark:
@@ -72,8 +72,8 @@ rule limestone_diagnosis:
         json=res("limestone_diagnosis.json"),
         md=res("limestone_diagnosis.md"),
     params:
-        n_boot=DIAGNOSIS.get("n_boot", 40),
-        seed=DIAGNOSIS.get("seed", 0),
+        n_boot=DIAGNOSIS["n_boot"],
+        seed=DIAGNOSIS["seed"],
     log:
         res("logs", "limestone_diagnosis.log"),
     benchmark:

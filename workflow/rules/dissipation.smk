@@ -30,8 +30,8 @@ checkpoint dissipation_tables:
         summary=report_table("summary.csv"),
     params:
         schemas=schema_path(""),
-        n_boot=config.get("statistics", {}).get("n_boot", 4000),
-        seed=config.get("statistics", {}).get("seed", 0),
+        n_boot=config["statistics"]["n_boot"],
+        seed=config["statistics"]["seed"],
     log:
         res("logs", "dissipation_tables.log"),
     benchmark:

@@ -4,11 +4,11 @@
 # test it draws only, chosen from the QC table or tests.csv once their
 # checkpoint has run, or named in the config.
 
-FIG_SPECIMEN = config.get("figures", {}).get("fig9_specimen", "5a")
+FIG_SPECIMEN = config["figures"]["fig9_specimen"]
 #: Test of Figs. 6, 8 and 9; empty: the first valid test.
-KINEMATICS_SAMPLE = config.get("figures", {}).get("sample_test", "")
+KINEMATICS_SAMPLE = config["figures"]["sample_test"]
 #: Test of Fig. 20a; empty: rocklab.plots.dissipation.fig20_sample of tests.csv.
-FIG20_SAMPLE = config.get("figures", {}).get("fig20_test", "")
+FIG20_SAMPLE = config["figures"]["fig20_test"]
 DISSIPATION_FIGS = ("10", "11", "13", "16", "17", "18", "19", "20")
 
 

@@ -20,7 +20,7 @@ for _k, (_series, _ids) in enumerate(TESTS_BY_SERIES.items()):
         params:
             tests=lambda wildcards, ids=_ids: {t: test_params(t) for t in ids},
             raw_dir=config["raw_dir"],
-            options={"channels": config.get("channels", {}), "validity": config.get("validity", {})},
+            options={"channels": config["channels"], "validity": config["validity"]},
         log:
             res("logs", "reduce", f"{_series}.log"),
         benchmark:

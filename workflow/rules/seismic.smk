@@ -4,10 +4,10 @@
 from rocklab.seismic.accelerograms import accelerogram_dir, read_manifest
 from rocklab.seismic.overturning import MODELS
 
-MAPS = config.get("maps", {})
+MAPS = config["maps"]
 MANIFEST = read_manifest()
-MAP_RECORDS = MAPS.get("records") or list(MANIFEST.record)
-MAP_FIG_RECORD = MAPS.get("figure_record", "40EIC180")
+MAP_RECORDS = MAPS["records"] or list(MANIFEST.record)
+MAP_FIG_RECORD = MAPS["figure_record"]
 if MAP_FIG_RECORD not in MAP_RECORDS:
     MAP_FIG_RECORD = MAP_RECORDS[0]
 
@@ -24,7 +24,7 @@ def map_path(record, model):
 
 def record_file(wildcards):
     """The shipped file of the record, so that replacing it recomputes its maps."""
-    return str(accelerogram_dir() / MANIFEST.set_index("record").loc[wildcards.record, "file"])
+    return recorded_path(accelerogram_dir() / MANIFEST.set_index("record").loc[wildcards.record, "file"])
 
 
 localrules:
@@ -45,16 +45,16 @@ rule overturning_map:
         record="|".join(map(re.escape, MAP_RECORDS)),
         model="|".join(map(re.escape, MODELS)),
     params:
-        n=MAPS.get("n", 201),
-        lo=MAPS.get("lo", 0.5),
-        hi=MAPS.get("hi", 1.5),
-        alpha=MAPS.get("alpha", 0.1),
-        R=MAPS.get("R", 3.0),
-        form=MAPS.get("form", "linear"),
-        eq17=MAPS.get("eq17", {}),
-        polarity=MAPS.get("polarity", 1),
-        chunks=MAPS.get("chunks", 10),
-    threads: MAPS.get("threads", 2)
+        n=MAPS["n"],
+        lo=MAPS["lo"],
+        hi=MAPS["hi"],
+        alpha=MAPS["alpha"],
+        R=MAPS["R"],
+        form=MAPS["form"],
+        eq17=MAPS["eq17"],
+        polarity=MAPS["polarity"],
+        chunks=MAPS["chunks"],
+    threads: MAPS["threads"]
     resources:
         mem_mb=1000,
         runtime=20,

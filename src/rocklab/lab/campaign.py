@@ -1,4 +1,4 @@
-"""Reader of the lab's raw campaign format (``shared/spec/raw-format.md``).
+"""Reader of the lab's raw campaign format (``docs/raw-format.md``).
 
 A campaign folder holds ``specimens.csv``, ``setups.csv``, ``tests.csv`` and
 one gzip-compressed record per test.  Every problem is reported as a
@@ -376,7 +376,7 @@ def row_series(row) -> str:
 
 
 def series_id(specimen, boundary, contact_depth_mm) -> str:
-    """Series key: specimen + boundary + contact depth (raw-format.md)."""
+    """Series key: specimen + boundary + contact depth (docs/raw-format.md)."""
     if boundary == "two-sided" or contact_depth_mm is None or not np.isfinite(contact_depth_mm):
         return f"{specimen}-2s"
     return f"{specimen}-1s-cd{int(round(contact_depth_mm))}"

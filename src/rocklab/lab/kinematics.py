@@ -1,7 +1,7 @@
 """Four-degree-of-freedom kinematics of a rocking wall from its transducers.
 
 Sect. 2.2 of the paper (Eqs. 3-8), written in the coordinates of the lab's
-raw format (``shared/spec/raw-format.md``).  A body point X of the wall maps
+raw format (``docs/raw-format.md``).  A body point X of the wall maps
 to the lab as
 
     X' = Rz(phi) . (Rx(theta) . (X - E) + E) + (v, w, 0),

@@ -1,6 +1,6 @@
 """The lab's validity rules for a free-rocking test, applied from the data.
 
-``shared/spec/raw-format.md`` ("What makes a test valid"):
+``docs/raw-format.md`` ("What makes a test valid"):
 
 * residual out-of-plumb: the wall top, once the motion has died out, must be
   within 1.5 mm of where it was at rest before the test (the vertical wall,

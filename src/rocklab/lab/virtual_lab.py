@@ -1,7 +1,7 @@
 """A virtual rocking-wall laboratory: simulated motions written as a campaign.
 
 Turns wall motions (theta, and optionally phi, v, w, on a time grid) into the
-transducer records of the lab's raw format (``shared/spec/raw-format.md``),
+transducer records of the lab's raw format (``docs/raw-format.md``),
 with the instrument effects of the real campaign (noise, 50 Hz mains hum,
 ringing after impacts, 3-decimal readings), the test protocol (a hold phase
 with the screw's slow creep, the release, free rocking, rest), and the

@@ -1,0 +1,110 @@
+"""Checks of the workflow's configuration that its schema cannot express.
+
+Every key, with its meaning and default, is in
+``workflow/schemas/config.schema.yaml``; Snakemake validates the
+configuration against it and fills in the defaults.  What a schema cannot
+see is the file system: whether ``raw_dir`` is a campaign folder, and
+whether ``results_dir`` would write into it.  Those checks live here, as do
+the paths the workflow records with each output.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import jsonschema
+
+#: The schema of the workflow's configuration, relative to the checkout.
+SCHEMA = "workflow/schemas/config.schema.yaml"
+
+
+class ConfigError(ValueError):
+    """A configuration the workflow refuses; the message says why in one line."""
+
+
+def schema_error(exc) -> ConfigError:
+    """The one-line :class:`ConfigError` of a configuration that fails its schema.
+
+    Parameters
+    ----------
+    exc : Exception
+        The ``jsonschema.ValidationError`` itself, or an exception that
+        carries it among its ``args`` or as its context (Snakemake's
+        ``validate`` raises a ``WorkflowError`` that prints the whole schema).
+
+    Returns
+    -------
+    ConfigError
+        Naming the key: an unknown key with the keys known at its level
+        (a misspelt ``result_dir`` reads "unknown config key result_dir"),
+        a bad value with what the schema asks of it.
+    """
+    errors = [exc, *exc.args, exc.__context__]
+    err = next((e for e in errors if isinstance(e, jsonschema.ValidationError)), None)
+    if err is None:
+        return ConfigError(f"configuration refused by {SCHEMA}: {exc}")
+    where = ".".join(str(k) for k in err.absolute_path)
+    if err.validator == "additionalProperties":
+        known = list(err.schema.get("properties", {}))
+        unknown = sorted(set(err.instance) - set(known))
+        keys = ", ".join(f"{where}.{k}" if where else k for k in unknown)
+        return ConfigError(f"unknown config key {keys} (the keys here: {', '.join(known)}; see {SCHEMA})")
+    hint = ""
+    if err.validator == "type" and isinstance(err.instance, str) and len(err.absolute_path) > 1:
+        hint = "; --config passes nested values as text, give them in a file with --configfile"
+    return ConfigError(f"config key {where or '(top level)'}: {err.message} (see {SCHEMA}{hint})")
+
+
+def check_paths(raw_dir, results_dir) -> None:
+    """Refuse a ``raw_dir`` that is not a campaign or a ``results_dir`` inside it.
+
+    Parameters
+    ----------
+    raw_dir : path-like
+        Campaign folder in the lab's raw format (``docs/raw-format.md``).
+    results_dir : path-like
+        Output folder; it need not exist yet.
+
+    Raises
+    ------
+    ConfigError
+        ``raw_dir`` is not a folder or has no ``tests.csv``; ``results_dir``
+        is ``raw_dir`` or lies inside it (the campaign folder is only read).
+    """
+    raw = Path(raw_dir)
+    campaign = "a campaign in the lab's raw format, docs/raw-format.md"
+    if not raw.is_dir():
+        raise ConfigError(f"raw_dir {str(raw_dir)!r} is not a folder ({campaign})")
+    if not (raw / "tests.csv").is_file():
+        raise ConfigError(f"raw_dir {str(raw_dir)!r} has no tests.csv: not {campaign}")
+    raw, results = raw.resolve(), Path(results_dir).resolve()
+    if results == raw or raw in results.parents:
+        raise ConfigError(
+            f"results_dir {str(results_dir)!r} is inside raw_dir {str(raw)!r}: the campaign folder is only read, "
+            "write the results elsewhere"
+        )
+
+
+def recorded_path(path, workdir=None) -> str:
+    """``path`` as the workflow records it: relative to ``workdir`` when inside it, else absolute.
+
+    Snakemake stores each job's params and list of inputs with its outputs,
+    and reruns the job when they change.  A file of the checkout given
+    relative to the working directory (the checkout) reads the same after
+    the checkout moves, so moving it reruns nothing; a file outside keeps
+    its absolute path, which the move does not change.
+
+    Parameters
+    ----------
+    path : path-like
+    workdir : path-like, optional
+        Default: the current directory (Snakemake's working directory).
+
+    Returns
+    -------
+    str
+    """
+    path = Path(path).resolve()
+    workdir = Path(os.getcwd() if workdir is None else workdir).resolve()
+    return str(path.relative_to(workdir)) if path.is_relative_to(workdir) else str(path)

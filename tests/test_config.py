@@ -1,0 +1,166 @@
+"""The workflow's configuration: one schema holds every key and default, the library agrees with it,
+and a misspelt key or a results folder inside the campaign is refused with a line that names it."""
+
+import inspect
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import jsonschema
+import pytest
+import yaml
+
+from rocklab.config import SCHEMA, ConfigError, check_paths, recorded_path, schema_error
+
+ROOT = Path(__file__).resolve().parents[1]
+SNAKEMAKE = Path(sys.executable).with_name("snakemake")
+
+
+@pytest.fixture(scope="module")
+def schema():
+    return yaml.safe_load((ROOT / SCHEMA).read_text())
+
+
+def _defaults(schema):
+    """The configuration the schema's defaults make, nested objects included."""
+    return {
+        k: _defaults(sub) if sub.get("type") == "object" and "properties" in sub else sub["default"]
+        for k, sub in schema["properties"].items()
+    }
+
+
+def _objects(schema, where="config"):
+    yield where, schema
+    for k, sub in schema.get("properties", {}).items():
+        if sub.get("type") == "object":
+            yield from _objects(sub, f"{where}.{k}")
+
+
+def _signature_defaults(fn, *names):
+    params = inspect.signature(fn).parameters
+    return {k: params[k].default for k in names}
+
+
+def test_every_key_has_a_description_and_a_default_and_no_other_key_is_accepted(schema):
+    for where, obj in _objects(schema):
+        assert obj.get("additionalProperties") is False, where
+        for key, sub in obj["properties"].items():
+            assert sub.get("description"), f"{where}.{key}"
+            assert "default" in sub, f"{where}.{key}"
+
+
+def test_every_key_is_read_by_the_workflow(schema):
+    """A key nothing reads is not configuration: the rules read each one by name, but for the
+    sections they hand whole to the library (whose defaults hold the same keys, see below)."""
+    text = "".join(p.read_text() for p in [ROOT / "Snakefile", *sorted((ROOT / "workflow" / "rules").glob("*.smk"))])
+    whole = {"config.channels", "config.validity", "config.maps.eq17"}
+    for where, obj in _objects(schema):
+        for key in obj["properties"]:
+            assert f'["{key}"]' in text or where in whole, f"{where}.{key}"
+    assert 'options={"channels": config["channels"], "validity": config["validity"]}' in text
+    assert 'p.eq17["a"], p.eq17["b"]' in (ROOT / "scripts" / "overturning_map.py").read_text()
+
+
+def test_snakemake_fills_every_default(schema):
+    """The rules read config["maps"]["n"] etc. without defaults of their own: validation fills them."""
+    validate = pytest.importorskip("snakemake.utils").validate
+    config = {"maps": {"n": 11}}
+    validate(config, str(ROOT / SCHEMA))
+    expected = _defaults(schema)
+    expected["maps"]["n"] = 11
+    assert config == expected
+    shipped = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    validate(shipped, str(ROOT / SCHEMA))
+    assert shipped == _defaults(schema)
+
+
+def test_library_defaults_equal_the_schema(schema):
+    from rocklab.diagnosis import diagnose_records
+    from rocklab.dissipation.statistics import campaign_tables
+    from rocklab.lab import channels, validity
+    from rocklab.physics.impact import AmplitudeLaw
+    from rocklab.seismic import overturning
+
+    d = _defaults(schema)
+    assert d["channels"] == channels.OPTIONS
+    assert d["validity"] == validity.RULES
+    assert d["statistics"] == _signature_defaults(campaign_tables, "n_boot", "seed")
+    assert d["diagnosis"] == _signature_defaults(diagnose_records, "n_boot", "n_history", "seed")
+    maps = d["maps"]
+    assert (maps["alpha"], maps["R"]) == (overturning.ALPHA, overturning.R)
+    names = ("n", "lo", "hi", "alpha", "R", "form", "polarity", "chunks")
+    assert {k: maps[k] for k in names} == _signature_defaults(overturning.overturning_map, *names)
+    assert maps["eq17"] == _signature_defaults(AmplitudeLaw, "a", "b")
+
+
+def _error(config, schema):
+    try:
+        jsonschema.Draft202012Validator(schema).validate(config)
+    except jsonschema.ValidationError as exc:
+        return str(schema_error(exc))
+    raise AssertionError("the configuration passed")
+
+
+def test_schema_errors_name_the_key(schema):
+    assert _error({"result_dir": "x"}, schema).startswith("unknown config key result_dir (the keys here: raw_dir,")
+    assert _error({"maps": {"nn": 3}}, schema).startswith("unknown config key maps.nn (the keys here: records, n,")
+    msg = _error({"statistics": {"n_boot": "100"}}, schema)
+    assert msg.startswith("config key statistics.n_boot: '100' is not of type 'integer'") and "--configfile" in msg
+    # Snakemake wraps the error in its own; the message is found in its args
+    assert str(schema_error(RuntimeError("Error validating config file.", _validation_error(schema)))).startswith(
+        "unknown config key raw-dir"
+    )
+
+
+def _validation_error(schema):
+    return next(jsonschema.Draft202012Validator(schema).iter_errors({"raw-dir": "x"}))
+
+
+def test_check_paths(tmp_path):
+    raw = tmp_path / "campaign"
+    with pytest.raises(ConfigError, match="is not a folder"):
+        check_paths(raw, tmp_path / "out")
+    raw.mkdir()
+    with pytest.raises(ConfigError, match="has no tests.csv"):
+        check_paths(raw, tmp_path / "out")
+    (raw / "tests.csv").write_text("test_id\n")
+    check_paths(raw, tmp_path / "out")
+    check_paths(raw, tmp_path / "campaign-results")  # a sibling whose name starts alike
+    for inside in (raw, raw / "results", raw / "a" / ".." / "b", tmp_path / "x" / ".." / "campaign"):
+        with pytest.raises(ConfigError, match="is inside raw_dir"):
+            check_paths(raw, inside)
+
+
+def test_recorded_path_is_relative_inside_the_working_directory(tmp_path):
+    assert recorded_path(tmp_path / "workflow" / "x.yaml", workdir=tmp_path) == os.path.join("workflow", "x.yaml")
+    assert recorded_path(tmp_path / "x.csv", workdir=tmp_path / "checkout") == str((tmp_path / "x.csv").resolve())
+
+
+def _dry_run(*config):
+    cmd = [str(SNAKEMAKE), "-n", "--cores", "1", "--config", *config]
+    run = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env={**os.environ, "PYTHONWARNINGS": "ignore"})
+    return run.returncode, run.stdout + run.stderr
+
+
+@pytest.mark.skipif(not SNAKEMAKE.exists(), reason="snakemake not installed beside this interpreter")
+@pytest.mark.parametrize(
+    "config, message",
+    [
+        (["result_dir=x"], "unknown config key result_dir"),
+        (["raw-dir=raw/campaign"], "unknown config key raw-dir"),
+        (["results_dir=raw/campaign/results"], "is inside raw_dir"),
+        (["raw_dir=raw"], "raw_dir 'raw' has no tests.csv"),
+    ],
+)
+def test_the_workflow_refuses_a_bad_configuration(config, message):
+    rc, out = _dry_run(*config)
+    assert rc != 0 and message in out, out[-2000:]
+
+
+def test_the_raw_format_is_specified_in_the_repository():
+    """The format's page ships with the code; nothing points outside the repository for it."""
+    assert "## tests.csv" in (ROOT / "docs" / "raw-format.md").read_text()
+    folders = ("src", "scripts", "workflow", "config", "tests", "docs")
+    files = [p for f in folders for p in (ROOT / f).rglob("*") if p.suffix in {".py", ".smk", ".yaml", ".md"}]
+    assert not [p for p in files if "shared/spec" in p.read_text() and p.name != "test_config.py"]
