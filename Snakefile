@@ -26,9 +26,11 @@ include: "workflow/rules/dissipation.smk"
 include: "workflow/rules/diagnosis.smk"
 include: "workflow/rules/figures.smk"
 include: "workflow/rules/seismic.smk"
+include: "workflow/rules/docs.smk"
 
 
 rule all:
     input:
         all_outputs(),
+        docs_outputs(),
     default_target: True

@@ -3,8 +3,7 @@
 # outputs into docs/; tests/test_docs.py checks the committed pages.
 
 #: One page per template; a new template is a new page.
-DOC_TEMPLATES = Path(workflow.basedir, "docs", "templates")
-DOC_PAGES = sorted(p.name for p in DOC_TEMPLATES.glob("*.md"))
+DOC_PAGES = sorted(p.name for p in Path(workflow.basedir, "docs", "templates").glob("*.md"))
 
 
 def docs_outputs():
@@ -16,14 +15,15 @@ rule docs:
         # Every stage has run, so every job's benchmark file exists.
         results=all_outputs(),
         tables=[res(name) for name in ("tests.csv", "amplitude_laws.csv", "effects.csv")],
-        templates=[str(DOC_TEMPLATES / page) for page in DOC_PAGES],
+        templates=[repo_path("docs", "templates", page) for page in DOC_PAGES],
     output:
         numbers=res("docs", "numbers.json"),
         pages=[res("docs", page) for page in DOC_PAGES],
+    params:
+        results_dir=config["results_dir"],
     log:
         res("logs", "docs.log"),
-    run:
-        from rocklab.report.pages import write_docs
-
-        written = write_docs(RESULTS, DOC_TEMPLATES, Path(output.numbers).parent)
-        Path(log[0]).write_text("".join(f"wrote {p}\n" for p in written))
+    benchmark:
+        res("benchmarks", "docs.tsv")
+    script:
+        "../../scripts/docs_pages.py"
