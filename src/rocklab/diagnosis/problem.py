@@ -19,7 +19,7 @@ class WallProblem(Problem):
         self.S = TestStack.of(self.tests)
         self.boundary = self.tests[0].boundary
         self.causes = tuple(catalogue.for_boundary(self.boundary))
-        self.later = tuple(catalogue.for_boundary(self.boundary, "after selection"))
+        self.after_selection = tuple(catalogue.for_boundary(self.boundary, "after selection"))
         self._sig = None
         self._cache = {}
 
@@ -38,7 +38,7 @@ class WallProblem(Problem):
     def extra_structure(self, sub, ext, values):
         """What the model leaves that the causes estimated after selection would explain."""
         mp = model_params(sub.tests, ext, values)
-        return [st for cause in self.later for st in cause.unexplained(sub, mp)]
+        return [st for cause in self.after_selection for st in cause.unexplained(sub, mp)]
 
     @property
     def signature(self):

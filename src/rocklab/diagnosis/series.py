@@ -107,7 +107,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
     # the causes estimated once the chosen model is known, from what it leaves
     structure = list(sel["structure"])
     ext, ext_values = list(effects), dict(values)
-    for cause in problem.later:
+    for cause in problem.after_selection:
         left = cause.unexplained(problem.S, model_params(tests, effects, values))
         found = cause.estimate(tests, effects, values, seed=seed) if left else None
         if found is not None and found["named"]:
