@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from rocklab import diagnosis as D
+from rocklab.diagnosis.causes import stop_threshold
 from rocklab.lab import kinematics
 from rocklab.lab import virtual_lab as vl
 from rocklab.physics import impact as I
@@ -290,12 +291,16 @@ def test_stop_speeds_bracket_the_sticking_landing():
                 theta=h.theta,
             )
         )
-    lo, hi = D.stop_speeds(D._Stack.of(tests), D.model_params(tests, ("restitution_scale",), {"c": 0.97}))
+    lo, hi = stop_threshold.stop_speeds(
+        D.TestStack.of(tests), D.model_params(tests, ("restitution_scale",), {"c": 0.97})
+    )
     assert np.all(lo < 0.2) and np.all(0.2 <= hi) and np.all(lo / hi > 0.9)
     # a next flight the noise would hide tells no stop
     hidden = [dataclasses.replace(tests[0], floor=tests[0].peaks[-1])]
     assert np.isnan(
-        D.stop_speeds(D._Stack.of(hidden), D.model_params(hidden, ("restitution_scale",), {"c": 0.97}))[0]
+        stop_threshold.stop_speeds(D.TestStack.of(hidden), D.model_params(hidden, ("restitution_scale",), {"c": 0.97}))[
+            0
+        ]
     ).all()
 
 
@@ -361,10 +366,10 @@ def test_a_gap_wall_sticks_by_the_same_rule_in_the_free_run_and_the_simulator():
     landing from the outer hinge may stick, as free_run and stop_speeds read it."""
     model = RockingModel(alpha=ALPHA, p=P, boundary="one-sided", gap=0.05 * ALPHA)
     test = _sim_test(model, 0.8 * ALPHA)
-    ext, values, stop = ("contact_gap",), {"gap_over_alpha": 0.05}, 0.3
-    run = D.free_run(D._Stack.of([test]), D.model_params([test], ext, values), n_max=50, stop=stop)
+    ext, values = ("contact_gap", "stop_threshold"), {"gap_over_alpha": 0.05, "v_stop_over_vr": 0.3}
+    run = D.free_run(D.TestStack.of([test]), D.model_params([test], ext, values), n_max=50)
     n_free = int(np.count_nonzero(run["peaks"][0] > 0))
-    h = simulate_free(D.rocking_model(test, ext, values, stop=stop), test.theta0, 0.0, t_end=20.0)
+    h = simulate_free(D.rocking_model(test, ext, values), test.theta0, 0.0, t_end=20.0)
     outer = h.impacts[(h.impacts.kind == "base") & (h.impacts.thetadot_before < 0)]
     assert outer.thetadot_after.iloc[-1] == 0.0 and 2 <= n_free == len(outer) - 1
 
@@ -404,7 +409,7 @@ def test_a_gap_wall_sticks_by_the_same_rule_in_the_free_run_and_the_simulator():
 def test_free_run_matches_the_exact_simulator(kw, ext, values, boundary, rtol):
     model = RockingModel(alpha=ALPHA, p=P, boundary=boundary, **kw)
     ts = _sim_test(model, 0.8 * model.alpha_pos)
-    run = D.free_run(D._Stack.of([ts]), D.model_params([ts], ext, values), n_max=ts.n_impacts)
+    run = D.free_run(D.TestStack.of([ts]), D.model_params([ts], ext, values), n_max=ts.n_impacts)
     big = ts.peaks > 1e-3 * ALPHA
     np.testing.assert_allclose(run["peaks"][0][big], ts.peaks[big], rtol=rtol)
     # flight times are undamped: a loss shifts a whole flight to second order, the fall from the release

@@ -1,7 +1,9 @@
 """Restitution of free-rocking blocks from measured impact-by-impact velocity ratios.
 
 The restitution part of :mod:`rocklab.diagnosis` on data that hold only
-the ratio r_k = thetadot^+_k / thetadot^-_k of every impact k of every trial:
+the ratio r_k = thetadot^+_k / thetadot^-_k of every impact k of every trial
+(the same causes of :mod:`rocklab.diagnosis.catalogue` and the same engine,
+:mod:`rocklab.diagnosis.engine`):
 the UMinho limestone blocks (Colombo et al., DOI 10.60756/uminho-jh25, CC BY
 4.0; ``raw/rocking-tests/uminho-limestone-free-rocking``), 134 trials on 12
 slendernesses H/B = 4-15.  Base model: Housner's e_an = 1 - 3/2 sin^2 alpha
@@ -22,7 +24,7 @@ measured ratios before it (a rigid block lands at the speed it took off
 with).  Velocity ratios above 1 or below 0 and late impacts are artefacts of
 the processing at small amplitudes (SOURCE.md): the diagnosis uses the first
 :data:`N_IMPACTS` impacts with 0 < r < :data:`R_MAX`, and a noise that grows
-as the impact speed falls (:func:`rocklab.diagnosis.noise_variance`).
+as the impact speed falls (:func:`rocklab.diagnosis.engine.noise_variance`).
 """
 
 from __future__ import annotations
@@ -34,7 +36,10 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from rocklab import diagnosis as D
+from rocklab.diagnosis import catalogue
+from rocklab.diagnosis.causes import restitution_scale
+from rocklab.diagnosis.engine import Problem, finite_mean, select_effects
+from rocklab.diagnosis.evidence import series_level
 from rocklab.physics import restitution
 
 #: Impacts per trial used (later ones are dominated by the processing noise).
@@ -108,18 +113,19 @@ def group_trials(events):
     return out
 
 
-class BlockProblem(D.Problem):
-    """The trials of one block group as a :class:`rocklab.diagnosis.Problem` (impact group only)."""
+class BlockProblem(Problem):
+    """The trials of one block group as a :class:`rocklab.diagnosis.engine.Problem` (impact group only)."""
 
     def __init__(self, trials: _Trials):
         self.T = trials
         self.n_tests = len(trials.ids)
+        self.causes = tuple(c for c in catalogue.CAUSES if c.name in CANDIDATES)
 
     def subset(self, idx):
         return self.T.subset(np.asarray(idx))
 
     def model_e(self, sub, values):
-        v = D.null_values()
+        v = catalogue.null_values()
         v.update(values)
         e_an = restitution.two_sided(sub.alpha)[:, None]
         e = e_an * v["c"] * np.exp(np.where(sub.odd, 0.5, -0.5) * v["s_e"])
@@ -146,12 +152,9 @@ class BlockProblem(D.Problem):
             }
         }
 
-    def candidates(self):
-        return list(CANDIDATES)
-
     def params(self, ext):
         # no rotations in the tables: the asymmetry is that of e only
-        return [q for q in D.param_list(ext) if q[0] != "s_alpha"]
+        return [q for q in super().params(ext) if q.name != "s_alpha"]
 
     def starts(self, ext):
         ratio = self.T.r / restitution.two_sided(self.T.alpha)[:, None]
@@ -171,7 +174,7 @@ def signatures(trials: _Trials):
     ratio = trials.r / restitution.two_sided(trials.alpha)[:, None]
     ok = np.isfinite(ratio)
     e, u = ratio[ok], trials.u[ok]
-    med = D.series_level(ratio, ok)
+    med = series_level(ratio, ok)
     sl = stats.linregress(u, e)
     odd, even = ratio[ok & trials.odd], ratio[ok & ~trials.odd]
     mw = stats.mannwhitneyu(odd, even)
@@ -181,7 +184,7 @@ def signatures(trials: _Trials):
     return {
         "restitution_scale": {
             "value": med,
-            "supports": abs(med - 1) > D.PRACTICAL["c"],
+            "supports": abs(med - 1) > restitution_scale.C.practical,
             "text": f"measured r/e_an = {med:.3f} (mean over trials of their medians, {e.size} impacts)",
         },
         "restitution_amplitude": {
@@ -203,7 +206,7 @@ def diagnose_group(trials: _Trials, *, n_boot=40, seed=0):
     """Diagnosis of one block group (or of all, pooled): what Housner's e gets wrong, the causes, the gain."""
     problem = BlockProblem(trials)
     sig = signatures(trials)
-    sel = D.select_effects(problem, signature=sig, n_boot=n_boot, seed=seed)
+    sel = select_effects(problem, signature=sig, n_boot=n_boot, seed=seed)
     e_an = float(np.median(restitution.two_sided(trials.alpha)))
     measured = float(np.nanmedian(trials.r))
     base_ho, final_ho = sel["base"], sel["final"]
@@ -211,7 +214,7 @@ def diagnose_group(trials: _Trials, *, n_boot=40, seed=0):
     decay_meas = float(np.median(np.exp(np.nansum(np.log(trials.r), axis=1) / np.maximum(n, 1))))
     findings = []
     for eff in sel["effects"]:
-        own = [q[0] for q in problem.params((eff,))]
+        own = [q.name for q in problem.params((eff,))]
         st = sel["steps"][eff]
         findings.append(
             {
@@ -223,8 +226,8 @@ def diagnose_group(trials: _Trials, *, n_boot=40, seed=0):
                     "fit": f"held-out deviance per impact lowered by {st['gain']:.3g} (standard error "
                     f"{st['se']:.2g}), dBIC = {st['dbic']:.1f}",
                 },
-                "error_heldout": {k: D.finite_mean(v) for k, v in st["heldout"].items()},
-                "gain": {k: D.finite_mean(base_ho[k]) - D.finite_mean(st["heldout"][k]) for k in base_ho}
+                "error_heldout": {k: finite_mean(v) for k, v in st["heldout"].items()},
+                "gain": {k: finite_mean(base_ho[k]) - finite_mean(st["heldout"][k]) for k in base_ho}
                 | {"deviance": st["gain"]},
             }
         )
@@ -256,8 +259,8 @@ def diagnose_group(trials: _Trials, *, n_boot=40, seed=0):
         "rejected": sel["rejected"],
         "signatures": {k: v["text"] for k, v in sig.items()},
         "heldout": {
-            "base": {k: D.finite_mean(v) for k, v in base_ho.items()},
-            "model": {k: D.finite_mean(v) for k, v in final_ho.items()},
+            "base": {k: finite_mean(v) for k, v in base_ho.items()},
+            "model": {k: finite_mean(v) for k, v in final_ho.items()},
         },
     }
 

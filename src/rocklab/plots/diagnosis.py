@@ -6,7 +6,7 @@ for two-sided walls; Eq. 14, the two-sided e of Hogan 1992 and e = 0 of
 Liberatore & Spera 2003 for one-sided walls, Fig. 15a); panel b, the same
 motion with the extended model that :mod:`rocklab.diagnosis` chose for the
 series (Figs. 14b, 15b).  Every model runs on the exact simulator
-(:func:`rocklab.diagnosis.simulate_test`) from the test's measured release.
+(:func:`rocklab.diagnosis.model.simulate_measured`) from the test's measured release.
 """
 
 from __future__ import annotations
@@ -19,9 +19,9 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import xarray as xr
 
-from rocklab.diagnosis import measured_test, records_by_series, simulate_test
+from rocklab.diagnosis import measured_test, records_by_series, simulate_measured
 
-#: Literature models of panel a: label -> base of :func:`rocklab.diagnosis.rocking_model`.
+#: Literature models of panel a: label -> base of :func:`rocklab.diagnosis.model.rocking_model`.
 LITERATURE = {
     "two-sided": {"Housner e_an,2s (Eq. 2)": "analytic"},
     "one-sided": {
@@ -56,13 +56,11 @@ def history_figure(test, entry):
     for ax in axes:
         _plot(ax, test.t, test.theta, test, color="k", lw=1.2, label=f"measured ({test.test_id})")
     for (label, base), style in zip(LITERATURE[test.boundary].items(), ("-", "--", ":")):
-        t, th = simulate_test(test, base=base, t_end=t_end)
+        t, th = simulate_measured(test, base=base, t_end=t_end)
         _plot(axes[0], t, th, test, ls=style, lw=0.9, label=label)
     ext = entry.get("extended")
     if ext:
-        t, th = simulate_test(
-            test, ext["effects"], ext["params"], t_end=t_end, stop=ext["params"].get("v_stop_over_vr", 0.0)
-        )
+        t, th = simulate_measured(test, ext["effects"], ext["params"], t_end=t_end)
         params = ", ".join(f"{k} = {v:.3g}" for k, v in ext["params"].items())
         _plot(axes[1], t, th, test, color="C3", lw=0.9, label=f"{' + '.join(ext['effects'])}\n({params})")
     else:

@@ -1,0 +1,71 @@
+"""The catalogue of candidate causes: one module each in :mod:`rocklab.diagnosis.causes`.
+
+:data:`CAUSES` is the ordered list the diagnosis reads: the order in which
+the causes act on the model and are reported when tied.  Adding a cause is
+one new module (a :class:`rocklab.diagnosis.causes.Cause` named ``CAUSE``)
+and one line here (docs/diagnosis-method.md, "Adding a cause").
+"""
+
+from __future__ import annotations
+
+from rocklab.diagnosis.causes import (
+    contact_gap,
+    flight_damping,
+    hinge_asymmetry,
+    instability_angle,
+    restitution_amplitude,
+    restitution_scale,
+    stop_threshold,
+)
+from rocklab.diagnosis.evidence import observe
+
+CAUSES = [
+    restitution_scale.CAUSE,
+    restitution_amplitude.CAUSE,
+    instability_angle.CAUSE,
+    flight_damping.CAUSE,
+    hinge_asymmetry.CAUSE,
+    contact_gap.CAUSE,
+    stop_threshold.CAUSE,
+]
+
+
+def by_name(name):
+    """The cause of the catalogue called ``name``."""
+    return next(c for c in CAUSES if c.name == name)
+
+
+def null_values():
+    """Every parameter of the catalogue at its null value (the base model)."""
+    return {q.name: q.null for c in CAUSES for q in c.params}
+
+
+def for_boundary(boundary, stage="selection"):
+    """The causes of a stage that can occur in a boundary condition, in catalogue order."""
+    return [c for c in CAUSES if c.stage == stage and boundary in c.boundaries]
+
+
+def signatures(tests):
+    """Evidence for each cause that needs no model fit, in catalogue order.
+
+    Returns
+    -------
+    dict
+        cause -> {"value": ..., "supports": bool, "text": str, ...} for the
+        causes of the tests' boundary condition that have a signature.
+    """
+    ob = observe(tests)
+    out = {}
+    for cause in for_boundary(tests[0].boundary):
+        s = cause.signature(ob)
+        if s is not None:
+            out[cause.name] = s
+    return out
+
+
+def starts(sigs):
+    """Data-driven starting values of every parameter from the signatures (:func:`signatures`)."""
+    out = {}
+    for cause in CAUSES:
+        out.update(cause.starts(sigs))
+    return out

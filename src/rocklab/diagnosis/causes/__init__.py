@@ -1,0 +1,83 @@
+"""Candidate causes of the diagnosis, one module each (the list is :mod:`rocklab.diagnosis.catalogue`).
+
+A cause is a physical extension of the base rocking model: a module that
+declares one :class:`Cause` named ``CAUSE``.  docs/diagnosis-method.md
+shows how to add one.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from rocklab.diagnosis.engine import Param
+
+BOTH = ("two-sided", "one-sided")
+
+
+def _no_signature(observed):
+    return None
+
+
+def _no_starts(signatures):
+    return {}
+
+
+@dataclass(frozen=True)
+class Cause:
+    """What the diagnosis needs to know of one candidate cause.
+
+    Attributes
+    ----------
+    name : str
+        As reported (the module's name).
+    law : str
+        The extension in one line (docs and tables).
+    params : tuple of Param
+        Bounds, null value (the base model) and smallest effect worth naming.
+    apply : callable
+        ``apply(mp, values) -> ModelParams``: the base model's
+        :class:`rocklab.diagnosis.model.ModelParams` as the cause changes it,
+        ``values`` its parameters by name (impact law, hinge angles, flight
+        loss, gap, stop, or an impact hook).
+    boundaries : tuple of str
+        Boundary conditions it can occur in.
+    signature : callable
+        ``signature(observed) -> dict or None``: the evidence in the data
+        that needs no fit (:class:`rocklab.diagnosis.evidence.Observed`),
+        ``{"value", "supports", "text", ...}``; a cause whose signature does
+        not support it is never named.
+    starts : callable
+        ``starts(signatures) -> dict``: data-driven starting values of its
+        parameters from the signatures of all causes.
+    replaces : tuple of str
+        Causes it contains (Eq. 17's a is the plain scale): never fitted
+        together.
+    stage : str
+        ``"selection"`` (a residual of the flights, selected by the engine)
+        or ``"after selection"`` (estimated once the chosen model is known,
+        from what that model leaves: :attr:`unexplained` and :attr:`estimate`).
+    unexplained : callable, optional
+        After-selection causes: ``unexplained(stack, mp) -> list of str``,
+        what the model ``mp`` leaves that this cause would explain.
+    estimate : callable, optional
+        After-selection causes: ``estimate(tests, ext, values, seed) ->
+        dict or None`` with ``named`` (bool), ``values`` (its parameters) and
+        ``finding`` (the entry of the diagnosis).
+    """
+
+    name: str
+    law: str
+    params: tuple[Param, ...]
+    apply: Callable
+    boundaries: tuple[str, ...] = BOTH
+    signature: Callable = _no_signature
+    starts: Callable = _no_starts
+    replaces: tuple[str, ...] = ()
+    stage: str = "selection"
+    unexplained: Callable | None = None
+    estimate: Callable | None = None
+
+    def values(self, values):
+        """This cause's parameters from ``values``, the null value where missing."""
+        return {q.name: values.get(q.name, q.null) for q in self.params}

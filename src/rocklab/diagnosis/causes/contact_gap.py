@@ -1,0 +1,56 @@
+"""A gap behind a one-sided wall: it swings inwards through g = gamma alpha (Fig. 12).
+
+Two-sided rocking on the inner hinge, Eq. 2 at the base, Eqs. 12-13 on the
+transverse walls (:func:`rocklab.diagnosis.model.impact_speeds`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from rocklab.diagnosis.causes import Cause
+from rocklab.diagnosis.engine import Param
+from rocklab.physics import restitution
+
+GAMMA = Param("gap_over_alpha", 0.0, 0.3, 0.0, practical=0.002)
+
+
+def apply(mp, v):
+    gap_model = mp.one_sided.copy()
+    return replace(
+        mp,
+        gap_model=gap_model,
+        e0=np.where(gap_model, restitution.two_sided(mp.alpha), mp.e0),
+        gap=v["gap_over_alpha"] * mp.alpha,
+    )
+
+
+def signature(ob):
+    """The negative rotations: excursions past theta = 0 above the noise threshold."""
+    S = ob.S
+    d = S.depth[np.isfinite(S.depth)]
+    f = np.broadcast_to(S.floor[:, None], S.depth.shape)[np.isfinite(S.depth)]
+    seen = d > f
+    med = float(np.median((S.depth / ob.alpha)[np.isfinite(S.depth)][seen])) if seen.any() else 0.0
+    return {
+        "value": med,
+        "supports": bool(seen.size and seen.mean() >= 0.25),
+        "text": f"{int(seen.sum())} of {d.size} impacts with negative rotations (median depth {med:.4f} alpha)",
+    }
+
+
+def starts(sig):
+    return {"gap_over_alpha": max(sig.get("contact_gap", {}).get("value", 0.0), 1e-3)}
+
+
+CAUSE = Cause(
+    name="contact_gap",
+    law="one-sided: the wall swings inwards through a gap g = gamma alpha",
+    params=(GAMMA,),
+    apply=apply,
+    boundaries=("one-sided",),
+    signature=signature,
+    starts=starts,
+)

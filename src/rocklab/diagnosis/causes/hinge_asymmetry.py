@@ -1,0 +1,80 @@
+"""Hinges that differ (two-sided walls): alpha_+- = alpha_r exp(+-s_alpha/2), e_+- = e exp(+-s_e/2)
+on the hinge being left."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+from scipy import stats
+
+from rocklab.diagnosis.causes import Cause
+from rocklab.diagnosis.engine import Param
+
+S_ALPHA = Param("s_alpha", -0.5, 0.5, 0.0, practical=0.005)
+S_E = Param("s_e", -0.5, 0.5, 0.0, practical=0.003)
+
+
+def apply(mp, v):
+    ha, he = v["s_alpha"] / 2, v["s_e"] / 2
+    return replace(
+        mp,
+        c_pos=mp.c_pos * math.exp(he),
+        c_neg=mp.c_neg * math.exp(-he),
+        a_pos=mp.a_pos * math.exp(ha),
+        a_neg=mp.a_neg * math.exp(-ha),
+    )
+
+
+def signature(ob):
+    """e and alpha by hinge, theta0/alpha by push or pull release."""
+    S, ratio, ok, a_T = ob.S, ob.ratio, ob.ok, ob.a_T
+    parts, ps, start = [], [], {}
+    plus = S.side > 0
+    a_, b_ = ratio[ok & plus], ratio[ok & ~plus]
+    if a_.size >= 3 and b_.size >= 3:
+        u = stats.mannwhitneyu(a_, b_)
+        ps.append((u.pvalue, abs(np.median(a_) / np.median(b_) - 1)))
+        start["s_e"] = float(np.log(np.median(a_) / np.median(b_)))
+        parts.append(f"e/e_an leaving hinge +/-: {np.median(a_):.3f} / {np.median(b_):.3f} (p = {u.pvalue:.2g})")
+    # the apex of flight k is on hinge -side_k
+    ta, tb = a_T[~plus[:, :-1]], a_T[plus[:, :-1]]
+    ta, tb = ta[np.isfinite(ta)], tb[np.isfinite(tb)]
+    if ta.size >= 3 and tb.size >= 3:
+        u = stats.mannwhitneyu(ta, tb)
+        ps.append((u.pvalue, abs(np.median(ta) / np.median(tb) - 1)))
+        start["s_alpha"] = float(np.log(np.median(ta) / np.median(tb)))
+        parts.append(
+            f"alpha_r/alpha from flights on hinge +/-: {np.median(ta):.3f} / {np.median(tb):.3f} (p = {u.pvalue:.2g})"
+        )
+    push = np.array([t.side0 > 0 for t in ob.tests])
+    if push.sum() >= 2 and (~push).sum() >= 2:
+        r0 = S.theta0 / np.array([t.alpha for t in ob.tests])
+        w = stats.ttest_ind(r0[push], r0[~push], equal_var=False)
+        ps.append((w.pvalue, abs(np.mean(r0[push]) / np.mean(r0[~push]) - 1)))
+        parts.append(
+            f"theta0/alpha pushed / pulled: {np.mean(r0[push]):.3f} / {np.mean(r0[~push]):.3f} (p = {w.pvalue:.2g})"
+        )
+    sup = any(pv < 0.01 and size > S_E.practical for pv, size in ps)
+    return {
+        "value": float(min((pv for pv, _ in ps), default=1.0)),
+        "supports": bool(sup),
+        **start,
+        "text": "; ".join(parts) if parts else "one hinge only",
+    }
+
+
+def starts(sig):
+    return {k: sig.get("hinge_asymmetry", {}).get(k, 0.0) for k in ("s_alpha", "s_e")}
+
+
+CAUSE = Cause(
+    name="hinge_asymmetry",
+    law="alpha_+- = alpha_r exp(+-s_alpha/2), e_+- = e exp(+-s_e/2) on the hinge being left",
+    params=(S_ALPHA, S_E),
+    apply=apply,
+    boundaries=("two-sided",),
+    signature=signature,
+    starts=starts,
+)

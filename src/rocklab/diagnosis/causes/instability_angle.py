@@ -1,0 +1,51 @@
+"""Instability angle below the nominal one: the wall rocks on alpha_r = r alpha.
+
+A rounded hinge, indented mortar (Sect. 3).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from rocklab.diagnosis.causes import Cause
+from rocklab.diagnosis.engine import Param
+
+R = Param("alpha_r_over_alpha", 0.3, 1.2, 1.0, practical=0.005)
+
+
+def apply(mp, v):
+    return replace(mp, a_pos=v["alpha_r_over_alpha"] * mp.a_pos, a_neg=v["alpha_r_over_alpha"] * mp.a_neg)
+
+
+def signature(ob):
+    """alpha_r/alpha from the flight times (Housner's closed form inverted) and from the fall after the release."""
+    r0 = ob.S.theta0 / ob.alpha[:, 0]
+    fall = np.array([t.alpha_fall / t.alpha for t in ob.tests])
+    med_T = float(np.nanmedian(ob.a_T)) if np.isfinite(ob.a_T).any() else np.nan
+    med_f = float(np.nanmedian(fall)) if np.isfinite(fall).any() else np.nan
+    value = med_T if np.isfinite(med_T) else (med_f if np.isfinite(med_f) else 1.0)
+    return {
+        "value": float(value),
+        "supports": bool(
+            (np.isfinite(med_T) and med_T < 1 - R.practical) or (np.isfinite(med_f) and med_f < 1 - R.practical)
+        ),
+        "text": f"flight times give alpha_r/alpha = {med_T:.3f} (Housner's closed form, median of "
+        f"{int(np.isfinite(ob.a_T).sum())} flights); the fall from the release {med_f:.3f}; "
+        f"theta0/alpha = {np.median(r0):.3f}",
+    }
+
+
+def starts(sig):
+    return {"alpha_r_over_alpha": sig.get("instability_angle", {}).get("value", R.null)}
+
+
+CAUSE = Cause(
+    name="instability_angle",
+    law="the wall rocks on alpha_r = r alpha < alpha",
+    params=(R,),
+    apply=apply,
+    signature=signature,
+    starts=starts,
+)

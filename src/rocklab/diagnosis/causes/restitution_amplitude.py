@@ -1,0 +1,47 @@
+"""Restitution that falls with the impact speed: e/e_an = a - b (thetadot^-/thetadot_r)^2, Eq. 17 (Fig. 15b)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+from scipy import stats
+
+from rocklab.diagnosis.causes import Cause
+from rocklab.diagnosis.engine import Param
+
+#: ``a`` of Eq. 17 has no null of its own: it is the scale.
+A = Param("a", 0.2, 2.5, 1.0)
+B = Param("b", -3.0, 3.0, 0.0, practical=0.01)
+
+
+def apply(mp, v):
+    return replace(mp, amp_a=v["a"] * mp.amp_a, amp_b=v["b"] * np.ones_like(mp.alpha))
+
+
+def signature(ob):
+    """The trend of the measured e/e_an with the squared impact speed over thetadot_r."""
+    e, v2 = ob.ratio[ob.ok], ob.vr[ob.ok] ** 2
+    if e.size < 3 or not np.ptp(v2) > 0:
+        return None
+    sl = stats.linregress(v2, e)
+    return {
+        "value": float(-sl.slope),
+        "supports": bool(sl.pvalue < 0.01 and abs(sl.slope) > B.practical),
+        "text": f"e/e_an against (thetadot^-/thetadot_r)^2: slope {sl.slope:+.3f} (p = {sl.pvalue:.2g})",
+    }
+
+
+def starts(sig):
+    return {"a": sig.get("restitution_scale", {}).get("value", 1.0)}
+
+
+CAUSE = Cause(
+    name="restitution_amplitude",
+    law="e/e_an = a - b (thetadot^-/thetadot_r)^2 (Eq. 17)",
+    params=(A, B),
+    apply=apply,
+    signature=signature,
+    starts=starts,
+    replaces=("restitution_scale",),
+)

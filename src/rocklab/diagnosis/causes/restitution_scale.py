@@ -1,0 +1,46 @@
+"""Restitution scale: e = c e_an, a calibrated e (Fig. 14b)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from rocklab.diagnosis.causes import Cause
+from rocklab.diagnosis.engine import Param
+from rocklab.diagnosis.evidence import series_level
+
+C = Param("c", 0.2, 2.0, 1.0, practical=0.005)
+
+
+def apply(mp, v):
+    return replace(mp, c_pos=v["c"] * mp.c_pos, c_neg=v["c"] * mp.c_neg)
+
+
+def signature(ob):
+    """The measured e/e_an: one level per test (its median), their mean over tests."""
+    e = ob.ratio[ob.ok]
+    if e.size < 3:
+        return None
+    level = series_level(ob.ratio, ob.ok)
+    lo, hi = np.percentile(e, [25, 75])
+    return {
+        "value": level,
+        "supports": bool(abs(level - 1) > C.practical),
+        "text": f"measured e/e_an = {level:.3f} (mean over tests of their medians; "
+        f"IQR of the {e.size} impacts {lo:.3f}-{hi:.3f})",
+    }
+
+
+def starts(sig):
+    return {"c": sig.get("restitution_scale", {}).get("value", 1.0)}
+
+
+CAUSE = Cause(
+    name="restitution_scale",
+    law="e = c e_an",
+    params=(C,),
+    apply=apply,
+    signature=signature,
+    starts=starts,
+)

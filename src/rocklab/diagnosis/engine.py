@@ -1,0 +1,495 @@
+"""Estimation engine: fits, held-out deviance, bootstrap intervals, selection.
+
+Independent of what is fitted: a :class:`Problem` hands the engine its
+tests, its residual groups (log ratios, model over measured), the noise
+covariate of each residual and its candidate causes (objects with ``name``,
+``params`` (:class:`Param`) and ``replaces``).  The engine fits a
+combination of causes by maximum likelihood with a noise model per group
+(:func:`fit`), scores it on tests left out (:func:`heldout`), resamples
+tests for parameter intervals (:func:`parameter_intervals`), selects causes
+greedily (:func:`select_effects`) and tests what the chosen model leaves
+(:func:`structure`).  The method is described in docs/diagnosis-method.md.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+from scipy import optimize, stats
+
+#: Floor of the variance of a residual group [log units^2] (noise-free data).
+VAR_FLOOR = 1e-10
+
+#: Residual structure smaller than this [log units over the range] is not reported.
+STRUCTURE_MIN = 0.01
+
+#: Significance of residual structure (cluster-robust t-test over tests).
+STRUCTURE_P = 1e-3
+
+
+class Param(NamedTuple):
+    """A parameter of a cause: bounds of the fit, null value (the cause absent),
+    and the smallest departure from the null worth naming the cause for (a
+    parameter whose 95 % interval stays closer to the null than this is no
+    cause; None: the parameter alone never names it)."""
+
+    name: str
+    lower: float
+    upper: float
+    null: float
+    practical: float | None = None
+
+
+def finite_mean(x):
+    """Mean of the finite values of x, None if there are none."""
+    x = np.asarray(x, float)
+    return float(np.nanmean(x)) if np.isfinite(x).any() else None
+
+
+class Problem:
+    """A set of tests and the residual groups of models over them.
+
+    Subclasses set ``causes`` (the candidates, in the order they are
+    reported when tied, each with ``name``, ``params`` and ``replaces``) and
+    define :meth:`residuals` (group -> (tests, k) arrays for a subset made by
+    :meth:`subset`), :meth:`noise`, :meth:`starts` (data-driven starting
+    values) and, optionally, :meth:`heldout_measures` and :meth:`covariates`.
+    """
+
+    n_tests: int
+    causes: tuple = ()
+
+    def subset(self, idx):
+        raise NotImplementedError
+
+    def residuals(self, sub, ext, values):
+        raise NotImplementedError
+
+    def candidates(self):
+        """Names of the candidate causes."""
+        return [c.name for c in self.causes]
+
+    def starts(self, ext):
+        return {}
+
+    def heldout_measures(self, sub, ext, values):
+        return {}
+
+    def covariates(self, sub):
+        """Group -> {label: array like its residuals} for the structure tests."""
+        return {}
+
+    def noise(self, sub):
+        """Noise covariate (threshold over amplitude) of every residual of :meth:`residuals`."""
+        raise NotImplementedError
+
+    def extra_structure(self, sub, ext, values):
+        """Structure outside the residual groups (list of statements)."""
+        return []
+
+    def resolution(self, x):
+        """Typical resolution [log units] of a group from its noise covariates ``x``."""
+        return float(np.median(x))
+
+    def params(self, ext):
+        """Parameters (:class:`Param`) of the causes ``ext`` this problem's data can see, in catalogue order."""
+        return [q for c in self.causes if c.name in ext for q in c.params]
+
+    def combine(self, current, eff):
+        """The causes ``current`` plus ``eff`` in catalogue order, less those ``eff``
+        replaces; None where a cause of ``current`` replaces ``eff``."""
+        by_name = {c.name: c for c in self.causes}
+        if any(eff in by_name[c].replaces for c in current):
+            return None
+        new = (set(current) | {eff}) - set(by_name[eff].replaces)
+        return tuple(c.name for c in self.causes if c.name in new)
+
+
+def noise_variance(r, x):
+    """Maximum-likelihood noise model v = s0^2 + s1^2 x^2 of residuals r [log units^2].
+
+    ``x`` is the observation's noise threshold over its amplitude: records
+    are precise to a fixed rotation, so the log residuals of small flights
+    are noisier in proportion.  For a ratio rho = s1^2 / s0^2 the best s0^2
+    is mean(r^2 / (1 + rho x^2)); the profile likelihood is then minimised
+    over log rho (Brent), the ends rho = 0 and s0 = 0 included.
+    Returns (s0^2, s1^2).
+    """
+    r2, x2 = r**2 + VAR_FLOOR, x**2
+    n = r.size
+    hom = (float(np.mean(r2)), 0.0)
+    if n < 4 or np.ptp(x2) <= 1e-12 * max(float(np.max(x2)), 1e-300):
+        return hom
+    x2 = np.maximum(x2, 1e-300)
+
+    def prof(t):
+        d = 1.0 + math.exp(t) * x2
+        return n * math.log(float(np.mean(r2 / d))) + float(np.sum(np.log(d)))
+
+    lo, hi = -math.log(float(np.max(x2))) - 12.0, -math.log(float(np.min(x2))) + 12.0
+    sol = optimize.minimize_scalar(prof, bounds=(lo, hi), method="bounded", options={"xatol": 1e-3})
+    ends = {"hom": n * math.log(hom[0]), "prop": n * math.log(float(np.mean(r2 / x2))) + float(np.sum(np.log(x2)))}
+    best = min(ends, key=ends.get)
+    if sol.fun <= ends[best]:
+        rho = math.exp(sol.x)
+        s0 = float(np.mean(r2 / (1.0 + rho * x2)))
+        return (s0, rho * s0)
+    return hom if best == "hom" else (1e-300, float(np.mean(r2 / x2)))
+
+
+def _obs(R, X):
+    """Finite residuals and their noise covariates, per group."""
+    out = {}
+    for g, r in R.items():
+        ok = np.isfinite(r) & np.isfinite(X[g])
+        out[g] = (r[ok], X[g][ok])
+    return out
+
+
+def _variances(R, X):
+    return {g: noise_variance(r, x) for g, (r, x) in _obs(R, X).items() if r.size >= 2}
+
+
+def _deviance(R, X, var):
+    """-2 log L (constants dropped) of residuals R under the group noise models ``var``."""
+    out = 0.0
+    for g, (r, x) in _obs(R, X).items():
+        if g in var and r.size:
+            v = var[g][0] + var[g][1] * x**2 + VAR_FLOOR
+            out += float(np.sum(r**2 / v + np.log(v)))
+    return out
+
+
+@dataclass
+class Fit:
+    """A fitted model: parameter values, group noise models, -2 log L, observations."""
+
+    ext: tuple
+    values: dict
+    var: dict
+    m2ll: float
+    n_obs: int
+
+    @property
+    def bic(self):
+        return self.m2ll + len(self.values) * math.log(max(self.n_obs, 2))
+
+
+def fit(problem: Problem, idx, ext, x0=None, n_irls=None) -> Fit:
+    """Maximum-likelihood fit of ``ext`` on the tests ``idx``, noise model per group.
+
+    Iteratively reweighted least squares: with the weights of the noise
+    model (:func:`noise_variance`) of the previous pass, a bounded
+    least-squares fit, then the noise model again; its fixed point is the
+    maximum of the likelihood.  Non-convex parameters start both at their
+    null and at the value the data suggest (:meth:`Problem.starts`); the
+    better end wins.  ``x0`` (a previous fit) gives a single warm start, and
+    two passes (``n_irls``, default 5 cold, 2 warm) then suffice.
+    """
+    sub = problem.subset(idx)
+    X = problem.noise(sub)
+    plist = problem.params(ext)
+    if not plist:
+        R = problem.residuals(sub, ext, {})
+        var = _variances(R, X)
+        return Fit(tuple(ext), {}, var, _deviance(R, X, var), sum(r.size for r, _ in _obs(R, X).values()))
+    names = [q.name for q in plist]
+    lo = np.array([q.lower for q in plist], float)
+    hi = np.array([q.upper for q in plist], float)
+    nulls = np.array([q.null for q in plist], float)
+    inside = lambda x: np.clip(x, lo + 1e-6 * (hi - lo), hi - 1e-6 * (hi - lo))  # noqa: E731
+    n_irls = n_irls or (2 if x0 is not None else 5)
+    if x0 is not None:
+        starts = [inside(np.array([x0[n] for n in names], float))]
+    else:
+        guess = problem.starts(ext)
+        starts = [inside(nulls)]
+        if any(n in guess for n in names):
+            starts.append(inside(np.array([guess.get(n, nu) for n, nu in zip(names, nulls)], float)))
+    R0 = problem.residuals(sub, ext, dict(zip(names, starts[0])))
+    masks = {g: np.isfinite(r) & np.isfinite(X[g]) for g, r in R0.items()}
+    masks = {g: m for g, m in masks.items() if m.sum() >= 2}
+    xm = {g: X[g][m] for g, m in masks.items()}
+    best = None
+    for x in starts:
+        R = problem.residuals(sub, ext, dict(zip(names, x)))
+        var = _variances({g: R[g] for g in masks}, X)
+        for _ in range(n_irls):
+            w = {g: 1.0 / np.sqrt(var[g][0] + var[g][1] * xm[g] ** 2 + VAR_FLOOR) for g in masks}
+
+            def res(xx, w=w):
+                R = problem.residuals(sub, ext, dict(zip(names, xx)))
+                return np.concatenate(
+                    [np.nan_to_num(R[g][m], nan=1.0, posinf=1.0, neginf=-1.0) * w[g] for g, m in masks.items()]
+                )
+
+            sol = optimize.least_squares(res, x, bounds=(lo, hi), x_scale="jac", diff_step=1e-5, xtol=1e-9, ftol=1e-9)
+            moved = np.max(np.abs(sol.x - x) / (hi - lo))
+            x = sol.x
+            R = problem.residuals(sub, ext, dict(zip(names, x)))
+            var = _variances({g: np.where(m, R[g], np.nan) for g, m in masks.items()}, X)
+            if moved < 1e-6:
+                break
+        R = {g: np.where(m, R[g], np.nan) for g, m in masks.items()}
+        m2ll = _deviance(R, X, var)
+        if best is None or m2ll < best.m2ll:
+            n_obs = int(sum(m.sum() for m in masks.values()))
+            best = Fit(tuple(ext), dict(zip(names, map(float, x))), var, m2ll, n_obs)
+    return best
+
+
+def _folds(n, k_max=5):
+    k = n if n <= 6 else k_max
+    idx = np.arange(n)
+    return [idx[idx % k == j] for j in range(k)] if n > 1 else [idx]
+
+
+def heldout(problem: Problem, ext, start=None):
+    """Per-test held-out deviance of ``ext`` fitted on the other tests (K-fold), and measures.
+
+    Returns
+    -------
+    dict
+        ``deviance`` (per test, -2 log L per observation of the held-out test
+        under the training fit) and the per-test arrays of
+        :meth:`Problem.heldout_measures`.
+    """
+    n = problem.n_tests
+    dev = np.full(n, np.nan)
+    meas = {}
+    for held in _folds(n):
+        train = np.setdiff1d(np.arange(n), held) if n > 1 else held
+        f = fit(problem, train, ext, x0=start)
+        sub = problem.subset(held)
+        X = problem.noise(sub)
+        R = {g: r for g, r in problem.residuals(sub, ext, f.values).items() if g in f.var}
+        for j, i in enumerate(held):
+            Ri = {g: r[j : j + 1] for g, r in R.items()}
+            Xi = {g: X[g][j : j + 1] for g in R}
+            nobs = sum(r.size for r, _ in _obs(Ri, Xi).values())
+            dev[i] = _deviance(Ri, Xi, f.var) / nobs if nobs else np.nan
+        for name, x in problem.heldout_measures(sub, ext, f.values).items():
+            meas.setdefault(name, np.full(n, np.nan))[held] = x
+    return {"deviance": dev, **meas}
+
+
+def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
+    """Percentile 95 % intervals of the parameters, whole tests resampled (bootstrap over tests)."""
+    rng = np.random.default_rng(seed)
+    names = list(fitted.values)
+    draws = []
+    for _ in range(n_boot):
+        pick = rng.integers(0, problem.n_tests, problem.n_tests)
+        # one reweighting pass: the noise model of the full fit serves the resample
+        draws.append([fit(problem, pick, fitted.ext, x0=fitted.values, n_irls=1).values[k] for k in names])
+    d = np.array(draws).reshape(len(draws), len(names))
+    return {k: [float(np.percentile(d[:, i], 2.5)), float(np.percentile(d[:, i], 97.5))] for i, k in enumerate(names)}
+
+
+def _paired(d):
+    d = d[np.isfinite(d)]
+    se = float(np.std(d, ddof=1) / math.sqrt(d.size)) if d.size > 1 else np.inf
+    return float(np.mean(d)) if d.size else 0.0, se
+
+
+def _improves(d):
+    """Whether paired per-test improvements ``d`` are beyond the noise.
+
+    The mean exceeds twice its standard error, or every one of at least five
+    tests improved (one-sided sign test, p <= 1/32): with few tests that
+    differ in how much they gain, the standard error alone is too strict.
+    """
+    d = d[np.isfinite(d)]
+    gain, se = _paired(d)
+    return gain > 2 * se or (d.size >= 5 and bool(np.all(d > 0)))
+
+
+def _null_excluded(problem, effect, ci):
+    """Whether some parameter of ``effect`` stays clear of its null by a practical margin."""
+    for q in problem.params((effect,)):
+        if q.practical is not None and q.name in ci:
+            lo, hi = ci[q.name]
+            if lo > q.null + q.practical or hi < q.null - q.practical:
+                return True
+    return False
+
+
+def structure(problem: Problem, idx, ext, values):
+    """Residual structure left by a model: bias and trends of each group, across tests.
+
+    For each group, the per-test median (bias) and the within-test slopes on
+    the covariates of :meth:`Problem.covariates` (impact index, log
+    amplitude), each with a cluster-robust (by test) t-test, or for a
+    covariate that is a property of the test the regression of the per-test
+    means on it; reported when p < :data:`STRUCTURE_P` and the effect
+    over the observed range exceeds :data:`STRUCTURE_MIN` and the median
+    noise covariate of the group (its resolution, :meth:`Problem.resolution`).
+
+    Returns
+    -------
+    list of str
+    """
+    sub = problem.subset(idx)
+    R = problem.residuals(sub, ext, values)
+    X = problem.noise(sub)
+    cov = problem.covariates(sub)
+    found = []
+    for g, r in R.items():
+        ok = np.isfinite(r)
+        tests_with = np.flatnonzero(ok.sum(axis=1) >= 1)
+        if tests_with.size < 3 or ok.sum() < 6:
+            continue
+        # structure below the group's typical resolution is no structure worth a cause
+        size = max(STRUCTURE_MIN, problem.resolution(X[g][ok]))
+        # per-test medians: one wild impact must not make a bias
+        means = np.array([np.median(r[i][ok[i]]) for i in tests_with])
+        t = stats.ttest_1samp(means, 0.0)
+        if np.isfinite(t.pvalue) and t.pvalue < STRUCTURE_P and abs(means.mean()) > size:
+            found.append(f"{g}: bias {means.mean():+.3f} (p = {t.pvalue:.1g})")
+        for label, x in cov.get(g, {}).items():
+            x = np.broadcast_to(x, r.shape)
+            xo = np.where(ok, x, np.nan)[tests_with]
+            if np.all(np.nanmax(xo, axis=1) == np.nanmin(xo, axis=1)):
+                # a property of the test (a slenderness): its per-test medians against it
+                xm = np.array([x[i][ok[i]][0] for i in tests_with])
+                fit = stats.linregress(xm, means) if np.ptp(xm) > 0 else None
+                slope, p_val = (fit.slope, fit.pvalue) if fit is not None else (0.0, np.nan)
+                span = float(np.subtract(*np.percentile(xm, [90, 10])))
+            else:
+                slope, p_val, span = _within_slope(r, x, ok)
+            if np.isfinite(p_val) and p_val < STRUCTURE_P and abs(slope * span) > size:
+                found.append(f"{g}: trend with {label} {slope * span:+.3f} over the range (p = {p_val:.1g})")
+    return found + problem.extra_structure(sub, ext, values)
+
+
+def _within_slope(r, x, ok):
+    """Within-test slope of r on x, cluster-robust p-value and the 10-90 % span of x."""
+    ok = ok & np.isfinite(x)
+    rows = [i for i in range(r.shape[0]) if ok[i].sum() >= 3]
+    if len(rows) < 3:
+        return 0.0, np.nan, 0.0
+    xs = [x[i][ok[i]] - x[i][ok[i]].mean() for i in rows]
+    rs = [r[i][ok[i]] - r[i][ok[i]].mean() for i in rows]
+    sxx = sum(float(a @ a) for a in xs)
+    if sxx <= 0:
+        return 0.0, np.nan, 0.0
+    beta = sum(float(a @ b) for a, b in zip(xs, rs)) / sxx
+    meat = sum(float(a @ (b - beta * a)) ** 2 for a, b in zip(xs, rs))
+    se = math.sqrt(meat) / sxx
+    allx = np.concatenate([x[i][ok[i]] for i in rows])
+    span = float(np.subtract(*np.percentile(allx, [90, 10])))
+    if se == 0:
+        return beta, 0.0 if beta else 1.0, span
+    return beta, float(2 * stats.t.sf(abs(beta / se), len(rows) - 1)), span
+
+
+def select_effects(problem: Problem, *, signature=None, n_boot=40, max_effects=4, seed=0, bic_margin=10.0):
+    """Greedy forward selection of the causes the data carry, with removal tests.
+
+    Parameters
+    ----------
+    problem : Problem
+    signature : dict, optional
+        effect -> {"supports": bool, ...}; an effect whose signature does not
+        support it is never named.
+    n_boot : int
+        Bootstrap resamples for the 95 % intervals.
+    bic_margin : float
+        BIC must drop by more than this (strong evidence, Kass & Raftery 1995).
+
+    Returns
+    -------
+    dict
+        ``effects`` (chosen, in order of entry), ``fit`` (:class:`Fit`),
+        ``ci`` (parameter intervals), ``base``/``final`` held-out results,
+        ``steps`` (the held-out result after each entry), ``rejected``
+        (effect -> reason), ``structure`` (what the chosen model leaves) and
+        ``weak`` (candidates turned down that would remove all of it).
+    """
+    all_idx = np.arange(problem.n_tests)
+    signature = signature or {}
+    fits = {}
+
+    def fit_of(ext):
+        # a fit is deterministic: the rounds, the removals and the weak-evidence
+        # pass meet the same models again
+        if ext not in fits:
+            fits[ext] = fit(problem, all_idx, ext)
+        return fits[ext]
+
+    current = ()
+    cur_fit = fit_of(current)
+    cur_ho = heldout(problem, current)
+    base_ho = cur_ho
+    steps, rejected, ci = {}, {}, {}
+    for _ in range(max_effects):
+        # candidates in the order of their information criterion; the held-out test and the
+        # bootstrap, the costly steps, only until one passes
+        cands = []
+        for eff in problem.candidates():
+            ext = problem.combine(current, eff) if eff not in current else None
+            if ext is None or ext == current or rejected.get(eff, "").startswith("95%"):
+                continue
+            f = fit_of(ext)
+            dbic = f.bic - cur_fit.bic
+            if dbic > -bic_margin:
+                rejected[eff] = f"BIC {dbic:+.1f}"
+            elif not signature.get(eff, {}).get("supports", True):
+                rejected[eff] = f"BIC {dbic:+.1f} but its signature in the data is absent"
+            else:
+                cands.append((dbic, eff, ext, f))
+        accepted = False
+        for dbic, eff, ext, f in sorted(cands, key=lambda c: c[0]):
+            ho = heldout(problem, ext, start=f.values)
+            d = cur_ho["deviance"] - ho["deviance"]
+            gain, se = _paired(d)
+            if not _improves(d):
+                rejected[eff] = f"held-out deviance gain {gain:.3g} within the noise (standard error {se:.2g})"
+                continue
+            c = parameter_intervals(problem, f, n_boot=n_boot, seed=seed)
+            if not _null_excluded(problem, eff, c):
+                rejected[eff] = "95% interval within the smallest effect worth naming of its null value"
+                continue
+            rejected.pop(eff, None)
+            current, cur_fit, cur_ho, ci = ext, f, ho, c
+            steps[eff] = {"heldout": ho, "gain": gain, "se": se, "dbic": dbic}
+            accepted = True
+            break
+        if not accepted:
+            break
+        # removal: a cause that entered earlier may be carried by the new one
+        for old in [e for e in current if e != eff and e in steps]:
+            ext = tuple(e for e in current if e != old)
+            f = fit_of(ext)
+            ho = heldout(problem, ext, start=f.values)
+            loss, se = _paired(ho["deviance"] - cur_ho["deviance"])
+            if not _improves(ho["deviance"] - cur_ho["deviance"]) or f.bic - cur_fit.bic < bic_margin:
+                rejected[old] = f"carried by {eff} (removing it costs {loss:.3g} +- {se:.2g} held out)"
+                steps.pop(old)
+                current, cur_fit, cur_ho = ext, f, ho
+                ci = parameter_intervals(problem, f, n_boot=n_boot, seed=seed) if ext else {}
+    found = structure(problem, all_idx, current, cur_fit.values)
+    # structure that a candidate turned down by the held-out test or the bootstrap would remove
+    # is weak evidence for it, not something outside the catalogue
+    weak = {}
+    if found:
+        for eff in problem.candidates():
+            ext = problem.combine(current, eff) if eff not in current else None
+            if ext is not None and ext != current and signature.get(eff, {}).get("supports", True):
+                f = fit_of(ext)
+                if not structure(problem, all_idx, ext, f.values):
+                    weak[eff] = {"params": f.values, "reason": rejected.get(eff, "")}
+    return {
+        "effects": list(current),
+        "fit": cur_fit,
+        "ci": ci,
+        "base": base_ho,
+        "final": cur_ho,
+        "steps": steps,
+        "rejected": rejected,
+        "structure": found,
+        "weak": weak,
+    }

@@ -1,0 +1,342 @@
+"""What the diagnosis sees of a test: its measured flights and the one-step residuals of a model.
+
+Every flight of a test is seen through what :mod:`rocklab.lab.motion`
+measures (:class:`MeasuredTest`): impact and take-off velocities, apexes,
+impact instants and, for one-sided walls, the excursion past theta = 0.
+Each is predicted one step ahead from the measured state before it
+(:func:`residuals`), in four groups that each see their own part of the
+physics (impact, peak, time, gap_time; docs/diagnosis-method.md).
+:func:`observe` gathers the arrays the causes' fit-free signatures read.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from rocklab.diagnosis.model import ModelParams, impact_speeds, release
+from rocklab.lab.motion import extract_motion
+from rocklab.physics import restitution
+from rocklab.physics.flight import apex_after, landing_speed, quarter_period
+from rocklab.physics.wall import overturning_velocity
+
+#: The derivative filter of :mod:`rocklab.lab.motion` fits undamped flights: with a
+#: viscous loss zeta it reads take-off speeds low and impact speeds high, so the
+#: velocity ratio of an impact reads e (1 - 0.35 zeta) (median over impacts and
+#: over walls with p = 3.0-4.3 rad/s and zeta = 0.005-0.02, exact simulator;
+#: checked in tests/test_diagnosis.py).
+FILTER_DAMPING_BIAS = 0.35
+
+
+@dataclass
+class MeasuredTest:
+    """What :mod:`rocklab.lab.motion` measured on one free-rocking test.
+
+    Angles and velocities are magnitudes on the side of release (``side0``);
+    arrays run over the impacts k = 1..n: ``peaks`` the apex |theta_k| after
+    impact k [rad], ``v_before`` / ``v_after`` |thetadot| before and after it
+    [rad/s], ``t_before`` / ``t_after`` its arrival at and departure from
+    theta = 0 [s] (they differ when a one-sided wall swings into the gap),
+    ``depth`` the excursion past theta = 0 [rad]; ``v_release`` the speed
+    towards the vertical with which the wall left the screw [rad/s].
+    """
+
+    test_id: str
+    alpha: float
+    p: float
+    boundary: str
+    direction: str
+    side0: int
+    theta0: float
+    peaks: np.ndarray
+    v_before: np.ndarray
+    v_after: np.ndarray
+    t_before: np.ndarray
+    t_after: np.ndarray
+    depth: np.ndarray
+    t_release: float
+    t_end: float
+    floor: float
+    dt: float = 1.0 / 400.0
+    v_release: float = 0.0
+    alpha_fall: float = np.nan
+    series: str = ""
+    t: np.ndarray | None = field(default=None, repr=False)
+    theta: np.ndarray | None = field(default=None, repr=False)
+
+    @property
+    def n_impacts(self) -> int:
+        return int(self.peaks.size)
+
+    @property
+    def sides(self) -> np.ndarray:
+        """Hinge left at impact k (+1 / -1, sign of theta before it)."""
+        k = np.arange(self.n_impacts)
+        return self.side0 * (np.ones(k.size) if self.boundary == "one-sided" else (-1.0) ** k)
+
+
+def measured_test(record) -> MeasuredTest:
+    """A :class:`MeasuredTest` from a reduced record.
+
+    Parameters
+    ----------
+    record : dict
+        ``test_id, t, theta, fs, alpha, p, boundary, direction`` (theta in
+        rad, t in s), optionally ``series`` and ``motion`` (a
+        :class:`rocklab.lab.motion.Motion` already extracted).
+    """
+    t = np.asarray(record["t"], float)
+    theta = np.asarray(record["theta"], float)
+    m = record.get("motion")
+    if m is None:
+        m = extract_motion(t, theta, record["fs"], record["boundary"], record["p"])
+    imp = m.impacts
+    n = min(len(imp), m.peaks.size)
+    col = lambda name: np.abs(imp[name].to_numpy(float)[:n])  # noqa: E731
+    return MeasuredTest(
+        test_id=str(record.get("test_id", "")),
+        alpha=float(record["alpha"]),
+        p=float(record["p"]),
+        boundary=record["boundary"],
+        direction=str(record.get("direction", "push")),
+        side0=int(m.sign),
+        theta0=float(m.theta0),
+        peaks=np.asarray(m.peaks[:n], float),
+        v_before=col("thetadot_before"),
+        v_after=col("thetadot_after"),
+        t_before=imp.t_s.to_numpy(float)[:n],
+        t_after=imp.t_after_s.to_numpy(float)[:n],
+        depth=col("negative_excursion"),
+        t_release=float(m.t_release),
+        t_end=float(m.t_end),
+        floor=float(m.peak_threshold),
+        dt=1.0 / float(record["fs"]),
+        v_release=max(float(m.thetadot_release), 0.0),
+        alpha_fall=float(m.alpha_fall),
+        series=str(record.get("series", "")),
+        t=t,
+        theta=theta,
+    )
+
+
+def records_by_series(datasets):
+    """Group reduced tests (:mod:`rocklab.lab.reduction`) into the records of :func:`diagnose_campaign`."""
+    out = {}
+    for ds in datasets:
+        a = ds.attrs
+        out.setdefault(a["series"], []).append(
+            {
+                "test_id": a["test_id"],
+                "series": a["series"],
+                "t": ds.time.values,
+                "theta": ds.theta.values,
+                "fs": float(a["sampling_rate_hz"]),
+                "alpha": float(a["alpha"]),
+                "p": float(a["p"]),
+                "boundary": a["boundary"],
+                "direction": a["direction"],
+            }
+        )
+    return dict(sorted(out.items()))
+
+
+# ---------------------------------------------------------------------------
+# one-step predictions
+
+
+@dataclass
+class TestStack:
+    """Measured tests as padded (tests, impacts) arrays (NaN past a test's last impact)."""
+
+    tests: list
+    theta0: np.ndarray
+    v0: np.ndarray
+    side0: np.ndarray
+    floor: np.ndarray
+    vfloor: np.ndarray
+    tfloor: np.ndarray
+    A: np.ndarray
+    vb: np.ndarray
+    va: np.ndarray
+    tb: np.ndarray
+    ta: np.ndarray
+    depth: np.ndarray
+    side: np.ndarray
+    k: np.ndarray
+
+    @classmethod
+    def of(cls, tests):
+        n = max(max(t.n_impacts for t in tests), 1)
+
+        def pad(name):
+            return np.array([np.r_[getattr(t, name), np.full(n - t.n_impacts, np.nan)] for t in tests])
+
+        side = np.array([np.r_[t.sides, np.full(n - t.n_impacts, np.nan)] for t in tests])
+        floor = np.array([t.floor for t in tests])
+        return cls(
+            tests=list(tests),
+            theta0=np.array([t.theta0 for t in tests]),
+            v0=np.array([t.v_release for t in tests]),
+            side0=np.array([t.side0 for t in tests], float),
+            floor=floor,
+            vfloor=np.array([t.p * t.floor for t in tests]),
+            tfloor=np.array([t.dt for t in tests]),
+            A=pad("peaks"),
+            vb=pad("v_before"),
+            va=pad("v_after"),
+            tb=pad("t_before"),
+            ta=pad("t_after"),
+            depth=pad("depth"),
+            side=np.nan_to_num(side, nan=1.0),
+            k=np.tile(np.arange(1, n + 1, dtype=float), (len(tests), 1)),
+        )
+
+    def subset(self, idx):
+        return replace(
+            self,
+            tests=[self.tests[i] for i in idx],
+            **{k: v[idx] for k, v in vars(self).items() if isinstance(v, np.ndarray)},
+        )
+
+
+def log_ratio(model, meas, floor=0.0):
+    """log((model + floor) / (measured + floor)), NaN where undefined."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.log((model + floor) / (meas + floor))
+
+
+def residuals(S: TestStack, mp: ModelParams, cache=None):
+    """One-step residuals of every group (module docstring), log(model / measured).
+
+    ``mp`` is a :class:`rocklab.diagnosis.model.ModelParams` of the tests of ``S``.
+
+    ``cache`` (a dict) keeps the flight times between calls with the same
+    hinge angles: a fit of the restitution moves nothing else.
+
+    Returns
+    -------
+    dict
+        Group name -> (tests, impacts) array, NaN where there is no observation.
+    """
+    f, vf = S.floor[:, None], S.vfloor[:, None]
+    p, zeta = mp.p[:, None], mp.zeta[:, None]
+    one = mp.one_sided[:, None]
+    apex_side = np.where(one, S.side, -S.side)
+    a_ap = mp.hinge(apex_side)
+    v_hat, _, tau_hat, _, _ = impact_speeds(S.vb, S.side, mp)
+    R = {"impact": log_ratio(v_hat * (1.0 - FILTER_DAMPING_BIAS * zeta), S.va, vf)}
+    # peak to peak: from the measured apex before (theta0 at rest for the first), a landing,
+    # the impact, a rise
+    v_land = landing_speed(S.A[:, :-1], mp.hinge(S.side[:, 1:]), p, zeta)
+    v_land = np.c_[release(S, mp)[0], v_land]
+    R["peak"] = log_ratio(apex_after(impact_speeds(v_land, S.side, mp)[0], a_ap, p, zeta), S.A, f)
+    key = mp.a_pos.tobytes() + mp.a_neg.tobytes()
+    if cache is not None and cache.get("stack") is S and cache.get("angles") == key:
+        R["time"] = cache["time"]
+    else:
+        # flights too close to the noise have apexes too uncertain to time them
+        A_t = np.where(S.A[:, :-1] > 3 * f, S.A[:, :-1], np.nan)
+        R["time"] = np.where(
+            np.isfinite(A_t),
+            log_ratio(2.0 * quarter_period(np.nan_to_num(A_t), a_ap[:, :-1], p), S.tb[:, 1:] - S.ta[:, :-1]),
+            np.nan,
+        )
+        if cache is not None:
+            cache.update(stack=S, angles=key, time=R["time"])
+    if np.all(mp.one_sided):
+        R["gap_time"] = log_ratio(tau_hat, S.ta - S.tb, S.tfloor[:, None])
+    return R
+
+
+def noise_covariates(S: TestStack):
+    """Noise threshold over the amplitude behind each residual of :func:`residuals`.
+
+    Velocities come from fits on the flights either side of an impact (the
+    smaller flight sets their noise), apexes and flight times from their own
+    flight, the gap from its depth and duration.
+    """
+    f = S.floor[:, None]
+    A0 = np.c_[S.theta0, S.A]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        x_imp = f / np.fmin(A0[:, :-1], A0[:, 1:])
+        X = {
+            "impact": x_imp,
+            "peak": f / S.A,
+            "time": f / S.A[:, :-1],
+            "gap_time": S.tfloor[:, None] / (S.ta - S.tb + S.tfloor[:, None]),
+        }
+    return X
+
+
+def covariates(S: TestStack):
+    """Impact index and log amplitude of each residual of :func:`residuals` (structure tests)."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        lv = np.log(S.vb)
+    k, lA = S.k, np.log(np.maximum(S.A, 1e-300))
+    pair = lambda a, b: {"impact index": a, "amplitude": b}  # noqa: E731
+    return {"impact": pair(k, lv), "peak": pair(k, lA), "time": pair(k[:, :-1], lA[:, :-1]), "gap_time": pair(k, lv)}
+
+
+def series_level(x, ok):
+    """Mean over tests of the per-test medians of x where ok: one level per test, robust within it."""
+    med = [np.median(x[i][ok[i]]) for i in range(x.shape[0]) if ok[i].any()]
+    return float(np.mean(med)) if med else np.nan
+
+
+def flight_time_alpha(A, T, p):
+    """Instability angle that Housner's closed form gives a flight of apex A and duration T [rad].
+
+    Inverts T = (2/p) arccosh(1 / (1 - A/a)): a = A / (1 - sech(p T / 2)).
+    """
+    return A / (1.0 - 1.0 / np.cosh(0.5 * p * T))
+
+
+@dataclass
+class Observed:
+    """The arrays of a series that the causes' signatures read (:func:`observe`).
+
+    ``alpha``, ``p`` as (tests, 1) columns; ``ratio`` the measured e over the
+    analytic e of the boundary, ``vr`` the impact speed over thetadot_r,
+    ``big`` the flights 3 times above the noise threshold, ``ok`` the
+    impacts with a finite ratio after a big flight, ``a_T`` the instability
+    angle over alpha that Housner's closed form gives each flight time
+    (:func:`flight_time_alpha`).
+    """
+
+    tests: list
+    S: TestStack
+    one_sided: bool
+    alpha: np.ndarray
+    p: np.ndarray
+    big: np.ndarray
+    ratio: np.ndarray
+    vr: np.ndarray
+    ok: np.ndarray
+    a_T: np.ndarray
+
+
+def observe(tests) -> Observed:
+    """:class:`Observed` of the tests of one series (one boundary condition)."""
+    S = TestStack.of(tests)
+    alpha = np.array([t.alpha for t in tests])[:, None]
+    p = np.array([t.p for t in tests])[:, None]
+    e_an = np.abs(restitution.analytic(tests[0].boundary, alpha))
+    big = S.A > 3 * S.floor[:, None]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = (S.va / S.vb) / e_an
+        vr = S.vb / overturning_velocity(alpha, p)
+        # period-amplitude: Housner's closed form inverted on every flight between two impacts
+        a_T = flight_time_alpha(S.A[:, :-1], S.tb[:, 1:] - S.ta[:, :-1], p) / alpha
+    return Observed(
+        tests=list(tests),
+        S=S,
+        one_sided=tests[0].boundary == "one-sided",
+        alpha=alpha,
+        p=p,
+        big=big,
+        ratio=ratio,
+        vr=vr,
+        ok=np.isfinite(ratio) & big,
+        a_T=np.where(big[:, :-1], a_T, np.nan),
+    )

@@ -1,0 +1,321 @@
+"""The extended rocking model of the diagnosis: the base model and what the causes change.
+
+Base model: a rigid block on the nominal alpha with the analytic e of its
+boundary (Eq. 2 two-sided, Eq. 14 one-sided), released from rest at the
+measured theta0.  Each cause of :mod:`rocklab.diagnosis.catalogue` changes
+the per-test arrays of :class:`ModelParams`; the closed forms of a flight
+(:mod:`rocklab.physics.flight`) then give the one-step predictions
+(:mod:`rocklab.diagnosis.evidence`), the flight-by-flight free run
+(:func:`next_flight`, :func:`free_run`) and the model of the exact
+simulator (:func:`rocking_model`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from rocklab.physics import impact as _impact
+from rocklab.physics import restitution
+from rocklab.physics.flight import (
+    apex,
+    apex_after,
+    landing_speed,
+    potential,
+    quarter_period,
+    quarter_period_linear,
+    transit_time,
+)
+from rocklab.physics.wall import overturning_velocity
+from rocklab.simulation.model import RockingModel
+from rocklab.simulation.reference import simulate_free
+
+#: A model wall is released at most this fraction below its instability angle.
+RELEASE_MARGIN = 1e-3
+
+
+@dataclass
+class ModelParams:
+    """Per-test arrays (shape (tests,)) of an extended model.
+
+    ``impact_hooks`` are functions ``hook(v_out, v, side, mp) -> v_out``
+    applied in turn to the take-off speed of every impact (a cause outside
+    the fields below), their parameters per test in ``extra``.
+    """
+
+    alpha: np.ndarray
+    p: np.ndarray
+    one_sided: np.ndarray
+    gap_model: np.ndarray  # one-sided walls modelled through the gap (Fig. 12)
+    e0: np.ndarray  # signed base e, nominal alpha: Eq. 14, or Eq. 2 (two-sided, gap model)
+    c_pos: np.ndarray  # multipliers of e on the hinge being left
+    c_neg: np.ndarray
+    amp_a: np.ndarray
+    amp_b: np.ndarray
+    a_pos: np.ndarray  # rocking angles of the hinges [rad]
+    a_neg: np.ndarray
+    zeta: np.ndarray
+    gap: np.ndarray  # [rad]
+    stop: np.ndarray  # landing speed [thetadot_r] below which the wall stops dead (0: never)
+    extra: dict = field(default_factory=dict)
+    impact_hooks: tuple = ()
+
+    def hinge(self, side):
+        """Rocking angle of hinge ``side`` (array of +1 / -1) [rad]."""
+        return np.where(side > 0, per_test(self.a_pos, side), per_test(self.a_neg, side))
+
+    def row(self, i):
+        """The model of test ``i`` (scalars)."""
+        arrays = {k: np.asarray(v)[i] for k, v in vars(self).items() if isinstance(v, np.ndarray)}
+        return replace(self, **arrays, extra={k: np.asarray(v)[i] for k, v in self.extra.items()})
+
+
+def per_test(x, like):
+    """Per-test array broadcast against a (tests, impacts) array."""
+    x = np.asarray(x)
+    return x[:, None] if np.ndim(like) == 2 and x.ndim == 1 else x
+
+
+def base_params(tests) -> ModelParams:
+    """ModelParams of the base model (every cause at its null value)."""
+    alpha = np.array([t.alpha for t in tests], float)
+    ones = np.ones_like(alpha)
+    return ModelParams(
+        alpha=alpha,
+        p=np.array([t.p for t in tests], float),
+        one_sided=np.array([t.boundary == "one-sided" for t in tests]),
+        gap_model=np.zeros(alpha.shape, bool),
+        e0=restitution.analytic([t.boundary for t in tests], alpha),
+        c_pos=ones,
+        c_neg=ones,
+        amp_a=ones,
+        amp_b=0.0 * ones,
+        a_pos=alpha,
+        a_neg=alpha,
+        zeta=0.0 * ones,
+        gap=0.0 * alpha,
+        stop=0.0 * ones,
+    )
+
+
+def model_params(tests, ext=(), values=None) -> ModelParams:
+    """ModelParams of the base model extended by the causes ``ext`` with parameter ``values``.
+
+    The causes act in catalogue order; the values of causes outside ``ext``
+    are not used.
+    """
+    # the catalogue's causes need this module (their stages run the model): read it at call time
+    from rocklab.diagnosis import catalogue
+
+    mp = base_params(tests)
+    for cause in catalogue.CAUSES:
+        if cause.name in ext:
+            mp = cause.apply(mp, cause.values(values or {}))
+    return mp
+
+
+def release_rotation(theta0, a):
+    """Rotation from which a model wall of instability angle a is released [rad]."""
+    return np.minimum(theta0, (1.0 - RELEASE_MARGIN) * a)
+
+
+def _amplitude_factor(e, v, mp, like):
+    return _impact.amplitude_factor(
+        e, per_test(mp.amp_a, like), per_test(mp.amp_b, like), v, per_test(mp.alpha, like), per_test(mp.p, like)
+    )
+
+
+def impact_speeds(v, side, mp: ModelParams):
+    """Take-off speed after an impact at speed v leaving hinge ``side``.
+
+    Two-sided and gap-less one-sided walls: one impact, |e| v with e the
+    base e times the scale, hinge factor and Eq. 17 bracket (clipped to
+    |e| <= 1, as :mod:`rocklab.physics.impact`).  One-sided walls with a gap
+    (Fig. 12): base impact (Eq. 2), flight on the inner hinge to the
+    transverse walls (or back, if it cannot reach them), their impact,
+    back to the base, base impact (Eq. 2).  The calibration of one-sided
+    rocking (scale, Eq. 17) is that of the transverse impact, at its own
+    velocity: it carries the dissipation that sets e_an,1s apart from
+    e_an,2s (Sect. 3), and as the gap closes the sequence tends to Eq. 14
+    with the same calibration.  The impact hooks of :class:`ModelParams`
+    act last.
+
+    Returns
+    -------
+    v_out : ndarray
+        [rad/s]
+    depth, duration : ndarray
+        Depth [rad] and duration [s] of the excursion past theta = 0.
+    v_in, v_back : ndarray
+        Speeds just before and after the impact on the transverse walls
+        (0 where there is none) [rad/s].
+    """
+    c_s = np.where(side > 0, per_test(mp.c_pos, side), per_test(mp.c_neg, side))
+    e = per_test(mp.e0, side) * c_s
+    v_out = np.abs(e * _amplitude_factor(e, v, mp, side)) * v
+    depth, duration, v_in, w = (np.zeros(np.shape(v_out)) for _ in range(4))
+    gm = per_test(mp.gap_model, side)
+    if np.any(gm):
+        p, a_in, g = per_test(mp.p, side), per_test(mp.a_neg, side), per_test(mp.gap, side)
+        e_b = per_test(restitution.two_sided(mp.alpha), side)
+        e_tr = per_test(restitution.transverse(mp.alpha), side) * c_s
+        v1 = e_b * v
+        U = potential(np.minimum(g, a_in), a_in, p)
+        reach = 0.5 * v1**2 > U
+        vg = np.sqrt(np.maximum(v1**2 - 2 * U, 0.0))
+        wg = np.abs(e_tr * _amplitude_factor(e_tr, vg, mp, side)) * vg
+        v2 = np.where(reach, np.sqrt(wg**2 + 2 * U), v1)
+        d = np.where(reach, g, apex(0.5 * v1**2, a_in, p))
+        tau = transit_time(v1, d, a_in, p) + transit_time(v2, d, a_in, p)
+        v_out = np.where(gm, e_b * v2, v_out)
+        depth = np.where(gm, d, 0.0)
+        duration = np.where(gm, tau, 0.0)
+        v_in = np.where(gm & reach, vg, 0.0)
+        w = np.where(gm & reach, wg, 0.0)
+    for hook in mp.impact_hooks:
+        v_out = hook(v_out, v, side, mp)
+    return v_out, depth, duration, v_in, w
+
+
+def next_flight(v, side, mp: ModelParams):
+    """One step of the free run: a landing at speed v leaving hinge ``side``, the impact, the next flight.
+
+    A landing slower than the stop threshold (``mp.stop``) sticks.
+
+    Returns
+    -------
+    A : ndarray
+        Apex of the next flight [rad].
+    side, a : ndarray
+        Its hinge (+1 / -1) and that hinge's rocking angle [rad].
+    depth, duration : ndarray
+        The excursion past theta = 0 of the impact (:func:`impact_speeds`).
+    """
+    v = np.where(v < mp.stop * overturning_velocity(mp.alpha, mp.p), 0.0, v)
+    v_out, d, tau, _, _ = impact_speeds(v, side, mp)
+    side = np.where(mp.one_sided, side, -side)
+    a = mp.hinge(side)
+    return apex_after(v_out, a, mp.p, mp.zeta), side, a, d, tau
+
+
+def release(S, mp: ModelParams):
+    """Speed at the first impact [rad/s] and time to it [s] from the measured release.
+
+    From min(theta0, (1 - delta) alpha_s) with the screw's speed v0 towards
+    the vertical: the energy adds v0^2 / 2; the time is the exact quarter
+    period from rest, shortened by what v0 saves on the linearised fall
+    (:func:`rocklab.physics.flight.quarter_period_linear`): most of the
+    first quarter when the wall leaves the screw at its instability angle
+    (:mod:`rocklab.lab.motion`, "Release and first quarter period").
+    ``S`` is a :class:`rocklab.diagnosis.evidence.TestStack`.
+    """
+    a0 = mp.hinge(S.side0)
+    th = release_rotation(S.theta0, a0)
+    v = np.sqrt(landing_speed(th, a0, mp.p, mp.zeta) ** 2 + S.v0**2)
+    saved = quarter_period_linear(th / a0) - quarter_period_linear(th / a0, S.v0 / (mp.p * a0))
+    return v, quarter_period(th, a0, mp.p) - saved / mp.p
+
+
+def free_run(S, mp: ModelParams, n_max=600):
+    """Free run of the model from each test's release, flight by flight (:func:`next_flight`).
+
+    Returns
+    -------
+    dict
+        ``peaks``, ``t_before``, ``t_after``, ``depth`` as (tests, n_max)
+        arrays (times from the measured release instant [s]) and ``t_first``
+        (tests,).
+    """
+    T = len(S.tests)
+    side = S.side0.copy()
+    out = {k: np.zeros((T, n_max)) for k in ("peaks", "t_before", "t_after", "depth")}
+    v, t = release(S, mp)
+    first = t.copy()
+    A = a = None  # apex and hinge of the previous flight, from the first impact on
+    for k in range(n_max):
+        if k:
+            v = landing_speed(A, a, mp.p, mp.zeta)
+        A, side, a, d, tau = next_flight(v, side, mp)
+        out["t_before"][:, k] = t
+        out["t_after"][:, k] = t + tau
+        out["depth"][:, k] = d
+        out["peaks"][:, k] = A
+        t = t + tau + 2.0 * quarter_period(A, a, mp.p)
+        if np.all(A < 0.5 * S.floor):
+            for key in out:
+                out[key] = out[key][:, : k + 1]
+            break
+    out["t_first"] = first
+    return out
+
+
+def rocking_model(test, ext=(), values=None, base="analytic") -> RockingModel:
+    """The :class:`rocklab.simulation.model.RockingModel` of a diagnosis model, for one test.
+
+    ``base``: ``"analytic"`` (Eq. 2 / Eq. 14), ``"two-sided-e"`` (e_an,2s used
+    for a one-sided wall, Hogan 1992) or ``"zero"`` (e = 0, Liberatore & Spera
+    2003).  Impact hooks (:class:`ModelParams`) have no simulator law.
+    """
+    mp = model_params([test], ext, values).row(0)
+    one = test.boundary == "one-sided"
+    if base == "zero":
+        law = _impact.Zero()
+    elif base == "two-sided-e" and one:
+        law = _impact.Constant(-restitution.two_sided(test.alpha))
+    elif one and not mp.gap_model:
+        law = _impact.OneSided()
+    else:
+        law = _impact.HousnerTwoSided()
+    calibrated = _impact.Transverse() if mp.gap_model else law
+    if mp.c_pos != mp.c_neg:
+        calibrated = _impact.Sided(
+            _impact.Scaled(calibrated, float(mp.c_pos)), _impact.Scaled(calibrated, float(mp.c_neg))
+        )
+    elif mp.c_pos != 1.0:
+        calibrated = _impact.Scaled(calibrated, float(mp.c_pos))
+    if mp.amp_b != 0.0 or mp.amp_a != 1.0:
+        calibrated = _impact.AmplitudeLaw(calibrated, float(mp.amp_a), float(mp.amp_b))
+    law, transverse = (law, calibrated) if mp.gap_model else (calibrated, None)
+    if mp.stop > 0:
+        # the landing from the outer hinge only, as free_run and stop_speeds
+        # read it: with a gap the base law also serves the return from it
+        sticking = _impact.Sticking(law, float(mp.stop))
+        law = _impact.Sided(sticking, law) if mp.gap_model else sticking
+    return RockingModel(
+        alpha=test.alpha,
+        p=test.p,
+        boundary=test.boundary,
+        impact=law,
+        alpha_rock=float(mp.a_pos),
+        alpha_neg=float(mp.a_neg),
+        flight_damping=float(mp.zeta),
+        gap=float(mp.gap),
+        transverse_impact=transverse,
+    )
+
+
+def simulate_measured(test, ext=(), values=None, base="analytic", t_end=None, fs=None):
+    """Free run of a diagnosis model (exact simulator) from a measured test's release, on its clock.
+
+    Released from the measured rotation and speed (:func:`release_rotation`).
+
+    Returns
+    -------
+    t, theta : ndarray
+        Time [s] from the start of the record and rotation [rad] (NaN-free).
+    """
+    model = rocking_model(test, ext, values, base)
+    a0 = model.alpha_side(test.side0)
+    fs = 1.0 / test.dt if fs is None else fs
+    t_end = (test.t_end - test.t_release) * 1.2 + 1.0 if t_end is None else t_end
+    h = simulate_free(
+        model,
+        test.side0 * float(release_rotation(test.theta0, a0)),
+        -test.side0 * test.v_release,
+        t_end=t_end,
+        fs=fs,
+        rtol=1e-9,
+        atol=1e-12,
+    )
+    return h.t + test.t_release, np.nan_to_num(h.theta)

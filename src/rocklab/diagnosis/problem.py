@@ -1,0 +1,66 @@
+"""Free-rocking tests of one series as a :class:`rocklab.diagnosis.engine.Problem`."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rocklab.diagnosis import catalogue
+from rocklab.diagnosis.engine import Problem
+from rocklab.diagnosis.evidence import TestStack, covariates, log_ratio, noise_covariates, residuals
+from rocklab.diagnosis.model import free_run, model_params
+
+
+class WallProblem(Problem):
+    """The tests of one boundary condition (a series), the causes of the catalogue that can occur in it."""
+
+    def __init__(self, tests):
+        self.tests = list(tests)
+        self.n_tests = len(self.tests)
+        self.S = TestStack.of(self.tests)
+        self.boundary = self.tests[0].boundary
+        self.causes = tuple(catalogue.for_boundary(self.boundary))
+        self.after_selection = tuple(catalogue.for_boundary(self.boundary, "after selection"))
+        self._sig = None
+        self._cache = {}
+
+    def subset(self, idx):
+        return self.S.subset(np.asarray(idx))
+
+    def residuals(self, sub, ext, values):
+        return residuals(sub, model_params(sub.tests, ext, values), self._cache)
+
+    def covariates(self, sub):
+        return covariates(sub)
+
+    def noise(self, sub):
+        return noise_covariates(sub)
+
+    def extra_structure(self, sub, ext, values):
+        """What the model leaves that the causes estimated after selection would explain."""
+        mp = model_params(sub.tests, ext, values)
+        return [st for cause in self.after_selection for st in cause.unexplained(sub, mp)]
+
+    @property
+    def signature(self):
+        """The causes' signatures in these tests (:func:`rocklab.diagnosis.catalogue.signatures`)."""
+        if self._sig is None:
+            self._sig = catalogue.signatures(self.tests)
+        return self._sig
+
+    def starts(self, ext):
+        return catalogue.starts(self.signature)
+
+    def heldout_measures(self, sub, ext, values):
+        mp = model_params(sub.tests, ext, values)
+        run = free_run(sub, mp, n_max=sub.A.shape[1])
+        R = residuals(sub, mp)
+        M = run["peaks"][:, : sub.A.shape[1]]
+        F = log_ratio(M, sub.A[:, : M.shape[1]], sub.floor[:, None])
+        rms = lambda x: np.sqrt(np.nanmean(x**2, axis=1))  # noqa: E731
+        with np.errstate(invalid="ignore"):
+            return {
+                "free_run_log_peak_rms": rms(F),
+                "impact_rms": rms(R["impact"]),
+                "time_rms": rms(R["time"]) if np.isfinite(R["time"]).any() else np.full(len(sub.tests), np.nan),
+                "peak_rms": rms(R["peak"]),
+            }

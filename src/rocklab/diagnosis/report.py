@@ -1,0 +1,123 @@
+"""The diagnosis as results/diagnosis.json and a readable results/diagnosis.md."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+
+def jsonable(x):
+    """``x`` with NumPy scalars as Python numbers and non-finite floats as None (JSON)."""
+    if isinstance(x, dict):
+        return {str(k): jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [jsonable(v) for v in x]
+    if isinstance(x, (np.floating, float)):
+        return None if not np.isfinite(x) else float(x)
+    if isinstance(x, (np.integer,)):
+        return int(x)
+    if isinstance(x, np.bool_):
+        return bool(x)
+    return x
+
+
+def write_diagnosis(entries, json_path, md_path=None):
+    """Write results/diagnosis.json (and diagnosis.md) from :func:`diagnose_campaign` entries."""
+    Path(json_path).write_text(json.dumps(jsonable(entries), indent=1))
+    if md_path is not None:
+        Path(md_path).write_text(diagnosis_markdown(entries))
+
+
+def _fmt_params(f):
+    return ", ".join(f"{k} = {v:.4g}" for k, v in f["params"].items())
+
+
+def _fmt_ci(f):
+    return ", ".join(f"[{a:.4g}, {b:.4g}]" for a, b in f["ci95"].values())
+
+
+def diagnosis_markdown(entries) -> str:
+    """Readable report (results/diagnosis.md) of :func:`diagnose_campaign` entries."""
+    out = [
+        "# Model diagnosis",
+        "",
+        "Per series and per boundary condition: what the base simulation gets wrong, the causes the "
+        "data carry (parameters, bootstrap 95 % intervals), and the held-out gain. "
+        "Method: `rocklab.diagnosis`.",
+        "",
+    ]
+    order = sorted(entries, key=lambda e: (e["scope"] != "boundary", e["key"]))
+    for e in order:
+        title = f"{'boundary condition' if e['scope'] == 'boundary' else 'series'} {e['key']}"
+        out += [
+            f"## {title} ({e['boundary']}, {e['n_tests']} tests)",
+            "",
+            f"Base model: {e['base']['model']}.",
+            "",
+            f"What it gets wrong: {e['what_is_wrong']}",
+            "",
+        ]
+        v = ", ".join(e["verdict"]) if e["verdict"] else "none"
+        line = f"**Verdict: {v}**"
+        if e["unexplained"]:
+            line += " — **unexplained** structure remains: " + "; ".join(e.get("residual_structure", []))
+        elif e.get("weak_evidence"):
+            line += (
+                " — structure remains ("
+                + "; ".join(e["residual_structure"])
+                + ") that "
+                + " or ".join(e["weak_evidence"])
+                + " would remove, short of the evidence to name it: "
+                + "; ".join(e["weak_evidence"].values())
+            )
+        out += [line, ""]
+        if e["findings"]:
+            out += [
+                "| effect | parameters | 95% CI | held-out deviance/obs "
+                "| gain (deviance/obs; free-run log-peak rms) | evidence |",
+                "|---|---|---|---|---|---|",
+            ]
+            for f in e["findings"]:
+                g = f["gain"]
+                fr = g.get("free_run_log_peak_rms")
+                ev = f["evidence"].get("signature") or f["evidence"].get("series", "")
+                out.append(
+                    f"| {f['effect']} | {_fmt_params(f)} | {_fmt_ci(f)} | "
+                    f"{_f(f['error_heldout']['deviance_per_obs'], '.3g')} | "
+                    f"{_f(g['deviance_per_obs'], '.3g')}; {'' if fr is None else f'{fr:.3f}'} | {ev} "
+                    f"{f['evidence'].get('fit', '') if f['effect'] == 'stop_threshold' else ''} |"
+                )
+            out.append("")
+        h = e.get("heldout")
+        if h and h["base"].get("free_run_log_peak_rms") is not None:
+            hb, hm = h["base"], h["model"]
+            out += [
+                f"Held-out (tests left out): free-run log-peak rms {hb['free_run_log_peak_rms']:.3f} base, "
+                f"{hm['free_run_log_peak_rms']:.3f} chosen model; one-step impact-velocity rms "
+                f"{hb['impact_rms']:.4f} → {hm['impact_rms']:.4f}; flight-time rms "
+                f"{_f(hb.get('time_rms'))} → {_f(hm.get('time_rms'))}.",
+                "",
+            ]
+        if e.get("extended"):
+            out += [f"Extended model: {e['extended']['statement']}", ""]
+        if e.get("series_verdicts"):
+            out += [
+                "Series verdicts: "
+                + "; ".join(f"{k}: {', '.join(v) or 'none'}" for k, v in e["series_verdicts"].items()),
+                "",
+            ]
+        alt = e["base"].get("alternatives")
+        if alt:
+            for name, er in alt.items():
+                out.append(
+                    f"- literature alternative {name}: {er['n_impacts']['model']:.0f} impacts, "
+                    f"{er['duration_s']['model']:.2f} s, free-run log-peak rms {er['log_peak_rms']:.3f}"
+                )
+            out.append("")
+    return "\n".join(out)
+
+
+def _f(x, fmt=".4f"):
+    return "n/a" if x is None else format(x, fmt)

@@ -1,0 +1,306 @@
+"""Diagnosis of a series, of a boundary condition, of a campaign (Sect. 3, Figs. 14-15).
+
+:func:`diagnose_series` compares the base model with the tests of one
+series (:mod:`rocklab.diagnosis.errors`), selects the causes the data
+carry (:func:`rocklab.diagnosis.engine.select_effects` on a
+:class:`rocklab.diagnosis.problem.WallProblem`), runs the causes estimated
+after selection and states the gain; :func:`diagnose_boundary` sums the
+series of a boundary condition up.  Method: docs/diagnosis-method.md.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rocklab.diagnosis import catalogue
+from rocklab.diagnosis.engine import finite_mean, select_effects
+from rocklab.diagnosis.errors import engineering_errors, what_is_wrong
+from rocklab.diagnosis.evidence import MeasuredTest, measured_test
+from rocklab.diagnosis.model import model_params
+from rocklab.diagnosis.problem import WallProblem
+
+
+def base_name(boundary):
+    """The base model of a boundary condition, in words."""
+    return (
+        "Housner e_an,2s (Eq. 2), nominal alpha, released from rest at theta0"
+        if boundary == "two-sided"
+        else "one-sided e_an,1s (Eq. 14), nominal alpha, released from rest at theta0"
+    )
+
+
+def _gain(before, after):
+    """Held-out engineering errors of the base model minus those after an extension (per measure)."""
+    out = {}
+    for k in before:
+        b, a = finite_mean(before[k]), finite_mean(after[k])
+        if k != "deviance":
+            out[k] = None if b is None or a is None else b - a
+    return out
+
+
+def _heldout_summary(ho):
+    return {
+        "deviance_per_obs": finite_mean(ho["deviance"]),
+        **{k: finite_mean(v) for k, v in ho.items() if k != "deviance"},
+    }
+
+
+def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, seed=0):
+    """Diagnosis of one series: base model, what it gets wrong, causes, gain.
+
+    Parameters
+    ----------
+    tests : list of MeasuredTest or of record dicts (see :func:`measured_test`)
+        All of one boundary condition.
+    key, scope : str
+        Identify the entry.
+    n_boot : int
+        Bootstrap resamples (of tests) for the 95 % intervals.
+    n_history : int
+        Tests simulated in time (:func:`rocklab.diagnosis.model.simulate_measured`) for the
+        RMS of theta/alpha.
+
+    Returns
+    -------
+    dict
+        One entry of results/diagnosis.json.
+    """
+    tests = [t if isinstance(t, MeasuredTest) else measured_test(t) for t in tests]
+    tests = [t for t in tests if t.n_impacts >= 2]
+    if not tests:
+        raise ValueError("a diagnosis needs tests with at least two impacts")
+    boundary = tests[0].boundary
+    if any(t.boundary != boundary for t in tests):
+        raise ValueError("a diagnosis needs tests of one boundary condition")
+    problem = WallProblem(tests)
+    sig = problem.signature
+    sel = select_effects(problem, signature=sig, n_boot=n_boot, seed=seed)
+    base_err = engineering_errors(tests, n_history=n_history)
+    base = {"model": base_name(boundary), "errors": base_err}
+    if boundary == "one-sided":
+        base["alternatives"] = {
+            "two-sided e (Hogan 1992)": engineering_errors(tests, base="two-sided-e", n_history=0),
+            "e = 0 (Liberatore & Spera 2003)": engineering_errors(tests, base="zero", n_history=0),
+        }
+    statement, off = what_is_wrong(base_err, "the simulation")
+    effects, values = sel["effects"], sel["fit"].values
+    findings = []
+    for eff in effects:
+        own = [q.name for q in catalogue.by_name(eff).params]
+        st = sel["steps"][eff]
+        findings.append(
+            {
+                "effect": eff,
+                "params": {k: values[k] for k in own},
+                "ci95": {k: sel["ci"][k] for k in own if k in sel["ci"]},
+                "evidence": {
+                    "signature": sig.get(eff, {}).get("text", ""),
+                    "fit": f"held-out deviance per observation lowered by {st['gain']:.3g} "
+                    f"(standard error {st['se']:.2g}), dBIC = {st['dbic']:.1f}",
+                },
+                "error_heldout": _heldout_summary(st["heldout"]),
+                "gain": _gain(sel["base"], st["heldout"]) | {"deviance_per_obs": st["gain"]},
+            }
+        )
+    findings.sort(key=lambda f: -f["gain"]["deviance_per_obs"])
+    # the causes estimated once the chosen model is known, from what it leaves
+    structure = list(sel["structure"])
+    ext, ext_values = list(effects), dict(values)
+    for cause in problem.after_selection:
+        left = cause.unexplained(problem.S, model_params(tests, effects, values))
+        found = cause.estimate(tests, effects, values, seed=seed) if left else None
+        if found is not None and found["named"]:
+            structure = [st for st in structure if st not in left]
+            findings.append(found["finding"])
+            ext.append(cause.name)
+            ext_values.update(found["values"])
+    unexplained = bool(structure) and not sel["weak"]
+    if not findings and not unexplained and not off:
+        verdict_text = "the base model explains the data within the noise"
+    elif not findings and not unexplained:
+        verdict_text = "none of the candidate causes is carried by the data"
+    else:
+        verdict_text = ""
+    entry = {
+        "scope": scope,
+        "key": key,
+        "boundary": boundary,
+        "n_tests": len(tests),
+        "n_impacts": int(sum(t.n_impacts for t in tests)),
+        "base": base,
+        "what_is_wrong": (verdict_text + ": " if verdict_text else "") + statement,
+        "verdict": [f["effect"] for f in findings],
+        "unexplained": unexplained,
+        "residual_structure": structure,
+        "findings": findings,
+        "weak_evidence": {k: v["reason"] for k, v in sel["weak"].items()},
+        "rejected": sel["rejected"],
+        "signatures": {k: v["text"] for k, v in sig.items()},
+        "heldout": {"base": _heldout_summary(sel["base"]), "model": _heldout_summary(sel["final"])},
+    }
+    if ext:
+        ext_err = engineering_errors(tests, ext, ext_values, n_history=n_history)
+        entry["extended"] = {
+            "effects": ext,
+            "params": ext_values,
+            "errors": ext_err,
+            "statement": what_is_wrong(ext_err, "the extended model")[0],
+        }
+    entry["sample_test"] = tests[int(np.argmax([t.n_impacts for t in tests]))].test_id
+    return entry
+
+
+def _wmean(vals, w):
+    """Weighted mean of the finite values (None counts as missing); None if there are none."""
+    vals = np.array([np.nan if v is None else v for v in vals], float)
+    w = np.asarray(w, float)
+    ok = np.isfinite(vals)
+    return float(np.sum(vals[ok] * w[ok]) / np.sum(w[ok])) if ok.any() else None
+
+
+def _merge_errors(errors, w):
+    """Weighted means over series of :func:`engineering_errors` dicts."""
+    return {
+        k: (
+            {s: _wmean([e[k][s] for e in errors], w) for s in v}
+            if isinstance(v, dict)
+            else _wmean([e[k] for e in errors], w)
+        )
+        for k, v in errors[0].items()
+    }
+
+
+def diagnose_boundary(entries, boundary, *, n_boot=2000, seed=0):
+    """One boundary condition from the diagnoses of its series.
+
+    The series are different walls and set-ups, so their parameters are not
+    pooled into one fit: a cause is in the verdict when it is named in at
+    least half of the series, with the test-weighted mean of its parameters
+    over the series that name it and a bootstrap (over those series) 95 %
+    interval of that mean; errors are test-weighted means over all series.
+    """
+    ser = [e for e in entries if e["scope"] == "series" and e["boundary"] == boundary]
+    if not ser:
+        return None
+    rng = np.random.default_rng(seed)
+    w_all = np.array([e["n_tests"] for e in ser], float)
+    n_tests = int(w_all.sum())
+    base_err = _merge_errors([e["base"]["errors"] for e in ser], w_all)
+    counts = {}
+    for e in ser:
+        for f in e["findings"]:
+            counts.setdefault(f["effect"], []).append((e, f))
+    findings = []
+    for eff, lst in counts.items():
+        if len(lst) < 0.5 * len(ser):
+            continue
+        w = np.array([e["n_tests"] for e, _ in lst], float)
+        params, ci = {}, {}
+        for name in lst[0][1]["params"]:
+            x = np.array([f["params"][name] for _, f in lst])
+            params[name] = _wmean(x, w)
+            boots = [_wmean(x[i], w[i]) for i in (rng.integers(0, x.size, x.size) for _ in range(n_boot))]
+            ci[name] = [float(np.percentile(boots, 2.5)), float(np.percentile(boots, 97.5))]
+        findings.append(
+            {
+                "effect": eff,
+                "params": params,
+                "ci95": ci,
+                "evidence": {
+                    "series": f"named in {len(lst)} of {len(ser)} series",
+                    "range": {
+                        n: [float(min(f["params"][n] for _, f in lst)), float(max(f["params"][n] for _, f in lst))]
+                        for n in params
+                    },
+                },
+                "error_heldout": {
+                    "deviance_per_obs": _wmean([f["error_heldout"]["deviance_per_obs"] for _, f in lst], w)
+                },
+                "gain": {k: _wmean([f["gain"].get(k) for _, f in lst], w) for k in lst[0][1]["gain"]},
+                "n_series": len(lst),
+            }
+        )
+    findings.sort(key=lambda f: (-f["n_series"], -(f["gain"]["deviance_per_obs"] or 0)))
+    flagged = [e["key"] for e in ser if e["unexplained"]]
+    kinds = {}
+    for e in ser:
+        for k in {st.split(":")[0] for st in e["residual_structure"]}:
+            kinds[k] = kinds.get(k, 0) + 1
+    ho = {
+        m: {k: _wmean([e["heldout"][m][k] for e in ser], w_all) for k in ser[0]["heldout"][m]}
+        for m in ("base", "model")
+    }
+    statement, off = what_is_wrong(base_err, "the simulation")
+    verdicts = {e["key"]: e["verdict"] for e in ser}
+    extended = [e for e in ser if e.get("extended")]
+    ext_statement = None
+    if extended:
+        ext_err = _merge_errors([e["extended"]["errors"] for e in extended], [e["n_tests"] for e in extended])
+        ext_statement = what_is_wrong(ext_err, "the extended model")[0]
+    if not findings and not flagged and not off:
+        statement = "the base model explains the data within the noise: " + statement
+    return {
+        "scope": "boundary",
+        "key": boundary,
+        "boundary": boundary,
+        "n_tests": n_tests,
+        "n_series": len(ser),
+        "n_impacts": int(sum(e["n_impacts"] for e in ser)),
+        "base": {"model": base_name(boundary), "errors": base_err},
+        "what_is_wrong": statement,
+        "verdict": [f["effect"] for f in findings],
+        "unexplained": len(flagged) >= 0.5 * len(ser),
+        "residual_structure": [
+            f"{k} in {n} of {len(ser)} series" for k, n in sorted(kinds.items(), key=lambda x: -x[1])
+        ],
+        "unexplained_series": flagged,
+        "findings": findings,
+        "heldout": ho,
+        "series_verdicts": verdicts,
+        **({"extended": {"statement": ext_statement, "n_series": len(extended)}} if ext_statement else {}),
+    }
+
+
+def diagnose_records(records, key, *, n_boot=40, n_history=2, seed=0):
+    """:func:`diagnose_series` of one series' records, or None when fewer than
+    two of its tests have two impacts or more (nothing to diagnose)."""
+    tests = [r if isinstance(r, MeasuredTest) else measured_test(r) for r in records]
+    tests = [t for t in tests if t.n_impacts >= 2]
+    if len(tests) < 2:
+        return None
+    return diagnose_series(tests, key=str(key), n_boot=n_boot, n_history=n_history, seed=seed)
+
+
+def with_boundaries(entries, *, seed=0):
+    """Series entries followed by one entry per boundary condition (:func:`diagnose_boundary`)."""
+    out = list(entries)
+    for b in ("two-sided", "one-sided"):
+        e = diagnose_boundary(out, b, seed=seed)
+        if e is not None:
+            out.append(e)
+    return out
+
+
+def diagnose_campaign(series_records, *, n_boot=40, n_history=2, by_boundary=True, seed=0):
+    """Diagnose every series and every boundary condition of a campaign.
+
+    Parameters
+    ----------
+    series_records : dict
+        series id -> list of test records (dicts for :func:`measured_test`)
+        or :class:`MeasuredTest`.
+    by_boundary : bool
+        Add one entry per boundary condition (:func:`diagnose_boundary`).
+
+    Returns
+    -------
+    list of dict
+        The content of results/diagnosis.json.
+    """
+    entries = [
+        diagnose_records(recs, sid, n_boot=n_boot, n_history=n_history, seed=seed)
+        for sid, recs in series_records.items()
+    ]
+    entries = [e for e in entries if e is not None]
+    return with_boundaries(entries, seed=seed) if by_boundary else entries
