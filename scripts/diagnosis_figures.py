@@ -10,5 +10,5 @@ setup_logging(snakemake.log[0])
 entries = json.loads(Path(snakemake.input.diagnosis).read_text())
 out = Path(snakemake.output.series)
 out.mkdir(parents=True, exist_ok=True)
-for name, fig in series_figures(entries, snakemake.input.tests).items():
+for name, fig in series_figures(entries, snakemake.input.tests, snakemake.input.motions).items():
     fig.savefig(snakemake.output[name] if name in ("fig14", "fig15") else out / f"{name}.png", dpi=110)

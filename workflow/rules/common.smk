@@ -1,5 +1,6 @@
 # Paths, the campaign's test list and the per-test parameters that decide
 # when a test must be reduced again.
+import json
 import re
 from pathlib import Path
 

@@ -17,6 +17,8 @@ rule diagnose_series:
         # the series' tests only, each with its own QC verdict: a test edited
         # elsewhere in the campaign does not diagnose this series again
         tests=lambda wildcards: [res("tests", f"{t}.nc") for t in TESTS_BY_SERIES[wildcards.series]],
+        # their motion, extracted once by the reduction
+        motions=lambda wildcards: [res("motion", f"{t}.nc") for t in TESTS_BY_SERIES[wildcards.series]],
     output:
         res("diagnosis", "{series}.json"),
     wildcard_constraints:
@@ -33,7 +35,7 @@ rule diagnose_series:
         "../../scripts/diagnose_series.py"
 
 
-rule diagnosis:
+checkpoint diagnosis:
     input:
         expand(res("diagnosis", "{series}.json"), series=sorted(TESTS_BY_SERIES)),
     output:
@@ -49,10 +51,22 @@ rule diagnosis:
         "../../scripts/diagnosis.py"
 
 
+def diagnosis_samples(kind):
+    """The sample test of every diagnosed series (the tests the figures draw), once the diagnosis has run."""
+
+    def inputs(wildcards):
+        with open(checkpoints.diagnosis.get().output.json) as f:
+            entries = json.load(f)
+        return sorted({res(kind, f"{e['sample_test']}.nc") for e in entries if e["scope"] == "series"})
+
+    return inputs
+
+
 rule diagnosis_figures:
     input:
         diagnosis=res("diagnosis.json"),
-        tests=expand(res("tests", "{test_id}.nc"), test_id=TEST_IDS),
+        tests=diagnosis_samples("tests"),
+        motions=diagnosis_samples("motion"),
     output:
         fig14=report(res("figures", "fig14.png"), caption="../report/fig14.rst", category="Model diagnosis"),
         fig15=report(res("figures", "fig15.png"), caption="../report/fig15.rst", category="Model diagnosis"),

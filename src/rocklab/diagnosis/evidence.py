@@ -120,13 +120,25 @@ def measured_test(record) -> MeasuredTest:
     )
 
 
-def records_by_series(datasets):
-    """Group reduced tests (:mod:`rocklab.lab.reduction`) into the records of :func:`diagnose_campaign`."""
+def records_by_series(datasets, motions=None):
+    """Group reduced tests (:mod:`rocklab.lab.reduction`) into the records of :func:`diagnose_campaign`.
+
+    Parameters
+    ----------
+    datasets : iterable of xarray.Dataset
+        Reduced tests.
+    motions : mapping, optional
+        Test id -> :class:`rocklab.lab.motion.Motion` already extracted (the
+        workflow's ``results/motion/<test_id>.nc``, :func:`rocklab.lab.motion.read_motion`);
+        a test without one has its motion extracted from theta by :func:`measured_test`.
+    """
+    motions = motions or {}
     out = {}
     for ds in datasets:
         a = ds.attrs
         out.setdefault(a["series"], []).append(
             {
+                "motion": motions.get(a["test_id"]),
                 "test_id": a["test_id"],
                 "series": a["series"],
                 "t": ds.time.values,

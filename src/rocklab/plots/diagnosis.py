@@ -20,6 +20,7 @@ import matplotlib.pyplot as plt
 import xarray as xr
 
 from rocklab.diagnosis import measured_test, records_by_series, simulate_measured
+from rocklab.lab.motion import read_motion
 
 #: Literature models of panel a: label -> base of :func:`rocklab.diagnosis.model.rocking_model`.
 LITERATURE = {
@@ -78,7 +79,7 @@ def history_figure(test, entry):
     return fig
 
 
-def series_figures(entries, test_paths):
+def series_figures(entries, test_paths, motion_paths=()):
     """Figs. 14-15 for the sample test of every series of results/diagnosis.json.
 
     Parameters
@@ -86,7 +87,11 @@ def series_figures(entries, test_paths):
     entries : list of dict
         results/diagnosis.json.
     test_paths : sequence of path
-        Reduced tests (``results/tests/<test_id>.nc``).
+        Reduced tests (``results/tests/<test_id>.nc``): at least the sample
+        test of every series.
+    motion_paths : sequence of path, optional
+        Their stored motions (``results/motion/<test_id>.nc``); a test
+        without one has its motion extracted again.
 
     Returns
     -------
@@ -96,11 +101,14 @@ def series_figures(entries, test_paths):
         the campaign has none).
     """
     paths = {Path(p).stem: p for p in test_paths}
+    motions = {Path(p).stem: p for p in motion_paths}
     series = [e for e in entries if e["scope"] == "series"]
     out = {}
     for e in series:
-        with xr.open_dataset(paths[e["sample_test"]]) as ds:
-            (recs,) = records_by_series([ds.load()]).values()
+        test_id = e["sample_test"]
+        motion = {test_id: read_motion(motions[test_id])} if test_id in motions else None
+        with xr.open_dataset(paths[test_id]) as ds:
+            (recs,) = records_by_series([ds.load()], motion).values()
         out[e["key"]] = history_figure(measured_test(recs[0]), e)
     for name, boundary in (("fig14", "two-sided"), ("fig15", "one-sided")):
         own = [e for e in series if e["boundary"] == boundary]
