@@ -1,6 +1,7 @@
 """End to end: the workflow on a campaign it has never seen, and the QC against known truth."""
 
 import hashlib
+import json
 import os
 import subprocess
 import sys
@@ -76,6 +77,9 @@ def test_workflow_reduces_any_campaign_and_never_writes_to_it(virtual_campaign, 
         assert (results / name).exists()
     # the motion of every test, extracted once by its reduction job
     assert {p.stem for p in (results / "motion").glob("*.nc")} == set(qc.test_id)
+    # every series with valid tests is diagnosed from those stored motions
+    diagnosed = {e["key"] for e in json.loads((results / "diagnosis.json").read_text()) if e["scope"] == "series"}
+    assert diagnosed and diagnosed <= set(tests.series)
 
 
 def test_a_reduction_that_fails_does_not_stop_the_series(virtual_campaign, monkeypatch):
