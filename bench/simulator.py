@@ -25,7 +25,7 @@ from rocklab.seismic.accelerograms import load_record
 from rocklab.seismic.overturning import named_model, reference_decisions
 from rocklab.simulation.batch import overturning_batch
 
-#: El Centro 1940 N-S (Table 4 row 1), shipped in raw/accelerograms.
+#: El Centro 1940 N-S (Table 4 row 1), shipped in rocklab/data/accelerograms.
 RECORD = "40EIC180"
 MODEL = named_model("2s-housner")
 

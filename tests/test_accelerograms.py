@@ -2,7 +2,7 @@
 
 Every reader is checked on a real file: first/last samples against the file
 text, units (m/s^2), dt, npts, obspy autodetection, and that the other
-formats' ``_is_`` functions reject it.  Files come from ``raw/accelerograms``
+formats' ``_is_`` functions reject it.  Files come from ``rocklab/data/accelerograms``
 (shipped) or, for obspy's own formats, from obspy's installed test data.
 """
 

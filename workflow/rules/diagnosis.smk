@@ -3,8 +3,11 @@
 # one job per series, then the boundary conditions over the series;
 # Figs. 14-15 per series; the restitution of the UMinho limestone blocks.
 
+from rocklab.diagnosis.block_tests import TABLES
+
 DIAGNOSIS = config["diagnosis"]
-BLOCKS = Path(repo_path("raw", "rocking-tests", "uminho-limestone-free-rocking"))
+# the limestone tables ship with the library (rocklab.data): found where it is installed
+BLOCKS = Path(recorded_path(TABLES))
 
 
 def diagnosis_outputs():

@@ -5,7 +5,7 @@ the ratio r_k = thetadot^+_k / thetadot^-_k of every impact k of every trial
 (the same causes of :mod:`rocklab.diagnosis.catalogue` and the same engine,
 :mod:`rocklab.diagnosis.engine`):
 the UMinho limestone blocks (Colombo et al., DOI 10.60756/uminho-jh25, CC BY
-4.0; ``raw/rocking-tests/uminho-limestone-free-rocking``), 134 trials on 12
+4.0; shipped in ``rocklab/data/uminho-limestone-free-rocking``), 134 trials on 12
 slendernesses H/B = 4-15.  Base model: Housner's e_an = 1 - 3/2 sin^2 alpha
 (Eq. 2), alpha = arctan(B/H).  Candidate causes, per block group (the trials
 of one H/B):
@@ -30,12 +30,12 @@ as the impact speed falls (:func:`rocklab.diagnosis.engine.noise_variance`).
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 from scipy import stats
 
+from rocklab.data import data_path
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.causes import restitution_scale
 from rocklab.diagnosis.engine import Problem, finite_mean, select_effects
@@ -48,13 +48,13 @@ N_IMPACTS = 10
 #: Measured ratios at or above this are artefacts (SOURCE.md: up to 28.9).
 R_MAX = 1.5
 
-#: Folder of the tables in the repository.
-RAW = Path(__file__).resolve().parents[3] / "raw" / "rocking-tests" / "uminho-limestone-free-rocking"
+#: Folder of the tables, with their provenance (package data, :mod:`rocklab.data`).
+TABLES = data_path("uminho-limestone-free-rocking")
 
 CANDIDATES = ("restitution_scale", "restitution_amplitude", "hinge_asymmetry")
 
 
-def read_events(path=RAW / "limestone-rocking-events.csv"):
+def read_events(path=TABLES / "limestone-rocking-events.csv"):
     """Per-impact table of the non-duplicate trials (``limestone-rocking-events.csv``)."""
     ev = pd.read_csv(path)
     ev = ev[ev.duplicate_of.isna()].copy()

@@ -1,11 +1,16 @@
-"""Table 4 records shipped in ``raw/accelerograms``: manifest, loading, comparison with Table 4.
+"""Table 4 records shipped with rocklab: manifest, loading, comparison with Table 4.
+
+The records are package data in ``rocklab/data/accelerograms/``
+(:func:`accelerogram_dir`, found through :mod:`importlib.resources`, so an
+installed rocklab finds them as the checkout does), with their
+``README.md`` (sources, stand-ins).
 
 ``records.csv`` (package data) says which shipped file stands for which
 Table 4 row (file, format, column, units, identity, source, notes);
 :func:`build_manifest` reads each file, baseline-corrects it with
 :data:`DEFAULT_PROCESSING` and adds what it measures (dt, npts, PGA, PGV,
 record length, D5-95) next to Table 4's values and their differences.  The
-result is ``raw/accelerograms/manifest.csv``; regenerate it with
+result is ``manifest.csv`` beside the records; regenerate it with
 ``python -c "from rocklab.seismic.accelerograms import write_manifest; write_manifest()"``.
 
 Comparison rules: PGA and PGV differences are signed percentages of the
@@ -25,6 +30,8 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
+from rocklab.data import data_path
 
 from . import processing
 from .native import read_accelerogram
@@ -71,10 +78,17 @@ MANIFEST_COLUMNS = [
 
 
 def accelerogram_dir():
-    """Folder of the shipped records: ``$ROCKLAB_ACCELEROGRAMS`` or ``<repo>/raw/accelerograms``."""
+    """Folder of the shipped records and their ``manifest.csv``.
+
+    Returns
+    -------
+    Path
+        ``$ROCKLAB_ACCELEROGRAMS`` when set, else the package data
+        ``rocklab/data/accelerograms/`` (:func:`rocklab.data.data_path`).
+    """
     if os.environ.get(ENV_DIR):
         return Path(os.environ[ENV_DIR])
-    return Path(__file__).resolve().parents[4] / "raw" / "accelerograms"
+    return data_path("accelerograms")
 
 
 def read_table4():
