@@ -208,15 +208,6 @@ def _bad_simulate(tmp):
     ]
 
 
-def test_every_wrong_simulate_argument_is_one_line_and_exit_2(tmp_path, capsys, nothing_computed):
-    for argv, option, text in _bad_simulate(tmp_path):
-        code, out, err = run(["simulate", *argv], capsys)
-        assert code == 2, argv
-        assert err.startswith(f"rocklab simulate: {option}: ") and text in err, (argv, err)
-        assert err.count("\n") == 1 and "Traceback" not in err and out == "", (argv, err)
-    assert not (tmp_path / "out.nc").exists()
-
-
 def _bad_map(tmp):
     rec = ["--record", "40EIC180"]
     (tmp / "file").write_text("")
@@ -226,7 +217,7 @@ def _bad_map(tmp):
         ([*rec, "--model", "2s-foo"], "--model", "unknown model '2s-foo'; choose from 2s-housner"),
         ([*rec, "--model", "2s-housner", "--all-models"], "--all-models", "not allowed with argument --model"),
         ([*rec, "--eq17", "1.2", "0.4"], "--eq17", "only for --model 1s-eq17"),
-        ([*rec, "--model", "1s-eq17", "--eq17", "-1", "0.4"], "--eq17", "A > 0"),
+        ([*rec, "--model", "1s-eq17", "--eq17", "-1", "0.4"], "--eq17", "A must be > 0"),
         ([*rec, "--n", "1"], "--n", "must be >= 2 (got 1)"),
         ([*rec, "--n", "2.5"], "--n", "must be an integer"),
         ([*rec, "--lo", "0"], "--lo", "must be > 0"),
@@ -246,12 +237,14 @@ def _bad_map(tmp):
     ]
 
 
-def test_every_wrong_map_argument_is_one_line_and_exit_2(tmp_path, capsys, nothing_computed):
-    for argv, option, text in _bad_map(tmp_path):
-        code, out, err = run(["map", *argv], capsys)
+@pytest.mark.parametrize("command, cases", [("simulate", _bad_simulate), ("map", _bad_map)])
+def test_every_wrong_argument_is_one_line_and_exit_2(command, cases, tmp_path, capsys, nothing_computed):
+    for argv, option, text in cases(tmp_path):
+        code, out, err = run([command, *argv], capsys)
         assert code == 2, argv
-        assert err.startswith(f"rocklab map: {option}: ") and text in err, (argv, err)
+        assert err.startswith(f"rocklab {command}: {option}: ") and text in err, (argv, err)
         assert err.count("\n") == 1 and "Traceback" not in err and out == "", (argv, err)
+    assert not list(tmp_path.glob("*.nc")) and not list(tmp_path.glob("*.png"))
 
 
 def test_a_real_process_prints_one_line_and_exits_2(tmp_path):

@@ -169,6 +169,24 @@ def check_wall(args, second):
     return "hb" if given_hb else "alpha"
 
 
+def add_eq17_option(group, flag, text, default):
+    """Add an option taking the coefficients A, B of Eq. 17 (checked by :func:`check_eq17`)."""
+    group.add_argument(
+        flag, type=FINITE, nargs=2, metavar=("A", "B"), help=f"{text}, A > 0, B >= 0 [-] (default: {default})"
+    )
+
+
+def check_eq17(values, option):
+    """The coefficients (A, B) of Eq. 17, e times (A - B (thetadot/thetadot_r)^2): A > 0
+    (else e = 0 at every impact), B >= 0 (else e grows with the amplitude)."""
+    a, b = values
+    if a <= 0:
+        raise UsageError(option, f"A must be > 0 (got {a:g})")
+    if b < 0:
+        raise UsageError(option, f"B must be >= 0 (got {b:g})")
+    return a, b
+
+
 def check_writable(path, option):
     """Check that ``path`` can be written, before anything is computed.
 
@@ -230,6 +248,8 @@ def read_record(args):
         Unknown name, missing or unreadable file, a record without finite
         samples.
     """
+    import pandas as pd
+
     from rocklab.seismic.accelerograms import load_record, read_manifest, to_si
 
     name = args.record
@@ -252,9 +272,9 @@ def read_record(args):
         try:
             manifest = read_manifest()
         except OSError:  # an installation without the shipped records still reads files
-            manifest = None
-        known = [] if manifest is None else list(manifest["record"])
-        shipped = manifest is not None and str(name).lower() in {s.lower() for s in (*known, *manifest["file"])}
+            manifest = pd.DataFrame({"record": [], "file": []}, dtype=str)
+        known = list(manifest["record"])
+        shipped = str(name).lower() in {s.lower() for s in (*known, *manifest["file"])}
         if not shipped and not Path(name).is_file():
             listing = f"shipped records: {', '.join(known)}" if known else "no shipped records found"
             raise UsageError("--record", f"{name!r} is neither a shipped record nor a file; {listing}")
@@ -282,11 +302,7 @@ def _impact_law(args, alpha):
         default = impact.OneSided() if args.boundary == "one-sided" and args.gap == 0 else impact.HousnerTwoSided()
         law = impact.Scaled(law or default, args.e_scale)
     if args.amplitude_law is not None:
-        a, b = args.amplitude_law
-        if a <= 0:
-            raise UsageError("--amplitude-law", f"A must be > 0 (got {a:g})")
-        if b < 0:
-            raise UsageError("--amplitude-law", f"B must be >= 0 (got {b:g})")
+        a, b = check_eq17(args.amplitude_law, "--amplitude-law")
         law = impact.AmplitudeLaw(law or impact.OneSided(), a, b)
     elif law is not None:
         # Eq. 17's bracket is clipped to |e| <= 1; a constant law is not
@@ -443,13 +459,7 @@ def _add_simulate(sub):
     g.add_argument(
         "--e-scale", type=NON_NEGATIVE, default=1.0, metavar="C", help="multiply the impact law by C [-], |e| <= 1"
     )
-    g.add_argument(
-        "--amplitude-law",
-        type=FINITE,
-        nargs=2,
-        metavar=("A", "B"),
-        help="Eq. 17: e times (A - B (thetadot/thetadot_r)^2), A > 0, B >= 0 [-] (default: none)",
-    )
+    add_eq17_option(g, "--amplitude-law", "Eq. 17: e times (A - B (thetadot/thetadot_r)^2)", "none")
     g.add_argument(
         "--flight-damping",
         type=number(0.0, 1.0, lo_closed=True),
@@ -536,9 +546,7 @@ def map_models(args):
     if args.eq17 is not None:
         if "1s-eq17" not in models:
             raise UsageError("--eq17", "only for --model 1s-eq17")
-        a, b = args.eq17
-        if a <= 0 or b < 0:
-            raise UsageError("--eq17", f"needs A > 0 and B >= 0 (got {a:g} {b:g})")
+        check_eq17(args.eq17, "--eq17")
     return models
 
 
@@ -681,13 +689,7 @@ def _add_map(sub):
         help=f"one or more of {', '.join(MODELS)} (default: 2s-housner)",
     )
     which.add_argument("--all-models", action="store_true", help="the five models of Sect. 5")
-    md.add_argument(
-        "--eq17",
-        type=FINITE,
-        nargs=2,
-        metavar=("A", "B"),
-        help="coefficients of Eq. 17 for 1s-eq17, A > 0, B >= 0 [-] (default: the paper's 1.18 0.473)",
-    )
+    add_eq17_option(md, "--eq17", "coefficients of Eq. 17 for 1s-eq17", "the paper's 1.18 0.473")
     gr = p.add_argument_group("grid of A_S/A and D_S/D")
     gr.add_argument(
         "--n", type=number(2, lo_closed=True, kind=int), default=201, help="values per axis (the paper: 201) [-]"
