@@ -147,7 +147,7 @@ def nothing_computed(monkeypatch):
     for module, name in (
         (reference, "simulate_free"),
         (reference, "simulate_ground"),
-        (overturning, "overturning_map"),
+        (overturning, "overturning_batch"),
     ):
         monkeypatch.setattr(module, name, forbidden)
 

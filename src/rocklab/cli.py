@@ -17,6 +17,7 @@ options, their units and the exit statuses: ``docs/cli.md``.
 from __future__ import annotations
 
 import argparse
+import inspect
 import math
 import shlex
 import sys
@@ -539,7 +540,7 @@ def map_models(args):
     """Names of the maps asked for (``--model``, ``--all-models``) and their checks."""
     from rocklab.seismic.overturning import MODELS
 
-    models = list(MODELS) if args.all_models else list(dict.fromkeys(args.model or ["2s-housner"]))
+    models = list(MODELS) if args.all_models else list(dict.fromkeys(args.model))
     unknown = [m for m in models if m not in MODELS]
     if unknown:
         raise UsageError("--model", f"unknown model {unknown[0]!r}; choose from {', '.join(MODELS)}")
@@ -657,7 +658,11 @@ models (Sect. 5):
 
 
 def _add_map(sub):
-    from rocklab.seismic.overturning import ALPHA, MODELS, R
+    from rocklab.seismic.overturning import ALPHA, MODELS, R, overturning_map
+
+    # the library's defaults are the command's, from one place
+    lib = {k: v.default for k, v in inspect.signature(overturning_map).parameters.items()}
+    eq17 = inspect.signature(impact.AmplitudeLaw).parameters
 
     p = sub.add_parser(
         "map",
@@ -672,30 +677,37 @@ def _add_map(sub):
     r = p.add_argument_group("record")
     _add_record_options(r, required=True)
     r.add_argument(
-        "--polarity", type=int, choices=[1, -1], default=1, help="multiplies the record (one-sided maps depend on it)"
+        "--polarity",
+        type=int,
+        choices=[1, -1],
+        default=lib["polarity"],
+        help="multiplies the record (one-sided maps depend on it)",
     )
     g = p.add_argument_group("wall (--alpha and --R, or --height and --thickness)")
     g.add_argument("--alpha", type=ANGLE, metavar="RAD", help=f"slenderness angle [rad] (default: {ALPHA}, Fig. 21)")
     g.add_argument("--R", type=POSITIVE, metavar="M", help=f"half diagonal [m] (default: {R}, Fig. 21)")
     g.add_argument("--height", type=POSITIVE, metavar="M", help="wall height h [m]")
     g.add_argument("--thickness", type=POSITIVE, metavar="M", help="wall thickness b [m]")
-    g.add_argument("--form", choices=["linear", "exact"], default="linear", help="equation of motion")
+    g.add_argument("--form", choices=["linear", "exact"], default=lib["form"], help="equation of motion")
     md = p.add_argument_group("model")
     which = md.add_mutually_exclusive_group()
     which.add_argument(
         "--model",
         nargs="+",
+        default=[lib["model"]],
         metavar="NAME",
-        help=f"one or more of {', '.join(MODELS)} (default: 2s-housner)",
+        help=f"one or more of {', '.join(MODELS)} (default: {lib['model']})",
     )
     which.add_argument("--all-models", action="store_true", help="the five models of Sect. 5")
-    add_eq17_option(md, "--eq17", "coefficients of Eq. 17 for 1s-eq17", "the paper's 1.18 0.473")
+    add_eq17_option(
+        md, "--eq17", "coefficients of Eq. 17 for 1s-eq17", f"the paper's {eq17['a'].default} {eq17['b'].default}"
+    )
     gr = p.add_argument_group("grid of A_S/A and D_S/D")
     gr.add_argument(
-        "--n", type=number(2, lo_closed=True, kind=int), default=201, help="values per axis (the paper: 201) [-]"
+        "--n", type=number(2, lo_closed=True, kind=int), default=lib["n"], help="values per axis (the paper: 201) [-]"
     )
-    gr.add_argument("--lo", type=POSITIVE, default=0.5, help="smallest scale [-]")
-    gr.add_argument("--hi", type=POSITIVE, default=1.5, help="largest scale, > --lo [-]")
+    gr.add_argument("--lo", type=POSITIVE, default=lib["lo"], help="smallest scale [-]")
+    gr.add_argument("--hi", type=POSITIVE, default=lib["hi"], help="largest scale, > --lo [-]")
     c = p.add_argument_group("computation and output")
     c.add_argument("--threads", type=COUNT, metavar="N", help="threads of the batch engine (default: all numba's)")
     c.add_argument("--chunks", type=COUNT, default=20, metavar="N", help="blocks of amplitude rows (progress steps)")
