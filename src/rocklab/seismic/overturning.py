@@ -159,6 +159,7 @@ def overturning_map(
     overturn=OVERTURN,
     tail=120.0,
     name=None,
+    progress=None,
 ):
     """Overturning map of a named wall under one record (Sect. 5, Figs. 21, 23).
 
@@ -187,6 +188,9 @@ def overturning_map(
         [s], see :func:`rocklab.simulation.batch.overturning_batch`.
     name : str, optional
         Record name for the attributes; default the Trace's ``stats.record``.
+    progress : callable, optional
+        Called as ``progress(rows_done, rows_total)`` after each block of
+        amplitude rows, e.g. to draw a progress bar (``rocklab map``).
 
     Returns
     -------
@@ -220,6 +224,8 @@ def overturning_map(
             amp.size,
             time.perf_counter() - t0,
         )
+        if progress is not None:
+            progress(int(rows[-1]) + 1, amp.size)
     e0, a, b = wall_model.base_law.flat(wall_model.alpha)[0]
     return xr.Dataset(
         {
