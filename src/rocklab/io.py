@@ -7,11 +7,13 @@ logging goes to the rule's log file.
 netCDF files follow the CF conventions (:data:`CF_CONVENTIONS`, checked by
 ``cfchecker`` in ``tests/test_cf.py``): the datasets carry :func:`cf_attrs`
 and a ``long_name`` and ``units`` on each variable, and :func:`write_netcdf`
-stores text as character arrays and appends to ``history``.  Times of a
-test or a simulation are ``time`` in seconds from the start of the record,
-``units = "s"``: no date is known, so they are not a CF time axis (which
-needs ``units = "seconds since <date>"``), and ``xarray.open_dataset``
-reads them back as plain seconds.
+stores text as character arrays and appends to ``history``.  The ``time``
+of a test or a simulation is in seconds from the start of the record or of
+the simulation, ``units = "s"`` and no ``standard_name``: no date is
+known, so it is not a CF time axis (which needs ``units = "seconds since
+<date>"``; a made-up date would tell CF tools when the test was done, and
+``xarray.open_dataset`` would read datetimes), and every reader gets plain
+seconds back.
 """
 
 from __future__ import annotations
