@@ -3,6 +3,17 @@
 Tables are validated against the JSON schemas of ``workflow/schemas`` before
 they are written, netCDF files are written compressed and atomically, and
 logging goes to the rule's log file.
+
+netCDF files follow the CF conventions (:data:`CF_CONVENTIONS`, checked by
+``cfchecker`` in ``tests/test_cf.py``): the datasets carry :func:`cf_attrs`
+and a ``long_name`` and ``units`` on each variable, and :func:`write_netcdf`
+stores text as character arrays and appends to ``history``.  The ``time``
+of a test or a simulation is in seconds from the start of the record or of
+the simulation, ``units = "s"`` and no ``standard_name``: no date is
+known, so it is not a CF time axis (which needs ``units = "seconds since
+<date>"``; a made-up date would tell CF tools when the test was done, and
+``xarray.open_dataset`` would read datetimes), and every reader gets plain
+seconds back.
 """
 
 from __future__ import annotations
@@ -10,6 +21,7 @@ from __future__ import annotations
 import logging
 import os
 import tempfile
+from datetime import UTC, datetime
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -17,6 +29,16 @@ import jsonschema
 import numpy as np
 import pandas as pd
 import yaml
+
+from rocklab import __version__
+
+#: The version of the CF conventions that rocklab's netCDF files follow.
+CF_CONVENTIONS = "CF-1.8"
+#: The paper whose equations, tables and figures the files refer to.
+REFERENCES = (
+    "Sorrentino L., Masiani R., Griffith M.C., The relevance of energy damping in unreinforced masonry "
+    "rocking mechanisms. Experimental and analytic investigations, Bulletin of Earthquake Engineering"
+)
 
 
 def setup_logging(path):
@@ -28,9 +50,34 @@ def setup_logging(path):
     logging.captureWarnings(True)
 
 
+def cf_attrs(title, source) -> dict:
+    """Global attributes of a rocklab netCDF file (CF section 2.6.2).
+
+    Parameters
+    ----------
+    title : str
+        What the file holds.
+    source : str
+        How its data were made (a laboratory test, a simulation); the
+        rocklab version is appended.
+    """
+    return {
+        "Conventions": CF_CONVENTIONS,
+        "title": title,
+        "source": f"{source}, rocklab {__version__}",
+        "references": REFERENCES,
+    }
+
+
 def write_netcdf(ds, path):
     """Write a dataset compressed, through a temporary file, so an interrupted
-    run never leaves a truncated output that looks complete."""
+    run never leaves a truncated output that looks complete.
+
+    Text variables are written as character arrays, which every netCDF
+    tool and CF-1.8 read (cfchecker rejects the netCDF-4 string type);
+    ``xarray.open_dataset`` gives them back as str.  A line with the time
+    and the rocklab version is appended to the ``history`` attribute.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     ds = ds.copy(deep=False)
@@ -40,8 +87,12 @@ def write_netcdf(ds, path):
         if var.dtype.kind in "fiu" and var.ndim > 0
     }
     for name, var in ds.variables.items():
-        if var.dtype == object:
+        if var.dtype.kind in "OU":
             ds[name] = var.astype(str)
+            encoding[name] = {"dtype": "S1"}
+    ds.attrs.setdefault("Conventions", CF_CONVENTIONS)
+    line = f"{datetime.now(UTC):%Y-%m-%dT%H:%M:%SZ} rocklab {__version__}: wrote {path.name}"
+    ds.attrs["history"] = "\n".join(filter(None, [ds.attrs.get("history", ""), line]))
     fd, tmp = tempfile.mkstemp(suffix=".nc", dir=path.parent)
     os.close(fd)
     try:

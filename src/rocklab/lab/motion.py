@@ -57,6 +57,7 @@ import pandas as pd
 import xarray as xr
 from scipy.signal import find_peaks, savgol_filter
 
+from rocklab.io import cf_attrs
 from rocklab.lab import kinematics
 from rocklab.lab.channels import LOST_STATUSES
 from rocklab.lab.flight_fit import local_fit, model_value, model_velocity, odd_samples, root_tau, stationary_tau
@@ -89,6 +90,21 @@ SCALAR_FIELDS = {
     "alpha_fall": float,
     "thetadot_release": float,
 }
+#: CF ``long_name`` and ``units`` of the variables of a stored motion.
+VARIABLE_ATTRS = {
+    "k": ("number of the impact, 1 the first after the release", "1"),
+    "t_s": ("arrival at theta = 0 before the impact, time since the start of the record", "s"),
+    "t_after_s": ("departure from theta = 0 after the impact, time since the start of the record", "s"),
+    "thetadot_before": ("angular velocity just before the impact", "rad/s"),
+    "thetadot_after": ("angular velocity just after the impact", "rad/s"),
+    "negative_excursion": ("excursion past theta = 0 of a one-sided wall, magnitude", "rad"),
+    "e_velocity": ("coefficient of restitution, thetadot_after / thetadot_before", "1"),
+    "peak_before": ("peak |theta| before the impact", "rad"),
+    "peak_after": ("peak |theta| after the impact", "rad"),
+    "peaks": ("reliable peaks |theta| after impacts 1..n", "rad"),
+}
+#: CF ``source`` of a stored motion.
+SOURCE = "laboratory free-rocking test, motion extracted from the reduced rotation"
 #: Attributes of a reduced test that its stored motion carries: who the test
 #: is, its verdict and the constants of its wall.
 TEST_ATTRS = (
@@ -417,20 +433,23 @@ def monitor_readings(ds):
     return int(ds.channel.values[k[0]]), ds.elongation.values[:, k[0]], rigid[:, 0]
 
 
+def _cf_attrs(attrs):
+    return cf_attrs(f"rocklab free-rocking motion of test {attrs.get('test_id', '')}".rstrip(), SOURCE)
+
+
 def motion_to_dataset(m: Motion, attrs=None) -> xr.Dataset:
     """A :class:`Motion` as a dataset: impacts on ``impact``, peaks on ``peak``,
     the scalars as attributes (after ``attrs``); :func:`motion_from_dataset`
     reads it back."""
     data = {name: ("impact", m.impacts[name].to_numpy()) for name in IMPACT_FIELDS}
-    data["peaks"] = ("peak", np.asarray(m.peaks, float), {"units": "rad", "long_name": "reliable peaks |theta|"})
-    ds = xr.Dataset(data, attrs={**(attrs or {}), **{name: getattr(m, name) for name in SCALAR_FIELDS}})
-    for name in ("t_s", "t_after_s"):
-        ds[name].attrs["units"] = "s"
-    for name in ("thetadot_before", "thetadot_after"):
-        ds[name].attrs["units"] = "rad/s"
-    for name in ("negative_excursion", "peak_before", "peak_after"):
-        ds[name].attrs["units"] = "rad"
-    return ds
+    data["peaks"] = ("peak", np.asarray(m.peaks, float))
+    for name, (long_name, units) in VARIABLE_ATTRS.items():
+        data[name] += ({"long_name": long_name, "units": units},)
+    attrs = attrs or {}
+    return xr.Dataset(
+        data,
+        attrs={**_cf_attrs(attrs), **attrs, **{name: getattr(m, name) for name in SCALAR_FIELDS}},
+    )
 
 
 def motion_from_dataset(ds) -> Motion:
@@ -476,11 +495,12 @@ def stored_motion(ds) -> xr.Dataset:
     a = ds.attrs
     attrs = {k: a[k] for k in TEST_ATTRS if k in a}
     if "theta" not in ds:
-        return xr.Dataset(attrs={**attrs, "motion_error": f"no rotation: {a.get('reject_detail', '')}"})
+        error = f"no rotation: {a.get('reject_detail', '')}"
+        return xr.Dataset(attrs={**_cf_attrs(attrs), **attrs, "motion_error": error})
     try:
         m = extract_motion(ds.time.values, ds.theta.values, float(a["sampling_rate_hz"]), a["boundary"], float(a["p"]))
     except ValueError as exc:
-        return xr.Dataset(attrs={**attrs, "motion_error": str(exc)})
+        return xr.Dataset(attrs={**_cf_attrs(attrs), **attrs, "motion_error": str(exc)})
     amp = np.nan
     mon = monitor_readings(ds)
     if mon is not None and np.isfinite(m.t_first_impact):

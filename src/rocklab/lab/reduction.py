@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from rocklab.io import cf_attrs
 from rocklab.lab import channels as health
 from rocklab.lab import kinematics, release, validity
 from rocklab.lab.campaign import Campaign, RawFormatError, read_record, row_series
@@ -83,10 +84,18 @@ def _row_metadata(campaign: Campaign, test_id: str) -> dict:
     return {"test_id": test_id, "specimen": row.specimen, "series": "", "boundary": row.boundary}
 
 
+#: CF ``source`` of a reduced test.
+SOURCE = "laboratory free-rocking test, displacement transducers"
+
+
 def _unreadable(meta: dict, error: Exception) -> xr.Dataset:
-    ds = xr.Dataset(attrs={k: v for k, v in meta.items() if v is not None})
+    ds = xr.Dataset(attrs={**_cf_attrs(meta["test_id"]), **{k: v for k, v in meta.items() if v is not None}})
     ds.attrs.update(valid=0, reject_reason="unreadable", reject_detail=str(error), flags="", channels_used="")
     return ds
+
+
+def _cf_attrs(test_id):
+    return cf_attrs(f"rocklab reduction of test {test_id}", SOURCE)
 
 
 def reduce_test(campaign: Campaign, test_id: str, options=None) -> xr.Dataset:
@@ -163,7 +172,10 @@ def reduce_test(campaign: Campaign, test_id: str, options=None) -> xr.Dataset:
 
     flags = [d for d in (r.describe() for r in reports) if d] + choice.flags
     ds = motion
-    ds = ds.assign_coords(channel=("channel", np.asarray(rec.channels, int)))
+    # an identifier, but CF wants units on a numeric coordinate: a number is dimensionless
+    ds = ds.assign_coords(
+        channel=("channel", np.asarray(rec.channels, int), {"long_name": "transducer channel number", "units": "1"})
+    )
     ds["raw"] = (("time", "channel"), rec.readings, {"units": "mm", "long_name": "transducer elongation as recorded"})
     ds["elongation"] = (
         ("time", "channel"),
@@ -180,7 +192,15 @@ def reduce_test(campaign: Campaign, test_id: str, options=None) -> xr.Dataset:
         roles.role.to_numpy().astype(object),
         {"long_name": "out_of_plane, in_plane or monitor (from geometry)"},
     )
-    ds["channel_used"] = ("channel", weights.astype(np.int8), {"long_name": "1 if used in the kinematics"})
+    ds["channel_used"] = (
+        "channel",
+        weights.astype(np.int8),
+        {
+            "long_name": "transducer used in the kinematics",
+            "flag_values": np.array([0, 1], np.int8),
+            "flag_meanings": "unused used",
+        },
+    )
     ds["channel_noise"] = (
         "channel",
         np.array([r.noise_mm for r in reports]),
@@ -206,12 +226,19 @@ def reduce_test(campaign: Campaign, test_id: str, options=None) -> xr.Dataset:
     ds.phi.attrs.update(long_name="twist about the vertical axis")
     ds.v.attrs.update(long_name="base sliding along x")
     ds.w.attrs.update(long_name="base sliding along y")
-    ds.time.attrs.update(long_name="time", standard_name="time")
+    ds.residual_rms.attrs.update(long_name="root mean square residual of the kinematic fit over the used transducers")
+    ds.n_channels.attrs.update(long_name="number of transducers in the kinematic fit", units="1")
+    ds.converged.attrs.update(
+        long_name="kinematic fit converged", flag_values=np.array([0, 1], np.int8), flag_meanings="no yes"
+    )
+    if "theta_eq8" in ds:
+        ds.theta_eq8.attrs.update(long_name="rocking rotation from the highest transducer along y (Eq. 8)")
+    # the record has no date, so no CF time axis: seconds from its start (rocklab.io)
+    ds.time.attrs.update(long_name="time since the start of the record", units="s")
 
     ds.attrs.update({k: v for k, v in meta.items() if not (isinstance(v, float) and np.isnan(v))})
     ds.attrs.update(
-        Conventions="CF-1.10",
-        title=f"rocklab reduction of test {test_id}",
+        **_cf_attrs(test_id),
         sha256=rec.sha256,
         sampling_rate_hz=rec.fs,
         valid=int(valid),

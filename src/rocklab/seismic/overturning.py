@@ -46,6 +46,7 @@ import pandas as pd
 import xarray as xr
 
 from rocklab import __version__
+from rocklab.io import cf_attrs
 from rocklab.physics import impact, wall
 from rocklab.physics.restitution import CALIBRATED_RATIO_ONE_SIDED, CALIBRATED_RATIO_TWO_SIDED
 from rocklab.simulation.batch import overturning_batch
@@ -232,7 +233,12 @@ def overturning_map(
             "overturned": (
                 ("amplitude_scale", "duration_scale"),
                 over,
-                {"long_name": "wall overturned", "flag_values": "0 1", "flag_meanings": "standing overturned"},
+                {
+                    "long_name": "wall overturned",
+                    # a boolean is stored as a byte, and CF flags have the type of the variable
+                    "flag_values": np.array([0, 1], np.int8),
+                    "flag_meanings": "standing overturned",
+                },
             )
         },
         coords={
@@ -248,8 +254,10 @@ def overturning_map(
             ),
         },
         attrs={
-            "Conventions": "CF-1.8",
-            "title": f"overturning map, record {name}, model {model} (Sect. 5)",
+            **cf_attrs(
+                f"overturning map, record {name}, model {model} (Sect. 5)",
+                f"rocking simulation of a wall under a scaled accelerogram, model {model}",
+            ),
             "record": str(name),
             "dt": dt,
             "npts": int(ag.size),

@@ -59,6 +59,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from rocklab.io import cf_attrs
 from rocklab.physics import flight, wall
 from rocklab.physics import impact as _impact
 
@@ -260,26 +261,38 @@ class RockingHistory:
     ag: np.ndarray | None = None
 
     def to_xarray(self) -> xr.Dataset:
-        """CF-style dataset: theta, thetadot (and ag) on time; impacts on their own dim."""
+        """CF-1.8 dataset: theta, thetadot (and ag) on time; impacts on their own dim.
+
+        ``time`` [s] runs from the start of the simulation, not a date (see
+        :mod:`rocklab.io`); ``impact_kind`` is written as a character array,
+        which CF-1.8 tools read, whatever writes the dataset.
+        """
         ds = xr.Dataset(
             {
                 "theta": ("time", self.theta, {"long_name": "rotation of the wall", "units": "rad"}),
                 "thetadot": ("time", self.thetadot, {"long_name": "angular velocity", "units": "rad/s"}),
             },
-            coords={"time": ("time", self.t, {"standard_name": "time", "units": "s"})},
+            coords={"time": ("time", self.t, {"long_name": "time since the start of the simulation", "units": "s"})},
         )
         if self.ag is not None:
             ds["ag"] = ("time", self.ag, {"long_name": "ground acceleration (+ towards +theta)", "units": "m/s2"})
         imp = self.impacts
-        ds = ds.assign_coords(impact=("impact", np.arange(len(imp))))
-        ds["impact_time"] = ("impact", imp["t"].to_numpy(float), {"units": "s"})
-        ds["impact_kind"] = ("impact", imp["kind"].to_numpy(str).astype("U10"))
-        ds["thetadot_before"] = ("impact", imp["thetadot_before"].to_numpy(float), {"units": "rad/s"})
-        ds["thetadot_after"] = ("impact", imp["thetadot_after"].to_numpy(float), {"units": "rad/s"})
-        ds["theta_peak_before"] = ("impact", imp["theta_peak_before"].to_numpy(float), {"units": "rad"})
+        ds = ds.assign_coords(impact=("impact", np.arange(len(imp)), {"long_name": "impact index", "units": "1"}))
+        ds["impact_time"] = ("impact", imp["t"].to_numpy(float), {"long_name": "time of the impact", "units": "s"})
+        ds["impact_kind"] = ("impact", imp["kind"].to_numpy(str).astype("U10"), {"long_name": "base or transverse"})
+        ds["impact_kind"].encoding["dtype"] = "S1"
+        for name, long_name in (
+            ("thetadot_before", "angular velocity just before the impact"),
+            ("thetadot_after", "angular velocity just after the impact"),
+        ):
+            ds[name] = ("impact", imp[name].to_numpy(float), {"long_name": long_name, "units": "rad/s"})
+        ds["theta_peak_before"] = (
+            "impact",
+            imp["theta_peak_before"].to_numpy(float),
+            {"long_name": "largest |theta| since the previous impact or the release", "units": "rad"},
+        )
         attrs = {
-            "Conventions": "CF-1.8",
-            "title": "rocking wall history (rocklab.simulation.model)",
+            **cf_attrs("rocking wall history", "rocking simulation (rocklab.simulation)"),
             "overturned": int(self.overturned),
             "t_overturn": np.nan if self.t_overturn is None else self.t_overturn,
             "t_rest": np.nan if self.t_rest is None else self.t_rest,
