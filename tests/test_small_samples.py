@@ -8,6 +8,10 @@ without an interval, marked, and a series names no cause.
 """
 
 import logging
+import os
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -79,7 +83,7 @@ def test_table3_of_two_tests_is_marked_not_nan():
     assert "nan" not in md and "[" not in md
     assert md.count("†") == 7  # six values and the note
     assert md.endswith("† too few series for an interval (1 < 5)")
-    assert f"{df.e_ratio[0]:.3f}† (1 tests, 1 series)" in md
+    assert f"{df.e_ratio[0]:.3f}† (1 test, 1 series)" in md
 
 
 def test_a_normal_boundary_gives_intervals_with_their_counts():
@@ -175,3 +179,27 @@ def test_the_log_of_a_diagnosis_names_every_candidate(diagnosed_six):
     assert "stop_threshold" in text and "chosen: " in text
     assert lines[-1].startswith("series six: verdict")
     assert 10 < len(lines) < 80  # a few dozen lines, not one per fit of a fold
+
+
+SNAKEMAKE = Path(sys.executable).with_name("snakemake")
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.mark.skipif(not SNAKEMAKE.exists(), reason="snakemake not installed beside this interpreter")
+def test_a_three_test_campaign_says_its_sample_is_too_small(tiny_campaign, tmp_path):
+    """The issue's campaign: the tables mark their values, the diagnosis names nothing, the logs say why."""
+    results = tmp_path / "results"
+    targets = [str(results / name) for name in ("table3.md", "series.csv", "diagnosis.md")]
+    cmd = [str(SNAKEMAKE), "--cores", "2", "--quiet", "--directory", str(ROOT), "--config"]
+    cmd += [f"raw_dir={tiny_campaign}", f"results_dir={results}", "--", *targets]
+    run = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env={**os.environ, "PYTHONWARNINGS": "ignore"})
+    assert run.returncode == 0, run.stderr[-3000:]
+    t3 = (results / "table3.md").read_text()
+    assert "nan" not in t3 and "[" not in t3 and "too few series for an interval (1 < 5)" in t3
+    series = pd.read_csv(results / "series.csv")
+    assert series.e_ratio_ci_low.isna().all() and (series.ci_note == "too few tests for an interval (1 < 5)").all()
+    md = (results / "diagnosis.md").read_text()
+    assert md.count("**Verdict: too small to name a cause**") == len(series) + 2  # and both boundaries
+    for s in series.series:
+        log = (results / "logs" / "diagnosis" / f"{s}.log").read_text()
+        assert f"series {s} is too small to name a cause" in log and "base model:" in log

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rocklab.dissipation.statistics import MIN_BOOTSTRAP, note_lines, note_mark
+from rocklab.dissipation.statistics import MIN_BOOTSTRAP, counted, note_lines, note_mark
 
 
 def jsonable(x):
@@ -38,7 +38,7 @@ def _fmt_params(f):
 
 def _rests_on(f):
     """What a finding's interval rests on: "(154 tests, 10 series)", "(21 tests)"."""
-    parts = [f"{f[k]} {k.removeprefix('n_')}" for k in ("n_tests", "n_series") if f.get(k) is not None]
+    parts = [counted(f[k], noun) for k, noun in (("n_tests", "test"), ("n_series", "series")) if f.get(k) is not None]
     return f" ({', '.join(parts)})" if parts else ""
 
 
@@ -67,7 +67,7 @@ def diagnosis_markdown(entries) -> str:
     order = sorted(entries, key=lambda e: (e["scope"] != "boundary", e["key"]))
     for e in order:
         title = f"{'boundary condition' if e['scope'] == 'boundary' else 'series'} {e['key']}"
-        size = f"{e['n_tests']} tests" + (f", {e['n_series']} series" if "n_series" in e else "")
+        size = counted(e["n_tests"], "test") + (f", {counted(e['n_series'], 'series')}" if "n_series" in e else "")
         out += [
             f"## {title} ({e['boundary']}, {size})",
             "",

@@ -30,12 +30,16 @@ scattered between series.  Hence
 
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 import pandas as pd
 from scipy import stats
 
 from rocklab.dissipation.analysis import amplitude_law_fit
 from rocklab.physics.restitution import CALIBRATED_RATIO_ONE_SIDED
+
+log = logging.getLogger(__name__)
 
 #: Per-series quantities of results/series.csv (Figs. 13, 16-20).
 SERIES_COLUMNS = (
@@ -80,6 +84,11 @@ NOTE_MARKS = "†‡§¶"
 def interval_note(n, unit="tests"):
     """Why a value resting on ``n`` ``unit`` has no bootstrap interval; "" when it has one."""
     return f"too few {unit} for an interval ({n} < {MIN_BOOTSTRAP})" if n < MIN_BOOTSTRAP else ""
+
+
+def counted(n, noun):
+    """``n`` and ``noun`` ("test", "series"), plural but for one: "1 test", "154 tests", "1 series"."""
+    return f"{n} {noun}{'' if n == 1 or noun.endswith('s') else 's'}"
 
 
 def note_mark(notes, note):
@@ -205,7 +214,7 @@ def interval_cells(stats, fmt=".3f"):
     """
     notes, cells = {}, []
     for r in stats.itertuples():
-        n = f"({r.n_tests} tests, {r.n_series} series)"
+        n = f"({counted(r.n_tests, 'test')}, {counted(r.n_series, 'series')})"
         if r.ci_note:
             cells.append(f"{r.mean:{fmt}}{note_mark(notes, r.ci_note)} {n}")
         else:
@@ -491,6 +500,11 @@ def campaign_tables(datasets, qc_df, n_boot=4000, seed=0):
         ],
         ignore_index=True,
     )
+    t3 = table3(tests, n_boot, seed)
+    for r in series[series.ci_note.fillna("") != ""].itertuples():
+        log.warning("series %s: %s", r.series, r.ci_note)
+    for b, note in t3[t3.ci_note != ""].groupby("boundary").ci_note.first().items():
+        log.warning("%s, Table 3 and summary.csv: %s", b, note)
     return {
         "tests": tests,
         "impacts": impacts,
@@ -498,6 +512,6 @@ def campaign_tables(datasets, qc_df, n_boot=4000, seed=0):
         "series": series,
         "laws": laws,
         "effects": effects,
-        "table3": table3(tests, n_boot, seed),
+        "table3": t3,
         "summary": boundary_summary(tests, SERIES_COLUMNS, n_boot=n_boot, seed=seed),
     }, failed
