@@ -9,6 +9,7 @@ from rocklab.lab.motion import read_motion
 
 setup_logging(snakemake.log[0])
 series = snakemake.wildcards.series
+# a list: the tests are read twice (their motions, their records)
 tests = list(valid_tests(snakemake.input.tests))
 motions = {Path(p).stem: p for p in snakemake.input.motions}
 stored = {t.attrs["test_id"]: read_motion(motions[t.attrs["test_id"]]) for t in tests}

@@ -422,15 +422,17 @@ def test_free_run_matches_the_exact_simulator(kw, ext, values, boundary, rtol):
 
 
 def test_boundary_entries_json_and_markdown(diagnosed, tmp_path):
-    series = [
-        dict(diagnosed[k], boundary="two-sided") for k in ("instability+scale", "instability+scale-noisy", "null-2s")
-    ]
+    # five series, the fewest a bootstrap over series is given from
+    keys = ("instability+scale", "instability+scale-noisy", "null-2s", "null-2s-noisy", "instability-0.95")
+    series = [dict(diagnosed[k], boundary="two-sided") for k in keys]
     b = D.diagnose_boundary(series, "two-sided", n_boot=200)
-    assert b["scope"] == "boundary" and b["n_tests"] == 18 and b["n_series"] == 3
-    assert set(b["verdict"]) == {"instability_angle", "restitution_scale"}
+    assert b["scope"] == "boundary" and b["n_tests"] == 30 and b["n_series"] == b["n_series_diagnosed"] == 5
+    assert b["verdict"] == ["instability_angle"]
     f = next(f for f in b["findings"] if f["effect"] == "instability_angle")
-    lo, hi = f["ci95"]["alpha_r_over_alpha"]
-    assert lo - 1e-3 <= 0.9 <= hi + 1e-3
+    assert f["n_series"] == 3 and f["n_tests"] == 18 and f["evidence"]["series"] == "named in 3 of 5 series"
+    # three series name it: the mean of their values, no interval
+    assert f["ci95"] == {} and f["ci_note"] == "too few series for an interval (3 < 5)"
+    assert f["params"]["alpha_r_over_alpha"] == pytest.approx((0.9 + 0.9 + 0.95) / 3, abs=2e-3)
     entries = list(diagnosed.values()) + [b]
     for e in entries:
         assert {"scope", "key", "n_tests", "base", "what_is_wrong", "verdict", "unexplained", "findings"} <= set(e)

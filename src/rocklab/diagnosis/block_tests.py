@@ -221,6 +221,7 @@ def diagnose_group(trials: _Trials, *, n_boot=40, seed=0):
                 "effect": eff,
                 "params": {k: sel["fit"].values[k] for k in own},
                 "ci95": {k: sel["ci"][k] for k in own if k in sel["ci"]},
+                "n_tests": len(trials.ids),
                 "evidence": {
                     "signature": sig[eff]["text"],
                     "fit": f"held-out deviance per impact lowered by {st['gain']:.3g} (standard error "

@@ -9,16 +9,25 @@ combination of causes by maximum likelihood with a noise model per group
 tests for parameter intervals (:func:`parameter_intervals`), selects causes
 greedily (:func:`select_effects`) and tests what the chosen model leaves
 (:func:`structure`).  The method is described in docs/diagnosis-method.md.
+
+Progress goes to the module's logger: each candidate with its BIC, held-out
+gain and the reason it is taken or turned down, each full fit (passes,
+convergence), each bootstrap (resamples, time); the fits of the folds and
+resamples only at DEBUG level.
 """
 
 from __future__ import annotations
 
+import logging
 import math
+import time
 from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
 from scipy import optimize, stats
+
+log = logging.getLogger(__name__)
 
 #: Floor of the variance of a residual group [log units^2] (noise-free data).
 VAR_FLOOR = 1e-10
@@ -165,13 +174,16 @@ def _deviance(R, X, var):
 
 @dataclass
 class Fit:
-    """A fitted model: parameter values, group noise models, -2 log L, observations."""
+    """A fitted model: parameter values, group noise models, -2 log L, observations,
+    and the reweighting passes of its best start and whether they converged."""
 
     ext: tuple
     values: dict
     var: dict
     m2ll: float
     n_obs: int
+    passes: int = 0
+    converged: bool = True
 
     @property
     def bic(self):
@@ -217,7 +229,9 @@ def fit(problem: Problem, idx, ext, x0=None, n_irls=None) -> Fit:
     for x in starts:
         R = problem.residuals(sub, ext, dict(zip(names, x)))
         var = _variances({g: R[g] for g in masks}, X)
+        passes, converged = 0, False
         for _ in range(n_irls):
+            passes += 1
             w = {g: 1.0 / np.sqrt(var[g][0] + var[g][1] * xm[g] ** 2 + VAR_FLOOR) for g in masks}
 
             def res(xx, w=w):
@@ -232,12 +246,14 @@ def fit(problem: Problem, idx, ext, x0=None, n_irls=None) -> Fit:
             R = problem.residuals(sub, ext, dict(zip(names, x)))
             var = _variances({g: np.where(m, R[g], np.nan) for g, m in masks.items()}, X)
             if moved < 1e-6:
+                converged = True
                 break
         R = {g: np.where(m, R[g], np.nan) for g, m in masks.items()}
         m2ll = _deviance(R, X, var)
         if best is None or m2ll < best.m2ll:
             n_obs = int(sum(m.sum() for m in masks.values()))
-            best = Fit(tuple(ext), dict(zip(names, map(float, x))), var, m2ll, n_obs)
+            best = Fit(tuple(ext), dict(zip(names, map(float, x))), var, m2ll, n_obs, passes, converged)
+    log.debug("fit %s on %d tests: %s, %d passes", ext, len(idx), best.values, best.passes)
     return best
 
 
@@ -278,6 +294,7 @@ def heldout(problem: Problem, ext, start=None):
 
 def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
     """Percentile 95 % intervals of the parameters, whole tests resampled (bootstrap over tests)."""
+    t0 = time.perf_counter()
     rng = np.random.default_rng(seed)
     names = list(fitted.values)
     draws = []
@@ -286,7 +303,16 @@ def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
         # one reweighting pass: the noise model of the full fit serves the resample
         draws.append([fit(problem, pick, fitted.ext, x0=fitted.values, n_irls=1).values[k] for k in names])
     d = np.array(draws).reshape(len(draws), len(names))
-    return {k: [float(np.percentile(d[:, i], 2.5)), float(np.percentile(d[:, i], 97.5))] for i, k in enumerate(names)}
+    ci = {k: [float(np.percentile(d[:, i], 2.5)), float(np.percentile(d[:, i], 97.5))] for i, k in enumerate(names)}
+    log.info(
+        "bootstrap of %s: %d resamples of %d tests in %.1f s: %s",
+        "+".join(fitted.ext),
+        n_boot,
+        problem.n_tests,
+        time.perf_counter() - t0,
+        ", ".join(f"{k} [{lo:.4g}, {hi:.4g}]" for k, (lo, hi) in ci.items()),
+    )
+    return ci
 
 
 def _paired(d):
@@ -417,15 +443,28 @@ def select_effects(problem: Problem, *, signature=None, n_boot=40, max_effects=4
         # a fit is deterministic: the rounds, the removals and the weak-evidence
         # pass meet the same models again
         if ext not in fits:
-            fits[ext] = fit(problem, all_idx, ext)
+            t0 = time.perf_counter()
+            f = fits[ext] = fit(problem, all_idx, ext)
+            log.info(
+                "fit %s: %s; -2 log L %.1f, BIC %.1f on %d observations; %d passes, %s in %.1f s",
+                "+".join(ext) or "base model",
+                ", ".join(f"{k} = {v:.4g}" for k, v in f.values.items()) or "no parameter",
+                f.m2ll,
+                f.bic,
+                f.n_obs,
+                f.passes,
+                "converged" if f.converged else "not converged",
+                time.perf_counter() - t0,
+            )
         return fits[ext]
 
+    log.info("selection over %d tests, candidates %s", problem.n_tests, ", ".join(problem.candidates()))
     current = ()
     cur_fit = fit_of(current)
     cur_ho = heldout(problem, current)
     base_ho = cur_ho
     steps, rejected, ci = {}, {}, {}
-    for _ in range(max_effects):
+    for stage in range(1, max_effects + 1):
         # candidates in the order of their information criterion; the held-out test and the
         # bootstrap, the costly steps, only until one passes
         cands = []
@@ -441,24 +480,48 @@ def select_effects(problem: Problem, *, signature=None, n_boot=40, max_effects=4
                 rejected[eff] = f"BIC {dbic:+.1f} but its signature in the data is absent"
             else:
                 cands.append((dbic, eff, ext, f))
+                continue
+            log.info("stage %d: %s rejected: %s", stage, eff, rejected[eff])
+        cands.sort(key=lambda c: c[0])
+        if cands:
+            log.info(
+                "stage %d: held-out test in the order of BIC until one passes: %s",
+                stage,
+                ", ".join(f"{eff} ({dbic:+.1f})" for dbic, eff, *_ in cands),
+            )
         accepted = False
-        for dbic, eff, ext, f in sorted(cands, key=lambda c: c[0]):
+        for dbic, eff, ext, f in cands:
             ho = heldout(problem, ext, start=f.values)
             d = cur_ho["deviance"] - ho["deviance"]
             gain, se = _paired(d)
             if not _improves(d):
                 rejected[eff] = f"held-out deviance gain {gain:.3g} within the noise (standard error {se:.2g})"
+                log.info("stage %d: %s (BIC %+.1f) rejected: %s", stage, eff, dbic, rejected[eff])
                 continue
             c = parameter_intervals(problem, f, n_boot=n_boot, seed=seed)
             if not _null_excluded(problem, eff, c):
                 rejected[eff] = "95% interval within the smallest effect worth naming of its null value"
+                log.info(
+                    "stage %d: %s (BIC %+.1f, held-out gain %.3g) rejected: %s", stage, eff, dbic, gain, rejected[eff]
+                )
                 continue
             rejected.pop(eff, None)
             current, cur_fit, cur_ho, ci = ext, f, ho, c
             steps[eff] = {"heldout": ho, "gain": gain, "se": se, "dbic": dbic}
+            log.info(
+                "stage %d: %s accepted: BIC %+.1f, held-out deviance gain %.3g (standard error %.2g)",
+                stage,
+                eff,
+                dbic,
+                gain,
+                se,
+            )
             accepted = True
             break
         if not accepted:
+            log.info(
+                "stage %d: no candidate accepted; selection stops at %s", stage, "+".join(current) or "the base model"
+            )
             break
         # removal: a cause that entered earlier may be carried by the new one
         for old in [e for e in current if e != eff and e in steps]:
@@ -468,6 +531,7 @@ def select_effects(problem: Problem, *, signature=None, n_boot=40, max_effects=4
             loss, se = _paired(ho["deviance"] - cur_ho["deviance"])
             if not _improves(ho["deviance"] - cur_ho["deviance"]) or f.bic - cur_fit.bic < bic_margin:
                 rejected[old] = f"carried by {eff} (removing it costs {loss:.3g} +- {se:.2g} held out)"
+                log.info("stage %d: %s removed: %s", stage, old, rejected[old])
                 steps.pop(old)
                 current, cur_fit, cur_ho = ext, f, ho
                 ci = parameter_intervals(problem, f, n_boot=n_boot, seed=seed) if ext else {}
@@ -482,6 +546,12 @@ def select_effects(problem: Problem, *, signature=None, n_boot=40, max_effects=4
                 f = fit_of(ext)
                 if not structure(problem, all_idx, ext, f.values):
                     weak[eff] = {"params": f.values, "reason": rejected.get(eff, "")}
+    log.info(
+        "chosen: %s; structure left: %s; weak evidence for: %s",
+        "+".join(current) or "the base model",
+        "; ".join(found) or "none",
+        ", ".join(weak) or "none",
+    )
     return {
         "effects": list(current),
         "fit": cur_fit,

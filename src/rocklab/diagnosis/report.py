@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
+from rocklab.dissipation.statistics import MIN_BOOTSTRAP, counted, note_lines, note_mark
+
 
 def jsonable(x):
     """``x`` with NumPy scalars as Python numbers and non-finite floats as None (JSON)."""
@@ -34,8 +36,19 @@ def _fmt_params(f):
     return ", ".join(f"{k} = {v:.4g}" for k, v in f["params"].items())
 
 
-def _fmt_ci(f):
-    return ", ".join(f"[{a:.4g}, {b:.4g}]" for a, b in f["ci95"].values())
+def _rests_on(f):
+    """What a finding's interval rests on: "(154 tests, 10 series)", "(21 tests)"."""
+    parts = [counted(f[k], noun) for k, noun in (("n_tests", "test"), ("n_series", "series")) if f.get(k) is not None]
+    return f" ({', '.join(parts)})" if parts else ""
+
+
+def _fmt_ci(f, notes):
+    """The 95 % interval cell of a finding, or the mark of the reason it has none (:func:`note_mark`)."""
+    if f["ci95"]:
+        return ", ".join(f"[{a:.4g}, {b:.4g}]" for a, b in f["ci95"].values()) + _rests_on(f)
+    if f.get("ci_note"):
+        return f"none{note_mark(notes, f['ci_note'])}{_rests_on(f)}"
+    return "none"
 
 
 def diagnosis_markdown(entries) -> str:
@@ -47,12 +60,16 @@ def diagnosis_markdown(entries) -> str:
         "data carry (parameters, bootstrap 95 % intervals), and the held-out gain. "
         "Method: `rocklab.diagnosis`.",
         "",
+        "Each interval gives the tests it resamples (and, for a boundary condition, the series that name the "
+        f"cause); none is given from fewer than {MIN_BOOTSTRAP}, and a series of fewer tests names no cause.",
+        "",
     ]
     order = sorted(entries, key=lambda e: (e["scope"] != "boundary", e["key"]))
     for e in order:
         title = f"{'boundary condition' if e['scope'] == 'boundary' else 'series'} {e['key']}"
+        size = counted(e["n_tests"], "test") + (f", {counted(e['n_series'], 'series')}" if "n_series" in e else "")
         out += [
-            f"## {title} ({e['boundary']}, {e['n_tests']} tests)",
+            f"## {title} ({e['boundary']}, {size})",
             "",
             f"Base model: {e['base']['model']}.",
             "",
@@ -61,7 +78,9 @@ def diagnosis_markdown(entries) -> str:
         ]
         v = ", ".join(e["verdict"]) if e["verdict"] else "none"
         line = f"**Verdict: {v}**"
-        if e["unexplained"]:
+        if e.get("too_small"):
+            line = f"**Verdict: too small to name a cause** — {e['too_small']}"
+        elif e["unexplained"]:
             line += " — **unexplained** structure remains: " + "; ".join(e.get("residual_structure", []))
         elif e.get("weak_evidence"):
             line += (
@@ -79,17 +98,18 @@ def diagnosis_markdown(entries) -> str:
                 "| gain (deviance/obs; free-run log-peak rms) | evidence |",
                 "|---|---|---|---|---|---|",
             ]
+            notes = {}
             for f in e["findings"]:
                 g = f["gain"]
                 fr = g.get("free_run_log_peak_rms")
                 ev = f["evidence"].get("signature") or f["evidence"].get("series", "")
                 out.append(
-                    f"| {f['effect']} | {_fmt_params(f)} | {_fmt_ci(f)} | "
+                    f"| {f['effect']} | {_fmt_params(f)} | {_fmt_ci(f, notes)} | "
                     f"{_f(f['error_heldout']['deviance_per_obs'], '.3g')} | "
                     f"{_f(g['deviance_per_obs'], '.3g')}; {'' if fr is None else f'{fr:.3f}'} | {ev} "
                     f"{f['evidence'].get('fit', '') if f['effect'] == 'stop_threshold' else ''} |"
                 )
-            out.append("")
+            out += ["", *(line for note in note_lines(notes) for line in (note, ""))]
         h = e.get("heldout")
         if h and h["base"].get("free_run_log_peak_rms") is not None:
             hb, hm = h["base"], h["model"]
@@ -103,9 +123,13 @@ def diagnosis_markdown(entries) -> str:
         if e.get("extended"):
             out += [f"Extended model: {e['extended']['statement']}", ""]
         if e.get("series_verdicts"):
+            small = set(e.get("too_small_series", []))
             out += [
                 "Series verdicts: "
-                + "; ".join(f"{k}: {', '.join(v) or 'none'}" for k, v in e["series_verdicts"].items()),
+                + "; ".join(
+                    f"{k}: {'too small to name a cause' if k in small else ', '.join(v) or 'none'}"
+                    for k, v in e["series_verdicts"].items()
+                ),
                 "",
             ]
         alt = e["base"].get("alternatives")

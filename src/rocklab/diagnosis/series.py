@@ -6,9 +6,19 @@ carry (:func:`rocklab.diagnosis.engine.select_effects` on a
 :class:`rocklab.diagnosis.problem.WallProblem`), runs the causes estimated
 after selection and states the gain; :func:`diagnose_boundary` sums the
 series of a boundary condition up.  Method: docs/diagnosis-method.md.
+
+Small samples: a cause is named only where the bootstrap interval of its
+parameter over the tests clears its null value, and no interval is given
+from fewer than :data:`rocklab.dissipation.statistics.MIN_BOOTSTRAP` tests;
+a smaller series is compared with the base model but names nothing
+(``too_small`` gives the reason), and a boundary condition is summed up over
+the series large enough, with no interval from fewer series than that.
 """
 
 from __future__ import annotations
+
+import logging
+import time
 
 import numpy as np
 
@@ -18,6 +28,9 @@ from rocklab.diagnosis.errors import engineering_errors, what_is_wrong
 from rocklab.diagnosis.evidence import MeasuredTest, measured_test
 from rocklab.diagnosis.model import model_params
 from rocklab.diagnosis.problem import WallProblem
+from rocklab.dissipation.statistics import MIN_BOOTSTRAP, interval_note
+
+log = logging.getLogger(__name__)
 
 
 def base_name(boundary):
@@ -64,8 +77,13 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
     Returns
     -------
     dict
-        One entry of results/diagnosis.json.
+        One entry of results/diagnosis.json; each finding carries
+        ``n_tests``, the tests its interval rests on.  With fewer than
+        :data:`~rocklab.dissipation.statistics.MIN_BOOTSTRAP` tests of two
+        impacts or more the entry compares the base model only, names no
+        cause and says why in ``too_small``.
     """
+    t0 = time.perf_counter()
     tests = [t if isinstance(t, MeasuredTest) else measured_test(t) for t in tests]
     tests = [t for t in tests if t.n_impacts >= 2]
     if not tests:
@@ -73,9 +91,14 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
     boundary = tests[0].boundary
     if any(t.boundary != boundary for t in tests):
         raise ValueError("a diagnosis needs tests of one boundary condition")
-    problem = WallProblem(tests)
-    sig = problem.signature
-    sel = select_effects(problem, signature=sig, n_boot=n_boot, seed=seed)
+    log.info(
+        "%s %s (%s): %d tests of two impacts or more, %d impacts",
+        scope,
+        key,
+        boundary,
+        len(tests),
+        sum(t.n_impacts for t in tests),
+    )
     base_err = engineering_errors(tests, n_history=n_history)
     base = {"model": base_name(boundary), "errors": base_err}
     if boundary == "one-sided":
@@ -84,6 +107,36 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
             "e = 0 (Liberatore & Spera 2003)": engineering_errors(tests, base="zero", n_history=0),
         }
     statement, off = what_is_wrong(base_err, "the simulation")
+    log.info("base model: %s", statement)
+    head = {
+        "scope": scope,
+        "key": key,
+        "boundary": boundary,
+        "n_tests": len(tests),
+        "n_impacts": int(sum(t.n_impacts for t in tests)),
+        "base": base,
+    }
+    if len(tests) < MIN_BOOTSTRAP:
+        why = (
+            f"{interval_note(len(tests))}, "
+            "and a cause is named only where the interval of its parameter clears its null value"
+        )
+        log.warning("%s %s is too small to name a cause: %s", scope, key, why)
+        return {
+            **head,
+            "what_is_wrong": statement,
+            "too_small": why,
+            "verdict": [],
+            "unexplained": False,
+            "residual_structure": [],
+            "findings": [],
+            "weak_evidence": {},
+            "rejected": {},
+            "sample_test": _sample_test(tests),
+        }
+    problem = WallProblem(tests)
+    sig = problem.signature
+    sel = select_effects(problem, signature=sig, n_boot=n_boot, seed=seed)
     effects, values = sel["effects"], sel["fit"].values
     findings = []
     for eff in effects:
@@ -94,6 +147,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
                 "effect": eff,
                 "params": {k: values[k] for k in own},
                 "ci95": {k: sel["ci"][k] for k in own if k in sel["ci"]},
+                "n_tests": len(tests),
                 "evidence": {
                     "signature": sig.get(eff, {}).get("text", ""),
                     "fit": f"held-out deviance per observation lowered by {st['gain']:.3g} "
@@ -110,6 +164,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
     for cause in problem.after_selection:
         left = cause.unexplained(problem.S, model_params(tests, effects, values))
         found = cause.estimate(tests, effects, values, seed=seed) if left else None
+        log.info("%s: %s; %s", cause.name, "; ".join(left) or "nothing left for it", _estimated(left, found))
         if found is not None and found["named"]:
             structure = [st for st in structure if st not in left]
             findings.append(found["finding"])
@@ -123,12 +178,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
     else:
         verdict_text = ""
     entry = {
-        "scope": scope,
-        "key": key,
-        "boundary": boundary,
-        "n_tests": len(tests),
-        "n_impacts": int(sum(t.n_impacts for t in tests)),
-        "base": base,
+        **head,
         "what_is_wrong": (verdict_text + ": " if verdict_text else "") + statement,
         "verdict": [f["effect"] for f in findings],
         "unexplained": unexplained,
@@ -147,8 +197,30 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
             "errors": ext_err,
             "statement": what_is_wrong(ext_err, "the extended model")[0],
         }
-    entry["sample_test"] = tests[int(np.argmax([t.n_impacts for t in tests]))].test_id
+    entry["sample_test"] = _sample_test(tests)
+    log.info(
+        "%s %s: verdict %s%s in %.1f s",
+        scope,
+        key,
+        ", ".join(entry["verdict"]) or "none",
+        "; unexplained structure" if unexplained else "",
+        time.perf_counter() - t0,
+    )
     return entry
+
+
+def _estimated(left, found):
+    """What the estimate of a cause after selection gave, in words (the log)."""
+    if not left:
+        return "not estimated"
+    if found is None:
+        return "no estimate"
+    return f"{'named' if found['named'] else 'not named'}: {found['finding']['evidence']['fit']}"
+
+
+def _sample_test(tests):
+    """The test of most impacts (the one the figures draw)."""
+    return tests[int(np.argmax([t.n_impacts for t in tests]))].test_id
 
 
 def _wmean(vals, w):
@@ -176,39 +248,47 @@ def diagnose_boundary(entries, boundary, *, n_boot=2000, seed=0):
 
     The series are different walls and set-ups, so their parameters are not
     pooled into one fit: a cause is in the verdict when it is named in at
-    least half of the series, with the test-weighted mean of its parameters
-    over the series that name it and a bootstrap (over those series) 95 %
-    interval of that mean; errors are test-weighted means over all series.
+    least half of the series large enough to name one (not ``too_small``),
+    with the test-weighted mean of its parameters over the series that name
+    it and a bootstrap (over those series) 95 % interval of that mean, none
+    from fewer than :data:`~rocklab.dissipation.statistics.MIN_BOOTSTRAP`
+    series (``ci_note`` says so); each finding gives the ``n_series`` and
+    ``n_tests`` it rests on.  Errors are test-weighted means over all series.
     """
     ser = [e for e in entries if e["scope"] == "series" and e["boundary"] == boundary]
     if not ser:
         return None
+    usable = [e for e in ser if not e.get("too_small")]
+    small = [e["key"] for e in ser if e.get("too_small")]
     rng = np.random.default_rng(seed)
     w_all = np.array([e["n_tests"] for e in ser], float)
     n_tests = int(w_all.sum())
     base_err = _merge_errors([e["base"]["errors"] for e in ser], w_all)
     counts = {}
-    for e in ser:
+    for e in usable:
         for f in e["findings"]:
             counts.setdefault(f["effect"], []).append((e, f))
+    of_series = f"{len(usable)} series" + (f" large enough to name a cause (of {len(ser)})" if small else "")
     findings = []
     for eff, lst in counts.items():
-        if len(lst) < 0.5 * len(ser):
+        if len(lst) < 0.5 * len(usable):
             continue
         w = np.array([e["n_tests"] for e, _ in lst], float)
+        note = interval_note(len(lst), "series")
         params, ci = {}, {}
         for name in lst[0][1]["params"]:
             x = np.array([f["params"][name] for _, f in lst])
             params[name] = _wmean(x, w)
-            boots = [_wmean(x[i], w[i]) for i in (rng.integers(0, x.size, x.size) for _ in range(n_boot))]
-            ci[name] = [float(np.percentile(boots, 2.5)), float(np.percentile(boots, 97.5))]
+            if not note:
+                boots = [_wmean(x[i], w[i]) for i in (rng.integers(0, x.size, x.size) for _ in range(n_boot))]
+                ci[name] = [float(np.percentile(boots, 2.5)), float(np.percentile(boots, 97.5))]
         findings.append(
             {
                 "effect": eff,
                 "params": params,
                 "ci95": ci,
                 "evidence": {
-                    "series": f"named in {len(lst)} of {len(ser)} series",
+                    "series": f"named in {len(lst)} of {of_series}",
                     "range": {
                         n: [float(min(f["params"][n] for _, f in lst)), float(max(f["params"][n] for _, f in lst))]
                         for n in params
@@ -219,18 +299,25 @@ def diagnose_boundary(entries, boundary, *, n_boot=2000, seed=0):
                 },
                 "gain": {k: _wmean([f["gain"].get(k) for _, f in lst], w) for k in lst[0][1]["gain"]},
                 "n_series": len(lst),
+                "n_tests": int(w.sum()),
+                **({"ci_note": note} if note else {}),
             }
         )
     findings.sort(key=lambda f: (-f["n_series"], -(f["gain"]["deviance_per_obs"] or 0)))
-    flagged = [e["key"] for e in ser if e["unexplained"]]
+    flagged = [e["key"] for e in usable if e["unexplained"]]
     kinds = {}
-    for e in ser:
+    for e in usable:
         for k in {st.split(":")[0] for st in e["residual_structure"]}:
             kinds[k] = kinds.get(k, 0) + 1
-    ho = {
-        m: {k: _wmean([e["heldout"][m][k] for e in ser], w_all) for k in ser[0]["heldout"][m]}
-        for m in ("base", "model")
-    }
+    w_used = [e["n_tests"] for e in usable]
+    ho = (
+        {
+            m: {k: _wmean([e["heldout"][m][k] for e in usable], w_used) for k in usable[0]["heldout"][m]}
+            for m in ("base", "model")
+        }
+        if usable
+        else None
+    )
     statement, off = what_is_wrong(base_err, "the simulation")
     verdicts = {e["key"]: e["verdict"] for e in ser}
     extended = [e for e in ser if e.get("extended")]
@@ -238,21 +325,23 @@ def diagnose_boundary(entries, boundary, *, n_boot=2000, seed=0):
     if extended:
         ext_err = _merge_errors([e["extended"]["errors"] for e in extended], [e["n_tests"] for e in extended])
         ext_statement = what_is_wrong(ext_err, "the extended model")[0]
-    if not findings and not flagged and not off:
+    if usable and not findings and not flagged and not off:
         statement = "the base model explains the data within the noise: " + statement
-    return {
+    out = {
         "scope": "boundary",
         "key": boundary,
         "boundary": boundary,
         "n_tests": n_tests,
         "n_series": len(ser),
+        "n_series_diagnosed": len(usable),
+        "too_small_series": small,
         "n_impacts": int(sum(e["n_impacts"] for e in ser)),
         "base": {"model": base_name(boundary), "errors": base_err},
         "what_is_wrong": statement,
         "verdict": [f["effect"] for f in findings],
-        "unexplained": len(flagged) >= 0.5 * len(ser),
+        "unexplained": bool(usable) and len(flagged) >= 0.5 * len(usable),
         "residual_structure": [
-            f"{k} in {n} of {len(ser)} series" for k, n in sorted(kinds.items(), key=lambda x: -x[1])
+            f"{k} in {n} of {len(usable)} series" for k, n in sorted(kinds.items(), key=lambda x: -x[1])
         ],
         "unexplained_series": flagged,
         "findings": findings,
@@ -260,14 +349,29 @@ def diagnose_boundary(entries, boundary, *, n_boot=2000, seed=0):
         "series_verdicts": verdicts,
         **({"extended": {"statement": ext_statement, "n_series": len(extended)}} if ext_statement else {}),
     }
+    if not usable:
+        out["too_small"] = (
+            f"none of its {len(ser)} series has the {MIN_BOOTSTRAP} tests "
+            "of two impacts or more a series needs to name one"
+        )
+    log.info(
+        "boundary %s: %d series (%d too small to name a cause), %d tests; verdict %s",
+        boundary,
+        len(ser),
+        len(small),
+        n_tests,
+        ", ".join(out["verdict"]) or "none",
+    )
+    return out
 
 
 def diagnose_records(records, key, *, n_boot=40, n_history=2, seed=0):
-    """:func:`diagnose_series` of one series' records, or None when fewer than
-    two of its tests have two impacts or more (nothing to diagnose)."""
+    """:func:`diagnose_series` of one series' records, or None when none of its
+    tests has two impacts or more (nothing to compare a model with)."""
     tests = [r if isinstance(r, MeasuredTest) else measured_test(r) for r in records]
     tests = [t for t in tests if t.n_impacts >= 2]
-    if len(tests) < 2:
+    if not tests:
+        log.warning("series %s: no test with two impacts or more, nothing to diagnose", key)
         return None
     return diagnose_series(tests, key=str(key), n_boot=n_boot, n_history=n_history, seed=seed)
 

@@ -268,19 +268,26 @@ def amplitude_law_fit(impacts_df, tests_df, by=("series",), law="peak"):
     Returns
     -------
     pandas.DataFrame
-        by-columns, law, a, b, r2, a_se, b_se, n.
+        by-columns, law, a, b, r2, a_se, b_se, n (impacts), n_tests and
+        n_series (where ``tests_df`` has ``series``) they come from; the
+        standard errors take the impacts as independent.
     """
     if law not in ("peak", "velocity"):
         raise ValueError("law must be 'peak' (Eq. 15) or 'velocity' (Eq. 17)")
     by = list(by)
-    d = impacts_df.merge(tests_df[["test_id", "e_an", *by]], on="test_id", how="inner")
+    units = ["series"] if "series" in tests_df and "series" not in by else []
+    d = impacts_df.merge(tests_df[["test_id", "e_an", *by, *units]], on="test_id", how="inner")
     d["ratio"] = d.e_exp_k / d.e_an.abs()
     d["x"] = d.peak_before_over_alpha if law == "peak" else d.v_over_vr**2
     groups = d.groupby(by, sort=True) if by else [((), d)]
     rows = []
     for key, g in groups:
         key = key if isinstance(key, tuple) else (key,)
-        rows.append({**dict(zip(by, key)), "law": law, **_ols(g.x.to_numpy(float), g.ratio.to_numpy(float))})
+        used = g[np.isfinite(g.x) & np.isfinite(g.ratio)]
+        counts = {"n_tests": used.test_id.nunique()}
+        if "series" in used:
+            counts["n_series"] = used.series.nunique()
+        rows.append({**dict(zip(by, key)), "law": law, **_ols(g.x.to_numpy(float), g.ratio.to_numpy(float)), **counts})
     return pd.DataFrame(rows)
 
 

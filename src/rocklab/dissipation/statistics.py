@@ -22,10 +22,15 @@ scattered between series.  Hence
   paper's "0.95" and "1.05", Table 3) is the mean over its tests with a
   series (cluster) bootstrap interval (:func:`cluster_bootstrap_ci`): a
   test-level bootstrap treats 150 repeats of 10 set-ups as 150 independent
-  walls and gives an interval about three times too narrow.
+  walls and gives an interval about three times too narrow;
+* every interval says what it rests on (tests, series), and below
+  :data:`MIN_BOOTSTRAP` of the units it resamples a value is given without
+  one, with the reason (:func:`interval_note`).
 """
 
 from __future__ import annotations
+
+import logging
 
 import numpy as np
 import pandas as pd
@@ -33,6 +38,8 @@ from scipy import stats
 
 from rocklab.dissipation.analysis import amplitude_law_fit
 from rocklab.physics.restitution import CALIBRATED_RATIO_ONE_SIDED
+
+log = logging.getLogger(__name__)
 
 #: Per-series quantities of results/series.csv (Figs. 13, 16-20).
 SERIES_COLUMNS = (
@@ -59,16 +66,49 @@ PAPER_TABLE3 = {
     ("one-sided", "e_ratio_without_first_half_cycle"): 1.34,
     ("one-sided", "e_ratio_first_half_cycle"): 0.72,
 }
+#: Fewest units resampled (tests for the interval of a series, series for a
+#: value of a whole boundary condition, tests for a parameter of the
+#: diagnosis) from which a percentile bootstrap 95 % interval is given.
+#: Every resampled mean lies between the smallest and the largest of the n
+#: values resampled, and n draws of a symmetric population leave its centre
+#: outside that range with probability 2^(1-n): the interval can cover at
+#: most 50 % from 2 values, 75 % from 3, 88 % from 4 and 94 % from 5, the
+#: first within reach of the nominal 95 %.  From one value it is a point.
+MIN_BOOTSTRAP = 5
+
+
+#: Marks of the values given without an interval in markdown, one per distinct note.
+NOTE_MARKS = "†‡§¶"
+
+
+def interval_note(n, unit="tests"):
+    """Why a value resting on ``n`` ``unit`` has no bootstrap interval; "" when it has one."""
+    return f"too few {unit} for an interval ({n} < {MIN_BOOTSTRAP})" if n < MIN_BOOTSTRAP else ""
+
+
+def counted(n, noun):
+    """``n`` and ``noun`` ("test", "series"), plural but for one: "1 test", "154 tests", "1 series"."""
+    return f"{n} {noun}{'' if n == 1 or noun.endswith('s') else 's'}"
+
+
+def note_mark(notes, note):
+    """The mark of ``note`` in ``notes`` (note -> mark, in order of first use), added if new."""
+    return notes.setdefault(note, NOTE_MARKS[len(notes) % len(NOTE_MARKS)])
+
+
+def note_lines(notes):
+    """The lines under a markdown table that explain its marks (:func:`note_mark`)."""
+    return [f"{mark} {note}" for note, mark in notes.items()]
 
 
 def bootstrap_ci(values, n_boot=4000, level=0.95, seed=0):
     """Percentile bootstrap interval of the mean (vectorised, seeded).
 
-    Returns (low, high); NaN for fewer than 2 finite values.
+    Returns (low, high); NaN for fewer than :data:`MIN_BOOTSTRAP` finite values.
     """
     x = np.asarray(values, float)
     x = x[np.isfinite(x)]
-    if x.size < 2:
+    if x.size < MIN_BOOTSTRAP:
         return np.nan, np.nan
     rng = np.random.default_rng(seed)
     means = x[rng.integers(0, x.size, size=(n_boot, x.size))].mean(axis=1)
@@ -94,11 +134,11 @@ def cluster_bootstrap_ci(values, groups, n_boot=4000, level=0.95, seed=0):
     Returns
     -------
     (float, float)
-        NaN for fewer than 2 groups with finite values.
+        NaN for fewer than :data:`MIN_BOOTSTRAP` groups with finite values.
     """
     d = pd.DataFrame({"x": np.asarray(values, float), "g": np.asarray(groups)}).dropna()
     agg = d.groupby("g").x.agg(["sum", "count"])
-    if len(agg) < 2:
+    if len(agg) < MIN_BOOTSTRAP:
         return np.nan, np.nan
     rng = np.random.default_rng(seed)
     idx = rng.integers(0, len(agg), size=(n_boot, len(agg)))
@@ -113,7 +153,8 @@ def boundary_summary(tests_df, columns, by="series", within="boundary", n_boot=4
 
     Returns one row per (boundary, quantity) with data: n_tests, n_series,
     mean (over tests), sd (between tests), series_sd (between series
-    means), ci_low, ci_high (:func:`cluster_bootstrap_ci`).
+    means), ci_low, ci_high (:func:`cluster_bootstrap_ci`) and ci_note
+    (:func:`interval_note` of the series; "" where there is an interval).
     """
     rows = []
     for key, g in tests_df.groupby(within, sort=True):
@@ -133,6 +174,7 @@ def boundary_summary(tests_df, columns, by="series", within="boundary", n_boot=4
                     "series_sd": d.groupby(by)[c].mean().std(ddof=1),
                     "ci_low": lo,
                     "ci_high": hi,
+                    "ci_note": interval_note(d[by].nunique(), "series"),
                 }
             )
     return pd.DataFrame(rows)
@@ -158,37 +200,80 @@ def table3(tests_df, n_boot=4000, seed=0):
     return out
 
 
+def interval_cells(stats, fmt=".3f"):
+    """Markdown cells "mean [low, high] (n tests, k series)" of :func:`boundary_summary` rows, and their notes.
+
+    A value without an interval is followed by a mark instead; the notes
+    (one per distinct ``ci_note``, e.g. "† too few series for an interval
+    (1 < 5)") go under the table.
+
+    Returns
+    -------
+    cells : list of str
+    notes : list of str
+    """
+    notes, cells = {}, []
+    for r in stats.itertuples():
+        n = f"({counted(r.n_tests, 'test')}, {counted(r.n_series, 'series')})"
+        if r.ci_note:
+            cells.append(f"{r.mean:{fmt}}{note_mark(notes, r.ci_note)} {n}")
+        else:
+            cells.append(f"{r.mean:{fmt}} [{r.ci_low:{fmt}}, {r.ci_high:{fmt}}] {n}")
+    return cells, note_lines(notes)
+
+
 def table3_markdown(t3):
-    """Table 3 as markdown: one row per boundary, mean [95 % CI], and the paper's row."""
-    t3 = t3.assign(cell=[f"{m:.3f} [{lo:.3f}, {hi:.3f}]" for m, lo, hi in zip(t3["mean"], t3.ci_low, t3.ci_high)])
-    wide = t3.pivot(index="boundary", columns="window", values="cell")
+    """Table 3 as markdown: one row per boundary, mean [95 % CI] (tests, series), the paper's row.
+
+    A value resting on fewer than :data:`MIN_BOOTSTRAP` series has no
+    interval: it is marked, and the reason follows the table.
+    """
+    t3 = t3.assign(ci_note=t3.ci_note.fillna(""))
+    cells, notes = interval_cells(t3)
+    wide = t3.assign(cell=cells).pivot(index="boundary", columns="window", values="cell")
     wide = wide[[w for w in TABLE3_WINDOWS.values() if w in wide]]
-    counts = t3.groupby("boundary").first()
-    wide.insert(0, "tests (series)", [f"{counts.n_tests[b]} ({counts.n_series[b]})" for b in wide.index])
     for b, g in t3.dropna(subset=["paper"]).groupby("boundary"):
-        wide.loc[f"{b}, paper"] = ["", *(f"{v:.2f}" for v in g.set_index("window").paper.reindex(wide.columns[1:]))]
-    return wide.rename_axis("boundary").reset_index().to_markdown(index=False)
+        wide.loc[f"{b}, paper"] = [f"{v:.2f}" for v in g.set_index("window").paper.reindex(wide.columns)]
+    table = wide.rename_axis("boundary").reset_index().to_markdown(index=False)
+    return "\n\n".join([table, *notes]) if notes else table
 
 
 def series_stats(tests_df, columns=RATIO_COLUMNS, by="series", n_boot=4000, seed=0):
     """Mean, sd, bootstrap 95 % CI and count of each ratio by series.
 
-    Returns one row per series with columns ``n``, and for each ratio X
-    present in ``tests_df``: X_mean, X_sd, X_ci_low, X_ci_high.
+    Returns
+    -------
+    pandas.DataFrame
+        One row per series with columns ``n``, for each ratio X present in
+        ``tests_df``: X_n (tests with a value, on which the interval rests),
+        X_mean, X_sd, X_ci_low, X_ci_high (NaN below :data:`MIN_BOOTSTRAP`
+        tests), and ``ci_note``: why intervals of values are missing (""
+        where none is).
     """
     cols = [c for c in columns if c in tests_df]
     rows = []
     for key, g in tests_df.groupby(by, sort=True):
         row = {by: key, "n": len(g)}
+        short = {}
         for c in cols:
             x = g[c].to_numpy(float)
+            n = int(np.isfinite(x).sum())
             lo, hi = bootstrap_ci(x, n_boot=n_boot, seed=seed)
             row |= {
-                f"{c}_mean": np.nanmean(x) if np.isfinite(x).any() else np.nan,
-                f"{c}_sd": np.nanstd(x, ddof=1) if np.isfinite(x).sum() > 1 else np.nan,
+                f"{c}_n": n,
+                f"{c}_mean": np.nanmean(x) if n else np.nan,
+                f"{c}_sd": np.nanstd(x, ddof=1) if n > 1 else np.nan,
                 f"{c}_ci_low": lo,
                 f"{c}_ci_high": hi,
             }
+            if 0 < n < MIN_BOOTSTRAP:
+                short.setdefault(n, []).append(c)
+        # one note per row; a quantity short of the tests the others have is named
+        present = [c for c in cols if row[f"{c}_n"]]
+        row["ci_note"] = "; ".join(
+            interval_note(n) if names == present else f"{interval_note(n)}: {', '.join(names)}"
+            for n, names in sorted(short.items())
+        )
         rows.append(row)
     return pd.DataFrame(rows)
 
@@ -415,6 +500,11 @@ def campaign_tables(datasets, qc_df, n_boot=4000, seed=0):
         ],
         ignore_index=True,
     )
+    t3 = table3(tests, n_boot, seed)
+    for r in series[series.ci_note.fillna("") != ""].itertuples():
+        log.warning("series %s: %s", r.series, r.ci_note)
+    for b, note in t3[t3.ci_note != ""].groupby("boundary").ci_note.first().items():
+        log.warning("%s, Table 3 and summary.csv: %s", b, note)
     return {
         "tests": tests,
         "impacts": impacts,
@@ -422,6 +512,6 @@ def campaign_tables(datasets, qc_df, n_boot=4000, seed=0):
         "series": series,
         "laws": laws,
         "effects": effects,
-        "table3": table3(tests, n_boot, seed),
+        "table3": t3,
         "summary": boundary_summary(tests, SERIES_COLUMNS, n_boot=n_boot, seed=seed),
     }, failed

@@ -21,6 +21,7 @@ from rocklab.diagnosis.engine import Param
 from rocklab.diagnosis.errors import engineering_rows
 from rocklab.diagnosis.evidence import TestStack
 from rocklab.diagnosis.model import model_params, next_flight
+from rocklab.dissipation.statistics import MIN_BOOTSTRAP, interval_note
 from rocklab.lab.motion import odd_samples
 from rocklab.physics.flight import landing_speed, quarter_period
 from rocklab.physics.wall import overturning_velocity
@@ -154,7 +155,8 @@ def threshold(tests, ext=(), values=None, *, n_boot=200, seed=0, min_tests=3):
     -------
     dict or None
         None when fewer than ``min_tests`` tests (or half of them) show a
-        stop; otherwise ``v_stop_over_vr``, ``ci95``, ``spread_log``,
+        stop; otherwise ``v_stop_over_vr``, ``ci95`` (None from fewer than
+        :data:`~rocklab.dissipation.statistics.MIN_BOOTSTRAP` stops), ``spread_log``,
         ``n_observed``, held-out rms errors ``n_impacts_rms`` and
         ``duration_pct_rms`` as (base, with threshold), and ``named`` (the
         held-out error in the number of impacts at least halved).
@@ -168,9 +170,9 @@ def threshold(tests, ext=(), values=None, *, n_boot=200, seed=0, min_tests=3):
     x = 0.5 * (np.log(lo) + np.log(hi))
     rng = np.random.default_rng(seed)
     boots = np.exp([rng.choice(x, x.size).mean() for _ in range(n_boot)])
-    ci = [float(np.percentile(boots, 2.5)), float(np.percentile(boots, 97.5))]
+    ci = [float(np.percentile(boots, 2.5)), float(np.percentile(boots, 97.5))] if x.size >= MIN_BOOTSTRAP else None
     centre, common = bracket_centre(lo, hi)
-    if common:
+    if common and ci is not None:
         # one threshold fits every wall: it is known only within the common
         # bracket, however alike the walls' brackets are
         ci = [min(ci[0], float(np.max(lo))), max(ci[1], float(np.min(hi)))]
@@ -203,10 +205,13 @@ def threshold(tests, ext=(), values=None, *, n_boot=200, seed=0, min_tests=3):
 def finding(stop):
     """The entry of :func:`rocklab.diagnosis.series.diagnose_series` for a threshold of :func:`threshold`."""
     (n0, n1), (d0, d1) = stop["n_impacts_rms"], stop["duration_pct_rms"]
+    note = interval_note(stop["n_observed"])
     return {
         "effect": NAME,
         "params": {"v_stop_over_vr": stop["v_stop_over_vr"], "spread_log": stop["spread_log"]},
-        "ci95": {"v_stop_over_vr": stop["ci95"]},
+        "ci95": {"v_stop_over_vr": stop["ci95"]} if stop["ci95"] is not None else {},
+        "n_tests": stop["n_observed"],
+        **({"ci_note": note} if note else {}),
         "evidence": {
             "signature": f"{stop['n_observed']} of {stop['n_tests']} walls stop dead at a landing of "
             f"{stop['v_stop_over_vr']:.3f} thetadot_r (test to test x/÷ "
