@@ -47,7 +47,7 @@ code { background: #f1f5f9; padding: 0 3px; }
 # Sorts by a header click and keeps the rows that pass every filter: the box
 # over all columns (every word somewhere in the row) and the per-column boxes
 # (a substring, or a comparison such as >0.9, <=3, =T0001).
-_SCRIPT = """
+_SCRIPT = """(() => {
 const table = document.querySelector("table.data");
 const rows = Array.from(table.tBodies[0].rows);
 const all = document.getElementById("filter-all");
@@ -88,6 +88,7 @@ table.querySelectorAll("th.sort").forEach((th, i) => th.addEventListener("click"
   });
   rows.forEach(r => table.tBodies[0].appendChild(r));
 }));
+})();
 """
 
 
