@@ -14,6 +14,7 @@ from __future__ import annotations
 import base64
 import html
 import re
+from io import StringIO
 from pathlib import Path
 
 import pandas as pd
@@ -129,8 +130,6 @@ def table_html(csv_text: str, name: str, schema: dict | None = None) -> str:
         The HTML document.  Rows whose ``valid`` column reads False (the QC
         table) are shaded.
     """
-    from io import StringIO
-
     table = pd.read_csv(StringIO(csv_text), dtype=str, keep_default_na=False)
     schema = schema or {}
     described = {k: v.get("description", "") for k, v in schema.get("properties", {}).items()}
@@ -138,8 +137,9 @@ def table_html(csv_text: str, name: str, schema: dict | None = None) -> str:
     head = "".join(f'<th class="sort" title="{esc(described.get(c, ""))}">{esc(c)}</th>' for c in table.columns)
     filters = "".join(f'<th><input aria-label="filter {esc(c)}" placeholder="filter"></th>' for c in table.columns)
     body = []
-    rejected = table["valid"] == "False" if "valid" in table.columns else pd.Series(False, index=table.index)
-    for row, shade in zip(table.itertuples(index=False), rejected.map({True: ' class="rejected"', False: ""})):
+    rejected = table.get("valid", pd.Series("", index=table.index)) == "False"
+    for row, out in zip(table.itertuples(index=False), rejected):
+        shade = ' class="rejected"' if out else ""
         cells = "".join(f"<td{' class=num' if _is_number(v) else ''}>{esc(v)}</td>" for v in row)
         body.append(f"<tr{shade}>{cells}</tr>")
     columns = "".join(f"<dt>{esc(c)}</dt><dd>{esc(described[c])}</dd>" for c in table.columns if described.get(c))
