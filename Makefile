@@ -2,13 +2,14 @@
 #   make run    reduce the embedded campaign (raw/) into results/
 #   make test   run the test suite
 #   make docs   write the docs/ pages from the results (docs/templates + results/)
+#   make report results/report.html, the browsable report of the results of `make run`
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 CORES  ?= 2
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test lint bench docs venv clean dryrun
+.PHONY: run test lint bench docs report venv clean dryrun
 
 $(STAMP): requirements.lock pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -43,6 +44,10 @@ RESULTS ?= results
 docs: $(STAMP)
 	$(BIN)/snakemake docs --cores $(CORES) --rerun-triggers=mtime --forcerun=docs --config results_dir=$(RESULTS)
 	cp $(RESULTS)/docs/numbers.json $(RESULTS)/docs/*.md docs/
+
+# Recomputes nothing: the report of what `make run` left in $(RESULTS).
+report: $(STAMP)
+	$(BIN)/snakemake --report $(RESULTS)/report.html --config results_dir=$(RESULTS)
 
 clean:
 	rm -rf results .snakemake

@@ -29,8 +29,36 @@ include: "workflow/rules/seismic.smk"
 include: "workflow/rules/docs.smk"
 
 
+# The targets: `snakemake campaign` for a campaign of one's own, `all` (the
+# default) for everything of the paper.
+localrules:
+    all,
+    campaign,
+    maps,
+    limestone,
+
+
 rule all:
+    """Everything: the campaign, the overturning maps, the limestone blocks and the docs pages."""
     input:
         all_outputs(),
         docs_outputs(),
     default_target: True
+
+
+rule campaign:
+    """The campaign in raw_dir: reduction, QC, dissipation, diagnosis, figures and report pages."""
+    input:
+        campaign_outputs(),
+
+
+rule maps:
+    """The overturning maps of Sect. 5 (Figs. 21-23 and their indices)."""
+    input:
+        map_outputs(),
+
+
+rule limestone:
+    """The restitution of the UMinho limestone blocks."""
+    input:
+        limestone_outputs(),

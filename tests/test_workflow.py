@@ -3,6 +3,7 @@
 import hashlib
 import json
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -45,17 +46,11 @@ def test_qc_matches_the_hidden_truth(virtual_campaign):
     assert (got == expected).all(), pd.DataFrame({"expected": expected, "got": got})[got != expected]
 
 
-@pytest.mark.skipif(not SNAKEMAKE.exists(), reason="snakemake not installed beside this interpreter")
-def test_workflow_reduces_any_campaign_and_never_writes_to_it(virtual_campaign, tmp_path):
-    folder, truth = virtual_campaign
-    before = _tree_hash(folder)
-    results = tmp_path / "results"
+def _snakemake(target, folder, results, *options):
     cmd = [
         str(SNAKEMAKE),
-        "--cores",
-        "2",
-        "--quiet",
-        "all",
+        target,
+        *options,
         "--directory",
         str(ROOT),
         "--config",
@@ -67,19 +62,55 @@ def test_workflow_reduces_any_campaign_and_never_writes_to_it(virtual_campaign, 
     ]
     run = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env={**os.environ, "PYTHONWARNINGS": "ignore"})
     assert run.returncode == 0, run.stderr[-3000:]
+    return run.stdout
+
+
+def _planned_jobs(target, folder, results):
+    """Jobs per rule that a dry run of target plans (before its checkpoints run)."""
+    stats = _snakemake(target, folder, results, "--dry-run", "--quiet", "rules").split("Job stats:")[1]
+    return {rule: int(n) for rule, n in re.findall(r"^(\w+)\s+(\d+)$", stats.split("\ntotal")[0], re.M)}
+
+
+@pytest.mark.skipif(not SNAKEMAKE.exists(), reason="snakemake not installed beside this interpreter")
+def test_the_campaign_target_plans_no_map_and_no_limestone_job(tmp_path):
+    folder, results = tmp_path / "campaign", tmp_path / "results"
+    virtual_lab.write_campaign(folder, virtual_lab.default_plan(3, seed=3), seed=3)
+    campaign = _planned_jobs("campaign", folder, results)
+    assert not {"overturning_map", "map_summary", "limestone_diagnosis", "docs"} & set(campaign), campaign
+    assert {"qc_table", "dissipation_tables", "diagnose_series", "diagnosis_figures", "qc_pages"} <= set(campaign)
+    everything = _planned_jobs("all", folder, results)
+    assert everything["overturning_map"] == 5 and everything["limestone_diagnosis"] == 1
+    del campaign["campaign"]
+    assert {r: everything[r] for r in campaign} == campaign  # the same jobs for the campaign's part
+
+
+@pytest.mark.skipif(not SNAKEMAKE.exists(), reason="snakemake not installed beside this interpreter")
+def test_workflow_reduces_any_campaign_and_never_writes_to_it(virtual_campaign, tmp_path):
+    folder, truth = virtual_campaign
+    before = _tree_hash(folder)
+    results = tmp_path / "results"
+    _snakemake("campaign", folder, results, "--cores", "2", "--quiet")
     assert _tree_hash(folder) == before
+    # the campaign alone: nothing of the maps or of the limestone blocks
+    assert not (results / "maps").exists() and not (results / "limestone_diagnosis.json").exists()
     qc = pd.read_csv(results / "qc.csv", keep_default_na=False)
     assert len(qc) == len(truth)
     assert (qc.reject_reason == "unreadable").sum() == (truth.expected_reason == "unreadable").sum()
     tests = pd.read_csv(results / "tests.csv")
     assert set(tests.test_id) == set(qc.test_id[qc.valid.astype(str) == "True"])
-    for name in ("impacts.csv", "series.csv", "figures/fig09.png"):
+    for name in ("impacts.csv", "series.csv", "figures/fig09.png", "report/qc.html", "report/diagnosis.html"):
         assert (results / name).exists()
     # the motion of every test, extracted once by its reduction job
     assert {p.stem for p in (results / "motion").glob("*.nc")} == set(qc.test_id)
-    # every series with valid tests is diagnosed from those stored motions
+    # every series with valid tests is diagnosed from those stored motions, each with its figure
     diagnosed = {e["key"] for e in json.loads((results / "diagnosis.json").read_text()) if e["scope"] == "series"}
     assert diagnosed and diagnosed <= set(tests.series)
+    assert {p.stem for p in (results / "figures" / "diagnosis").glob("*.png")} == diagnosed
+    # then everything else, the campaign's jobs being done
+    _snakemake("all", folder, results, "--cores", "2", "--quiet")
+    assert _tree_hash(folder) == before
+    for name in ("maps/summary.csv", "figures/fig21.png", "report/map_summary.html", "limestone_diagnosis.json"):
+        assert (results / name).exists()
 
 
 def test_a_reduction_that_fails_does_not_stop_the_series(virtual_campaign, monkeypatch):

@@ -63,6 +63,43 @@ def test_params(test_id):
     return out
 
 
+#: Categories of `snakemake --report`, one per stage of the workflow; the
+#: report lists them by name, hence the numbers.
+CATEGORY = {
+    "qc": "1. Quality control",
+    "kinematics": "2. Kinematics (Sect. 2)",
+    "dissipation": "3. Energy dissipation (Sects. 3-4)",
+    "diagnosis": "4. Model diagnosis",
+    "limestone": "5. Limestone blocks",
+    "maps": "6. Overturning maps (Sect. 5)",
+}
+
+
+def report_item(path, caption, stage, label, subcategory=None, **kw):
+    """An output shown in the report, with workflow/report/<caption>.rst, in
+    its stage's category, listed as label (a string: one 'result' column)
+    or labels (a dict of columns, e.g. per wildcard)."""
+    labels = {"result": label} if isinstance(label, str) else label
+    return report(path, caption=f"../report/{caption}.rst", category=CATEGORY[stage],
+                  subcategory=subcategory, labels=labels, **kw)
+
+
+def report_figure(n, stage, what, subcategory=None):
+    """Figure n of the paper (results/figures/figNN.png), with workflow/report/figNN.rst."""
+    return report_item(res("figures", f"fig{n}.png"), f"fig{n}", stage, f"Fig. {int(n)}: {what}", subcategory)
+
+
+def report_page(name, stage, what, subcategory=None):
+    """The browsable page (results/report/<name>.html, rocklab.report.html) of
+    a table or text, with workflow/report/<name>.rst."""
+    return report_item(res("report", f"{name}.html"), name, stage, what, subcategory)
+
+
+def campaign_outputs():
+    """Everything of the campaign in raw_dir: reduction, QC, dissipation,
+    diagnosis, their figures and report pages (no map, no limestone block)."""
+    return qc_outputs() + dissipation_outputs() + figure_outputs() + diagnosis_outputs()
+
+
 def all_outputs():
-    return ([res("qc.csv"), res("series.csv")] + diagnosis_outputs() + dissipation_outputs()
-            + figure_outputs()) + map_outputs()
+    return campaign_outputs() + limestone_outputs() + map_outputs()

@@ -11,8 +11,12 @@ BLOCKS = Path(recorded_path(TABLES))
 
 
 def diagnosis_outputs():
-    return [res("diagnosis.json"), res("figures", "fig14.png"), res("figures", "fig15.png"),
-            res("figures", "diagnosis"), res("limestone_diagnosis.json")]
+    return [res("diagnosis.json"), res("report", "diagnosis.html"), res("figures", "fig14.png"),
+            res("figures", "fig15.png"), res("figures", "diagnosis")]
+
+
+def limestone_outputs():
+    return [res("limestone_diagnosis.json"), res("report", "limestone_diagnosis.html")]
 
 
 rule diagnose_series:
@@ -42,7 +46,7 @@ checkpoint diagnosis:
     input:
         expand(res("diagnosis", "{series}.json"), series=sorted(TESTS_BY_SERIES)),
     output:
-        json=report(res("diagnosis.json"), caption="../report/diagnosis.rst", category="Model diagnosis"),
+        json=report_item(res("diagnosis.json"), "diagnosis_json", "diagnosis", "diagnosis.json, for programs", "Summary"),
         md=res("diagnosis.md"),
     params:
         seed=DIAGNOSIS["seed"],
@@ -52,6 +56,20 @@ checkpoint diagnosis:
         res("benchmarks", "diagnosis.tsv")
     script:
         "../../scripts/diagnosis.py"
+
+
+# The report's page of diagnosis.md.
+rule diagnosis_pages:
+    input:
+        diagnosis=res("diagnosis.md"),
+    output:
+        diagnosis=report_page("diagnosis", "diagnosis", "diagnosis.md, every series and boundary", "Summary"),
+    log:
+        res("logs", "report_pages", "diagnosis.log"),
+    benchmark:
+        res("benchmarks", "report_pages", "diagnosis.tsv")
+    script:
+        "../../scripts/report_pages.py"
 
 
 def diagnosis_samples(kind):
@@ -71,9 +89,11 @@ rule diagnosis_figures:
         tests=diagnosis_samples("tests"),
         motions=diagnosis_samples("motion"),
     output:
-        fig14=report(res("figures", "fig14.png"), caption="../report/fig14.rst", category="Model diagnosis"),
-        fig15=report(res("figures", "fig15.png"), caption="../report/fig15.rst", category="Model diagnosis"),
-        series=directory(res("figures", "diagnosis")),
+        fig14=report_figure("14", "diagnosis", "two-sided, models against the test", "Summary"),
+        fig15=report_figure("15", "diagnosis", "one-sided, models against the test", "Summary"),
+        # every series' figure its own report item, labelled by its series
+        series=report_item(directory(res("figures", "diagnosis")), "diagnosis_series", "diagnosis",
+                           {"series": "{series}"}, "Per series", patterns=["{series}.png"]),
     log:
         res("logs", "diagnosis_figures.log"),
     benchmark:
@@ -86,7 +106,8 @@ rule limestone_diagnosis:
     input:
         events=str(BLOCKS / "limestone-rocking-events.csv"),
     output:
-        json=res("limestone_diagnosis.json"),
+        json=report_item(res("limestone_diagnosis.json"), "limestone_json", "limestone",
+                         "limestone_diagnosis.json, for programs"),
         md=res("limestone_diagnosis.md"),
     params:
         n_boot=DIAGNOSIS["n_boot"],
@@ -97,3 +118,17 @@ rule limestone_diagnosis:
         res("benchmarks", "limestone_diagnosis.tsv")
     script:
         "../../scripts/limestone_diagnosis.py"
+
+
+# The report's page of limestone_diagnosis.md.
+rule limestone_pages:
+    input:
+        limestone_diagnosis=res("limestone_diagnosis.md"),
+    output:
+        limestone_diagnosis=report_page("limestone_diagnosis", "limestone", "limestone_diagnosis.md, per block group"),
+    log:
+        res("logs", "report_pages", "limestone.log"),
+    benchmark:
+        res("benchmarks", "report_pages", "limestone.tsv")
+    script:
+        "../../scripts/report_pages.py"

@@ -3,15 +3,21 @@
 # statistics, Table 3.  A checkpoint: the test drawn in Fig. 20a is chosen
 # from its tests.csv.
 
-
-def report_table(name):
-    """A table output, shown in the report with workflow/report/<name>.rst."""
-    return report(res(name), caption=f"../report/{name.removesuffix('.csv')}.rst",
-                  category="Dissipation tables (Sects. 3-4)")
+#: The tables of the report (results/report/<name>.html): what each holds, its schema if any.
+DISSIPATION_PAGES = {
+    "tests": ("tests.csv, every valid test", "tests.schema.yaml"),
+    "series": ("series.csv, every series", "series.schema.yaml"),
+    "table3": ("table3.csv, Table 3", None),
+    "summary": ("summary.csv, by boundary condition", None),
+    "amplitude_laws": ("amplitude_laws.csv, Eqs. 15 and 17", None),
+    "effects": ("effects.csv, the factors between series", None),
+}
 
 
 def dissipation_outputs():
-    return [res(name) for name in ("table3.csv", "table3.md", "summary.csv")]
+    return [res(name) for name in ("table3.csv", "table3.md", "summary.csv")] + [
+        res("report", f"{name}.html") for name in DISSIPATION_PAGES
+    ]
 
 
 checkpoint dissipation_tables:
@@ -19,15 +25,15 @@ checkpoint dissipation_tables:
         qc=res("qc.csv"),
         motions=expand(res("motion", "{test_id}.nc"), test_id=TEST_IDS),
     output:
-        tests=report_table("tests.csv"),
+        tests=res("tests.csv"),
         impacts=res("impacts.csv"),
         e_by_n=res("e_by_n.csv"),
-        series=report_table("series.csv"),
-        laws=report_table("amplitude_laws.csv"),
-        effects=report_table("effects.csv"),
-        table3=report_table("table3.csv"),
+        series=res("series.csv"),
+        laws=res("amplitude_laws.csv"),
+        effects=res("effects.csv"),
+        table3=res("table3.csv"),
         table3_md=res("table3.md"),
-        summary=report_table("summary.csv"),
+        summary=res("summary.csv"),
     params:
         schemas=schema_path(""),
         n_boot=config["statistics"]["n_boot"],
@@ -38,3 +44,19 @@ checkpoint dissipation_tables:
         res("benchmarks", "dissipation_tables.tsv")
     script:
         "../../scripts/dissipation_tables.py"
+
+
+# The report's pages of the tables: sortable, filterable, columns described.
+rule dissipation_pages:
+    input:
+        **{name: res(f"{name}.csv") for name in DISSIPATION_PAGES},
+    output:
+        **{name: report_page(name, "dissipation", what, "Tables") for name, (what, _) in DISSIPATION_PAGES.items()},
+    params:
+        schemas={name: schema_path(schema) for name, (_, schema) in DISSIPATION_PAGES.items() if schema},
+    log:
+        res("logs", "report_pages", "dissipation.log"),
+    benchmark:
+        res("benchmarks", "report_pages", "dissipation.tsv")
+    script:
+        "../../scripts/report_pages.py"

@@ -15,12 +15,6 @@ DISSIPATION_FIGS = ("10", "11", "13", "16", "17", "18", "19", "20")
 report: "../report/workflow.rst"
 
 
-def report_figure(n, category):
-    """A figure output, shown in the report with workflow/report/figNN.rst."""
-    return report(res("figures", f"fig{n}.png"), caption=f"../report/fig{n}.rst",
-                  category=category)
-
-
 def figure_outputs():
     return [res("figures", f"fig{n}.png") for n in ("06", "08", "09", *DISSIPATION_FIGS)]
 
@@ -48,9 +42,9 @@ rule kinematics_figures:
         kinematics=res("kinematics.csv"),
         sample=kinematics_sample,
     output:
-        fig6=report_figure("06", "Kinematics (Sect. 2)"),
-        fig8=report_figure("08", "Kinematics (Sect. 2)"),
-        fig9=report_figure("09", "Kinematics (Sect. 2)"),
+        fig6=report_figure("06", "kinematics", "a record, elongation and velocity"),
+        fig8=report_figure("08", "kinematics", "the four degrees of freedom"),
+        fig9=report_figure("09", "kinematics", "Eq. 3 against Eq. 8; peaks"),
     params:
         specimen=FIG_SPECIMEN,
     log:
@@ -68,14 +62,14 @@ rule dissipation_figures:
         series=res("series.csv"),
         sample=fig20_sample_test,
     output:
-        fig10=report_figure("10", "Energy dissipation (Sects. 3-4)"),
-        fig11=report_figure("11", "Energy dissipation (Sects. 3-4)"),
-        fig13=report_figure("13", "Energy dissipation (Sects. 3-4)"),
-        fig16=report_figure("16", "Energy dissipation (Sects. 3-4)"),
-        fig17=report_figure("17", "Energy dissipation (Sects. 3-4)"),
-        fig18=report_figure("18", "Energy dissipation (Sects. 3-4)"),
-        fig19=report_figure("19", "Energy dissipation (Sects. 3-4)"),
-        fig20=report_figure("20", "Energy dissipation (Sects. 3-4)"),
+        fig10=report_figure("10", "dissipation", "theta0 / alpha test by test", "Figures"),
+        fig11=report_figure("11", "dissipation", "e_exp / e_an after n impacts", "Figures"),
+        fig13=report_figure("13", "dissipation", "e_exp / e_an per series", "Figures"),
+        fig16=report_figure("16", "dissipation", "theta0 / alpha per series", "Figures"),
+        fig17=report_figure("17", "dissipation", "p T_1/4 per series", "Figures"),
+        fig18=report_figure("18", "dissipation", "cycles per series", "Figures"),
+        fig19=report_figure("19", "dissipation", "duration p D per series", "Figures"),
+        fig20=report_figure("20", "dissipation", "channel-5 amplification", "Figures"),
     log:
         res("logs", "dissipation_figures.log"),
     benchmark:

@@ -2,6 +2,10 @@
 # A checkpoint: the test drawn in Figs. 6, 8 and 9 is chosen from its verdicts.
 
 
+def qc_outputs():
+    return [res("qc.csv"), res("kinematics.csv"), res("report", "qc.html"), res("report", "kinematics.html")]
+
+
 checkpoint qc_table:
     input:
         tests=expand(res("tests", "{test_id}.nc"), test_id=TEST_IDS),
@@ -18,3 +22,21 @@ checkpoint qc_table:
         res("benchmarks", "qc_table.tsv")
     script:
         "../../scripts/qc_table.py"
+
+
+# The report's pages of the two tables: sortable, filterable, columns described.
+rule qc_pages:
+    input:
+        qc=res("qc.csv"),
+        kinematics=res("kinematics.csv"),
+    output:
+        qc=report_page("qc", "qc", "qc.csv, the verdict of every test"),
+        kinematics=report_page("kinematics", "kinematics", "kinematics.csv, peaks and the Eq. 8 check"),
+    params:
+        schemas={"qc": schema_path("qc.schema.yaml")},
+    log:
+        res("logs", "report_pages", "qc.log"),
+    benchmark:
+        res("benchmarks", "report_pages", "qc.tsv")
+    script:
+        "../../scripts/report_pages.py"

@@ -15,7 +15,7 @@ if MAP_FIG_RECORD not in MAP_RECORDS:
 def map_outputs():
     return [res("maps", "summary.csv"), res("maps", "reductions.csv")] + [
         res("figures", f"fig{n}.png") for n in (21, 22, 23)
-    ]
+    ] + [res("report", f"{name}.html") for name in ("map_summary", "map_reductions")]
 
 
 def map_path(record, model):
@@ -25,15 +25,6 @@ def map_path(record, model):
 def record_file(wildcards):
     """The shipped file of the record, so that replacing it recomputes its maps."""
     return recorded_path(accelerogram_dir() / MANIFEST.set_index("record").loc[wildcards.record, "file"])
-
-
-localrules:
-    maps,
-
-
-rule maps:
-    input:
-        map_outputs(),
 
 
 rule overturning_map:
@@ -89,12 +80,33 @@ rule map_figures:
         two_sided=[map_path(MAP_FIG_RECORD, m) for m in ("2s-housner", "2s-0.95")],
         one_sided=[map_path(MAP_FIG_RECORD, m) for m in ("1s-zero", "1s-1.05", "1s-eq17")],
     output:
-        fig21=res("figures", "fig21.png"),
-        fig22=res("figures", "fig22.png"),
-        fig23=res("figures", "fig23.png"),
+        fig21=report_figure("21", "maps", "two-sided maps"),
+        fig22=report_figure("22", "maps", "indices record by record"),
+        fig23=report_figure("23", "maps", "one-sided maps"),
     log:
         res("logs", "map_figures.log"),
     benchmark:
         res("benchmarks", "map_figures.tsv")
     script:
         "../../scripts/map_figures.py"
+
+
+# The report's pages of the two tables: sortable, filterable, columns described.
+rule map_pages:
+    input:
+        map_summary=res("maps", "summary.csv"),
+        map_reductions=res("maps", "reductions.csv"),
+    output:
+        map_summary=report_page("map_summary", "maps", "maps/summary.csv, the indices of every map"),
+        map_reductions=report_page("map_reductions", "maps", "maps/reductions.csv, from one model to another"),
+    params:
+        schemas={
+            "map_summary": schema_path("map_summary.schema.yaml"),
+            "map_reductions": schema_path("map_reductions.schema.yaml"),
+        },
+    log:
+        res("logs", "report_pages", "maps.log"),
+    benchmark:
+        res("benchmarks", "report_pages", "maps.tsv")
+    script:
+        "../../scripts/report_pages.py"
