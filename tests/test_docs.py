@@ -567,3 +567,25 @@ def test_every_template_renders_on_a_campaign_that_lacks_most_of_it(tiny_results
     assert set(rendered) == {p.name for p in TEMPLATES.glob("*.md")}
     assert "not measured" in rendered["dissipation.md"]
     assert "${" not in "".join(rendered.values())
+
+
+def test_a_boundary_too_small_to_extend_the_model_is_extracted(tiny_results):
+    """A boundary whose series are all too small has no extended model and no held-out gain."""
+    small = {
+        "scope": "boundary",
+        "key": "one-sided",
+        "boundary": "one-sided",
+        "n_tests": 3,
+        "n_series": 1,
+        "n_impacts": 6,
+        "base": {"model": "Eq. 14", "errors": {}},
+        "what_is_wrong": "it stops early.",
+        "verdict": [],
+        "unexplained": False,
+        "findings": [],
+        "heldout": None,
+        "too_small": "none of its 1 series has the 5 tests of two impacts or more a series needs to name one",
+    }
+    (tiny_results / "diagnosis.json").write_text(json.dumps([*_diagnosis_entries(), small]))
+    one = nb.diagnosis(tiny_results)["one_sided"]
+    assert one["extended"] is None and one["verdict"] == "none" and one["n_tests"] == 3

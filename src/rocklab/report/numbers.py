@@ -293,7 +293,8 @@ def diagnosis(results: Path) -> dict:
             "unexplained": bool(e["unexplained"]),
             "findings": {f["effect"]: _finding(f) for f in e["findings"]},
             "heldout": e["heldout"],
-            "extended": e["extended"]["statement"],
+            # absent where no series was large enough to extend the model
+            "extended": e.get("extended", {}).get("statement"),
             "stop_heldout": _stop_gain(mine),
             "no_stop": [s["key"] for s in mine if "stop_threshold" not in s["verdict"]],
             "minority": [
