@@ -59,7 +59,8 @@ def overturning_batch(
         linear form, which is exact per interval).
     tail : float
         Longest free motion [s] followed after the record (the wall is
-        followed only while its energy can still reach alpha).
+        followed only while it leans beyond alpha or its energy can still
+        reach alpha).
     return_max : bool
         Also return max |theta| / alpha_s of each history.
 

@@ -99,9 +99,18 @@ _potential_linear = numba.njit(cache=True, inline="always")(flight.potential_lin
 
 @numba.njit(cache=True)
 def _can_overturn(x, v, s, prm):
+    """Whether a wall in free motion at (x [rad], v [rad/s]) on hinge s may still overturn.
+
+    Below the instability angle of its hinge it may only if its energy
+    reaches the critical energy of a reachable hinge.  Beyond it, the wall is
+    on the falling side of the potential maximum: with less energy it cannot
+    climb back and falls, with more it crosses back, so it is always followed.
+    """
     p = prm[_P_P]
     a = prm[_P_APOS] if s > 0 else prm[_P_ANEG]
     th = abs(x)
+    if th >= a:
+        return True
     if prm[_P_LIN] > 0:
         en = 0.5 * v * v + _potential_linear(th, a, p)
         crit = _potential_linear(prm[_P_APOS], prm[_P_APOS], p)
