@@ -148,3 +148,19 @@ def test_wall_past_alpha_when_the_record_ends_overturns(form):
         unpadded = simulate_ground(model, a * ag, dt).overturned
         assert (bool(o), bool(o_ground), unpadded) == (True, True, True), a
         assert t_ground == pytest.approx(padded.t_overturn, rel=1e-4), a
+
+
+def test_ground_batch_covers_the_free_motion_after_the_record():
+    """After a 1.5 m/s^2 sine pulse the wall rocks freely for 88 s: ``ground_batch``
+    follows it to rest and counts its impacts and peaks as the reference on the
+    padded record does (it once stopped with the record: 1 impact)."""
+    model = RockingModel(alpha=ALPHA, p=P, form="linear")
+    ag, dt = _sine_pulse(1.5)
+    ref = simulate_ground(model, _padded(ag, dt, 100.0), dt)
+    assert not ref.overturned and ref.t_rest is not None and len(ref.impacts) > 100
+    ds = ground_batch(ag, dt, [model], max_impacts=len(ref.impacts) + 5)
+    assert int(ds.n_impacts[0]) == len(ref.impacts)
+    np.testing.assert_allclose(ds.t_impact[0, : len(ref.impacts)], ref.impacts.t, atol=1e-6)
+    # the reference samples theta every dt: its peak lies a few (p dt)^2 below the true one
+    sampled = np.nanmax(np.abs(ref.theta)) / ALPHA
+    assert sampled <= float(ds.max_ratio[0]) < sampled * (1 + 2 * (P * dt) ** 2)

@@ -188,12 +188,13 @@ def _locate(x, v, s, ga, gb, u, prm, l1, l2, zp, h, Fh, ov, edge, target, f0, f1
 
 
 @numba.njit(cache=True)
-def run_history(ag, h, scale, n_tail, prm, law, x, v, log_t, log_vb, log_va, log_peak):
+def run_history(ag, h, scale, n_tail, to_rest, prm, law, x, v, log_t, log_vb, log_va, log_peak):
     """Event-driven integration of one wall, sample interval by sample interval.
 
     ``ag`` [m/s^2] (times ``scale``) is stepped with interval ``h`` [s] (the
-    record's dt times a duration scale), then ``n_tail`` free steps follow
-    while the wall can still overturn.  Linear form: exact closed form per
+    record's dt times a duration scale), then up to ``n_tail`` free steps
+    follow: until the wall rests if ``to_rest``, otherwise only while it can
+    still overturn (enough to decide overturning).  Linear form: exact closed form per
     interval; exact form: ``prm[_P_SUB]`` RK4 substeps per interval.  Events
     (impact, overturning, onset, velocity zero for the peaks) are located by
     bisection inside the step.  Impacts are logged into the ``log_*`` arrays
@@ -234,7 +235,7 @@ def run_history(ag, h, scale, n_tail, prm, law, x, v, log_t, log_vb, log_va, log
     while k + 1 < n_steps:
         k += 1
         if k >= n_rec:
-            if resting or not _can_overturn(x, v, s, prm):
+            if resting or not (to_rest or _can_overturn(x, v, s, prm)):
                 break
         if resting:
             # fast-forward through the samples that cannot start the motion:
@@ -371,17 +372,29 @@ def run_history(ag, h, scale, n_tail, prm, law, x, v, log_t, log_vb, log_va, log
 
 
 @numba.njit(cache=True)
-def _row(ag, h, scale, n_tail, prm, law, x0, v0, logs, out, i):
+def _row(ag, h, scale, n_tail, to_rest, prm, law, x0, v0, logs, out, i):
     # called from the prange body instead of run_history itself: inlined into
     # the parallel loop, run_history runs 4-8x slower (measured, numba 0.68)
     o, t, m, k = run_history(
-        ag, h[i], scale[i], n_tail[i], prm[i], law[i], x0[i], v0[i], logs[0, i], logs[1, i], logs[2, i], logs[3, i]
+        ag,
+        h[i],
+        scale[i],
+        n_tail[i],
+        to_rest,
+        prm[i],
+        law[i],
+        x0[i],
+        v0[i],
+        logs[0, i],
+        logs[1, i],
+        logs[2, i],
+        logs[3, i],
     )
     out[0][i], out[1][i], out[2][i], out[3][i] = o, t, m, k
 
 
 @numba.njit(parallel=True, cache=True)
-def batch_kernel(ag, h, scale, n_tail, prm, law, x0, v0, max_log):
+def batch_kernel(ag, h, scale, n_tail, to_rest, prm, law, x0, v0, max_log):
     """:func:`run_history` of every row (history) in parallel; the Python
     front ends are in :mod:`rocklab.simulation.batch`."""
     n = h.shape[0]
@@ -392,5 +405,5 @@ def batch_kernel(ag, h, scale, n_tail, prm, law, x0, v0, max_log):
     logs = np.full((4, n, max_log), np.nan)
     out = (over, t_over, max_ratio, n_imp)
     for i in numba.prange(n):
-        _row(ag, h, scale, n_tail, prm, law, x0, v0, logs, out, i)
+        _row(ag, h, scale, n_tail, to_rest, prm, law, x0, v0, logs, out, i)
     return over, t_over, max_ratio, n_imp, logs[0], logs[1], logs[2], logs[3]
