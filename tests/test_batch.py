@@ -119,3 +119,61 @@ def test_impact_inside_one_coarse_step_is_found(gap):
     ds = free_batch(model, 0.8 * ALPHA, dt=0.2, t_end=10.0, max_impacts=len(ref) + 5)
     assert int(ds.n_impacts[0]) == len(ref) and (ref.kind == "transverse").sum() >= 3
     np.testing.assert_allclose(ds.t_impact[0, : len(ref)], ref.t, atol=1e-8)
+
+
+def _sine_pulse(amplitude, dt=0.01):
+    """One period of a 1 s sine [m/s^2], ending on zero."""
+    return amplitude * np.sin(2 * np.pi * np.arange(101) * dt), dt
+
+
+def _padded(ag, dt, seconds=20.0):
+    """``ag`` followed by ``seconds`` of zeros: the free motion inside the record."""
+    return np.concatenate([ag, np.zeros(round(seconds / dt))])
+
+
+@pytest.mark.parametrize("form", ["linear", "exact"])
+def test_wall_past_alpha_when_the_record_ends_overturns(form):
+    """A 1 s sine pulse of 6-7 m/s^2 leaves the wall at 1.8-2.4 alpha with less
+    than the critical energy: beyond the potential maximum it cannot climb back
+    and falls (2.8-3.4 s on the padded record).  The engine and the reference
+    once stopped following it there and reported it standing."""
+    model = RockingModel(alpha=ALPHA, p=P, form=form)
+    ag, dt = _sine_pulse(1.0)
+    amps = np.array([6.0, 7.0])
+    over = overturning_batch(ag, dt, model, amps, [1.0], substeps=4)[:, 0]
+    ds = ground_batch(ag, dt, [model] * len(amps), amplitude_scale=amps, substeps=4)
+    for a, o, o_ground, t_ground in zip(amps, over, ds.overturned.values, ds.t_overturn.values):
+        padded = simulate_ground(model, _padded(a * ag, dt), dt)
+        assert padded.overturned and padded.t_overturn > 2.5, a
+        unpadded = simulate_ground(model, a * ag, dt).overturned
+        assert (bool(o), bool(o_ground), unpadded) == (True, True, True), a
+        assert t_ground == pytest.approx(padded.t_overturn, rel=1e-4), a
+
+
+def test_onset_on_the_first_sample():
+    """A record whose first sample alone exceeds the onset threshold starts the
+    wall rocking at t = 0 (the engine once skipped the first sample: no impact)."""
+    model = RockingModel(alpha=ALPHA, p=P, form="linear")
+    ag, dt = np.zeros(50), 0.01
+    ag[0] = -60.0
+    ref = simulate_ground(model, _padded(ag, dt, 60.0), dt)
+    assert ref.t_rest is not None and len(ref.impacts) > 100
+    ds = ground_batch(ag, dt, [model], max_impacts=len(ref.impacts) + 5)
+    assert int(ds.n_impacts[0]) == len(ref.impacts)
+    np.testing.assert_allclose(ds.t_impact[0, : len(ref.impacts)], ref.impacts.t, atol=1e-6)
+
+
+def test_ground_batch_covers_the_free_motion_after_the_record():
+    """After a 1.5 m/s^2 sine pulse the wall rocks freely for 88 s: ``ground_batch``
+    follows it to rest and counts its impacts and peaks as the reference on the
+    padded record does (it once stopped with the record: 1 impact)."""
+    model = RockingModel(alpha=ALPHA, p=P, form="linear")
+    ag, dt = _sine_pulse(1.5)
+    ref = simulate_ground(model, _padded(ag, dt, 100.0), dt)
+    assert not ref.overturned and ref.t_rest is not None and len(ref.impacts) > 100
+    ds = ground_batch(ag, dt, [model], max_impacts=len(ref.impacts) + 5)
+    assert int(ds.n_impacts[0]) == len(ref.impacts)
+    np.testing.assert_allclose(ds.t_impact[0, : len(ref.impacts)], ref.impacts.t, atol=1e-6)
+    # the reference samples theta every dt: its peak lies a few (p dt)^2 below the true one
+    sampled = np.nanmax(np.abs(ref.theta)) / ALPHA
+    assert sampled <= float(ds.max_ratio[0]) < sampled * (1 + 2 * (P * dt) ** 2)

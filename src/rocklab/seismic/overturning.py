@@ -79,7 +79,8 @@ PAPER_REDUCTIONS = {
 
 OVERTURNING_CRITERION = (
     "|theta| >= {overturn:.6g} rad (wall lying on the ground); after the record a wall still rocking is "
-    "followed in free motion up to {tail:g} s while its energy can reach alpha (rocklab.simulation.model)"
+    "followed in free motion up to {tail:g} s while it leans beyond alpha or its energy can reach alpha "
+    "(rocklab.simulation.model)"
 )
 
 

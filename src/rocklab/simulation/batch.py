@@ -59,7 +59,8 @@ def overturning_batch(
         linear form, which is exact per interval).
     tail : float
         Longest free motion [s] followed after the record (the wall is
-        followed only while its energy can still reach alpha).
+        followed only while it leans beyond alpha or its energy can still
+        reach alpha).
     return_max : bool
         Also return max |theta| / alpha_s of each history.
 
@@ -80,6 +81,7 @@ def overturning_batch(
         h,
         A.ravel().copy(),
         n_tail,
+        False,
         np.repeat(prm, n, axis=0),
         np.repeat(law, n, axis=0),
         np.zeros(n),
@@ -110,6 +112,10 @@ def ground_batch(
     ag, dt : see :func:`overturning_batch`.
     models : sequence of RockingModel
     amplitude_scale, duration_scale : float or array_like, broadcast to len(models)
+    tail : float
+        Longest free motion [s] followed after the record: every wall is
+        followed until it overturns or rests, so that the impacts and
+        ``max_ratio`` cover the whole response.
     max_impacts : int
         Impacts logged per history.
 
@@ -125,7 +131,9 @@ def ground_batch(
     h = dt * np.broadcast_to(np.asarray(duration_scale, float), (n,)).copy()
     scale = np.broadcast_to(np.asarray(amplitude_scale, float), (n,)).copy()
     n_tail = np.ceil(tail / h).astype(np.int64)
-    out = _kernel(np.ascontiguousarray(ag, float), h, scale, n_tail, prm, law, np.zeros(n), np.zeros(n), max_impacts)
+    out = _kernel(
+        np.ascontiguousarray(ag, float), h, scale, n_tail, True, prm, law, np.zeros(n), np.zeros(n), max_impacts
+    )
     return _dataset(out)
 
 
@@ -222,6 +230,7 @@ def free_batch(
         np.full(n, dt),
         np.ones(n),
         np.zeros(n, np.int64),
+        False,
         prm,
         laws,
         b.get("theta0", np.zeros(n)).copy(),

@@ -99,9 +99,18 @@ _potential_linear = numba.njit(cache=True, inline="always")(flight.potential_lin
 
 @numba.njit(cache=True)
 def _can_overturn(x, v, s, prm):
+    """Whether a wall in free motion at (x [rad], v [rad/s]) on hinge s may still overturn.
+
+    Below the instability angle of its hinge it may only if its energy
+    reaches the critical energy of a reachable hinge.  Beyond it, the wall is
+    on the falling side of the potential maximum: with less energy it cannot
+    climb back and falls, with more it crosses back, so it is always followed.
+    """
     p = prm[_P_P]
     a = prm[_P_APOS] if s > 0 else prm[_P_ANEG]
     th = abs(x)
+    if th >= a:
+        return True
     if prm[_P_LIN] > 0:
         en = 0.5 * v * v + _potential_linear(th, a, p)
         crit = _potential_linear(prm[_P_APOS], prm[_P_APOS], p)
@@ -179,12 +188,13 @@ def _locate(x, v, s, ga, gb, u, prm, l1, l2, zp, h, Fh, ov, edge, target, f0, f1
 
 
 @numba.njit(cache=True)
-def run_history(ag, h, scale, n_tail, prm, law, x, v, log_t, log_vb, log_va, log_peak):
+def run_history(ag, h, scale, n_tail, to_rest, prm, law, x, v, log_t, log_vb, log_va, log_peak):
     """Event-driven integration of one wall, sample interval by sample interval.
 
     ``ag`` [m/s^2] (times ``scale``) is stepped with interval ``h`` [s] (the
-    record's dt times a duration scale), then ``n_tail`` free steps follow
-    while the wall can still overturn.  Linear form: exact closed form per
+    record's dt times a duration scale), then up to ``n_tail`` free steps
+    follow: until the wall rests if ``to_rest``, otherwise only while it can
+    still overturn (enough to decide overturning).  Linear form: exact closed form per
     interval; exact form: ``prm[_P_SUB]`` RK4 substeps per interval.  Events
     (impact, overturning, onset, velocity zero for the peaks) are located by
     bisection inside the step.  Impacts are logged into the ``log_*`` arrays
@@ -225,7 +235,7 @@ def run_history(ag, h, scale, n_tail, prm, law, x, v, log_t, log_vb, log_va, log
     while k + 1 < n_steps:
         k += 1
         if k >= n_rec:
-            if resting or not _can_overturn(x, v, s, prm):
+            if resting or not (to_rest or _can_overturn(x, v, s, prm)):
                 break
         if resting:
             # fast-forward through the samples that cannot start the motion:
@@ -235,7 +245,11 @@ def run_history(ag, h, scale, n_tail, prm, law, x, v, log_t, log_vb, log_va, log
             two = rest_at == 0.0 and not (one and gap == 0.0)
             A0n = _accel(0.0, 0.0, -1.0, 0.0, prm)
             A1n = _accel(0.0, 0.0, -1.0, 1.0, prm) - A0n
-            while k + 1 < n_rec - 1:
+            # the step's own first sample too: at k = 0 (or after a hold) no
+            # earlier step has tested it
+            a_now = scale * ag[k]
+            lifts = A0p + A1p * a_now > 0.0 or (two and A0n + A1n * a_now < 0.0)
+            while not lifts and k + 1 < n_rec - 1:
                 a_next = scale * ag[k + 1]
                 if A0p + A1p * a_next > 0.0 or (two and A0n + A1n * a_next < 0.0):
                     break
@@ -362,17 +376,29 @@ def run_history(ag, h, scale, n_tail, prm, law, x, v, log_t, log_vb, log_va, log
 
 
 @numba.njit(cache=True)
-def _row(ag, h, scale, n_tail, prm, law, x0, v0, logs, out, i):
+def _row(ag, h, scale, n_tail, to_rest, prm, law, x0, v0, logs, out, i):
     # called from the prange body instead of run_history itself: inlined into
     # the parallel loop, run_history runs 4-8x slower (measured, numba 0.68)
     o, t, m, k = run_history(
-        ag, h[i], scale[i], n_tail[i], prm[i], law[i], x0[i], v0[i], logs[0, i], logs[1, i], logs[2, i], logs[3, i]
+        ag,
+        h[i],
+        scale[i],
+        n_tail[i],
+        to_rest,
+        prm[i],
+        law[i],
+        x0[i],
+        v0[i],
+        logs[0, i],
+        logs[1, i],
+        logs[2, i],
+        logs[3, i],
     )
     out[0][i], out[1][i], out[2][i], out[3][i] = o, t, m, k
 
 
 @numba.njit(parallel=True, cache=True)
-def batch_kernel(ag, h, scale, n_tail, prm, law, x0, v0, max_log):
+def batch_kernel(ag, h, scale, n_tail, to_rest, prm, law, x0, v0, max_log):
     """:func:`run_history` of every row (history) in parallel; the Python
     front ends are in :mod:`rocklab.simulation.batch`."""
     n = h.shape[0]
@@ -383,5 +409,5 @@ def batch_kernel(ag, h, scale, n_tail, prm, law, x0, v0, max_log):
     logs = np.full((4, n, max_log), np.nan)
     out = (over, t_over, max_ratio, n_imp)
     for i in numba.prange(n):
-        _row(ag, h, scale, n_tail, prm, law, x0, v0, logs, out, i)
+        _row(ag, h, scale, n_tail, to_rest, prm, law, x0, v0, logs, out, i)
     return over, t_over, max_ratio, n_imp, logs[0], logs[1], logs[2], logs[3]

@@ -37,9 +37,12 @@ Overturning
     realistic record (it would need |ag| > g (pi/2 - alpha)).  ``alpha`` itself
     would be premature under ground motion, which can push a wall back from
     beyond alpha.  After the end of the record, a wall still rocking is
-    followed in free motion until it overturns, comes to rest, or its energy
-    can no longer reach the instability rotation of a reachable hinge (every
-    law with |e| <= 1 then keeps it standing).
+    followed in free motion until it overturns, comes to rest, or, standing
+    within the instability rotation of its hinge, its energy can no longer
+    reach that of a reachable hinge (every law with |e| <= 1 then keeps it
+    standing).  A wall beyond the instability rotation is on the falling side
+    of the potential maximum: with less energy it cannot climb back and
+    falls, so it is always followed.
 One-sided rocking and the gap
     ``boundary="one-sided"`` keeps theta >= 0 and with ``gap == 0`` applies the
     impact law (default Eq. 14, negative: a rebound) at theta = 0.  With

@@ -100,7 +100,13 @@ def _reference(model, rec, theta0, thetadot0, t_end, fs, overturn, rest_tol, rto
 
     while t < t_hard:
         if t >= t_end:
-            if resting or all(model.energy(th, thd, side) < model.critical_energy(s) for s in model.reachable_sides()):
+            # beyond the instability angle of its hinge the wall is on the
+            # falling side of the potential maximum: it falls or climbs back,
+            # and only the integration tells which
+            below = abs(th) < model.alpha_side(side)
+            if resting or (
+                below and all(model.energy(th, thd, side) < model.critical_energy(s) for s in model.reachable_sides())
+            ):
                 break
         if resting:
             t_stop = t_end
