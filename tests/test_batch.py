@@ -150,19 +150,6 @@ def test_wall_past_alpha_when_the_record_ends_overturns(form):
         assert t_ground == pytest.approx(padded.t_overturn, rel=1e-4), a
 
 
-def test_onset_on_the_first_sample():
-    """A record whose first sample alone exceeds the onset threshold starts the
-    wall rocking at t = 0 (the engine once skipped the first sample: no impact)."""
-    model = RockingModel(alpha=ALPHA, p=P, form="linear")
-    ag, dt = np.zeros(50), 0.01
-    ag[0] = -60.0
-    ref = simulate_ground(model, _padded(ag, dt, 60.0), dt)
-    assert ref.t_rest is not None and len(ref.impacts) > 100
-    ds = ground_batch(ag, dt, [model], max_impacts=len(ref.impacts) + 5)
-    assert int(ds.n_impacts[0]) == len(ref.impacts)
-    np.testing.assert_allclose(ds.t_impact[0, : len(ref.impacts)], ref.impacts.t, atol=1e-6)
-
-
 def test_ground_batch_covers_the_free_motion_after_the_record():
     """After a 1.5 m/s^2 sine pulse the wall rocks freely for 88 s: ``ground_batch``
     follows it to rest and counts its impacts and peaks as the reference on the

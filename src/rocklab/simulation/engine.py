@@ -245,11 +245,7 @@ def run_history(ag, h, scale, n_tail, to_rest, prm, law, x, v, log_t, log_vb, lo
             two = rest_at == 0.0 and not (one and gap == 0.0)
             A0n = _accel(0.0, 0.0, -1.0, 0.0, prm)
             A1n = _accel(0.0, 0.0, -1.0, 1.0, prm) - A0n
-            # the step's own first sample too: at k = 0 (or after a hold) no
-            # earlier step has tested it
-            a_now = scale * ag[k]
-            lifts = A0p + A1p * a_now > 0.0 or (two and A0n + A1n * a_now < 0.0)
-            while not lifts and k + 1 < n_rec - 1:
+            while k + 1 < n_rec - 1:
                 a_next = scale * ag[k + 1]
                 if A0p + A1p * a_next > 0.0 or (two and A0n + A1n * a_next < 0.0):
                     break
