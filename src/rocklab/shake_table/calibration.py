@@ -1,0 +1,219 @@
+"""Causes fitted to the outcomes: a Bernoulli likelihood on the simulated grid.
+
+The outcome of a test is a scalar (overturned or not), so the block is
+simulated once per test at every node of the causes' grid
+(:func:`rocklab.shake_table.block.outcome_grid`) and every fit afterwards,
+of every fold and every resample, reads that array: no fit simulates again.
+
+Likelihood
+----------
+The contact of a rounded base varies from test to test (SOURCE.md), so the
+instability angle of a test is taken lognormal about r alpha with a
+log-scatter ``sigma``; with a lapse ``eps`` (an outcome the planar block
+cannot produce, e.g. the out-of-plane coupling) the probability that test i
+overturns is::
+
+    P_i = eps + (1 - 2 eps) sum_j w_j(r, sigma) O_i(r_j, s_alpha, c)
+
+with O_i the simulated outcome at the grid's r_j and w_j the lognormal
+weights over the grid (Gaussian in ln r, normalised; sigma = 0 is the grid
+node itself).  The log-likelihood sum_i [y_i ln P_i + (1 - y_i) ln(1 - P_i)]
+is maximised over the grid of (r, s_alpha, c, sigma, eps).
+
+Uncertainty and held-out evaluation
+-----------------------------------
+Ground motions are the unit of resampling and of the folds: the scaled
+copies of one record are not independent tests.  Intervals are percentiles
+of the fits to resampled ground motions (bootstrap); the fragility of a
+test, its probability of overturning, is the mean of P_i over those fits.
+The cross-validation (:func:`folds_by_group`) holds every test of a ground
+motion in one fold.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import optimize
+
+from rocklab.diagnosis.engine import Param
+from rocklab.shake_table.block import PARAMS
+
+#: Log-scatter of the instability angle from test to test [-] (ln units).
+SIGMA = Param("sigma_ln_alpha", 0.0, 0.8, 0.0, practical=0.05)
+SIGMAS = np.array([0.0, 0.15, 0.3, 0.5, 0.8])
+
+#: Probability of an outcome the planar block cannot produce [-].
+LAPSE = Param("lapse", 0.001, 0.1, 0.0)
+LAPSES = np.array([0.001, 0.005, 0.02, 0.05, 0.1])
+
+#: Probabilities are clipped to [PROB_CLIP, 1 - PROB_CLIP] in the log loss.
+PROB_CLIP = 1e-6
+
+
+def folds_by_group(groups, k=5):
+    """Fold of every test, all tests of a group (ground motion) in one fold.
+
+    Groups are dealt, largest first, to the fold holding the fewest tests so
+    far (ties: the lower fold): balanced and deterministic.
+
+    Returns
+    -------
+    ndarray of int, shape (len(groups),)
+    """
+    groups = np.asarray(groups)
+    names, counts = np.unique(groups, return_counts=True)
+    k = int(min(k, names.size))
+    if k < 2:
+        raise ValueError(f"cross-validation needs at least 2 ground motions, got {names.size}")
+    load = np.zeros(k, int)
+    fold_of = {}
+    for i in np.lexsort((names, -counts)):
+        f = int(np.argmin(load))
+        fold_of[names[i]] = f
+        load[f] += counts[i]
+    return np.array([fold_of[g] for g in groups], int)
+
+
+def _kernel(ln_r, sigma):
+    """Weights (centre, node) of the lognormal scatter over the grid of ln r."""
+    if sigma == 0:
+        return np.eye(ln_r.size)
+    w = np.exp(-0.5 * ((ln_r[None, :] - ln_r[:, None]) / sigma) ** 2)
+    return w / w.sum(axis=1, keepdims=True)
+
+
+class OutcomeLikelihood:
+    """Bernoulli log-likelihood of every test at every node of (sigma, eps, r, s_alpha, c).
+
+    Parameters
+    ----------
+    overturned : ndarray of bool, shape (tests, n_r, n_s, n_c)
+        Simulated outcomes on the causes' grid (:func:`~rocklab.shake_table.block.outcome_grid`).
+    observed : array_like of bool, shape (tests,)
+    grid : dict
+        The grid values by parameter name (r first, as ``overturned``'s axes).
+    """
+
+    def __init__(self, overturned, observed, grid):
+        o = np.asarray(overturned, float)
+        self.grid = grid
+        self.shape = o.shape[1:]
+        ln_r = np.log(grid[PARAMS[0].name])
+        # smoothed outcome S[sigma, test, r, s, c]
+        smooth = np.stack([np.einsum("cj,tjsk->tcsk", _kernel(ln_r, s), o) for s in SIGMAS])
+        self.smooth = smooth.reshape(SIGMAS.size, o.shape[0], -1)
+        y = np.asarray(observed, bool)[None, None, :, None]
+        p = LAPSES[:, None, None, None] + (1 - 2 * LAPSES[:, None, None, None]) * self.smooth[None]
+        # ll[eps, sigma, test, node]
+        self.ll = np.where(y, np.log(p), np.log1p(-p))
+
+    def fit(self, weights):
+        """Node (eps, sigma, flat grid index) of the largest weighted log-likelihood.
+
+        ``weights``: per test (0 leaves a test out; bootstrap counts resample).
+        Ties go to the first node in grid order.
+        """
+        total = np.tensordot(self.ll, np.asarray(weights, float), axes=([2], [0]))
+        return np.unravel_index(int(np.argmax(total)), total.shape)
+
+    def probability(self, node, idx=slice(None)):
+        """P_i of the tests ``idx`` at ``node`` (from :meth:`fit`)."""
+        e, s, g = node
+        return LAPSES[e] + (1 - 2 * LAPSES[e]) * self.smooth[s][idx, g]
+
+    def values(self, node) -> dict:
+        """The parameters of ``node`` by name."""
+        e, s, g = node
+        ijk = np.unravel_index(g, self.shape)
+        out = {q.name: float(self.grid[q.name][i]) for q, i in zip(PARAMS, ijk)}
+        out[SIGMA.name] = float(SIGMAS[s])
+        out[LAPSE.name] = float(LAPSES[e])
+        return out
+
+
+def resample_weights(groups, idx, n_boot, seed=0):
+    """Bootstrap weights (n_boot, tests): the groups of ``idx`` drawn with replacement, zero elsewhere."""
+    groups = np.asarray(groups)
+    rng = np.random.default_rng(seed)
+    names = np.unique(groups[idx])
+    member = {g: np.flatnonzero(groups == g) for g in names}
+    out = np.zeros((n_boot, groups.size))
+    for b in range(n_boot):
+        for g in rng.choice(names, names.size, replace=True):
+            out[b, member[g]] += 1
+    return out
+
+
+def calibrate(lik: OutcomeLikelihood, groups, idx, n_boot=200, seed=0):
+    """Fit on the tests ``idx``, resample their ground motions, predict every test.
+
+    Returns
+    -------
+    dict
+        ``values`` (the fit on ``idx``), ``boot`` (list of the resamples'
+        values), ``fragility`` (mean P of every test over the resamples),
+        ``probability`` (P of every test at the fit).
+    """
+    w = np.zeros(len(groups))
+    w[idx] = 1.0
+    node = lik.fit(w)
+    nodes = [lik.fit(wb) for wb in resample_weights(groups, idx, n_boot, seed)]
+    frag = np.mean([lik.probability(n) for n in nodes], axis=0) if nodes else lik.probability(node)
+    return {
+        "values": lik.values(node),
+        "boot": [lik.values(n) for n in nodes],
+        "fragility": frag,
+        "probability": lik.probability(node),
+    }
+
+
+def intervals(boot, level=0.95):
+    """Percentile interval of every parameter over the resamples' values."""
+    q = [(1 - level) / 2 * 100, (1 + level) / 2 * 100]
+    return {k: tuple(float(x) for x in np.percentile([b[k] for b in boot], q)) for k in boot[0]}
+
+
+def named(param: Param, ci) -> bool:
+    """Whether the interval ``ci`` stays clear of the parameter's null by its practical margin."""
+    if param.practical is None:
+        return False
+    lo, hi = ci
+    return lo > param.null + param.practical or hi < param.null - param.practical
+
+
+def deterministic_probability(predicted, train_error):
+    """A 0/1 prediction as a probability: the lapse is the predictor's error rate on its training tests.
+
+    The rate is kept within [1/(2n), 1 - 1/(2n)]-like bounds by
+    :data:`PROB_CLIP`, so that a predictor without training errors still
+    has a finite log loss.
+    """
+    eps = float(np.clip(train_error, 0.005, 0.5))
+    return np.where(np.asarray(predicted, bool), 1.0 - eps, eps)
+
+
+def logistic_threshold(x, y, weights=None):
+    """Logistic regression of y on ln x: P = 1 / (1 + exp(-(ln x - ln x50) / beta)).
+
+    The probabilistic form of a single threshold x50 (the PGV-threshold
+    baseline); fitted by maximum likelihood.
+
+    Returns
+    -------
+    x50, beta : float
+    """
+    lx, y = np.log(np.asarray(x, float)), np.asarray(y, float)
+    w = np.ones_like(lx) if weights is None else np.asarray(weights, float)
+
+    def nll(theta):
+        z = (lx - theta[0]) / np.exp(theta[1])
+        return float(np.sum(w * (np.logaddexp(0.0, -z) * y + np.logaddexp(0.0, z) * (1 - y))))
+
+    start = np.array([np.median(lx), np.log(0.2)])
+    sol = optimize.minimize(nll, start, method="Nelder-Mead", options={"xatol": 1e-6, "fatol": 1e-9})
+    return float(np.exp(sol.x[0])), float(np.exp(sol.x[1]))
+
+
+def logistic_probability(x, x50, beta):
+    """P of :func:`logistic_threshold`."""
+    return 1.0 / (1.0 + np.exp(-(np.log(np.asarray(x, float)) - np.log(x50)) / beta))
