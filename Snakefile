@@ -27,6 +27,7 @@ include: "workflow/rules/diagnosis.smk"
 include: "workflow/rules/figures.smk"
 include: "workflow/rules/seismic.smk"
 include: "workflow/rules/docs.smk"
+include: "workflow/rules/shake_table.smk"
 
 
 # The targets: `snakemake campaign` for a campaign of one's own, `all` (the
@@ -36,6 +37,7 @@ localrules:
     campaign,
     maps,
     limestone,
+    shake_table,
 
 
 rule all:
@@ -62,3 +64,9 @@ rule limestone:
     """The restitution of the UMinho limestone blocks."""
     input:
         limestone_outputs(),
+
+
+rule shake_table:
+    """Real shake-table outcomes (shake_table_dir): the block against the PGV threshold and DEM."""
+    input:
+        shake_table_outputs(),

@@ -310,3 +310,73 @@ def calibrated_map(ag, dt, block, values, record, n=41, lo=0.5, hi=1.5, specimen
             "compute_s": time.perf_counter() - t0,
         },
     )
+
+
+def block_inputs(folder, tests: pd.DataFrame, motions: pd.DataFrame):
+    """The block input [m/s^2] and sample interval [s] of every test of ``motions``, in its order."""
+    rows = tests.set_index("test").loc[list(motions.test)].reset_index()
+    traces = [records.read_motion(folder, row).select(channel="ACC")[0] for _, row in rows.iterrows()]
+    return [records.block_input(tr) for tr in traces], [tr.stats.delta for tr in traces]
+
+
+def calibration_tables(tests, motions, outcomes: dict, blocks: dict, folds=5, n_boot=200, n_boot_cv=50, seed=0):
+    """Every table of the calibration stage for the specimens of ``outcomes``.
+
+    Returns
+    -------
+    dict
+        ``scores``, ``predictions``, ``nominal_errors``, ``fragility``,
+        ``parameters`` (DataFrames; see the schemas of workflow/schemas/shake_table_*).
+    """
+    preds, params = [], []
+    for specimen, ds in outcomes.items():
+        t0 = time.perf_counter()
+        pr = cross_validate(specimen, tests, motions, ds, folds, n_boot_cv, seed)
+        fit = full_fit(specimen, tests, motions, ds, n_boot, seed)
+        pr["p_fragility_in_sample"] = fit["fragility"]
+        preds.append(pr)
+        params.append(parameter_table(specimen, fit, blocks[specimen]))
+        log.info("%s: calibration with %d folds, %.1f s", specimen, folds, time.perf_counter() - t0)
+    predictions = pd.concat(preds, ignore_index=True)
+    return {
+        "scores": score_table(predictions),
+        "predictions": predictions,
+        "nominal_errors": nominal_errors(predictions, blocks),
+        "fragility": fragility_table(predictions),
+        "parameters": pd.concat(params, ignore_index=True),
+    }
+
+
+def fitted_values(parameters: pd.DataFrame, specimen: str) -> dict:
+    """The fitted causes' parameters of one specimen from parameters.csv."""
+    p = parameters[parameters.specimen == specimen].set_index("parameter").value
+    return {q.name: float(p[q.name]) for q in PARAMS}
+
+
+def map_tests(predictions: pd.DataFrame, n=2) -> list[int]:
+    """Tests whose records are mapped: of the ``n`` ground motions with most tests, the test of median PGA."""
+    g = predictions.drop_duplicates("test")
+    counts = g.groupby("ground_motion").size().sort_values(ascending=False, kind="stable")
+    out = []
+    for gm in counts.index[:n]:
+        sub = g[g.ground_motion == gm].sort_values(["pga_g", "test"])
+        out.append(int(sub.test.iloc[(len(sub) - 1) // 2]))
+    return out
+
+
+def calibrated_maps(folder, tests, predictions, parameters, blocks, specimen, n=41) -> xr.Dataset:
+    """Maps of the calibrated block of ``specimen`` under the records of :func:`map_tests`, on dim ``record``."""
+    values = fitted_values(parameters, specimen)
+    chosen = map_tests(predictions)
+    sub = tests[tests.test.isin(chosen)].set_index("test").loc[chosen].reset_index()
+    inputs, dts = block_inputs(folder, tests, sub[["test"]])
+    maps = [
+        calibrated_map(ag, dt, blocks[specimen], values, f"Test{t:03d} {gm}", n, specimen=specimen).expand_dims(
+            record=[f"Test{t:03d} {gm}"]
+        )
+        for ag, dt, t, gm in zip(inputs, dts, sub.test, sub.ground_motion)
+    ]
+    out = xr.concat(maps, dim="record", combine_attrs="drop_conflicts")
+    for key in ("N_O", "scatter"):
+        out[key] = ("record", [m.attrs[f"index_{key}"] for m in maps], {"long_name": f"{key} of the map (Fig. 22)"})
+    return out

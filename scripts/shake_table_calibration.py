@@ -1,0 +1,25 @@
+"""Snakemake shim: causes fitted to the outcomes, held-out scores against the PGV threshold and DEM."""
+
+import pandas as pd
+import xarray as xr
+
+from rocklab.io import setup_logging, write_table
+from rocklab.shake_table.block import specimen_block
+from rocklab.shake_table.evaluation import calibration_tables
+from rocklab.shake_table.records import read_geometry, read_tests
+
+setup_logging(snakemake.log[0])
+p = snakemake.params
+geometry = read_geometry(p.folder)
+outcomes = {ds.attrs["specimen"]: ds for ds in map(xr.load_dataset, snakemake.input.outcomes)}
+tables = calibration_tables(
+    read_tests(p.folder),
+    pd.read_csv(snakemake.input.motions),
+    outcomes,
+    {s: specimen_block(geometry, s) for s in outcomes},
+    p.folds,
+    p.n_boot,
+    p.n_boot_cv,
+)
+for name, df in tables.items():
+    write_table(df, snakemake.output[name], p.schemas[name])
