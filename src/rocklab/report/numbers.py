@@ -2,12 +2,14 @@
 
 :func:`extract` reads the outputs of the workflow (``qc.csv``, the
 dissipation tables, ``diagnosis.json``, ``limestone_diagnosis.json``, the
-map tables, the job benchmarks and, when ``make bench`` has run,
-``bench/*.json``) into one nested dictionary, one section per stage, saved
-as the numbers file by :func:`write_numbers`. A quantity that the results do
-not hold is ``None`` (the pages say "not measured"). The sections listed in
-``numbers["volatile"]`` change from run to run (timings); comparisons of two
-numbers files leave them out (:func:`stable`).
+map tables, the job benchmarks, when ``make bench`` has run,
+``bench/*.json``, and when the target ``shake_table`` has run, its tables)
+into one nested dictionary, one section per stage, saved as the numbers
+file by :func:`write_numbers`. A quantity that the results do not hold is
+``None`` (the pages say "not measured"). The sections listed in
+``numbers["volatile"]`` change from run to run (timings) or come from a
+target outside ``all``; comparisons of two numbers files leave them out
+(:func:`stable`).
 
 Floats are kept to :data:`SIGNIFICANT` significant digits, enough for any
 number a page prints, so that the file reads well and compares exactly.
@@ -26,8 +28,11 @@ import pandas as pd
 #: Significant digits kept of every float.
 SIGNIFICANT = 6
 
-#: Sections whose values change from run to run (timings).
-VOLATILE = ("performance",)
+#: Sections left out of the comparison of two numbers files: those whose values
+#: change from run to run (timings) and those of targets outside ``all``
+#: (``shake_table``: its data live outside the repository), which the results
+#: of ``make run`` do not hold.
+VOLATILE = ("performance", "shake_table")
 
 #: The two boundary conditions and their keys in the numbers file.
 BOUNDARIES = {"two-sided": "two_sided", "one-sided": "one_sided"}
@@ -489,6 +494,53 @@ def performance(results: Path) -> dict:
     return out
 
 
+def shake_table(results: Path) -> dict | None:
+    """The shake-table outcomes (target ``shake_table``), ``None`` when it was not run."""
+    root = results / "shake_table"
+    if not (root / "scores.csv").is_file():
+        return None
+    scores = _csv(root, "scores.csv")
+    params = _csv(root, "parameters.csv")
+    preds = _csv(root, "predictions.csv")
+    errors = _csv(root, "nominal_errors.csv")
+    out = {"specimens": sorted(scores.specimen.unique())}
+    for s, g in preds.groupby("specimen"):
+        obs, nom = g.observed.astype(bool), g.nominal_overturns.astype(bool)
+        e = errors[(errors.specimen == s) & (errors.by == "onset_edge")].set_index("bin")
+        neither = e.loc["neither edge"] if "neither edge" in e.index else None
+        out[s] = {
+            "n_tests": len(g),
+            "n_ground_motions": g.ground_motion.nunique(),
+            "observed_overturns": int(obs.sum()),
+            "nominal_overturns": int(nom.sum()),
+            "nominal_missed": int((obs & ~nom).sum()),
+            "nominal_false_alarms": int((~obs & nom).sum()),
+            "min_pga_overturned_g": g.pga_g[obs].min() if obs.any() else None,
+            "neither_edge_tests": None if neither is None else int(neither.n_tests),
+            "neither_edge_overturns": None if neither is None else int(neither.observed_overturns),
+            "scores": {
+                r.model: {"accuracy": r.accuracy, "brier": r.brier, "log_loss": r.log_loss, "n_tests": r.n_tests}
+                for r in scores[scores.specimen == s].itertuples()
+            },
+            "parameters": {
+                r.parameter: {
+                    "value": r.value,
+                    "ci_low": r.ci_low,
+                    "ci_high": r.ci_high,
+                    "null": r.null,
+                    "named": bool(r.named),
+                    "cause": r.cause,
+                }
+                for r in params[params.specimen == s].itertuples()
+            },
+        }
+    jobs = _benchmarks(results).get("shake_table_jobs")
+    out["job_time_s"] = None if jobs is None else jobs["total_s"]
+    bench = results / "benchmarks" / "shake_table"
+    out["job_times_s"] = {t.stem: float(pd.read_csv(t, sep="\t")["s"].iloc[0]) for t in sorted(bench.glob("*.tsv"))}
+    return out
+
+
 #: One section of the numbers file per stage, and the function that reads it.
 SECTIONS = {
     "quality_control": quality_control,
@@ -497,6 +549,7 @@ SECTIONS = {
     "limestone": limestone,
     "maps": maps,
     "performance": performance,
+    "shake_table": shake_table,
 }
 
 

@@ -261,6 +261,94 @@ def performance_jobs(n: Mapping) -> str:
     return markdown_table(["rule (or folder of jobs)", "jobs", "job time, total (s)", "longest job (s)"], rows)
 
 
+#: What the shake-table page says where the target was not run.
+NOT_RUN = (
+    "Not run: the target `shake_table` has not run on these results "
+    "(`snakemake shake_table`, see its config key `shake_table_dir`)."
+)
+
+
+def shake_table_status(n: Mapping) -> str:
+    """Whether the shake-table target ran, and on how many tests."""
+    st = n.get("shake_table")
+    if st is None:
+        return NOT_RUN
+    parts = [
+        f"{s}: {show(st[s]['n_tests'])} tests of {show(st[s]['n_ground_motions'])} ground motions"
+        for s in st["specimens"]
+    ]
+    return "Results of the target `shake_table` (" + "; ".join(parts) + ")."
+
+
+def shake_table_scores(n: Mapping) -> str:
+    """Held-out accuracy, Brier score and log loss of every model and specimen."""
+    st = n.get("shake_table")
+    if st is None:
+        return NOT_RUN
+    rows = [
+        [
+            s,
+            f"`{m}`",
+            show(v["accuracy"], ".3f"),
+            show(v["brier"], ".3f"),
+            show(v["log_loss"], ".3f"),
+            show(v["n_tests"]),
+        ]
+        for s in st["specimens"]
+        for m, v in st[s]["scores"].items()
+    ]
+    return markdown_table(["specimen", "model", "accuracy", "Brier score", "log loss", "tests"], rows)
+
+
+def shake_table_nominal(n: Mapping) -> str:
+    """What the nominal block gets wrong, per specimen."""
+    st = n.get("shake_table")
+    if st is None:
+        return NOT_RUN
+    rows = [
+        [
+            s,
+            show(st[s]["observed_overturns"]),
+            show(st[s]["nominal_overturns"]),
+            show(st[s]["nominal_missed"]),
+            show(st[s]["nominal_false_alarms"]),
+            show(st[s]["min_pga_overturned_g"], ".3f"),
+            f"{show(st[s]['neither_edge_overturns'])} of {show(st[s]['neither_edge_tests'])}",
+        ]
+        for s in st["specimens"]
+    ]
+    header = [
+        "specimen",
+        "overturns observed",
+        "predicted by the nominal block",
+        "missed",
+        "false alarms",
+        "lowest PGA overturned (g)",
+        "overturned where no edge can start rocking",
+    ]
+    return markdown_table(header, rows)
+
+
+def shake_table_parameters(n: Mapping) -> str:
+    """The fitted parameters with their 95 % intervals and whether each names its cause."""
+    st = n.get("shake_table")
+    if st is None:
+        return NOT_RUN
+    rows = [
+        [
+            s,
+            f"`{q['cause']}`",
+            name,
+            f"{show(q['value'], '.3g')} [{show(q['ci_low'], '.3g')}, {show(q['ci_high'], '.3g')}]",
+            show(q["null"], ".3g"),
+            show(q["named"]) if q["cause"] != "hinge angle (derived)" else "-",
+        ]
+        for s in st["specimens"]
+        for name, q in st[s]["parameters"].items()
+    ]
+    return markdown_table(["specimen", "cause", "parameter", "value [95 % CI]", "nominal", "named"], rows)
+
+
 #: The tables a template may place with ${table:name}.
 TABLES: dict[str, Callable[[Mapping], str]] = {
     "qc_series": qc_series,
@@ -276,6 +364,10 @@ TABLES: dict[str, Callable[[Mapping], str]] = {
     "limestone_groups": limestone_groups,
     "maps_records": maps_records,
     "performance_jobs": performance_jobs,
+    "shake_table_status": shake_table_status,
+    "shake_table_scores": shake_table_scores,
+    "shake_table_nominal": shake_table_nominal,
+    "shake_table_parameters": shake_table_parameters,
 }
 
 
