@@ -268,11 +268,20 @@ NOT_RUN = (
 )
 
 
-def shake_table_status(n: Mapping) -> str:
+def _shake_table(table: Callable[[Mapping], str]) -> Callable[[Mapping], str]:
+    """``table`` of the numbers file's shake_table section, :data:`NOT_RUN` where the target did not run."""
+
+    def wrapped(n: Mapping) -> str:
+        st = n.get("shake_table")
+        return NOT_RUN if st is None else table(st)
+
+    wrapped.__doc__ = table.__doc__
+    return wrapped
+
+
+@_shake_table
+def shake_table_status(st: Mapping) -> str:
     """Whether the shake-table target ran, and on how many tests."""
-    st = n.get("shake_table")
-    if st is None:
-        return NOT_RUN
     parts = [
         f"{s}: {show(st[s]['n_tests'])} tests of {show(st[s]['n_ground_motions'])} ground motions"
         for s in st["specimens"]
@@ -280,11 +289,9 @@ def shake_table_status(n: Mapping) -> str:
     return "Results of the target `shake_table` (" + "; ".join(parts) + ")."
 
 
-def shake_table_scores(n: Mapping) -> str:
+@_shake_table
+def shake_table_scores(st: Mapping) -> str:
     """Held-out accuracy, Brier score and log loss of every model and specimen."""
-    st = n.get("shake_table")
-    if st is None:
-        return NOT_RUN
     rows = [
         [
             s,
@@ -300,11 +307,9 @@ def shake_table_scores(n: Mapping) -> str:
     return markdown_table(["specimen", "model", "accuracy", "Brier score", "log loss", "tests"], rows)
 
 
-def shake_table_nominal(n: Mapping) -> str:
+@_shake_table
+def shake_table_nominal(st: Mapping) -> str:
     """What the nominal block gets wrong, per specimen."""
-    st = n.get("shake_table")
-    if st is None:
-        return NOT_RUN
     rows = [
         [
             s,
@@ -329,11 +334,9 @@ def shake_table_nominal(n: Mapping) -> str:
     return markdown_table(header, rows)
 
 
-def shake_table_parameters(n: Mapping) -> str:
+@_shake_table
+def shake_table_parameters(st: Mapping) -> str:
     """The fitted parameters with their 95 % intervals and whether each names its cause."""
-    st = n.get("shake_table")
-    if st is None:
-        return NOT_RUN
     rows = [
         [
             s,
