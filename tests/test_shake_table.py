@@ -237,7 +237,7 @@ def test_shake_table_target_end_to_end_on_a_subset(tmp_path):
                 "results_dir": str(results),
                 "shake_table_dir": str(DATA),
                 "shake_table": {
-                    "ground_motions": ["RSN43_LYTLECREEK", "RSN23_SanFracisco", "RSN316_WESMORL"],
+                    "ground_motions": ["RSN1749_NWCHINA1_XIK270", "RSN221_LIVERMOR_B-LFA270", "RSN1758_SANJUAN_HDA270"],
                     "folds": 3,
                     "n_boot": 5,
                     "n_boot_cv": 3,

@@ -184,9 +184,9 @@ def named(param: Param, ci) -> bool:
 def deterministic_probability(predicted, train_error):
     """A 0/1 prediction as a probability: the lapse is the predictor's error rate on its training tests.
 
-    The rate is kept within [1/(2n), 1 - 1/(2n)]-like bounds by
-    :data:`PROB_CLIP`, so that a predictor without training errors still
-    has a finite log loss.
+    The rate is clipped to [0.005, 0.5]: a predictor without training errors
+    keeps a finite log loss, and one wrong more often than not predicts no
+    better than a coin.
     """
     eps = float(np.clip(train_error, 0.005, 0.5))
     return np.where(np.asarray(predicted, bool), 1.0 - eps, eps)
