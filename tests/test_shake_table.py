@@ -18,6 +18,8 @@ import yaml
 
 from rocklab.io import validate_table
 from rocklab.physics.wall import G
+from rocklab.report import numbers as nb
+from rocklab.report import pages
 from rocklab.shake_table import block, calibration, evaluation, records
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -262,6 +264,13 @@ def test_shake_table_target_end_to_end_on_a_subset(tmp_path):
         assert (st / f).is_file()
     assert (results / "figures" / "shake_table_fragility.png").is_file()
     assert all((results / "benchmarks" / "shake_table" / f"{j}.tsv").is_file() for j in ("motions", "calibration"))
+    # the page reads the run's numbers, and says "not run" without them
+    template = (ROOT / "docs" / "templates" / "shake-table.md").read_text()
+    numbers = {"shake_table": nb._tree(nb.shake_table(results))}
+    assert numbers["shake_table"]["SP1"]["n_tests"] == len(pred) // 2
+    page = pages.render(template, numbers)
+    assert "not measured" not in page and pages.NOT_RUN not in page
+    assert pages.NOT_RUN in pages.render(template, {"shake_table": nb.shake_table(tmp_path)}, strict=False)
 
 
 @pytest.mark.skipif(not SNAKEMAKE.exists(), reason="snakemake not installed beside this interpreter")
