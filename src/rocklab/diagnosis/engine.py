@@ -292,16 +292,75 @@ def heldout(problem: Problem, ext, start=None):
     return {"deviance": dev, **meas}
 
 
+def _jacobian(problem: Problem, sub, ext, values):
+    """Residuals at ``values`` and their derivatives by each parameter (forward differences).
+
+    Returns (R, J): group -> residual array, group -> list of derivative
+    arrays (one per parameter of ``ext``, like the residuals).
+    """
+    R = problem.residuals(sub, ext, values)
+    J = {g: [] for g in R}
+    for q in problem.params(ext):
+        # the step least_squares takes (diff_step 1e-5, relative), away from the nearer bound
+        h = 1e-5 * max(abs(values[q.name]), 1.0)
+        h = -h if values[q.name] + h > q.upper else h
+        Rq = problem.residuals(sub, ext, {**values, q.name: values[q.name] + h})
+        for g in R:
+            J[g].append((Rq[g] - R[g]) / h)
+    return R, J
+
+
 def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
-    """Percentile 95 % intervals of the parameters, whole tests resampled (bootstrap over tests)."""
+    """Percentile 95 % intervals of the parameters, whole tests resampled (bootstrap over tests).
+
+    Each resample is fitted by one Gauss-Newton step from the full fit
+    (the estimating-function bootstrap of Hu & Kalbfleisch 2000, within the
+    bounds): the residuals of every test and their derivatives are computed
+    once, at the full fit, and a resample weighs each test by the times it
+    was drawn, with the noise model (:func:`noise_variance`) of its own
+    residuals.  The resamples differ from the full fit by a few times its
+    standard errors, where the residuals are linear in the parameters to
+    well below those errors (the full refit of every resample, tried
+    before, gave the same intervals to their third digit at twenty times
+    the cost).
+    """
     t0 = time.perf_counter()
     rng = np.random.default_rng(seed)
     names = list(fitted.values)
+    if not names:
+        return {}
+    all_idx = np.arange(problem.n_tests)
+    sub = problem.subset(all_idx)
+    X = problem.noise(sub)
+    R, J = _jacobian(problem, sub, fitted.ext, fitted.values)
+    x0 = np.array([fitted.values[k] for k in names], float)
+    plist = problem.params(fitted.ext)
+    lo = np.array([q.lower for q in plist], float) - x0
+    hi = np.array([q.upper for q in plist], float) - x0
+    # per group: the finite observations of every test, their residuals, derivatives and noise covariates
+    rows = {}
+    for g, r in R.items():
+        d = np.stack(J[g], axis=-1)
+        ok = np.isfinite(r) & np.isfinite(X[g]) & np.all(np.isfinite(d), axis=-1)
+        if ok.sum() >= 2:
+            rows[g] = [(r[i][ok[i]], X[g][i][ok[i]], d[i][ok[i]]) for i in all_idx]
     draws = []
     for _ in range(n_boot):
-        pick = rng.integers(0, problem.n_tests, problem.n_tests)
-        # one reweighting pass: the noise model of the full fit serves the resample
-        draws.append([fit(problem, pick, fitted.ext, x0=fitted.values, n_irls=1).values[k] for k in names])
+        counts = np.bincount(rng.integers(0, problem.n_tests, problem.n_tests), minlength=problem.n_tests)
+        drawn = np.flatnonzero(counts)
+        A, y = [], []
+        for per in rows.values():
+            r = np.concatenate([np.repeat(per[i][0], counts[i]) for i in drawn])
+            x = np.concatenate([np.repeat(per[i][1], counts[i]) for i in drawn])
+            if r.size < 2:
+                continue
+            s0, s1 = noise_variance(r, x)
+            for i in drawn:
+                w = math.sqrt(counts[i]) / np.sqrt(s0 + s1 * per[i][1] ** 2 + VAR_FLOOR)
+                A.append(per[i][2] * w[:, None])
+                y.append(-per[i][0] * w)
+        step = optimize.lsq_linear(np.concatenate(A), np.concatenate(y), bounds=(lo, hi)).x
+        draws.append(x0 + step)
     d = np.array(draws).reshape(len(draws), len(names))
     ci = {k: [float(np.percentile(d[:, i], 2.5)), float(np.percentile(d[:, i], 97.5))] for i, k in enumerate(names)}
     log.info(
@@ -472,12 +531,15 @@ def select_effects(problem: Problem, *, signature=None, n_boot=40, max_effects=4
             ext = problem.combine(current, eff) if eff not in current else None
             if ext is None or ext == current or rejected.get(eff, "").startswith("95%"):
                 continue
+            if not signature.get(eff, {}).get("supports", True):
+                # never named without it: its fit, the costliest of all for a loss in flight, is not needed
+                rejected[eff] = "its signature in the data is absent"
+                log.info("stage %d: %s rejected: %s", stage, eff, rejected[eff])
+                continue
             f = fit_of(ext)
             dbic = f.bic - cur_fit.bic
             if dbic > -bic_margin:
                 rejected[eff] = f"BIC {dbic:+.1f}"
-            elif not signature.get(eff, {}).get("supports", True):
-                rejected[eff] = f"BIC {dbic:+.1f} but its signature in the data is absent"
             else:
                 cands.append((dbic, eff, ext, f))
                 continue
