@@ -52,3 +52,35 @@ def test_one_step_bootstrap_matches_the_refit_of_every_resample():
         width = ref[1] - ref[0]
         assert width > 0
         assert ci[k] == pytest.approx(ref, abs=0.05 * width), (k, ci[k], ref)
+
+
+def _cr1_closed_form(r, x, groups):
+    """Cluster-robust (CR1) standard error of the within-group slope, by the matrices of Cameron & Miller (2015)."""
+    X, U, G = [], [], np.unique(groups)
+    for g in G:
+        m = groups == g
+        X.append(x[m] - x[m].mean())
+        U.append(r[m] - r[m].mean())
+    Xa, Ua = np.concatenate(X), np.concatenate(U)
+    bread = 1.0 / (Xa @ Xa)
+    beta = bread * (Xa @ Ua)
+    meat = sum((xg @ (ug - beta * xg)) ** 2 for xg, ug in zip(X, U))
+    n, k = Xa.size, 1
+    return beta, np.sqrt(len(G) / (len(G) - 1) * (n - 1) / (n - k) * bread * meat * bread)
+
+
+@pytest.mark.parametrize("n_tests", [4, 6, 12])
+def test_structure_slopes_have_the_small_sample_correction(n_tests):
+    from scipy import stats
+
+    rng = np.random.default_rng(n_tests)
+    x = rng.uniform(0.0, 1.0, (n_tests, 10))
+    r = 0.05 * x + rng.normal(0.0, 0.02, (n_tests, 1)) + rng.normal(0.0, 0.03, x.shape) * (1 + x)
+    beta, p, _ = engine.within_slope(r, x, np.ones(x.shape, bool))
+    ref_beta, ref_se = _cr1_closed_form(r.ravel(), x.ravel(), np.repeat(np.arange(n_tests), 10))
+    se = abs(beta) / stats.t.isf(p / 2, n_tests - 1)
+    assert beta == pytest.approx(ref_beta, rel=1e-12)
+    assert se == pytest.approx(ref_se, rel=1e-9)
+    # the uncorrected error is sqrt((G - 1) / G) of it: 9.5 % too small with 6 tests, 15.5 % with 4 (issue 12)
+    meat_only = ref_se * np.sqrt((n_tests - 1) / n_tests)
+    assert se / meat_only == pytest.approx({4: 1.1547, 6: 1.0954, 12: 1.0445}[n_tests], abs=1e-4)
