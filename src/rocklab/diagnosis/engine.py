@@ -77,9 +77,9 @@ class Problem:
     def residuals(self, sub, ext, values):
         raise NotImplementedError
 
-    def candidates(self):
-        """Names of the candidate causes."""
-        return [c.name for c in self.causes]
+    def candidates(self, families=False):
+        """Names of the candidate causes (the listed ones; with ``families``, the generalised families too)."""
+        return [c.name for c in self.causes if families or not getattr(c, "family", None)]
 
     def starts(self, ext):
         return {}
@@ -380,6 +380,11 @@ def _paired(d):
     return float(np.mean(d)) if d.size else 0.0, se
 
 
+def paired_gain(before, after):
+    """Mean per-test held-out deviance gain of ``after`` over ``before`` and its standard error."""
+    return _paired(np.asarray(before, float) - np.asarray(after, float))
+
+
 def _improves(d):
     """Whether paired per-test improvements ``d`` are beyond the noise.
 
@@ -487,7 +492,9 @@ def within_slope(r, x, ok):
     return beta, float(2 * stats.t.sf(abs(beta / se), n_clusters - 1)), span
 
 
-def select_effects(problem: Problem, *, signature=None, n_boot=40, max_effects=4, seed=0, bic_margin=10.0):
+def select_effects(
+    problem: Problem, *, signature=None, n_boot=40, max_effects=4, seed=0, bic_margin=10.0, families=False, fits=None
+):
     """Greedy forward selection of the causes the data carry, with removal tests.
 
     Parameters
@@ -500,6 +507,11 @@ def select_effects(problem: Problem, *, signature=None, n_boot=40, max_effects=4
         Bootstrap resamples for the 95 % intervals.
     bic_margin : float
         BIC must drop by more than this (strong evidence, Kass & Raftery 1995).
+    families : bool
+        Candidates include the generalised families of the problem's causes
+        (those with a ``family``): the search beyond the catalogue.
+    fits : dict, optional
+        Fits by causes, shared with an earlier selection on the same problem.
 
     Returns
     -------
@@ -512,7 +524,7 @@ def select_effects(problem: Problem, *, signature=None, n_boot=40, max_effects=4
     """
     all_idx = np.arange(problem.n_tests)
     signature = signature or {}
-    fits = {}
+    fits = {} if fits is None else fits
 
     def fit_of(ext):
         # a fit is deterministic: the rounds, the removals and the weak-evidence
@@ -533,7 +545,8 @@ def select_effects(problem: Problem, *, signature=None, n_boot=40, max_effects=4
             )
         return fits[ext]
 
-    log.info("selection over %d tests, candidates %s", problem.n_tests, ", ".join(problem.candidates()))
+    candidates = problem.candidates(families)
+    log.info("selection over %d tests, candidates %s", problem.n_tests, ", ".join(candidates))
     current = ()
     cur_fit = fit_of(current)
     cur_ho = heldout(problem, current)
@@ -543,7 +556,7 @@ def select_effects(problem: Problem, *, signature=None, n_boot=40, max_effects=4
         # candidates in the order of their information criterion; the held-out test and the
         # bootstrap, the costly steps, only until one passes
         cands = []
-        for eff in problem.candidates():
+        for eff in candidates:
             ext = problem.combine(current, eff) if eff not in current else None
             if ext is None or ext == current or rejected.get(eff, "").startswith("95%"):
                 continue
@@ -618,7 +631,7 @@ def select_effects(problem: Problem, *, signature=None, n_boot=40, max_effects=4
     # is weak evidence for it, not something outside the catalogue
     weak = {}
     if found:
-        for eff in problem.candidates():
+        for eff in candidates:
             ext = problem.combine(current, eff) if eff not in current else None
             if ext is not None and ext != current and signature.get(eff, {}).get("supports", True):
                 f = fit_of(ext)
@@ -640,4 +653,105 @@ def select_effects(problem: Problem, *, signature=None, n_boot=40, max_effects=4
         "rejected": rejected,
         "structure": found,
         "weak": weak,
+    }
+
+
+def beyond_the_catalogue(problem: Problem, sel, *, signature, n_boot=40, seed=0, fits=None):
+    """The selection with the generalised families, where the listed causes leave structure (issue 12).
+
+    Where ``sel`` (a selection of the listed causes,
+    :func:`select_effects`) leaves structure that no
+    candidate turned down would remove, the selection is run again with the
+    families of the problem's causes among the candidates (the same engine:
+    information criterion, signature, held-out deviance, bootstrap).  When
+    it names a family, it replaces ``sel``, with ``catalogue`` (the
+    selection of the listed causes) kept beside it; otherwise ``sel`` stands,
+    with the families that would remove the structure but fall short of the
+    evidence to be named added to its weak evidence.
+    """
+    if not sel["structure"] or sel["weak"] or problem.candidates(True) == problem.candidates():
+        return sel
+    log.info("structure left by the listed causes: the generalised families are searched")
+    wide = select_effects(problem, signature=signature, n_boot=n_boot, seed=seed, families=True, fits=fits)
+    families = set(problem.candidates(True)) - set(problem.candidates())
+    named = [e for e in wide["effects"] if e in families]
+    if not named:
+        weak = {k: v for k, v in wide["weak"].items() if k in families}
+        log.info(
+            "no family named: %s",
+            f"weak evidence for {', '.join(weak)}" if weak else "the structure stays unexplained",
+        )
+        return {**sel, "weak": {**sel["weak"], **weak}}
+    log.info("discovered: %s", ", ".join(named))
+    return {**wide, "catalogue": sel}
+
+
+def family_against_listed(problem: Problem, family, sel, *, n_boot=40, seed=0, fits=None):
+    """A family fitted whether named or not, against the base model and the best listed cause.
+
+    The fit of ``family`` on all tests, its bootstrap intervals, the closed
+    form it reduces to, and its paired held-out deviance gain per
+    observation over the base model and over the single listed cause of
+    lowest BIC (the best member of the catalogue), for a report of what a
+    form outside the catalogue would give (the limestone blocks).
+    """
+    fits = {} if fits is None else fits
+    all_idx = np.arange(problem.n_tests)
+    by_name = {c.name: c for c in problem.causes}
+    cause = by_name[family]
+    for ext in [(family,), *((c,) for c in problem.candidates())]:
+        if ext not in fits:
+            fits[ext] = fit(problem, all_idx, ext)
+    best = min(problem.candidates(), key=lambda c: fits[(c,)].bic)
+    f = fits[(family,)]
+    ho = heldout(problem, (family,), start=f.values)
+    ci = parameter_intervals(problem, f, n_boot=n_boot, seed=seed)
+    vs_base, se_base = paired_gain(sel["base"]["deviance"], ho["deviance"])
+    vs_best, se_best = paired_gain(heldout(problem, (best,), start=fits[(best,)].values)["deviance"], ho["deviance"])
+    return {
+        "effect": family,
+        "form": cause.law,
+        "params": f.values,
+        "ci95": ci,
+        "reduces_to": cause.closed_form(f.values, ci),
+        "discovered": family in sel["effects"],
+        "best_listed": best,
+        "dbic_vs_base": f.bic - fits[()].bic if () in fits else None,
+        "dbic_vs_best_listed": f.bic - fits[(best,)].bic,
+        "heldout_gain": {
+            "vs_base": vs_base,
+            "vs_base_se": se_base,
+            "vs_best_listed": vs_best,
+            "vs_best_listed_se": se_best,
+        },
+    }
+
+
+def discovery(problem: Problem, eff, sel):
+    """The fields of a finding that say whether its form was discovered (a family) rather than listed.
+
+    A discovered form carries the closed form of the library it reduces to
+    (or "no closed form of the library") and its held-out gain against the
+    base model and against the best model of the listed causes.
+    """
+    cause = next(c for c in problem.causes if c.name == eff)
+    if not getattr(cause, "family", None):
+        return {"discovered": False}
+    ho = sel["final"]["deviance"]
+    vs_catalogue, se_catalogue = paired_gain(sel["catalogue"]["final"]["deviance"], ho)
+    vs_base, se_base = paired_gain(sel["base"]["deviance"], ho)
+    own = [q.name for q in cause.params]
+    return {
+        "discovered": True,
+        "family": f"{cause.law} (holds {cause.family})",
+        "reduces_to": cause.closed_form(
+            {k: sel["fit"].values[k] for k in own}, {k: sel["ci"][k] for k in own if k in sel["ci"]}
+        ),
+        "best_listed": sel["catalogue"]["effects"],
+        "heldout_gain": {
+            "vs_base": vs_base,
+            "vs_base_se": se_base,
+            "vs_best_listed": vs_catalogue,
+            "vs_best_listed_se": se_catalogue,
+        },
     }

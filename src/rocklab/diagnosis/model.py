@@ -58,6 +58,7 @@ class ModelParams:
     zeta: np.ndarray
     gap: np.ndarray  # [rad]
     stop: np.ndarray  # landing speed [thetadot_r] below which the wall stops dead (0: never)
+    order: np.ndarray  # the test's place in its series, 0 (first) to 1 (last)
     extra: dict = field(default_factory=dict)
     impact_hooks: tuple = ()
 
@@ -96,6 +97,7 @@ def base_params(tests) -> ModelParams:
         zeta=0.0 * ones,
         gap=0.0 * alpha,
         stop=0.0 * ones,
+        order=np.array([t.order for t in tests], float),
     )
 
 
@@ -109,7 +111,7 @@ def model_params(tests, ext=(), values=None) -> ModelParams:
     from rocklab.diagnosis import catalogue
 
     mp = base_params(tests)
-    for cause in catalogue.CAUSES:
+    for cause in catalogue.in_order():
         if cause.name in ext:
             mp = cause.apply(mp, cause.values(values or {}))
     return mp

@@ -18,7 +18,7 @@ class WallProblem(Problem):
         self.n_tests = len(self.tests)
         self.S = TestStack.of(self.tests)
         self.boundary = self.tests[0].boundary
-        self.causes = tuple(catalogue.for_boundary(self.boundary))
+        self.causes = tuple(catalogue.for_boundary(self.boundary, families=True))
         self.after_selection = tuple(catalogue.for_boundary(self.boundary, "after selection"))
         self._sig = None
         self._cache = {}
