@@ -388,6 +388,18 @@ def blocks_markdown(result) -> str:
             f"{'; '.join(e['residual_structure']) if e['unexplained'] else 'no'}"
             f"{' (weak: ' + ', '.join(e['weak_evidence']) + ')' if e['weak_evidence'] else ''} |"
         )
+    for fam in a.get("families", []):
+        g, ci = fam["heldout_gain"], fam["ci95"]
+        out += [
+            "",
+            f"Beyond the catalogue, {fam['effect']} ({fam['form']}): "
+            + ", ".join(f"{k} = {v:.4g} [{ci[k][0]:.4g}, {ci[k][1]:.4g}]" for k, v in fam["params"].items())
+            + f"; {fam['reduces_to']}; dBIC {fam['dbic_vs_base']:+.1f} against Housner's e, "
+            f"{fam['dbic_vs_best_listed']:+.1f} against the best listed cause ({fam['best_listed']}); held-out "
+            f"deviance gain per impact {g['vs_base']:.3g} (standard error {g['vs_base_se']:.2g}) against Housner's e, "
+            f"{g['vs_best_listed']:.3g} ({g['vs_best_listed_se']:.2g}) against {fam['best_listed']}: "
+            + ("**discovered**." if fam["discovered"] else "not named (weak evidence at most)."),
+        ]
     st = result["slenderness"]
     out += [
         "",

@@ -316,13 +316,13 @@ def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
     Each resample is fitted by one Gauss-Newton step from the full fit
     (the estimating-function bootstrap of Hu & Kalbfleisch 2000, within the
     bounds): the residuals of every test and their derivatives are computed
-    once, at the full fit, and a resample weighs each test by the times it
-    was drawn, with the noise model (:func:`noise_variance`) of its own
-    residuals.  The resamples differ from the full fit by a few times its
-    standard errors, where the residuals are linear in the parameters to
-    well below those errors (the full refit of every resample, tried
-    before, gave the same intervals to their third digit at twenty times
-    the cost).
+    once, at the full fit, with the weights of its noise model, and a
+    resample weighs each test by the times it was drawn.  The resamples
+    differ from the full fit by a few times its standard errors, where the
+    residuals are linear in the parameters to well below those errors (the
+    refit of every resample with its own noise model, the engine's former
+    bootstrap, gives the same intervals to a few per cent of their width at
+    twenty times the cost: tests/test_diagnosis_engine.py).
     """
     t0 = time.perf_counter()
     rng = np.random.default_rng(seed)
@@ -337,30 +337,27 @@ def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
     plist = problem.params(fitted.ext)
     lo = np.array([q.lower for q in plist], float) - x0
     hi = np.array([q.upper for q in plist], float) - x0
-    # per group: the finite observations of every test, their residuals, derivatives and noise covariates
-    rows = {}
+    # per test: the weighted derivatives and residuals of its finite observations, every group
+    A, y = [[] for _ in all_idx], [[] for _ in all_idx]
     for g, r in R.items():
+        if g not in fitted.var:
+            continue
         d = np.stack(J[g], axis=-1)
         ok = np.isfinite(r) & np.isfinite(X[g]) & np.all(np.isfinite(d), axis=-1)
-        if ok.sum() >= 2:
-            rows[g] = [(r[i][ok[i]], X[g][i][ok[i]], d[i][ok[i]]) for i in all_idx]
+        w = 1.0 / np.sqrt(fitted.var[g][0] + fitted.var[g][1] * np.where(ok, X[g], 0.0) ** 2 + VAR_FLOOR)
+        for i in all_idx:
+            A[i].append(d[i][ok[i]] * w[i][ok[i], None])
+            y[i].append(-r[i][ok[i]] * w[i][ok[i]])
+    A = [np.concatenate(a) for a in A]
+    y = [np.concatenate(b) for b in y]
     draws = []
     for _ in range(n_boot):
         counts = np.bincount(rng.integers(0, problem.n_tests, problem.n_tests), minlength=problem.n_tests)
         drawn = np.flatnonzero(counts)
-        A, y = [], []
-        for per in rows.values():
-            r = np.concatenate([np.repeat(per[i][0], counts[i]) for i in drawn])
-            x = np.concatenate([np.repeat(per[i][1], counts[i]) for i in drawn])
-            if r.size < 2:
-                continue
-            s0, s1 = noise_variance(r, x)
-            for i in drawn:
-                w = math.sqrt(counts[i]) / np.sqrt(s0 + s1 * per[i][1] ** 2 + VAR_FLOOR)
-                A.append(per[i][2] * w[:, None])
-                y.append(-per[i][0] * w)
-        step = optimize.lsq_linear(np.concatenate(A), np.concatenate(y), bounds=(lo, hi)).x
-        draws.append(x0 + step)
+        root = np.sqrt(counts[drawn])
+        Ab = np.concatenate([A[i] * c for i, c in zip(drawn, root)])
+        yb = np.concatenate([y[i] * c for i, c in zip(drawn, root)])
+        draws.append(x0 + optimize.lsq_linear(Ab, yb, bounds=(lo, hi)).x)
     d = np.array(draws).reshape(len(draws), len(names))
     ci = {k: [float(np.percentile(d[:, i], 2.5)), float(np.percentile(d[:, i], 97.5))] for i, k in enumerate(names)}
     log.info(
@@ -716,6 +713,7 @@ def family_against_listed(problem: Problem, family, sel, *, n_boot=40, seed=0, f
         "reduces_to": cause.closed_form(f.values, ci),
         "discovered": family in sel["effects"],
         "best_listed": best,
+        "best_listed_params": fits[(best,)].values,
         "dbic_vs_base": f.bic - fits[()].bic if () in fits else None,
         "dbic_vs_best_listed": f.bic - fits[(best,)].bic,
         "heldout_gain": {
