@@ -271,7 +271,7 @@ def test_a_drift_between_tests_is_discovered(diagnosed, name):
     assert f["discovered"] and f["reduces_to"] == "no closed form of the library"
     assert "restitution_drift" not in e["listed_verdict"]
     g = f["heldout_gain"]
-    assert g["vs_best_listed"] > 2 * g["vs_best_listed_se"] and g["vs_base"] > g["vs_best_listed"]
+    assert g["vs_best_listed"] > 2 * g["vs_best_listed_se"] and g["vs_base"] >= g["vs_best_listed"]
     assert all(not x["discovered"] for x in e["findings"] if x is not f)
 
 
