@@ -657,8 +657,9 @@ def beyond_the_catalogue(problem: Problem, sel, *, signature, n_boot=40, seed=0,
     """The selection with the generalised families, where the listed causes leave structure (issue 12).
 
     Where ``sel`` (a selection of the listed causes,
-    :func:`select_effects`) leaves structure that no
-    candidate turned down would remove, the selection is run again with the
+    :func:`select_effects`) leaves structure in the residual groups (not
+    only what the stage after selection addresses, :meth:`Problem.extra_structure`)
+    that no candidate turned down would remove, the selection is run again with the
     families of the problem's causes among the candidates (the same engine:
     information criterion, signature, held-out deviance, bootstrap).  When
     it names a family, it replaces ``sel``, with ``catalogue`` (the
@@ -666,7 +667,12 @@ def beyond_the_catalogue(problem: Problem, sel, *, signature, n_boot=40, seed=0,
     with the families that would remove the structure but fall short of the
     evidence to be named added to its weak evidence.
     """
-    if not sel["structure"] or sel["weak"] or problem.candidates(True) == problem.candidates():
+    if sel["weak"] or problem.candidates(True) == problem.candidates():
+        return sel
+    # structure of the residual groups: what the stage after selection addresses (a stop) is not the families'
+    every = problem.subset(np.arange(problem.n_tests))
+    after = problem.extra_structure(every, tuple(sel["effects"]), sel["fit"].values)
+    if not [st for st in sel["structure"] if st not in after]:
         return sel
     log.info("structure left by the listed causes: the generalised families are searched")
     wide = select_effects(problem, signature=signature, n_boot=n_boot, seed=seed, families=True, fits=fits)
