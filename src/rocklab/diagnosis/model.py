@@ -101,16 +101,17 @@ def base_params(tests) -> ModelParams:
     )
 
 
-def model_params(tests, ext=(), values=None) -> ModelParams:
+def model_params(tests, ext=(), values=None, base=None) -> ModelParams:
     """ModelParams of the base model extended by the causes ``ext`` with parameter ``values``.
 
     The causes act in catalogue order; the values of causes outside ``ext``
-    are not used.
+    are not used.  ``base``: :func:`base_params` of ``tests`` already made
+    (the causes replace its arrays, never change them).
     """
     # the catalogue's causes need this module (their stages run the model): read it at call time
     from rocklab.diagnosis import catalogue
 
-    mp = base_params(tests)
+    mp = base_params(tests) if base is None else base
     for cause in catalogue.in_order():
         if cause.name in ext:
             mp = cause.apply(mp, cause.values(values or {}))

@@ -7,7 +7,7 @@ import numpy as np
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.engine import Problem
 from rocklab.diagnosis.evidence import TestStack, covariates, log_ratio, noise_covariates, residuals
-from rocklab.diagnosis.model import free_run, model_params
+from rocklab.diagnosis.model import base_params, free_run, model_params
 
 
 class WallProblem(Problem):
@@ -27,7 +27,10 @@ class WallProblem(Problem):
         return self.S.subset(np.asarray(idx))
 
     def residuals(self, sub, ext, values):
-        return residuals(sub, model_params(sub.tests, ext, values), self._cache)
+        # a fit evaluates one subset many times: its base model is made once
+        if self._cache.get("base_of") is not sub:
+            self._cache.update(base_of=sub, base=base_params(sub.tests))
+        return residuals(sub, model_params(sub.tests, ext, values, self._cache["base"]), self._cache)
 
     def covariates(self, sub):
         return covariates(sub)
