@@ -48,6 +48,8 @@ def main():
             "cpu_s": time.process_time() - c0,
             "wall_s": time.perf_counter() - t0,
             "verdict": entry["verdict"] if entry else None,
+            "unexplained": entry["unexplained"] if entry else None,
+            "discovered": [f["effect"] for f in entry["findings"] if f.get("discovered")] if entry else [],
         }
         print(f"{key}: {series[key]['cpu_s']:.2f} s CPU")
     jobs = sorted((args.results / "benchmarks" / "diagnosis").glob("*.tsv"))
