@@ -273,6 +273,7 @@ def test_a_drift_between_tests_is_discovered(diagnosed, name):
     g = f["heldout_gain"]
     assert g["vs_best_listed"] > 2 * g["vs_best_listed_se"] and g["vs_base"] >= g["vs_best_listed"]
     assert all(not x["discovered"] for x in e["findings"] if x is not f)
+    assert f"Discovered beyond the catalogue: {f['effect']}" in D.diagnosis_markdown([e])
 
 
 def test_a_stop_is_named_only_where_the_walls_stop_dead(diagnosed):
