@@ -1,4 +1,4 @@
-"""Snakemake shim: restitution of the UMinho limestone blocks (results/limestone_diagnosis.json, .md)."""
+"""Snakemake shim: restitution of the UMinho limestone blocks (results/limestone_diagnosis.json, .md, figure)."""
 
 import json
 from pathlib import Path
@@ -6,10 +6,11 @@ from pathlib import Path
 from rocklab.diagnosis import jsonable
 from rocklab.diagnosis.block_tests import blocks_markdown, diagnose_blocks, read_events
 from rocklab.io import setup_logging
+from rocklab.plots.diagnosis import family_figure
 
 setup_logging(snakemake.log[0])
-result = diagnose_blocks(
-    read_events(snakemake.input.events), n_boot=snakemake.params.n_boot, seed=snakemake.params.seed
-)
+events = read_events(snakemake.input.events)
+result = diagnose_blocks(events, n_boot=snakemake.params.n_boot, seed=snakemake.params.seed)
+family_figure(result, events).savefig(snakemake.output.figure, dpi=120)
 Path(snakemake.output.json).write_text(json.dumps(jsonable(result), indent=1))
 Path(snakemake.output.md).write_text(blocks_markdown(result))

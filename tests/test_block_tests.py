@@ -8,14 +8,16 @@ from rocklab.diagnosis import block_tests as B
 from rocklab.physics import restitution
 
 
-def synthetic_events(c=1.0, s_e=0.0, b=0.0, noise=0.02, n_trials=12, groups=(4, 8, 12), seed=0):
+def synthetic_events(
+    c=1.0, s_e=0.0, b=0.0, noise=0.02, n_trials=12, groups=(4, 8, 12), seed=0, loss_fraction=1.0, loss_constant=0.0
+):
     """Per-impact ratios like the limestone tables: e = c e_an exp(+-s_e/2) (1 - b u), lognormal noise
-    growing as the impact speed falls."""
+    growing as the impact speed falls; e_an = 1 - lambda (1 - e_Housner) - delta (1 and 0: Eq. 2)."""
     rng = np.random.default_rng(seed)
     rows = []
     for g, hb in enumerate(groups, start=1):
         B_m, H_m = 0.05, 0.05 * hb
-        e_an = float(restitution.two_sided(np.arctan2(B_m, H_m)))
+        e_an = 1.0 - loss_fraction * (1.0 - float(restitution.two_sided(np.arctan2(B_m, H_m)))) - loss_constant
         for trial in range(1, n_trials + 1):
             u = 1.0
             for k in range(1, 16):
@@ -57,5 +59,30 @@ def test_limestone_blocks():
     # Eq. 2 gets the trend with slenderness wrong: the stockiest blocks lose less, the slenderest more
     st = res["slenderness"]
     assert st["slope"] > 0 and st["p"] < 1e-3
-    assert a["unexplained"] and any("slenderness" in s for s in a["residual_structure"])
+    assert any("slenderness" in s for s in a["residual_structure"])
+    # the family affine in Housner's loss removes it: about half of Housner's loss plus ~2 % per impact, no
+    # closed form of the library, but its held-out gain is within the noise of 134 trials: weak evidence
+    (fam,) = a["families"]
+    lam, delta = fam["ci95"]["loss_fraction"], fam["ci95"]["loss_constant"]
+    assert lam[1] < 0.9 and 0.005 < delta[0] and delta[1] < 0.05, fam
+    assert fam["reduces_to"] == "no closed form of the library" and fam["dbic_vs_base"] < -10
+    assert not fam["discovered"] and "restitution_housner_loss" in a["weak_evidence"] and not a["unexplained"]
     assert B.blocks_markdown(res).startswith("# Restitution of the UMinho limestone blocks")
+
+
+@pytest.mark.parametrize(
+    "loss_fraction, loss_constant, noise", [(0.6, 0.02, 0.02), (0.6, 0.02, 0.01), (0.8, 0.01, 0.01)]
+)
+def test_an_impact_law_affine_in_housners_loss_is_discovered(loss_fraction, loss_constant, noise):
+    ev = synthetic_events(
+        loss_fraction=loss_fraction, loss_constant=loss_constant, noise=noise, groups=(4, 6, 8, 10, 12, 15), n_trials=15
+    )
+    a = B.diagnose_blocks(ev, n_boot=20)["all"]
+    assert a["verdict"] == ["restitution_housner_loss"] and not a["unexplained"], (a["verdict"], a["rejected"])
+    (f,) = a["findings"]
+    assert f["discovered"] and f["reduces_to"] == "no closed form of the library"
+    for k, x in (("loss_fraction", loss_fraction), ("loss_constant", loss_constant)):
+        lo, hi = f["ci95"][k]
+        assert lo - 0.1 * abs(x) <= x <= hi + 0.1 * abs(x), (k, x, f["params"][k], (lo, hi))
+    assert f["heldout_gain"]["vs_base"] > 2 * f["heldout_gain"]["vs_base_se"]
+    assert a["families"][0]["discovered"]

@@ -87,6 +87,11 @@ def wearing(rate, c):
     return model
 
 
+def drifting(c, drift, n=6):
+    """e = c e_an,2s exp(drift (i / (n - 1) - 1/2)) in test i of n: a restitution that drifts between tests."""
+    return lambda i: {"impact": I.Scaled(H(), c * np.exp(drift * (i / (n - 1) - 0.5)))}
+
+
 def sticking(v_stick, c):
     """e = c e_an,2s, but the wall sticks (e = 0) on landings slower than v_stick thetadot_r."""
 
@@ -196,6 +201,17 @@ SCENARIOS = {
         {"restitution_scale": {"c": 0.95}, "stop_threshold": {"v_stop_over_vr": 0.15}},
     ),
     "wearing": ("two-sided", wearing(0.006, 0.97), {}, None),
+    # a family of the catalogue (issue 12): found where the scale leaves a trend with the test order
+    **{
+        f"drift-{d}-noise-{noise}": (
+            "two-sided",
+            drifting(0.92, d),
+            {"noise_mm": noise},
+            {"restitution_drift": {"c": 0.92, "drift": d}},
+        )
+        for d in (0.08, 0.15)
+        for noise in (0.002, 0.01)
+    },
 }
 
 
@@ -244,6 +260,20 @@ def test_hidden_causes_named_recovered_with_a_gain(diagnosed, name):
 def test_effect_outside_the_catalogue_is_flagged(diagnosed):
     e = diagnosed["wearing"]
     assert e["unexplained"] and e["residual_structure"]
+    # a wear within each test is no drift between tests: no family named for it
+    assert "restitution_drift" not in e["verdict"]
+
+
+@pytest.mark.parametrize("name", [k for k in SCENARIOS if k.startswith("drift-")])
+def test_a_drift_between_tests_is_discovered(diagnosed, name):
+    e = diagnosed[name]
+    f = next(f for f in e["findings"] if f["effect"] == "restitution_drift")
+    assert f["discovered"] and f["reduces_to"] == "no closed form of the library"
+    assert "restitution_drift" not in e["listed_verdict"]
+    g = f["heldout_gain"]
+    assert g["vs_best_listed"] > 2 * g["vs_best_listed_se"] and g["vs_base"] >= g["vs_best_listed"]
+    assert all(not x["discovered"] for x in e["findings"] if x is not f)
+    assert f"Discovered beyond the catalogue: {f['effect']}" in D.diagnosis_markdown([e])
 
 
 def test_a_stop_is_named_only_where_the_walls_stop_dead(diagnosed):

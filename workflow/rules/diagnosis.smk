@@ -109,6 +109,8 @@ rule limestone_diagnosis:
         json=report_item(res("limestone_diagnosis.json"), "limestone_json", "limestone",
                          "limestone_diagnosis.json, for programs"),
         md=res("limestone_diagnosis.md"),
+        figure=report_item(res("figures", "limestone_family.png"), "limestone_family", "limestone",
+                           "the impact law across slendernesses: data, Housner, listed causes, families"),
     params:
         n_boot=DIAGNOSIS["n_boot"],
         seed=DIAGNOSIS["seed"],

@@ -19,6 +19,12 @@ of one H/B):
                           edges in turn (every trial taken as released to the
                           same side)
 
+and, where these leave structure and the trials span several slendernesses
+(all groups pooled), the generalised family
+:mod:`rocklab.diagnosis.causes.restitution_housner_loss`: e = 1 - lambda
+(1 - e_an) - delta, Housner's loss scaled plus a constant loss per impact
+(issue 12).
+
 The speed before impact k relative to the first is the product of the
 measured ratios before it (a rigid block lands at the speed it took off
 with).  Velocity ratios above 1 or below 0 and late impacts are artefacts of
@@ -37,8 +43,15 @@ from scipy import stats
 
 from rocklab.data import data_path
 from rocklab.diagnosis import catalogue
-from rocklab.diagnosis.causes import restitution_scale
-from rocklab.diagnosis.engine import Problem, finite_mean, select_effects
+from rocklab.diagnosis.causes import restitution_housner_loss, restitution_scale
+from rocklab.diagnosis.engine import (
+    Problem,
+    beyond_the_catalogue,
+    discovery,
+    family_against_listed,
+    finite_mean,
+    select_effects,
+)
 from rocklab.diagnosis.evidence import series_level
 from rocklab.physics import restitution
 
@@ -120,6 +133,9 @@ class BlockProblem(Problem):
         self.T = trials
         self.n_tests = len(trials.ids)
         self.causes = tuple(c for c in catalogue.CAUSES if c.name in CANDIDATES)
+        if np.ptp(trials.alpha) > 0:
+            # Housner's loss and a constant loss are told apart only across slendernesses
+            self.causes += (restitution_housner_loss.CAUSE,)
 
     def subset(self, idx):
         return self.T.subset(np.asarray(idx))
@@ -127,7 +143,7 @@ class BlockProblem(Problem):
     def model_e(self, sub, values):
         v = catalogue.null_values()
         v.update(values)
-        e_an = restitution.two_sided(sub.alpha)[:, None]
+        e_an = restitution_housner_loss.restitution(restitution.two_sided(sub.alpha)[:, None], v)
         e = e_an * v["c"] * np.exp(np.where(sub.odd, 0.5, -0.5) * v["s_e"])
         return e * np.clip(v["a"] - v["b"] * sub.u, 0.0, 1.0 / e)
 
@@ -170,7 +186,8 @@ class BlockProblem(Problem):
 
 
 def signatures(trials: _Trials):
-    """Evidence in the ratios that needs no fit: level, trend with the impact speed, odd/even."""
+    """Evidence in the ratios that needs no fit: level, trend with the impact speed, odd/even, and
+    across slendernesses the trend of e/e_an with (B/H)^2 (:func:`slenderness_trend`)."""
     ratio = trials.r / restitution.two_sided(trials.alpha)[:, None]
     ok = np.isfinite(ratio)
     e, u = ratio[ok], trials.u[ok]
@@ -181,7 +198,15 @@ def signatures(trials: _Trials):
     per = [
         np.nanmedian(ratio[i][trials.odd[i]]) - np.nanmedian(ratio[i][~trials.odd[i]]) for i in range(len(trials.ids))
     ]
-    return {
+    out = {}
+    if np.ptp(trials.alpha) > 0:
+        st = slenderness_trend(trials)
+        out["restitution_housner_loss"] = {
+            "value": st["slope"],
+            "supports": bool(st["p"] < 0.01),
+            "text": f"per-trial median r/e_an against (B/H)^2: slope {st['slope']:+.3f} (p = {st['p']:.2g})",
+        }
+    return out | {
         "restitution_scale": {
             "value": med,
             "supports": abs(med - 1) > restitution_scale.C.practical,
@@ -206,7 +231,9 @@ def diagnose_group(trials: _Trials, *, n_boot=40, seed=0):
     """Diagnosis of one block group (or of all, pooled): what Housner's e gets wrong, the causes, the gain."""
     problem = BlockProblem(trials)
     sig = signatures(trials)
-    sel = select_effects(problem, signature=sig, n_boot=n_boot, seed=seed)
+    fits = {}
+    sel = select_effects(problem, signature=sig, n_boot=n_boot, seed=seed, fits=fits)
+    sel = beyond_the_catalogue(problem, sel, signature=sig, n_boot=n_boot, seed=seed, fits=fits)
     e_an = float(np.median(restitution.two_sided(trials.alpha)))
     measured = float(np.nanmedian(trials.r))
     base_ho, final_ho = sel["base"], sel["final"]
@@ -230,10 +257,12 @@ def diagnose_group(trials: _Trials, *, n_boot=40, seed=0):
                 "error_heldout": {k: finite_mean(v) for k, v in st["heldout"].items()},
                 "gain": {k: finite_mean(base_ho[k]) - finite_mean(st["heldout"][k]) for k in base_ho}
                 | {"deviance": st["gain"]},
+                **discovery(problem, eff, sel),
             }
         )
     hb = 1.0 / np.tan(trials.alpha)
     one = np.ptp(hb) == 0
+    families = [c for c in problem.candidates(True) if c not in problem.candidates()]
     return {
         "scope": "block group" if one else "all blocks",
         "key": f"H/B = {hb[0]:.0f}" if one else f"H/B = {hb.min():.0f}-{hb.max():.0f}",
@@ -253,6 +282,7 @@ def diagnose_group(trials: _Trials, *, n_boot=40, seed=0):
             f"{100 * decay_meas**N_IMPACTS:.0f}% measured"
         ),
         "verdict": sel["effects"],
+        **({"listed_verdict": sel["catalogue"]["effects"]} if "catalogue" in sel else {}),
         "unexplained": bool(sel["structure"]) and not sel["weak"],
         "residual_structure": sel["structure"],
         "findings": findings,
@@ -263,6 +293,8 @@ def diagnose_group(trials: _Trials, *, n_boot=40, seed=0):
             "base": {k: finite_mean(v) for k, v in base_ho.items()},
             "model": {k: finite_mean(v) for k, v in final_ho.items()},
         },
+        # the families of the impact law, named or not: what a form outside the catalogue gives
+        "families": [family_against_listed(problem, f, sel, n_boot=n_boot, seed=seed, fits=fits) for f in families],
     }
 
 
@@ -356,6 +388,18 @@ def blocks_markdown(result) -> str:
             f"{'; '.join(e['residual_structure']) if e['unexplained'] else 'no'}"
             f"{' (weak: ' + ', '.join(e['weak_evidence']) + ')' if e['weak_evidence'] else ''} |"
         )
+    for fam in a.get("families", []):
+        g, ci = fam["heldout_gain"], fam["ci95"]
+        out += [
+            "",
+            f"Beyond the catalogue, {fam['effect']} ({fam['form']}): "
+            + ", ".join(f"{k} = {v:.4g} [{ci[k][0]:.4g}, {ci[k][1]:.4g}]" for k, v in fam["params"].items())
+            + f"; {fam['reduces_to']}; dBIC {fam['dbic_vs_base']:+.1f} against Housner's e, "
+            f"{fam['dbic_vs_best_listed']:+.1f} against the best listed cause ({fam['best_listed']}); held-out "
+            f"deviance gain per impact {g['vs_base']:.3g} (standard error {g['vs_base_se']:.2g}) against Housner's e, "
+            f"{g['vs_best_listed']:.3g} ({g['vs_best_listed_se']:.2g}) against {fam['best_listed']}: "
+            + ("**discovered**." if fam["discovered"] else "not named (weak evidence at most)."),
+        ]
     st = result["slenderness"]
     out += [
         "",

@@ -4,6 +4,9 @@
 the causes act on the model and are reported when tied.  Adding a cause is
 one new module (a :class:`rocklab.diagnosis.causes.Cause` named ``CAUSE``)
 and one line here (docs/diagnosis-method.md, "Adding a cause").
+:data:`FAMILIES` are the generalised families (issue 12), each holding a
+listed cause as one member, searched only where the listed causes leave
+structure.
 """
 
 from __future__ import annotations
@@ -14,6 +17,8 @@ from rocklab.diagnosis.causes import (
     hinge_asymmetry,
     instability_angle,
     restitution_amplitude,
+    restitution_drift,
+    restitution_housner_loss,
     restitution_scale,
     stop_threshold,
 )
@@ -29,20 +34,30 @@ CAUSES = [
     stop_threshold.CAUSE,
 ]
 
+FAMILIES = [
+    restitution_housner_loss.CAUSE,
+    restitution_drift.CAUSE,
+]
+
+
+def in_order():
+    """The causes and the families in the order they act on the model."""
+    return [*CAUSES[:-1], *FAMILIES, CAUSES[-1]]
+
 
 def by_name(name):
     """The cause of the catalogue called ``name``."""
-    return next(c for c in CAUSES if c.name == name)
+    return next(c for c in in_order() if c.name == name)
 
 
 def null_values():
     """Every parameter of the catalogue at its null value (the base model)."""
-    return {q.name: q.null for c in CAUSES for q in c.params}
+    return {q.name: q.null for c in in_order() for q in c.params}
 
 
-def for_boundary(boundary, stage="selection"):
-    """The causes of a stage that can occur in a boundary condition, in catalogue order."""
-    return [c for c in CAUSES if c.stage == stage and boundary in c.boundaries]
+def for_boundary(boundary, stage="selection", families=False):
+    """The causes of a stage that can occur in a boundary condition, in catalogue order (and the families)."""
+    return [c for c in in_order() if c.stage == stage and boundary in c.boundaries and (families or not c.family)]
 
 
 def signatures(tests):
@@ -56,7 +71,7 @@ def signatures(tests):
     """
     ob = observe(tests)
     out = {}
-    for cause in for_boundary(tests[0].boundary):
+    for cause in for_boundary(tests[0].boundary, families=True):
         s = cause.signature(ob)
         if s is not None:
             out[cause.name] = s
@@ -66,6 +81,6 @@ def signatures(tests):
 def starts(sigs):
     """Data-driven starting values of every parameter from the signatures (:func:`signatures`)."""
     out = {}
-    for cause in CAUSES:
+    for cause in in_order():
         out.update(cause.starts(sigs))
     return out

@@ -39,7 +39,9 @@ class MeasuredTest:
     [rad/s], ``t_before`` / ``t_after`` its arrival at and departure from
     theta = 0 [s] (they differ when a one-sided wall swings into the gap),
     ``depth`` the excursion past theta = 0 [rad]; ``v_release`` the speed
-    towards the vertical with which the wall left the screw [rad/s].
+    towards the vertical with which the wall left the screw [rad/s];
+    ``order`` its place in its series, 0 (first) to 1 (last)
+    (:func:`in_series_order`).
     """
 
     test_id: str
@@ -62,6 +64,7 @@ class MeasuredTest:
     v_release: float = 0.0
     alpha_fall: float = np.nan
     series: str = ""
+    order: float = 0.5
     t: np.ndarray | None = field(default=None, repr=False)
     theta: np.ndarray | None = field(default=None, repr=False)
 
@@ -120,6 +123,18 @@ def measured_test(record) -> MeasuredTest:
     )
 
 
+def in_series_order(tests):
+    """The tests with their place in the series (``order``, 0 to 1), from the order of their ids.
+
+    Test ids of a campaign grow with the date of the test (``T0001``...), so
+    their order is the order of the tests: what a drift between tests
+    (wear, debris) follows.
+    """
+    rank = {tid: i for i, tid in enumerate(sorted(t.test_id for t in tests))}
+    n = max(len(tests) - 1, 1)
+    return [replace(t, order=rank[t.test_id] / n) for t in tests]
+
+
 def records_by_series(datasets, motions=None):
     """Group reduced tests (:mod:`rocklab.lab.reduction`) into the records of :func:`diagnose_campaign`.
 
@@ -176,6 +191,7 @@ class TestStack:
     depth: np.ndarray
     side: np.ndarray
     k: np.ndarray
+    order: np.ndarray
 
     @classmethod
     def of(cls, tests):
@@ -202,6 +218,7 @@ class TestStack:
             depth=pad("depth"),
             side=np.nan_to_num(side, nan=1.0),
             k=np.tile(np.arange(1, n + 1, dtype=float), (len(tests), 1)),
+            order=np.array([t.order for t in tests], float),
         )
 
     def subset(self, idx):
@@ -282,12 +299,19 @@ def noise_covariates(S: TestStack):
 
 
 def covariates(S: TestStack):
-    """Impact index and log amplitude of each residual of :func:`residuals` (structure tests)."""
+    """Impact index, log amplitude and test order of each residual of :func:`residuals` (structure tests)."""
     with np.errstate(invalid="ignore", divide="ignore"):
         lv = np.log(S.vb)
     k, lA = S.k, np.log(np.maximum(S.A, 1e-300))
-    pair = lambda a, b: {"impact index": a, "amplitude": b}  # noqa: E731
-    return {"impact": pair(k, lv), "peak": pair(k, lA), "time": pair(k[:, :-1], lA[:, :-1]), "gap_time": pair(k, lv)}
+    # a property of the test: its per-test medians against it (a drift between tests)
+    order = S.order[:, None] + 0.0 * k
+    pair = lambda a, b, o: {"impact index": a, "amplitude": b, "test order": o}  # noqa: E731
+    return {
+        "impact": pair(k, lv, order),
+        "peak": pair(k, lA, order),
+        "time": pair(k[:, :-1], lA[:, :-1], order[:, :-1]),
+        "gap_time": pair(k, lv, order),
+    }
 
 
 def series_level(x, ok):

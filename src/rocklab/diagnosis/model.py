@@ -58,6 +58,7 @@ class ModelParams:
     zeta: np.ndarray
     gap: np.ndarray  # [rad]
     stop: np.ndarray  # landing speed [thetadot_r] below which the wall stops dead (0: never)
+    order: np.ndarray  # the test's place in its series, 0 (first) to 1 (last)
     extra: dict = field(default_factory=dict)
     impact_hooks: tuple = ()
 
@@ -96,20 +97,22 @@ def base_params(tests) -> ModelParams:
         zeta=0.0 * ones,
         gap=0.0 * alpha,
         stop=0.0 * ones,
+        order=np.array([t.order for t in tests], float),
     )
 
 
-def model_params(tests, ext=(), values=None) -> ModelParams:
+def model_params(tests, ext=(), values=None, base=None) -> ModelParams:
     """ModelParams of the base model extended by the causes ``ext`` with parameter ``values``.
 
     The causes act in catalogue order; the values of causes outside ``ext``
-    are not used.
+    are not used.  ``base``: :func:`base_params` of ``tests`` already made
+    (the causes replace its arrays, never change them).
     """
     # the catalogue's causes need this module (their stages run the model): read it at call time
     from rocklab.diagnosis import catalogue
 
-    mp = base_params(tests)
-    for cause in catalogue.CAUSES:
+    mp = base_params(tests) if base is None else base
+    for cause in catalogue.in_order():
         if cause.name in ext:
             mp = cause.apply(mp, cause.values(values or {}))
     return mp

@@ -7,7 +7,7 @@ import numpy as np
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.engine import Problem
 from rocklab.diagnosis.evidence import TestStack, covariates, log_ratio, noise_covariates, residuals
-from rocklab.diagnosis.model import free_run, model_params
+from rocklab.diagnosis.model import base_params, free_run, model_params
 
 
 class WallProblem(Problem):
@@ -18,7 +18,7 @@ class WallProblem(Problem):
         self.n_tests = len(self.tests)
         self.S = TestStack.of(self.tests)
         self.boundary = self.tests[0].boundary
-        self.causes = tuple(catalogue.for_boundary(self.boundary))
+        self.causes = tuple(catalogue.for_boundary(self.boundary, families=True))
         self.after_selection = tuple(catalogue.for_boundary(self.boundary, "after selection"))
         self._sig = None
         self._cache = {}
@@ -27,7 +27,10 @@ class WallProblem(Problem):
         return self.S.subset(np.asarray(idx))
 
     def residuals(self, sub, ext, values):
-        return residuals(sub, model_params(sub.tests, ext, values), self._cache)
+        # a fit evaluates one subset many times: its base model is made once
+        if self._cache.get("base_of") is not sub:
+            self._cache.update(base_of=sub, base=base_params(sub.tests))
+        return residuals(sub, model_params(sub.tests, ext, values, self._cache["base"]), self._cache)
 
     def covariates(self, sub):
         return covariates(sub)

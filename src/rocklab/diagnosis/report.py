@@ -110,6 +110,16 @@ def diagnosis_markdown(entries) -> str:
                     f"{f['evidence'].get('fit', '') if f['effect'] == 'stop_threshold' else ''} |"
                 )
             out += ["", *(line for note in note_lines(notes) for line in (note, ""))]
+        for f in e["findings"]:
+            if f.get("discovered"):
+                g = f["heldout_gain"]
+                out += [
+                    f"Discovered beyond the catalogue: {f['effect']}, {f['family']}; {f['reduces_to']}; held-out "
+                    f"deviance gain per observation {g['vs_base']:.3g} (standard error {g['vs_base_se']:.2g}) against "
+                    f"the base model, {g['vs_best_listed']:.3g} ({g['vs_best_listed_se']:.2g}) against the listed "
+                    f"causes alone ({', '.join(f['best_listed']) or 'none'}).",
+                    "",
+                ]
         h = e.get("heldout")
         if h and h["base"].get("free_run_log_peak_rms") is not None:
             hb, hm = h["base"], h["model"]

@@ -23,9 +23,9 @@ import time
 import numpy as np
 
 from rocklab.diagnosis import catalogue
-from rocklab.diagnosis.engine import finite_mean, select_effects
+from rocklab.diagnosis.engine import beyond_the_catalogue, discovery, finite_mean, select_effects
 from rocklab.diagnosis.errors import engineering_errors, what_is_wrong
-from rocklab.diagnosis.evidence import MeasuredTest, measured_test
+from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_test
 from rocklab.diagnosis.model import model_params
 from rocklab.diagnosis.problem import WallProblem
 from rocklab.dissipation.statistics import MIN_BOOTSTRAP, interval_note
@@ -85,7 +85,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
     """
     t0 = time.perf_counter()
     tests = [t if isinstance(t, MeasuredTest) else measured_test(t) for t in tests]
-    tests = [t for t in tests if t.n_impacts >= 2]
+    tests = in_series_order([t for t in tests if t.n_impacts >= 2])
     if not tests:
         raise ValueError("a diagnosis needs tests with at least two impacts")
     boundary = tests[0].boundary
@@ -136,7 +136,9 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         }
     problem = WallProblem(tests)
     sig = problem.signature
-    sel = select_effects(problem, signature=sig, n_boot=n_boot, seed=seed)
+    fits = {}
+    sel = select_effects(problem, signature=sig, n_boot=n_boot, seed=seed, fits=fits)
+    sel = beyond_the_catalogue(problem, sel, signature=sig, n_boot=n_boot, seed=seed, fits=fits)
     effects, values = sel["effects"], sel["fit"].values
     findings = []
     for eff in effects:
@@ -155,6 +157,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
                 },
                 "error_heldout": _heldout_summary(st["heldout"]),
                 "gain": _gain(sel["base"], st["heldout"]) | {"deviance_per_obs": st["gain"]},
+                **discovery(problem, eff, sel),
             }
         )
     findings.sort(key=lambda f: -f["gain"]["deviance_per_obs"])
@@ -184,6 +187,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         "unexplained": unexplained,
         "residual_structure": structure,
         "findings": findings,
+        **({"listed_verdict": sel["catalogue"]["effects"]} if "catalogue" in sel else {}),
         "weak_evidence": {k: v["reason"] for k, v in sel["weak"].items()},
         "rejected": sel["rejected"],
         "signatures": {k: v["text"] for k, v in sig.items()},

@@ -17,10 +17,12 @@ matplotlib.use("Agg")
 from pathlib import Path
 
 import matplotlib.pyplot as plt
+import numpy as np
 import xarray as xr
 
-from rocklab.diagnosis import measured_test, records_by_series, simulate_measured
+from rocklab.diagnosis import block_tests, measured_test, records_by_series, simulate_measured
 from rocklab.lab.motion import read_motion
+from rocklab.physics import restitution
 
 #: Literature models of panel a: label -> base of :func:`rocklab.diagnosis.model.rocking_model`.
 LITERATURE = {
@@ -114,6 +116,72 @@ def series_figures(entries, test_paths, motion_paths=()):
         own = [e for e in series if e["boundary"] == boundary]
         out[name] = out[max(own, key=lambda e: e["n_tests"])["key"]] if own else _empty(boundary)
     return out
+
+
+def family_figure(result, events):
+    """The impact law across the limestone blocks: the families against the data and the listed causes.
+
+    The median measured r/e_an (e_an Housner's, Eq. 2) of every trial
+    against (B/H)^2, the variable of Eq. 2, with the mean of each block
+    group; and the same median of each model's e/e_an over the impacts of
+    the trials, averaged over each group: Housner's e (1), the listed cause
+    of lowest BIC and each generalised family fitted to all trials (``families`` of
+    :func:`rocklab.diagnosis.block_tests.diagnose_blocks`).
+
+    Parameters
+    ----------
+    result : dict
+        :func:`rocklab.diagnosis.block_tests.diagnose_blocks` (results/limestone_diagnosis.json).
+    events : pandas.DataFrame
+        The per-impact table it was computed from (:func:`rocklab.diagnosis.block_tests.read_events`).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    trials = block_tests.pooled(block_tests.group_trials(events))
+    problem = block_tests.BlockProblem(trials)
+    e_an = restitution.two_sided(trials.alpha)[:, None]
+    x = np.tan(trials.alpha) ** 2
+    ok = np.isfinite(trials.r)
+
+    def per_trial(e):
+        return np.array([np.median(e[i][ok[i]]) for i in range(len(x))])
+
+    xs = np.unique(x)
+
+    def by_group(v):
+        return np.array([v[x == u].mean() for u in xs])
+
+    measured = per_trial(trials.r / e_an)
+    fig, ax = plt.subplots(figsize=(8, 5))
+    ax.plot(x, measured, "o", color="0.6", ms=3, label="measured, per trial (median over its impacts)")
+    ax.plot(xs, by_group(measured), "ks", ms=6, label="measured, mean of each block group")
+    ax.axhline(1.0, color="C0", lw=1.0, label="Housner's e (Eq. 2)")
+    for i, fam in enumerate(result["all"].get("families", [])):
+        if i == 0:
+            best = per_trial(problem.model_e(trials, fam["best_listed_params"]) / e_an)
+            pars = ", ".join(f"{k} = {v:.3g}" for k, v in fam["best_listed_params"].items())
+            ax.plot(xs, by_group(best), "--", color="C1", label=f"best listed: {fam['best_listed']} ({pars})")
+        model = per_trial(problem.model_e(trials, fam["params"]) / e_an)
+        pars = ", ".join(f"{k} = {v:.3g}" for k, v in fam["params"].items())
+        gain = fam["heldout_gain"]
+        ax.plot(
+            xs,
+            by_group(model),
+            color=f"C{3 + i}",
+            lw=1.5,
+            label=f"{fam['effect']}{' (discovered)' if fam['discovered'] else ''}: {pars}\n"
+            f"held-out gain {gain['vs_base']:.3g} +- {gain['vs_base_se']:.2g} over Housner, "
+            f"{gain['vs_best_listed']:.3g} +- {gain['vs_best_listed_se']:.2g} over the best listed; "
+            f"{fam['reduces_to']}",
+        )
+    ax.set_xlabel("(B/H)^2")
+    ax.set_ylabel("e / e_an (Housner, Eq. 2)")
+    ax.set_title(f"Limestone blocks: impact law across slendernesses ({result['all']['n_tests']} trials)")
+    ax.legend(fontsize=7, loc="best")
+    fig.tight_layout()
+    return fig
 
 
 def _empty(boundary):

@@ -313,6 +313,24 @@ def diagnosis(results: Path) -> dict:
     return out
 
 
+def _family(families: list[dict]) -> dict | None:
+    """The first generalised family of the limestone blocks (issue 12): form, parameters, intervals, gains."""
+    if not families:
+        return None
+    f = families[0]
+    return {
+        "effect": f["effect"],
+        "form": f["form"],
+        "params": f["params"],
+        "ci95": {k: list(v) for k, v in f["ci95"].items()},
+        "reduces_to": f["reduces_to"],
+        "discovered": f["discovered"],
+        "best_listed": f["best_listed"],
+        "dbic_vs_base": f["dbic_vs_base"],
+        "heldout_gain": f["heldout_gain"],
+    }
+
+
 def limestone(results: Path) -> dict:
     """The restitution diagnosis of the UMinho limestone blocks."""
     d = json.loads((results / "limestone_diagnosis.json").read_text())
@@ -333,6 +351,7 @@ def limestone(results: Path) -> dict:
         "signatures": a["signatures"],
         "heldout_ratio_rms": {"base": a["heldout"]["base"]["ratio_rms"], "model": a["heldout"]["model"]["ratio_rms"]},
         "slenderness": d["slenderness"],
+        "family": _family(a.get("families") or []),
         "groups": [
             {
                 "h_over_b": round(g["h_over_b"]),

@@ -64,6 +64,15 @@ class Cause:
         After-selection causes: ``estimate(tests, ext, values, seed) ->
         dict or None`` with ``named`` (bool), ``values`` (its parameters) and
         ``finding`` (the entry of the diagnosis).
+    family : str, optional
+        A generalised family (issue 12) rather than a listed cause: the
+        listed cause it holds as one member (its null values).  Families
+        are searched only where the listed causes leave structure, and a
+        family named is reported as discovered.
+    closed_form : callable, optional
+        Families: ``closed_form(values, ci) -> str``, the closed form of
+        the library the fitted member reduces to (its intervals hold the
+        values of that form), or "no closed form of the library".
     """
 
     name: str
@@ -77,6 +86,15 @@ class Cause:
     stage: str = "selection"
     unexplained: Callable | None = None
     estimate: Callable | None = None
+    family: str | None = None
+    closed_form: Callable | None = None
+
+    def holds(self, ci, name, value):
+        """Whether the 95 % interval ``ci`` of parameter ``name`` holds ``value`` (to its practical margin)."""
+        q = next(q for q in self.params if q.name == name)
+        lo, hi = ci[name]
+        margin = q.practical or 0.0
+        return lo - margin <= value <= hi + margin
 
     def values(self, values):
         """This cause's parameters from ``values``, the null value where missing."""

@@ -1,0 +1,75 @@
+"""Benchmark: the diagnosis of every series of a reduced campaign, timed series by series.
+
+    python bench/diagnosis.py --out results/bench [--results results]
+
+Reads the reduced tests and their motion (``<results>/tests``,
+``<results>/motion``, as the workflow's ``diagnose_series`` jobs do) and
+times :func:`rocklab.diagnosis.diagnose_records` on each series with the
+workflow's settings (``config/config.yaml``, defaults from its schema):
+CPU and wall seconds, the verdict.  With the workflow's job benchmarks
+(``<results>/benchmarks/diagnosis/*.tsv``) it also sums the job times of
+the diagnosis, start-up and reading included.  Writes
+``<out>/diagnosis.json`` and prints the totals.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import pandas as pd
+import yaml
+
+from rocklab.diagnosis import diagnose_records, records_by_series
+from rocklab.io import valid_tests
+from rocklab.lab.motion import read_motion
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, default=Path("results/bench"))
+    ap.add_argument("--results", type=Path, default=Path("results"))
+    args = ap.parse_args()
+    schema = yaml.safe_load((ROOT / "workflow" / "schemas" / "config.schema.yaml").read_text())
+    cfg = {k: v["default"] for k, v in schema["properties"]["diagnosis"]["properties"].items()}
+    cfg |= (yaml.safe_load((ROOT / "config" / "config.yaml").read_text()) or {}).get("diagnosis", {})
+    datasets = list(valid_tests(sorted((args.results / "tests").glob("*.nc"))))
+    motion = args.results / "motion"
+    motions = {ds.attrs["test_id"]: read_motion(motion / f"{ds.attrs['test_id']}.nc") for ds in datasets}
+    series = {}
+    for key, records in records_by_series(datasets, motions).items():
+        t0, c0 = time.perf_counter(), time.process_time()
+        entry = diagnose_records(records, key, n_boot=cfg["n_boot"], n_history=cfg["n_history"], seed=cfg["seed"])
+        series[key] = {
+            "cpu_s": time.process_time() - c0,
+            "wall_s": time.perf_counter() - t0,
+            "verdict": entry["verdict"] if entry else None,
+            "unexplained": entry["unexplained"] if entry else None,
+            "discovered": [f["effect"] for f in entry["findings"] if f.get("discovered")] if entry else [],
+        }
+        print(f"{key}: {series[key]['cpu_s']:.2f} s CPU")
+    jobs = sorted((args.results / "benchmarks" / "diagnosis").glob("*.tsv"))
+    job_s = [float(pd.read_csv(p, sep="\t")["s"].iloc[0]) for p in jobs]
+    out = {
+        "n_series": len(series),
+        "cpu_s": sum(s["cpu_s"] for s in series.values()),
+        "wall_s": sum(s["wall_s"] for s in series.values()),
+        "longest_series_cpu_s": max(s["cpu_s"] for s in series.values()),
+        "jobs": len(job_s),
+        "job_s": sum(job_s) if job_s else None,
+        "series": series,
+    }
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "diagnosis.json").write_text(json.dumps(out, indent=1))
+    print(
+        f"diagnosis of {out['n_series']} series: {out['cpu_s']:.1f} s CPU, {out['wall_s']:.1f} s wall"
+        + (f"; {len(job_s)} workflow jobs {out['job_s']:.1f} s" if job_s else "")
+    )
+
+
+if __name__ == "__main__":
+    main()
