@@ -164,3 +164,51 @@ def test_ground_batch_covers_the_free_motion_after_the_record():
     # the reference samples theta every dt: its peak lies a few (p dt)^2 below the true one
     sampled = np.nanmax(np.abs(ref.theta)) / ALPHA
     assert sampled <= float(ds.max_ratio[0]) < sampled * (1 + 2 * (P * dt) ** 2)
+
+
+def test_onset_on_the_first_sample():
+    """A record whose first sample alone exceeds the onset threshold starts the
+    wall rocking at t = 0 (the engine once skipped the first sample: 0 impacts)."""
+    model = RockingModel(alpha=ALPHA, p=P, form="linear")
+    ag, dt = np.zeros(50), 0.01
+    ag[0] = -60.0
+    ref = simulate_ground(model, _padded(ag, dt, 60.0), dt)
+    assert ref.t_rest is not None and len(ref.impacts) > 100
+    ds = ground_batch(ag, dt, [model], max_impacts=len(ref.impacts) + 5)
+    assert int(ds.n_impacts[0]) == len(ref.impacts)
+    np.testing.assert_allclose(ds.t_impact[0, : len(ref.impacts)], ref.impacts.t, atol=1e-6)
+
+
+def test_excursion_inside_one_solver_step_is_an_impact():
+    """Pacoima Dam at A_S/A = 0.84, D_S/D = 0.715, Housner's wall: after its 37th
+    impact the wall crosses its edge and turns back inside one solver step of the
+    reference, which once missed that impact (solve_ivp tests the sign at the
+    step ends) and let the wall rock on past its edge on the wrong hinge; the
+    engine then disagreed with it on 14 cells of the map (issue 13).  The
+    crossing is checked against an independent fine-step integration."""
+    from scipy.integrate import solve_ivp
+
+    from rocklab.seismic.accelerograms import load_record
+
+    tr = load_record("Pac164")
+    ag, dt = 0.84 * tr.data, 0.715 * tr.stats.delta
+    model = RockingModel(alpha=ALPHA, p=P, form="linear")
+    ref = simulate_ground(model, ag, dt).impacts
+    ds = ground_batch(ag, dt, [model], max_impacts=60)
+    n = min(len(ref), 45)
+    np.testing.assert_allclose(ds.t_impact[0, :n], ref.t[:n], atol=1e-7)
+    t0, v0 = ref.t[36], ref.thetadot_after[36]
+    t_rec = np.arange(len(ag) + 1) * dt
+    a_rec = np.append(ag, 0.0)
+    s = np.sign(v0)
+
+    def rhs(t, y):
+        return [y[1], P**2 * (y[0] - s * ALPHA - np.interp(t, t_rec, a_rec) / wall.G)]
+
+    def edge(t, y):
+        return y[0] if t > t0 + 1e-9 else s
+
+    edge.terminal, edge.direction = True, -s
+    fine = solve_ivp(rhs, (t0, t0 + 0.5), [0.0, v0], rtol=1e-12, atol=1e-16, max_step=1e-5, events=edge)
+    assert ref.t[37] == pytest.approx(fine.t_events[0][0], abs=1e-8)
+    assert ref.t[37] - t0 < 0.01

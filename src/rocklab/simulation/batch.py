@@ -175,9 +175,10 @@ def free_batch(
         Multiplies the base-impact coefficients (e.g. e_exp/e_an).
     amplitude_a, amplitude_b : array_like, optional
         Replace a, b of the base-impact laws (Eq. 17 form).
-    law : ndarray (n, 3, 3), optional
-        Full flat laws (rows base +, base -, transverse; columns e0, a, b),
-        see :meth:`rocklab.physics.impact.ImpactLaw.flat`; applied before e_scale.
+    law : ndarray (n, 3, 3) or (n, 3, 4), optional
+        Full flat laws (rows base +, base -, transverse; columns e0, a, b
+        and optionally v_stick), see
+        :meth:`rocklab.simulation.model.RockingModel.numba_law`; applied before e_scale.
     t_end, dt : float
         Duration [s] and step [s] (the closed form of the linear model is
         exact for any step; the exact form takes ``substeps`` RK4 steps).
@@ -209,7 +210,12 @@ def free_batch(
     b = {k: np.broadcast_to(v, np.broadcast_shapes(*shapes)).ravel() for k, v in given.items()}
     prm, law0 = _model_arrays([model], overturn, rest_tol, substeps)
     prm = np.repeat(prm, n, axis=0)
-    laws = np.repeat(law0, n, axis=0) if law is None else np.array(np.broadcast_to(law, (n, 3, 3)), float)
+    laws = np.repeat(law0, n, axis=0)
+    if law is not None:
+        # a law without the sticking column never sticks
+        law = np.asarray(law, float)
+        laws[..., : law.shape[-1]] = law
+        laws[..., law.shape[-1] :] = 0.0
     if "alpha_rock" in b:
         prm[:, 0] = b["alpha_rock"]
         if "alpha_neg" not in b and model.alpha_neg is None:
