@@ -212,3 +212,61 @@ def test_excursion_inside_one_solver_step_is_an_impact():
     fine = solve_ivp(rhs, (t0, t0 + 0.5), [0.0, v0], rtol=1e-12, atol=1e-16, max_step=1e-5, events=edge)
     assert ref.t[37] == pytest.approx(fine.t_events[0][0], abs=1e-8)
     assert ref.t[37] - t0 < 0.01
+
+
+def _calibrated_walls():
+    """Walls with every feature of a calibrated wall (rocklab.seismic.calibrated):
+    alpha_r < alpha, amplitude-dependent e, a stopping threshold; one-sided with
+    a gap, the threshold on the outer hinge's landings only."""
+    from rocklab.physics import impact
+
+    two = RockingModel(
+        alpha=ALPHA,
+        p=P,
+        form="linear",
+        alpha_rock=0.9 * ALPHA,
+        impact=impact.Sticking(impact.AmplitudeLaw(impact.HousnerTwoSided(), 0.96, 0.03), 0.11),
+    )
+    base = impact.HousnerTwoSided()
+    one = RockingModel(
+        alpha=ALPHA,
+        p=P,
+        form="linear",
+        boundary="one-sided",
+        gap=0.01 * ALPHA,
+        alpha_rock=0.74 * ALPHA,
+        impact=impact.Sided(impact.Sticking(base, 0.2), base),
+        transverse_impact=impact.AmplitudeLaw(impact.Transverse(), 1.22, 0.54),
+    )
+    return {"two-sided": two, "one-sided": one}
+
+
+@pytest.mark.parametrize("boundary", ["two-sided", "one-sided"])
+def test_sticking_law_in_the_engine_matches_the_reference(boundary):
+    """The engine's sticking threshold (fourth law column): free rocking and a
+    record give the reference's impacts, the last one a landing slower than
+    v_stick thetadot_r followed by rest; without it the walls rock on."""
+    model = _calibrated_walls()[boundary]
+    v_stick = model.numba_law()[0, 3]
+    assert v_stick > 0.1
+    ref = simulate_free(model, 0.95 * model.alpha_pos, t_end=30.0)
+    assert ref.t_rest is not None and len(ref.impacts) >= 3
+    last = ref.impacts.iloc[-1]
+    assert last.kind == "base" and abs(last.thetadot_before) < v_stick * model.thetadot_r
+    assert last.thetadot_after == 0.0
+    ds = free_batch(model, 0.95 * model.alpha_pos, t_end=30.0, dt=0.01, max_impacts=len(ref.impacts) + 5)
+    assert int(ds.n_impacts[0]) == len(ref.impacts)
+    np.testing.assert_allclose(ds.t_impact[0, : len(ref.impacts)], ref.impacts.t.to_numpy(float), atol=1e-7)
+    after = ref.impacts.thetadot_after.to_numpy(float)
+    np.testing.assert_allclose(ds.thetadot_after[0, : len(ref.impacts)], after, atol=1e-9)
+    loose = free_batch(model, 0.95 * model.alpha_pos, t_end=30.0, dt=0.01, law=model.numba_law()[:, :3])
+    assert int(loose.n_impacts[0]) > len(ref.impacts) + 10
+    ag, dt = _record()
+    for scale in (0.3, 0.6):
+        ref = simulate_ground(model, _padded(scale * ag, dt, 30.0), dt)
+        ds = ground_batch(ag, dt, [model], amplitude_scale=scale, max_impacts=len(ref.impacts) + 5)
+        assert bool(ds.overturned[0]) == ref.overturned
+        if not ref.overturned:
+            assert int(ds.n_impacts[0]) == len(ref.impacts)
+        n = min(int(ds.n_impacts[0]), len(ref.impacts))
+        np.testing.assert_allclose(ds.t_impact[0, :n], ref.impacts.t.to_numpy(float)[:n], atol=1e-6)
