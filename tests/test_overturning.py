@@ -387,9 +387,11 @@ def test_calibrated_maps_agree_with_the_event_driven_reference(pacoima, name):
     assert res["unexplained"] == 0, res["mismatches"]
 
 
-def test_calibrated_table_ranks_the_findings():
+def test_calibrated_table_ranks_the_findings(tmp_path):
     """N_O and the scatter of the calibrated wall against e alone, and the
-    finding whose removal moves N_O the most ranked first (made-up indices)."""
+    finding whose removal moves N_O the most ranked first (made-up indices);
+    the docs' numbers and table read it."""
+    from rocklab.report import numbers, pages
     from rocklab.seismic.calibrated import TABLE_COLUMNS, calibrated_table
 
     n_o = {
@@ -426,3 +428,12 @@ def test_calibrated_table_ranks_the_findings():
     assert t.loc["1s-calibrated-no-alpha", "rank"] == 1
     with pytest.raises(KeyError, match="lacks the models 1s-calibrated-no-gap"):
         calibrated_table(summary[summary.model != "1s-calibrated-no-gap"], _diagnosis())
+    assert numbers.calibrated(tmp_path) is None
+    (tmp_path / "maps").mkdir()
+    table.to_csv(tmp_path / "maps" / "calibrated.csv", index=False)
+    n = numbers.calibrated(tmp_path)
+    assert n["2s"]["matters_most"] == "instability_angle" and n["1s"]["matters_most"] == "instability_angle"
+    assert n["2s"]["calibrated"]["N_O_change_pct"] == pytest.approx(37.5)
+    assert n["1s"]["findings"]["contact_gap"]["rank"] == 2
+    md = pages.calibrated_walls({"calibrated": n})
+    assert len(md.splitlines()) == 2 + 11 and "`2s-calibrated-no-alpha` (no instability_angle)" in md

@@ -2,8 +2,8 @@
 
 Converged to the tolerances given, slow: the yardstick of the numba engine
 (:mod:`rocklab.simulation.engine`) and the simulator of the impact laws the
-engine does not accept (:class:`rocklab.physics.impact.Custom`,
-:class:`~rocklab.physics.impact.AmplitudeLaw`, :class:`~rocklab.physics.impact.Sticking`).
+engine does not accept (:class:`rocklab.physics.impact.Custom`, nested
+amplitude laws: no flat form, :meth:`rocklab.simulation.model.RockingModel.numba_law`).
 """
 
 from __future__ import annotations
