@@ -14,6 +14,7 @@ Scaling (Sect. 5): an amplitude scale multiplies ``ag``; a duration scale
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 import xarray as xr
 
@@ -74,12 +75,17 @@ def overturning_batch(
     A, D = np.meshgrid(amp, dur, indexing="ij")
     n = A.size
     prm, law = _model_arrays([model], overturn, rest_tol, substeps)
-    h = (dt * D).ravel()
+    # prange hands each thread one contiguous block of histories, and the
+    # cost of an amplitude row varies several times from row to row:
+    # interleaved, every thread gets a share of each row (2-17 % of a map's
+    # time lost to the idle thread otherwise, measured on three records)
+    order = np.argsort(np.arange(n) % numba.get_num_threads(), kind="stable")
+    h = (dt * D).ravel()[order]
     n_tail = np.ceil(tail / h).astype(np.int64)
     out = _kernel(
         np.ascontiguousarray(ag, float),
         h,
-        A.ravel().copy(),
+        A.ravel()[order],
         n_tail,
         False,
         np.repeat(prm, n, axis=0),
@@ -88,8 +94,9 @@ def overturning_batch(
         np.zeros(n),
         0,
     )
-    over = out[0].reshape(A.shape)
-    return (over, out[2].reshape(A.shape)) if return_max else over
+    over, max_ratio = np.empty(n, bool), np.empty(n)
+    over[order], max_ratio[order] = out[0], out[2]
+    return (over.reshape(A.shape), max_ratio.reshape(A.shape)) if return_max else over.reshape(A.shape)
 
 
 def ground_batch(
