@@ -254,7 +254,8 @@ def maps_records(n: Mapping) -> str:
 def calibrated_walls(n: Mapping) -> str:
     """The calibrated walls against e alone, and each finding switched off (issue 13, item 4)."""
     rows = []
-    for c in (n.get("calibrated") or {}).values():
+    walls = n.get("calibrated") or {}
+    for c in (walls[prefix] for prefix in ("2s", "1s") if prefix in walls):
         e, full = c["e_alone"], c["calibrated"]
         rows.append([f"`{e['model']}` (e alone)", show(e["N_O"], ".3f"), show(e["scatter"], ".3f"), "", ""])
         rows.append(
@@ -266,7 +267,7 @@ def calibrated_walls(n: Mapping) -> str:
                 "",
             ]
         )
-        for finding, f in c["findings"].items():
+        for finding, f in sorted(c["findings"].items(), key=lambda item: item[1]["rank"]):
             rows.append(
                 [
                     f"`{f['model']}` (no {finding})",
