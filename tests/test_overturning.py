@@ -428,6 +428,10 @@ def test_calibrated_table_ranks_the_findings(tmp_path):
     assert t.loc["1s-calibrated-no-alpha", "rank"] == 1
     with pytest.raises(KeyError, match="lacks the models 1s-calibrated-no-gap"):
         calibrated_table(summary[summary.model != "1s-calibrated-no-gap"], _diagnosis())
+    # a diagnosis that names no cause: no calibrated model, no map, an empty table
+    nothing = [{"scope": "boundary", "boundary": b, "verdict": [], "findings": []} for b in ("two-sided", "one-sided")]
+    empty = calibrated_table(pd.DataFrame([]), nothing)
+    assert list(empty.columns) == TABLE_COLUMNS and empty.empty
     assert numbers.calibrated(tmp_path) is None
     (tmp_path / "maps").mkdir()
     table.to_csv(tmp_path / "maps" / "calibrated.csv", index=False)

@@ -417,10 +417,13 @@ def maps(results: Path) -> dict:
 def calibrated(results: Path) -> dict | None:
     """Issue 13, item 4: the calibrated wall on the maps (``maps/calibrated.csv``), per
     boundary (``2s``, ``1s``): the e-alone model, the calibrated wall, each finding
-    switched off, and the finding that matters most; None without the table."""
+    switched off, and the finding that matters most; None without the table or
+    when the diagnosis named no cause (an empty table)."""
     if not (results / "maps" / "calibrated.csv").is_file():
         return None
     table = _csv(results / "maps", "calibrated.csv")
+    if table.empty:
+        return None
     out = {}
     for boundary, rows in table.groupby("boundary", sort=False):
         e_alone = rows[rows["role"] == "e alone"].iloc[0]

@@ -259,7 +259,8 @@ def calibrated_table(summary, diagnosis):
     from rocklab.seismic.overturning import record_reductions
 
     rows = []
-    present = set(summary["model"])
+    # no calibrated model, no map: an empty summary has no columns
+    present = set(summary["model"]) if "model" in summary else set()
     for boundary, prefix in PREFIX.items():
         found = boundary_findings(diagnosis, boundary)
         if not found:
