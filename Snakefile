@@ -36,6 +36,7 @@ localrules:
     all,
     campaign,
     maps,
+    calibrated,
     limestone,
     shake_table,
 
@@ -58,6 +59,12 @@ rule maps:
     """The overturning maps of Sect. 5 (Figs. 21-23 and their indices)."""
     input:
         map_outputs(),
+
+
+rule calibrated:
+    """The calibrated wall of the campaign's diagnosis on the maps (maps/calibrated.csv)."""
+    input:
+        calibrated_outputs(),
 
 
 rule limestone:

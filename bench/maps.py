@@ -5,7 +5,10 @@ Times one map per model of :data:`rocklab.seismic.overturning.MODELS` on El Cent
 (:func:`rocklab.simulation.reference.simulate_ground`) on ``--histories`` cells of the
 same grid drawn at random, and every map of every shipped record (measured,
 not extrapolated, unless ``--records`` restricts them: the JSON says which).
-Targets: one map < 2 s and all maps < 2 min on two cores.
+Targets: one map < 2 s and all maps (16 records x 6 models, issue 13) < 60 s
+on two cores; ``all_maps_vs_reference`` is the speed-up over the solve_ivp
+loop timed in the same run, the measure that does not depend on the
+machine's load.
 
 Usage: python bench/maps.py --out results/bench
 """
@@ -80,9 +83,10 @@ def main(argv=None):
         "all_maps_count": len(records) * len(MODELS),
         "all_maps_s": t_all,
         "all_maps_measured": True,
+        "all_maps_vs_reference": t_hist * n_cells * len(records) * len(MODELS) / t_all,
         "target_map_s": 2.0,
-        "target_all_maps_s": 120.0,
-        "pass": bool(max(v["map_s"] for v in per_model.values()) < 2.0 and t_all < 120.0 and not args.records),
+        "target_all_maps_s": 60.0,
+        "pass": bool(max(v["map_s"] for v in per_model.values()) < 2.0 and t_all < 60.0 and not args.records),
     }
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -19,6 +19,8 @@ ds = overturning_map(
     R=p.R,
     form=p.form,
     eq17=(p.eq17["a"], p.eq17["b"]),
+    # the calibrated walls read the campaign's diagnosis
+    diagnosis=snakemake.input.diagnosis[0] if snakemake.input.diagnosis else None,
     polarity=p.polarity,
     chunks=p.chunks,
 )

@@ -164,3 +164,109 @@ def test_ground_batch_covers_the_free_motion_after_the_record():
     # the reference samples theta every dt: its peak lies a few (p dt)^2 below the true one
     sampled = np.nanmax(np.abs(ref.theta)) / ALPHA
     assert sampled <= float(ds.max_ratio[0]) < sampled * (1 + 2 * (P * dt) ** 2)
+
+
+def test_onset_on_the_first_sample():
+    """A record whose first sample alone exceeds the onset threshold starts the
+    wall rocking at t = 0 (the engine once skipped the first sample: 0 impacts)."""
+    model = RockingModel(alpha=ALPHA, p=P, form="linear")
+    ag, dt = np.zeros(50), 0.01
+    ag[0] = -60.0
+    ref = simulate_ground(model, _padded(ag, dt, 60.0), dt)
+    assert ref.t_rest is not None and len(ref.impacts) > 100
+    ds = ground_batch(ag, dt, [model], max_impacts=len(ref.impacts) + 5)
+    assert int(ds.n_impacts[0]) == len(ref.impacts)
+    np.testing.assert_allclose(ds.t_impact[0, : len(ref.impacts)], ref.impacts.t, atol=1e-6)
+
+
+def test_excursion_inside_one_solver_step_is_an_impact():
+    """Pacoima Dam at A_S/A = 0.84, D_S/D = 0.715, Housner's wall: after its 37th
+    impact the wall crosses its edge and turns back inside one solver step of the
+    reference, which once missed that impact (solve_ivp tests the sign at the
+    step ends) and let the wall rock on past its edge on the wrong hinge; the
+    engine then disagreed with it on 14 cells of the map (issue 13).  The
+    crossing is checked against an independent fine-step integration."""
+    from scipy.integrate import solve_ivp
+
+    from rocklab.seismic.accelerograms import load_record
+
+    tr = load_record("Pac164")
+    ag, dt = 0.84 * tr.data, 0.715 * tr.stats.delta
+    model = RockingModel(alpha=ALPHA, p=P, form="linear")
+    ref = simulate_ground(model, ag, dt).impacts
+    ds = ground_batch(ag, dt, [model], max_impacts=60)
+    n = min(len(ref), 45)
+    np.testing.assert_allclose(ds.t_impact[0, :n], ref.t[:n], atol=1e-7)
+    t0, v0 = ref.t[36], ref.thetadot_after[36]
+    t_rec = np.arange(len(ag) + 1) * dt
+    a_rec = np.append(ag, 0.0)
+    s = np.sign(v0)
+
+    def rhs(t, y):
+        return [y[1], P**2 * (y[0] - s * ALPHA - np.interp(t, t_rec, a_rec) / wall.G)]
+
+    def edge(t, y):
+        return y[0] if t > t0 + 1e-9 else s
+
+    edge.terminal, edge.direction = True, -s
+    fine = solve_ivp(rhs, (t0, t0 + 0.5), [0.0, v0], rtol=1e-12, atol=1e-16, max_step=1e-5, events=edge)
+    assert ref.t[37] == pytest.approx(fine.t_events[0][0], abs=1e-8)
+    assert ref.t[37] - t0 < 0.01
+
+
+def _calibrated_walls():
+    """Walls with every feature of a calibrated wall (rocklab.seismic.calibrated):
+    alpha_r < alpha, amplitude-dependent e, a stopping threshold; one-sided with
+    a gap, the threshold on the outer hinge's landings only."""
+    from rocklab.physics import impact
+
+    two = RockingModel(
+        alpha=ALPHA,
+        p=P,
+        form="linear",
+        alpha_rock=0.9 * ALPHA,
+        impact=impact.Sticking(impact.AmplitudeLaw(impact.HousnerTwoSided(), 0.96, 0.03), 0.11),
+    )
+    base = impact.HousnerTwoSided()
+    one = RockingModel(
+        alpha=ALPHA,
+        p=P,
+        form="linear",
+        boundary="one-sided",
+        gap=0.01 * ALPHA,
+        alpha_rock=0.74 * ALPHA,
+        impact=impact.Sided(impact.Sticking(base, 0.2), base),
+        transverse_impact=impact.AmplitudeLaw(impact.Transverse(), 1.22, 0.54),
+    )
+    return {"two-sided": two, "one-sided": one}
+
+
+@pytest.mark.parametrize("boundary", ["two-sided", "one-sided"])
+def test_sticking_law_in_the_engine_matches_the_reference(boundary):
+    """The engine's sticking threshold (fourth law column): free rocking and a
+    record give the reference's impacts, the last one a landing slower than
+    v_stick thetadot_r followed by rest; without it the walls rock on."""
+    model = _calibrated_walls()[boundary]
+    v_stick = model.numba_law()[0, 3]
+    assert v_stick > 0.1
+    ref = simulate_free(model, 0.95 * model.alpha_pos, t_end=30.0)
+    assert ref.t_rest is not None and len(ref.impacts) >= 3
+    last = ref.impacts.iloc[-1]
+    assert last.kind == "base" and abs(last.thetadot_before) < v_stick * model.thetadot_r
+    assert last.thetadot_after == 0.0
+    ds = free_batch(model, 0.95 * model.alpha_pos, t_end=30.0, dt=0.01, max_impacts=len(ref.impacts) + 5)
+    assert int(ds.n_impacts[0]) == len(ref.impacts)
+    np.testing.assert_allclose(ds.t_impact[0, : len(ref.impacts)], ref.impacts.t.to_numpy(float), atol=1e-7)
+    after = ref.impacts.thetadot_after.to_numpy(float)
+    np.testing.assert_allclose(ds.thetadot_after[0, : len(ref.impacts)], after, atol=1e-9)
+    loose = free_batch(model, 0.95 * model.alpha_pos, t_end=30.0, dt=0.01, law=model.numba_law()[:, :3])
+    assert int(loose.n_impacts[0]) > len(ref.impacts) + 10
+    ag, dt = _record()
+    for scale in (0.3, 0.6):
+        ref = simulate_ground(model, _padded(scale * ag, dt, 30.0), dt)
+        ds = ground_batch(ag, dt, [model], amplitude_scale=scale, max_impacts=len(ref.impacts) + 5)
+        assert bool(ds.overturned[0]) == ref.overturned
+        if not ref.overturned:
+            assert int(ds.n_impacts[0]) == len(ref.impacts)
+        n = min(int(ds.n_impacts[0]), len(ref.impacts))
+        np.testing.assert_allclose(ds.t_impact[0, :n], ref.impacts.t.to_numpy(float)[:n], atol=1e-6)

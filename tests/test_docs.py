@@ -80,6 +80,7 @@ READ = (
     "limestone_diagnosis.json",
     "maps/summary.csv",
     "maps/reductions.csv",
+    "maps/calibrated.csv",
 )
 
 

@@ -272,3 +272,172 @@ def test_workflow_maps_one_record(tmp_path):
     for n in (21, 22, 23):
         assert (out / "figures" / f"fig{n}.png").stat().st_size > 0
     assert "amplitude rows 1-2 of 3 done" in (out / "logs" / "maps" / "Pac164__2s-housner.log").read_text()
+
+
+# ---------------------------------------------------------------- the calibrated wall
+
+
+def _diagnosis():
+    """A diagnosis.json with one entry per boundary (pooled findings, as
+    rocklab.diagnosis.series.diagnose_boundary writes them) and a series entry."""
+
+    def finding(effect, **params):
+        return {"effect": effect, "params": params}
+
+    return [
+        {"scope": "series", "key": "1a-2s", "boundary": "two-sided", "verdict": [], "findings": []},
+        {
+            "scope": "boundary",
+            "boundary": "two-sided",
+            "verdict": ["instability_angle", "restitution_amplitude", "stop_threshold"],
+            "findings": [
+                finding("instability_angle", alpha_r_over_alpha=0.9),
+                finding("restitution_amplitude", a=0.96, b=0.03),
+                finding("stop_threshold", v_stop_over_vr=0.11, spread_log=0.25),
+                finding("flight_damping", zeta=0.01),  # not in the verdict: not used
+            ],
+        },
+        {
+            "scope": "boundary",
+            "boundary": "one-sided",
+            "verdict": ["restitution_amplitude", "instability_angle", "contact_gap", "stop_threshold"],
+            "findings": [
+                finding("restitution_amplitude", a=1.22, b=0.53),
+                finding("instability_angle", alpha_r_over_alpha=0.74),
+                finding("contact_gap", gap_over_alpha=0.01),
+                finding("stop_threshold", v_stop_over_vr=0.2, spread_log=0.2),
+            ],
+        },
+    ]
+
+
+def test_calibrated_walls_carry_the_diagnosis_in_dimensionless_form():
+    """The findings land on the maps' wall as ratios: alpha_r = 0.9 alpha, e = e_an
+    (0.96 - 0.03 (v/v_r)^2), sticking below 0.11 v_r (v_r of the maps' wall);
+    one-sided: the gap model (Eq. 2 at the base, the Eq. 17-type law at the
+    transverse walls) with gap 0.01 alpha; each variant drops one finding."""
+    from rocklab.seismic import calibrated
+
+    diag = _diagnosis()
+    names = calibrated.model_names(diag)
+    assert names == [
+        "2s-calibrated",
+        "2s-calibrated-no-alpha",
+        "2s-calibrated-no-eamp",
+        "2s-calibrated-no-stop",
+        "1s-calibrated",
+        "1s-calibrated-no-eamp",
+        "1s-calibrated-no-alpha",
+        "1s-calibrated-no-gap",
+        "1s-calibrated-no-stop",
+    ]
+    for alpha, R in ((0.1, 3.0), (0.2, 1.5)):
+        two = named_model("2s-calibrated", alpha=alpha, R=R, diagnosis=diag)
+        assert two.form == "linear" and two.boundary == "two-sided"
+        assert two.alpha == alpha and two.p == pytest.approx(math.sqrt(0.75 * wall.G / R))
+        assert two.alpha_pos == two.alpha_minus == pytest.approx(0.9 * alpha)
+        e_an = restitution.two_sided(alpha)
+        np.testing.assert_allclose(two.numba_law()[:2], [[e_an, 0.96, 0.03, 0.11]] * 2)
+        # the law itself at a landing speed: Eq. 17 form, then sticking
+        v_r = two.thetadot_r
+        assert two.base_law.coefficient(0.5 * v_r, 1, alpha, two.p) == pytest.approx(e_an * (0.96 - 0.03 * 0.25))
+        assert two.base_law.coefficient(0.1 * v_r, 1, alpha, two.p) == 0.0
+        one = named_model("1s-calibrated", alpha=alpha, R=R, diagnosis=diag)
+        assert one.boundary == "one-sided" and one.gap == pytest.approx(0.01 * alpha)
+        assert one.alpha_pos == pytest.approx(0.74 * alpha)
+        law = one.numba_law()
+        np.testing.assert_allclose(law[0], [e_an, 1.0, 0.0, 0.2])  # landing from the outer hinge sticks
+        np.testing.assert_allclose(law[1], [e_an, 1.0, 0.0, 0.0])  # the return from the gap does not
+        np.testing.assert_allclose(law[2], [restitution.transverse(alpha), 1.22, 0.53, 0.0])
+    assert named_model("2s-calibrated-no-alpha", diagnosis=diag).alpha_pos == 0.1
+    assert named_model("2s-calibrated-no-stop", diagnosis=diag).numba_law()[0, 3] == 0.0
+    assert tuple(named_model("2s-calibrated-no-eamp", diagnosis=diag).numba_law()[0, 1:3]) == (1.0, 0.0)
+    nogap = named_model("1s-calibrated-no-gap", diagnosis=diag)
+    assert nogap.gap == 0.0
+    np.testing.assert_allclose(nogap.numba_law()[0], [restitution.one_sided(0.1), 1.22, 0.53, 0.2])
+
+
+def test_calibrated_models_need_a_diagnosis_that_names_them(tmp_path):
+    from rocklab.seismic import calibrated
+
+    with pytest.raises(ValueError, match="needs the diagnosis"):
+        named_model("2s-calibrated")
+    with pytest.raises(KeyError, match="does not name contact_gap"):
+        named_model("2s-calibrated-no-gap", diagnosis=_diagnosis())
+    with pytest.raises(KeyError, match="no calibrated model"):
+        calibrated.parse_name("2s-calibrated-no-colour")
+    with pytest.raises(ValueError, match="names no cause"):
+        named_model("1s-calibrated", diagnosis=_diagnosis()[:2])
+    bad = tmp_path / "diagnosis.json"
+    bad.write_text("{not json")
+    with pytest.raises(ValueError, match="diagnosis.json: not a readable diagnosis"):
+        named_model("2s-calibrated", diagnosis=bad)
+
+
+@pytest.mark.parametrize("name", ["2s-calibrated", "1s-calibrated", "1s-calibrated-no-gap"])
+def test_calibrated_maps_agree_with_the_event_driven_reference(pacoima, name):
+    """3 x 3 cells of the 201 grid (sticking, alpha_r, amplitude law, gap): a
+    difference must sit on the reference's own boundary."""
+    ag, dt = pacoima
+    grid = np.linspace(0.5, 1.5, 201)
+    sub = grid[::90]
+    model = named_model(name, diagnosis=_diagnosis())
+    fast = overturning_batch(ag, dt, model, sub, sub)
+    res = check_against_reference(ag, dt, model, sub, sub, fast, step=grid[1] - grid[0])
+    assert res["unexplained"] == 0, res["mismatches"]
+
+
+def test_calibrated_table_ranks_the_findings(tmp_path):
+    """N_O and the scatter of the calibrated wall against e alone, and the
+    finding whose removal moves N_O the most ranked first (made-up indices);
+    the docs' numbers and table read it."""
+    from rocklab.report import numbers, pages
+    from rocklab.seismic.calibrated import TABLE_COLUMNS, calibrated_table
+
+    n_o = {
+        "2s-0.95": (0.4, 0.2),
+        "2s-calibrated": (0.5, 0.3),
+        "2s-calibrated-no-alpha": (0.3, 0.2),
+        "2s-calibrated-no-eamp": (0.6, 0.3),
+        "2s-calibrated-no-stop": (0.5, 0.35),
+        "1s-1.05": (0.1, 0.1),
+        "1s-calibrated": (0.2, 0.1),
+        "1s-calibrated-no-eamp": (0.2, 0.1),
+        "1s-calibrated-no-alpha": (0.05, 0.1),
+        "1s-calibrated-no-gap": (0.25, 0.1),
+        "1s-calibrated-no-stop": (0.2, 0.1),
+        "2s-housner": (0.9, 0.9),  # another model: ignored
+    }
+    summary = pd.DataFrame(
+        [
+            {"record": rec, "model": m, "N_O": v[k], "scatter": 0.2 + v[k]}
+            for m, v in n_o.items()
+            for k, rec in enumerate(("A", "B"))
+        ]
+    )
+    table = calibrated_table(summary, _diagnosis())
+    assert list(table.columns) == TABLE_COLUMNS and len(table) == 11
+    t = table.set_index("model")
+    assert t.loc["2s-0.95", "role"] == "e alone" and t.loc["2s-calibrated", "role"] == "calibrated"
+    assert t.loc["2s-calibrated", "N_O_mean"] == pytest.approx(0.4)
+    # per record 100 (0.5/0.4 - 1) = 25 and 100 (0.3/0.2 - 1) = 50
+    assert t.loc["2s-calibrated", "N_O_change_pct"] == pytest.approx(37.5)
+    assert t.loc["2s-calibrated-no-alpha", "N_O_shift"] == pytest.approx(-0.15)
+    assert t.loc["2s-calibrated-no-alpha", "rank"] == 1 and t.loc["2s-calibrated-no-stop", "rank"] == 3
+    assert t.loc["1s-calibrated-no-alpha", "finding_off"] == "instability_angle"
+    assert t.loc["1s-calibrated-no-alpha", "rank"] == 1
+    with pytest.raises(KeyError, match="lacks the models 1s-calibrated-no-gap"):
+        calibrated_table(summary[summary.model != "1s-calibrated-no-gap"], _diagnosis())
+    # a diagnosis that names no cause: no calibrated model, no map, an empty table
+    nothing = [{"scope": "boundary", "boundary": b, "verdict": [], "findings": []} for b in ("two-sided", "one-sided")]
+    empty = calibrated_table(pd.DataFrame([]), nothing)
+    assert list(empty.columns) == TABLE_COLUMNS and empty.empty
+    assert numbers.calibrated(tmp_path) is None
+    (tmp_path / "maps").mkdir()
+    table.to_csv(tmp_path / "maps" / "calibrated.csv", index=False)
+    n = numbers.calibrated(tmp_path)
+    assert n["2s"]["matters_most"] == "instability_angle" and n["1s"]["matters_most"] == "instability_angle"
+    assert n["2s"]["calibrated"]["N_O_change_pct"] == pytest.approx(37.5)
+    assert n["1s"]["findings"]["contact_gap"]["rank"] == 2
+    md = pages.calibrated_walls({"calibrated": n})
+    assert len(md.splitlines()) == 2 + 11 and "`2s-calibrated-no-alpha` (no instability_angle)" in md

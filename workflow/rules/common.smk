@@ -102,4 +102,4 @@ def campaign_outputs():
 
 
 def all_outputs():
-    return campaign_outputs() + limestone_outputs() + map_outputs()
+    return campaign_outputs() + limestone_outputs() + map_outputs() + calibrated_outputs()

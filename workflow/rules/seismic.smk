@@ -2,6 +2,7 @@
 # model) map, since a map is the unit that takes time; then the indices of
 # Fig. 22 with the reductions between models, and the figures.
 from rocklab.seismic.accelerograms import accelerogram_dir, read_manifest
+from rocklab.seismic import calibrated
 from rocklab.seismic.overturning import MODELS
 
 MAPS = config["maps"]
@@ -22,6 +23,18 @@ def map_path(record, model):
     return res("maps", f"{record}__{model}.nc")
 
 
+def calibrated_outputs():
+    return [res("maps", "calibrated.csv"), res("report", "map_calibrated.html")]
+
+
+def calibrated_map_models():
+    """The e-alone and calibrated models, named by the campaign's diagnosis (a checkpoint)."""
+    with open(checkpoints.diagnosis.get().output.json) as f:
+        names = calibrated.model_names(json.load(f))
+    boundaries = {calibrated.parse_name(n)[0] for n in names}
+    return [calibrated.E_ALONE[b] for b in calibrated.PREFIX if b in boundaries] + names
+
+
 def record_file(wildcards):
     """The shipped file of the record, so that replacing it recomputes its maps."""
     return recorded_path(accelerogram_dir() / MANIFEST.set_index("record").loc[wildcards.record, "file"])
@@ -29,12 +42,14 @@ def record_file(wildcards):
 
 rule overturning_map:
     input:
-        record_file,
+        record=record_file,
+        # the calibrated walls (rocklab.seismic.calibrated) are the campaign's diagnosis
+        diagnosis=lambda wildcards: [res("diagnosis.json")] if calibrated.is_calibrated(wildcards.model) else [],
     output:
         res("maps", "{record}__{model}.nc"),
     wildcard_constraints:
         record="|".join(map(re.escape, MAP_RECORDS)),
-        model="|".join(map(re.escape, MODELS)),
+        model="|".join([*map(re.escape, MODELS), calibrated.NAME_PATTERN]),
     params:
         n=MAPS["n"],
         lo=MAPS["lo"],
@@ -108,5 +123,38 @@ rule map_pages:
         res("logs", "report_pages", "maps.log"),
     benchmark:
         res("benchmarks", "report_pages", "maps.tsv")
+    script:
+        "../../scripts/report_pages.py"
+
+
+# The lab's findings on the maps (issue 13, item 4): the calibrated walls of
+# the campaign's diagnosis on every record, against the paper's e alone.
+rule map_calibrated:
+    input:
+        maps=lambda wildcards: [map_path(r, m) for r in MAP_RECORDS for m in calibrated_map_models()],
+        diagnosis=res("diagnosis.json"),
+    output:
+        res("maps", "calibrated.csv"),
+    params:
+        schema=schema_path("map_calibrated.schema.yaml"),
+    log:
+        res("logs", "map_calibrated.log"),
+    benchmark:
+        res("benchmarks", "map_calibrated.tsv")
+    script:
+        "../../scripts/map_calibrated.py"
+
+
+rule map_calibrated_page:
+    input:
+        map_calibrated=res("maps", "calibrated.csv"),
+    output:
+        map_calibrated=report_page("map_calibrated", "maps", "maps/calibrated.csv, what the lab's findings change"),
+    params:
+        schemas={"map_calibrated": schema_path("map_calibrated.schema.yaml")},
+    log:
+        res("logs", "report_pages", "map_calibrated.log"),
+    benchmark:
+        res("benchmarks", "report_pages", "map_calibrated.tsv")
     script:
         "../../scripts/report_pages.py"

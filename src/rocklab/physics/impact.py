@@ -181,7 +181,8 @@ class Sticking(ImpactLaw):
     "imperfection of the rocking hinge" of Sect. 4) absorbs the last, small
     landings whole, so the walls stop after fewer impacts than any
     coefficient of restitution predicts, a number that scatters from test to
-    test (Fig. 18).  Only the event-driven reference integrator accepts it.
+    test (Fig. 18).  The numba engine reads the threshold from the fourth
+    column of :meth:`rocklab.simulation.model.RockingModel.numba_law`.
     """
 
     def __init__(self, law: ImpactLaw, v_stick: float):

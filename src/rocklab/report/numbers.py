@@ -439,6 +439,47 @@ def maps(results: Path) -> dict:
     return out
 
 
+def calibrated(results: Path) -> dict | None:
+    """Issue 13, item 4: the calibrated wall on the maps (``maps/calibrated.csv``), per
+    boundary (``2s``, ``1s``): the e-alone model, the calibrated wall, each finding
+    switched off, and the finding that matters most; None without the table or
+    when the diagnosis named no cause (an empty table)."""
+    if not (results / "maps" / "calibrated.csv").is_file():
+        return None
+    table = _csv(results / "maps", "calibrated.csv")
+    if table.empty:
+        return None
+    out = {}
+    for boundary, rows in table.groupby("boundary", sort=False):
+        e_alone = rows[rows["role"] == "e alone"].iloc[0]
+        full = rows[rows["role"] == "calibrated"].iloc[0]
+        offs = rows[rows["role"] == "finding off"].sort_values("rank")
+        out["2s" if boundary == "two-sided" else "1s"] = {
+            "e_alone": {"model": e_alone["model"], "N_O": e_alone["N_O_mean"], "scatter": e_alone["scatter_mean"]},
+            "calibrated": {
+                "model": full["model"],
+                "n_records": full["n_records"],
+                "N_O": full["N_O_mean"],
+                "scatter": full["scatter_mean"],
+                "N_O_change_pct": full["N_O_change_pct"],
+                "scatter_change_pct": full["scatter_change_pct"],
+            },
+            "findings": {
+                r["finding_off"]: {
+                    "model": r["model"],
+                    "N_O": r["N_O_mean"],
+                    "scatter": r["scatter_mean"],
+                    "N_O_shift": r["N_O_shift"],
+                    "N_O_shift_abs": r["N_O_shift_abs"],
+                    "rank": r["rank"],
+                }
+                for _, r in offs.iterrows()
+            },
+            "matters_most": offs["finding_off"].iloc[0] if len(offs) else None,
+        }
+    return out
+
+
 def _benchmarks(results: Path) -> dict:
     """Job times of the workflow from Snakemake's benchmark files: one entry
     per single-job rule (``<rule>.tsv``) and one per folder of jobs
@@ -577,6 +618,7 @@ SECTIONS = {
     "diagnosis": diagnosis,
     "limestone": limestone,
     "maps": maps,
+    "calibrated": calibrated,
     "performance": performance,
     "shake_table": shake_table,
 }

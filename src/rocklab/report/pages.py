@@ -251,6 +251,36 @@ def maps_records(n: Mapping) -> str:
     return markdown_table(header, rows)
 
 
+def calibrated_walls(n: Mapping) -> str:
+    """The calibrated walls against e alone, and each finding switched off (issue 13, item 4)."""
+    rows = []
+    walls = n.get("calibrated") or {}
+    for c in (walls[prefix] for prefix in ("2s", "1s") if prefix in walls):
+        e, full = c["e_alone"], c["calibrated"]
+        rows.append([f"`{e['model']}` (e alone)", show(e["N_O"], ".3f"), show(e["scatter"], ".3f"), "", ""])
+        rows.append(
+            [
+                f"`{full['model']}`",
+                show(full["N_O"], ".3f"),
+                show(full["scatter"], ".3f"),
+                f"{show(full['N_O_change_pct'], '+.0f')} / {show(full['scatter_change_pct'], '+.0f')}",
+                "",
+            ]
+        )
+        for finding, f in sorted(c["findings"].items(), key=lambda item: item[1]["rank"]):
+            rows.append(
+                [
+                    f"`{f['model']}` (no {finding})",
+                    show(f["N_O"], ".3f"),
+                    show(f["scatter"], ".3f"),
+                    "",
+                    f"{show(f['N_O_shift'], '+.3f')} (rank {show(f['rank'])})",
+                ]
+            )
+    header = ["model", "mean N_O", "mean scatter", "N_O / scatter vs e alone (%)", "N_O shift without it"]
+    return markdown_table(header, rows)
+
+
 def performance_jobs(n: Mapping) -> str:
     """Job times of the workflow by rule."""
     jobs = n["performance"]["jobs"]
@@ -366,6 +396,7 @@ TABLES: dict[str, Callable[[Mapping], str]] = {
     "diagnosis_series": diagnosis_series,
     "limestone_groups": limestone_groups,
     "maps_records": maps_records,
+    "calibrated_walls": calibrated_walls,
     "performance_jobs": performance_jobs,
     "shake_table_status": shake_table_status,
     "shake_table_scores": shake_table_scores,

@@ -49,6 +49,7 @@ from rocklab import __version__
 from rocklab.io import cf_attrs
 from rocklab.physics import impact, wall
 from rocklab.physics.restitution import CALIBRATED_RATIO_ONE_SIDED, CALIBRATED_RATIO_TWO_SIDED
+from rocklab.seismic import calibrated
 from rocklab.simulation.batch import overturning_batch
 from rocklab.simulation.model import OVERTURN, RockingModel
 from rocklab.simulation.reference import simulate_ground
@@ -112,13 +113,14 @@ def impact_law(name, eq17=None):
     raise KeyError(f"unknown map model {name!r}; choose one of {', '.join(MODELS)}")
 
 
-def named_model(name, alpha=ALPHA, R=R, form="linear", eq17=None):
-    """The wall of a named map model (:data:`MODELS`).
+def named_model(name, alpha=ALPHA, R=R, form="linear", eq17=None, diagnosis=None):
+    """The wall of a named map model (:data:`MODELS`, or a calibrated wall).
 
     Parameters
     ----------
     name : str
-        A key of :data:`MODELS`.
+        A key of :data:`MODELS`, or a calibrated model
+        (:data:`rocklab.seismic.calibrated.NAME_PATTERN`, with ``diagnosis``).
     alpha : float
         Slenderness angle [rad] (Fig. 21: 0.1).
     R : float
@@ -128,11 +130,18 @@ def named_model(name, alpha=ALPHA, R=R, form="linear", eq17=None):
         Equation of motion (module docstring: the maps use "linear").
     eq17 : tuple of float, optional
         (a, b) of Eq. 17 for ``"1s-eq17"``.
+    diagnosis : list of dict or path, optional
+        ``results/diagnosis.json`` of a campaign, for the calibrated walls
+        (:func:`rocklab.seismic.calibrated.calibrated_model`).
 
     Returns
     -------
     rocklab.simulation.model.RockingModel
     """
+    if calibrated.is_calibrated(name):
+        if diagnosis is None:
+            raise ValueError(f"the calibrated model {name!r} needs the diagnosis of a campaign (diagnosis=)")
+        return calibrated.calibrated_model(diagnosis, name, alpha, R, form)
     law = impact_law(name, eq17)
     return RockingModel(
         alpha=float(alpha), p=float(wall.frequency_parameter(R)), boundary=MODELS[name][0], impact=law, form=form
@@ -156,6 +165,7 @@ def overturning_map(
     R=R,
     form="linear",
     eq17=None,
+    diagnosis=None,
     polarity=1,
     chunks=10,
     overturn=OVERTURN,
@@ -175,10 +185,10 @@ def overturning_map(
     dt : float, optional
         Sample interval [s]; required for an array.
     model : str
-        A key of :data:`MODELS`.
+        A key of :data:`MODELS`, or a calibrated model (with ``diagnosis``).
     n, lo, hi : int, float, float
         Grid of A_S/A and D_S/D (:func:`scales`); the paper: 201, 0.5, 1.5.
-    alpha, R, form, eq17
+    alpha, R, form, eq17, diagnosis
         Wall and law, see :func:`named_model`.
     polarity : {1, -1}
         Multiplies the record: the maps of one-sided walls depend on it.
@@ -210,7 +220,7 @@ def overturning_map(
         ag = np.asarray(record, float)
     if polarity not in (1, -1):
         raise ValueError(f"polarity must be 1 or -1, not {polarity!r}")
-    wall_model = named_model(model, alpha, R, form, eq17)
+    wall_model = named_model(model, alpha, R, form, eq17, diagnosis)
     amp, dur = scales(n, lo, hi), scales(n, lo, hi)
     over = np.zeros((amp.size, dur.size), bool)
     signed = polarity * ag
@@ -228,7 +238,7 @@ def overturning_map(
         )
         if progress is not None:
             progress(int(rows[-1]) + 1, amp.size)
-    e0, a, b = wall_model.base_law.flat(wall_model.alpha)[0]
+    e0, a, b, v_stick = wall_model.numba_law()[0]
     return xr.Dataset(
         {
             "overturned": (
@@ -264,17 +274,25 @@ def overturning_map(
             "npts": int(ag.size),
             "polarity": int(polarity),
             "model": model,
-            "model_description": MODELS[model][1],
+            "model_description": (
+                calibrated.describe(diagnosis, model) if calibrated.is_calibrated(model) else MODELS[model][1]
+            ),
             "alpha": wall_model.alpha,
             "R": float(R),
             "p": wall_model.p,
             "form": form,
             "boundary": wall_model.boundary,
             "impact_law": type(wall_model.base_law).__name__,
-            # the engines' law e = e0 clip(a - b (thetadot^-/thetadot_r)^2) (rocklab.physics.impact)
+            # the engines' law e = e0 clip(a - b (thetadot^-/thetadot_r)^2) (rocklab.physics.impact),
+            # 0 below a landing of v_stick thetadot_r; positive hinge (the calibrated walls'
+            # other hinge and transverse impacts are in model_description)
             "impact_e0": float(e0),
             "impact_a": float(a),
             "impact_b": float(b),
+            "impact_v_stick": float(v_stick),
+            "alpha_rock": wall_model.alpha_pos,
+            "alpha_neg": wall_model.alpha_minus,
+            "gap": wall_model.gap,
             "overturning_criterion": OVERTURNING_CRITERION.format(overturn=overturn, tail=tail),
             "compute_s": time.perf_counter() - t0,
             "rocklab_version": __version__,

@@ -80,7 +80,15 @@ def _advance(x, v, s, ga, gb, u, prm, l1, l2, zp, h, Fh):
 
 @numba.njit(cache=True)
 def _coefficient(law, row, v, prm):
+    """Signed e of law row ``row`` (e0, a, b, v_stick) for a landing at v [rad/s].
+
+    ``e0 clip(a - b (v/thetadot_r)^2, 0, 1/|e0|)``
+    (:func:`rocklab.physics.impact.amplitude_factor`), and 0 for a landing
+    slower than v_stick thetadot_r (:class:`rocklab.physics.impact.Sticking`).
+    """
     e0, a, b = law[row, 0], law[row, 1], law[row, 2]
+    if abs(v) < law[row, 3] * prm[_P_VR]:
+        return 0.0
     if a == 1.0 and b == 0.0:
         return e0
     r = abs(v) / prm[_P_VR]
@@ -245,13 +253,19 @@ def run_history(ag, h, scale, n_tail, to_rest, prm, law, x, v, log_t, log_vb, lo
             two = rest_at == 0.0 and not (one and gap == 0.0)
             A0n = _accel(0.0, 0.0, -1.0, 0.0, prm)
             A1n = _accel(0.0, 0.0, -1.0, 1.0, prm) - A0n
-            while k + 1 < n_rec - 1:
+            # the step's own first sample too: at k = 0 (or after a hold) no
+            # earlier step has tested it, and skipping the step would miss an
+            # onset in its first part
+            a_now = scale * ag[k]
+            lifts = A0p + A1p * a_now > 0.0 or (two and A0n + A1n * a_now < 0.0)
+            while not lifts and k + 1 < n_rec - 1:
                 a_next = scale * ag[k + 1]
                 if A0p + A1p * a_next > 0.0 or (two and A0n + A1n * a_next < 0.0):
                     break
                 k += 1
         ga0 = scale * ag[k] if k < n_rec else 0.0
         hold = False
+        t_lift = -1.0
         ga1 = scale * ag[k + 1] if k + 1 < n_rec else 0.0
         t0 = k * h
         tau = 0.0
@@ -285,6 +299,7 @@ def run_history(ag, h, scale, n_tail, to_rest, prm, law, x, v, log_t, log_vb, lo
                 if s_on == 0.0 or hold:
                     break
                 resting = False
+                t_lift = t_on
                 s = s_on
                 x, v = rest_at, 0.0
                 peak = abs(x)
@@ -351,10 +366,13 @@ def run_history(ag, h, scale, n_tail, to_rest, prm, law, x, v, log_t, log_vb, lo
             peak = 0.0
             wrong_way = (one and gap == 0.0 and v_after <= 0.0) or (ev == 2 and v_after <= 0.0)
             if abs(v_after) < prm[_P_VREST] or wrong_way:
-                # a landing slower than rest (ground held at the onset
-                # threshold) would lift again at once, endlessly: the wall
-                # stays down to the end of the step, then the onset is tested
-                hold = abs(vm) < prm[_P_VREST]
+                # a landing slower than rest within rounding of the onset in
+                # this step (ground held at the onset threshold) would lift
+                # again at once, endlessly: the wall stays down to the end of
+                # the step, then the onset is tested.  Any other landing may
+                # lift at once, as the reference does: a wall coming back
+                # slowly against a ground that turns and pushes it away
+                hold = abs(vm) < prm[_P_VREST] and 0.0 <= t_lift and tau - t_lift <= 1e-9 * h
                 resting = True
                 rest_at = x
                 v = 0.0

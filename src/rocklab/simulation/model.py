@@ -228,10 +228,34 @@ class RockingModel:
         )
 
     def numba_law(self):
-        """Impact laws as a (3, 3) array: rows base +, base -, transverse."""
-        base = self.base_law.flat(self.alpha)
-        tr = self.transverse_law.flat(self.alpha)
-        return np.vstack([base, tr[1:2]])
+        """Impact laws as a (3, 4) array: rows base +, base -, transverse;
+        columns e0, a, b of the flat form (:meth:`rocklab.physics.impact.ImpactLaw.flat`)
+        and v_stick [thetadot_r] of a :class:`~rocklab.physics.impact.Sticking`
+        law (0: none).
+
+        Raises
+        ------
+        NotImplementedError
+            For a law the engines cannot evaluate (no flat form).
+        """
+        return np.array(
+            [
+                _engine_row(self.base_law, 1, self.alpha),
+                _engine_row(self.base_law, -1, self.alpha),
+                _engine_row(self.transverse_law, -1, self.alpha),
+            ]
+        )
+
+
+def _engine_row(law, side, alpha):
+    """(e0, a, b, v_stick) of ``law`` on hinge ``side``: the flat form, with
+    the sticking threshold of a :class:`~rocklab.physics.impact.Sticking`
+    law (possibly per hinge, :class:`~rocklab.physics.impact.Sided`)."""
+    if isinstance(law, _impact.Sided):
+        return _engine_row(law.law_pos if side > 0 else law.law_neg, side, alpha)
+    if isinstance(law, _impact.Sticking):
+        return [*_engine_row(law.law, side, alpha)[:3], law.v_stick]
+    return [*law.flat(alpha)[0 if side > 0 else 1], 0.0]
 
 
 @dataclass

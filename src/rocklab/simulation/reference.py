@@ -2,8 +2,8 @@
 
 Converged to the tolerances given, slow: the yardstick of the numba engine
 (:mod:`rocklab.simulation.engine`) and the simulator of the impact laws the
-engine does not accept (:class:`rocklab.physics.impact.Custom`,
-:class:`~rocklab.physics.impact.AmplitudeLaw`, :class:`~rocklab.physics.impact.Sticking`).
+engine does not accept (:class:`rocklab.physics.impact.Custom`, nested
+amplitude laws: no flat form, :meth:`rocklab.simulation.model.RockingModel.numba_law`).
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ import math
 import numpy as np
 import pandas as pd
 from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
 
 from rocklab.simulation.model import OVERTURN, REST_TOL, RockingHistory
 
@@ -72,6 +73,19 @@ def _onset(model, rec, t0, t_stop, theta_rest):
         if best[0] is None or t_on < best[0]:
             best = (t_on, side)
     return best
+
+
+def _missed_edge(dense, t0, t1, s):
+    """First instant in (t0, t1] at which the wall on hinge ``s`` is past its
+    edge (s theta < 0), from the dense output of one segment.
+
+    The grid is geometric from t0: the wall may leave the edge (an impact at
+    t0) and cross it back long before t1.
+    """
+    tt = t0 + (t1 - t0) * np.concatenate([[0.0], np.geomspace(1e-9, 1.0, 256)])
+    f = s * dense(tt)[0]
+    k = int(np.flatnonzero(f < 0.0)[0])
+    return brentq(lambda u: s * dense(u)[0], tt[k - 1], tt[k], xtol=1e-15, rtol=4 * np.finfo(float).eps)
 
 
 def _reference(model, rec, theta0, thetadot0, t_end, fs, overturn, rest_tol, rtol, atol, max_step, tail):
@@ -139,7 +153,16 @@ def _reference(model, rec, theta0, thetadot0, t_end, fs, overturn, rest_tol, rto
         def ev_peak(tt, y):
             return y[1]
 
-        events = [ev_base, ev_over, ev_peak]
+        # a wall moving towards its edge that turns back: if it turns past the
+        # edge, it crossed the edge and came back inside one solver step (a
+        # small excursion under ground motion), an impact that the sign test
+        # of ev_base misses (not at the segment's start: an onset or a turn)
+        def ev_turn(tt, y, t0=t, s=s):
+            return y[1] if tt > t0 else float(s)
+
+        ev_turn.terminal, ev_turn.direction = True, float(s)
+
+        events = [ev_base, ev_over, ev_peak, ev_turn]
         if model.one_sided and model.gap > 0 and s < 0:
 
             def ev_tr(tt, y, t0=t):
@@ -162,19 +185,23 @@ def _reference(model, rec, theta0, thetadot0, t_end, fs, overturn, rest_tol, rto
             events=events,
             dense_output=True,
         )
-        t_new = sol.t[-1]
-        fill(t, min(t_new, t_end), sol.sol)
-        peaks = [abs(th), abs(sol.y[0, -1])] + [abs(y[0]) for y in sol.y_events[2]]
         if sol.status == -1:
             raise RuntimeError(f"solve_ivp failed at t = {t:.6g} s: {sol.message}")
-        if sol.status != 1:  # reached the end of the piece
+        t_new, v_before = sol.t[-1], sol.y[1, -1]
+        turned = sol.status == 1 and sol.t_events[3].size > 0
+        if turned and s * sol.y[0, -1] < 0.0:
+            t_new = _missed_edge(sol.sol, t, t_new, s)
+            v_before = float(sol.sol(t_new)[1])
+        fill(t, min(t_new, t_end), sol.sol)
+        peaks = [abs(th), abs(sol.y[0, -1])] + [abs(y[0]) for y in sol.y_events[2]]
+        if sol.status != 1 or (turned and s * sol.y[0, -1] >= 0.0):
+            # the end of the piece, or a turn short of the edge
             t, th, thd = t_new, sol.y[0, -1], sol.y[1, -1]
             continue
         if sol.t_events[1].size:
             overturned, t_ov = True, float(sol.t_events[1][0])
             break
-        transverse = len(events) == 4 and sol.t_events[3].size > 0
-        v_before = sol.y[1, -1]
+        transverse = len(events) == 5 and sol.t_events[4].size > 0
         t = t_new
         if transverse:
             e = float(law_tr.coefficient(v_before, -1, model.alpha, model.p))

@@ -1,0 +1,300 @@
+"""The calibrated wall: the maps' wall with what the diagnosis of a campaign found.
+
+The paper's maps (Sect. 5) change only the coefficient of restitution of
+Housner's wall.  The diagnosis of a free-rocking campaign
+(:mod:`rocklab.diagnosis`, ``results/diagnosis.json``) names, per boundary
+condition, every cause that sets the walls apart from that model: the
+instability angle (alpha_r/alpha), the impact law (e/e_an, its amplitude
+dependence a - b (thetadot^-/thetadot_r)^2, Eq. 17 form), the landing speed
+below which the walls stop dead (:class:`rocklab.physics.impact.Sticking`),
+the contact gap of one-sided walls (Fig. 12), hinge asymmetry, flight damping.
+
+Each boundary's entry of the diagnosis (scope ``"boundary"``) pools its
+series: a cause named in at least half of them, with the test-weighted mean
+of its parameters over the series that name it
+(:func:`rocklab.diagnosis.series.diagnose_boundary`).  Every parameter is
+dimensionless (ratios to alpha, to e_an, to thetadot_r of Eq. 16), so the
+findings transfer to the maps' wall (alpha, R of the configuration): the
+calibrated wall is the diagnosis model of that wall
+(:func:`rocklab.diagnosis.model.rocking_model`), the one place where the
+causes become a :class:`~rocklab.simulation.model.RockingModel`.
+
+Models
+------
+``2s-calibrated`` / ``1s-calibrated``
+    Every finding of the boundary.
+``2s-calibrated-no-<finding>`` ...
+    The same with one finding switched off (:data:`SHORT` names them): the
+    change of N_O and of the scatter against the full calibrated wall tells
+    which finding matters most.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from rocklab.physics import wall
+
+#: Prefix of the model names of a boundary condition (as the paper's models).
+PREFIX = {"two-sided": "2s", "one-sided": "1s"}
+
+#: Short name of each cause of the catalogue in the model names ("-no-<short>").
+SHORT = {
+    "restitution_scale": "escale",
+    "restitution_amplitude": "eamp",
+    "instability_angle": "alpha",
+    "flight_damping": "zeta",
+    "hinge_asymmetry": "asym",
+    "contact_gap": "gap",
+    "stop_threshold": "stop",
+}
+
+#: Model names of the calibrated walls: ``{2s,1s}-calibrated[-no-<short>]``.
+NAME_PATTERN = r"[12]s-calibrated(?:-no-(?:" + "|".join(SHORT.values()) + "))?"
+
+
+@dataclass(frozen=True)
+class MapWall:
+    """The maps' wall as the diagnosis model reads a test: alpha [rad], p [rad/s], boundary."""
+
+    alpha: float
+    p: float
+    boundary: str
+
+
+def read_diagnosis(diagnosis):
+    """The entries of ``results/diagnosis.json`` from a path or the list itself."""
+    if isinstance(diagnosis, (str, Path)):
+        path = Path(diagnosis)
+        try:
+            entries = json.loads(path.read_text())
+        except (OSError, json.JSONDecodeError) as err:
+            raise ValueError(f"{path}: not a readable diagnosis ({err})") from err
+        if not isinstance(entries, list):
+            raise ValueError(f"{path}: a diagnosis is a list of entries, not {type(entries).__name__}")
+        return entries
+    return list(diagnosis)
+
+
+def boundary_findings(diagnosis, boundary):
+    """The pooled findings of one boundary condition, in the diagnosis' order.
+
+    Parameters
+    ----------
+    diagnosis : list of dict or path
+        The entries of ``results/diagnosis.json``; without an entry of scope
+        ``"boundary"`` for ``boundary``, its series are pooled here
+        (:func:`rocklab.diagnosis.series.diagnose_boundary`).
+    boundary : {"two-sided", "one-sided"}
+
+    Returns
+    -------
+    dict
+        cause name -> {parameter: value}; empty when the boundary has no
+        series or none names a cause.
+    """
+    entries = read_diagnosis(diagnosis)
+    entry = next((e for e in entries if e.get("scope") == "boundary" and e.get("boundary") == boundary), None)
+    if entry is None:
+        from rocklab.diagnosis.series import diagnose_boundary
+
+        entry = diagnose_boundary(entries, boundary)
+    if entry is None:
+        return {}
+    from rocklab.diagnosis.catalogue import by_name
+
+    # a finding also reports statistics of its parameters (spread_log): only the cause's own parameters
+    return {
+        f["effect"]: {q.name: float(f["params"][q.name]) for q in by_name(f["effect"]).params}
+        for f in entry["findings"]
+        if f["effect"] in entry["verdict"]
+    }
+
+
+def model_names(diagnosis):
+    """Names of the calibrated models a diagnosis gives: per boundary with
+    findings, the full calibrated wall and one variant per finding switched off."""
+    names = []
+    for boundary, prefix in PREFIX.items():
+        found = boundary_findings(diagnosis, boundary)
+        if found:
+            names.append(f"{prefix}-calibrated")
+            names += [f"{prefix}-calibrated-no-{SHORT[c]}" for c in found]
+    return names
+
+
+def parse_name(name):
+    """(boundary, cause switched off or None) of a calibrated model name.
+
+    Raises
+    ------
+    KeyError
+        For a name that is no calibrated model.
+    """
+    m = re.fullmatch(r"([12]s)-calibrated(?:-no-(\w+))?", name)
+    short_to_cause = {v: k for k, v in SHORT.items()}
+    if m is None or (m.group(2) is not None and m.group(2) not in short_to_cause):
+        raise KeyError(f"{name!r} is no calibrated model (<2s|1s>-calibrated[-no-<{'|'.join(SHORT.values())}>])")
+    boundary = {v: k for k, v in PREFIX.items()}[m.group(1)]
+    return boundary, (short_to_cause[m.group(2)] if m.group(2) else None)
+
+
+def is_calibrated(name):
+    """Whether ``name`` is a calibrated model name (:data:`NAME_PATTERN`)."""
+    return re.fullmatch(NAME_PATTERN, str(name)) is not None
+
+
+def calibrated_model(diagnosis, name, alpha, R, form="linear"):
+    """The wall of a calibrated model on the maps' wall.
+
+    Parameters
+    ----------
+    diagnosis : list of dict or path
+        ``results/diagnosis.json`` (entries or its path).
+    name : str
+        ``2s-calibrated``, ``1s-calibrated-no-stop``, ... (:func:`model_names`).
+    alpha : float
+        Nominal slenderness of the maps' wall [rad].
+    R : float
+        Half diagonal [m] (p = sqrt(3 g / 4 R), homogeneous wall).
+    form : {"linear", "exact"}
+
+    Returns
+    -------
+    rocklab.simulation.model.RockingModel
+
+    Raises
+    ------
+    KeyError
+        A name that is no calibrated model, or whose finding the diagnosis
+        does not name.
+    ValueError
+        A diagnosis whose boundary names no cause.
+    """
+    from rocklab.diagnosis.model import rocking_model
+
+    boundary, off = parse_name(name)
+    found = boundary_findings(diagnosis, boundary)
+    if not found:
+        raise ValueError(f"{name}: the diagnosis names no cause for {boundary} walls, nothing to calibrate")
+    if off is not None and off not in found:
+        raise KeyError(f"{name}: the diagnosis does not name {off} for {boundary} walls ({', '.join(found)})")
+    ext = [c for c in found if c != off]
+    values = {k: v for c in ext for k, v in found[c].items()}
+    model = rocking_model(MapWall(float(alpha), float(wall.frequency_parameter(R)), boundary), ext, values)
+    return replace(model, form=form)
+
+
+def describe(diagnosis, name):
+    """One line on what a calibrated model holds, with the pooled parameters."""
+    boundary, off = parse_name(name)
+    found = boundary_findings(diagnosis, boundary)
+    parts = [f"{c} (" + ", ".join(f"{k} = {v:.3g}" for k, v in p.items()) + ")" for c, p in found.items() if c != off]
+    text = f"{boundary}, calibrated on the campaign's diagnosis: " + ("; ".join(parts) or "no finding")
+    return text + (f"; {off} switched off" if off else "")
+
+
+#: The paper's "e alone" calibration of each boundary (Sect. 3, Table 3): the
+#: baseline the calibrated walls are compared with.
+E_ALONE = {"two-sided": "2s-0.95", "one-sided": "1s-1.05"}
+
+#: Columns of ``results/maps/calibrated.csv`` (schema map_calibrated.schema.yaml).
+TABLE_COLUMNS = [
+    "boundary",
+    "model",
+    "role",
+    "finding_off",
+    "baseline",
+    "n_records",
+    "N_O_mean",
+    "scatter_mean",
+    "N_O_change_pct",
+    "scatter_change_pct",
+    "N_O_shift",
+    "N_O_shift_abs",
+    "rank",
+]
+
+
+def calibrated_table(summary, diagnosis):
+    """What the lab's findings do to the maps, per boundary condition.
+
+    Rows: the paper's e-alone model of the boundary (:data:`E_ALONE`), the
+    calibrated wall, and the calibrated wall with each finding switched off.
+    Changes are per record, then averaged over the records where they are
+    defined: ``N_O_change_pct`` and ``scatter_change_pct`` are
+    100 (x_model / x_e-alone - 1) (minus the reductions of
+    :func:`rocklab.seismic.overturning.record_reductions`: positive = more);
+    ``N_O_shift`` is the mean of N_O(model) - N_O(calibrated) [fraction of
+    the map] and ``N_O_shift_abs`` the mean of its absolute value; ``rank``
+    orders the findings by ``N_O_shift_abs`` (1: the finding that matters
+    most, switched off it moves N_O the most).
+
+    Parameters
+    ----------
+    summary : pandas.DataFrame
+        :func:`rocklab.seismic.overturning.summary_table` of the maps of the
+        e-alone and calibrated models (other models are ignored).
+    diagnosis : list of dict or path
+        ``results/diagnosis.json``, which names the models.
+
+    Returns
+    -------
+    pandas.DataFrame
+        :data:`TABLE_COLUMNS`; empty (with the columns) when the diagnosis
+        names no cause.
+
+    Raises
+    ------
+    KeyError
+        A model the diagnosis names that ``summary`` lacks.
+    """
+    # overturning names its models through this module: read it at call time
+    from rocklab.seismic.overturning import record_reductions
+
+    rows = []
+    # no calibrated model, no map: an empty summary has no columns
+    present = set(summary["model"]) if "model" in summary else set()
+    for boundary, prefix in PREFIX.items():
+        found = boundary_findings(diagnosis, boundary)
+        if not found:
+            continue
+        full, base = f"{prefix}-calibrated", E_ALONE[boundary]
+        models = [base, full] + [f"{full}-no-{SHORT[c]}" for c in found]
+        missing = [m for m in models if m not in present]
+        if missing:
+            raise KeyError(f"the maps summary lacks the models {', '.join(missing)}")
+        wide = summary.set_index(["record", "model"])[["N_O", "scatter"]].unstack("model")
+        block = []
+        for model, off in zip(models, [None, None, *found]):
+            change = -record_reductions(summary, base, model)
+            shift = wide[("N_O", model)] - wide[("N_O", full)]
+            block.append(
+                {
+                    "boundary": boundary,
+                    "model": model,
+                    "role": "e alone" if model == base else ("calibrated" if off is None else "finding off"),
+                    "finding_off": off or "",
+                    "baseline": base,
+                    "n_records": int(wide[("N_O", model)].notna().sum()),
+                    "N_O_mean": wide[("N_O", model)].mean(),
+                    "scatter_mean": wide[("scatter", model)].mean(),
+                    "N_O_change_pct": change["N_O"].mean(),
+                    "scatter_change_pct": change["scatter"].mean(),
+                    "N_O_shift": shift.mean(),
+                    "N_O_shift_abs": shift.abs().mean(),
+                    "rank": np.nan,
+                }
+            )
+        offs = sorted((r for r in block if r["role"] == "finding off"), key=lambda r: -r["N_O_shift_abs"])
+        for k, r in enumerate(offs, 1):
+            r["rank"] = k
+        rows += block
+    table = pd.DataFrame(rows, columns=TABLE_COLUMNS)
+    return table.astype({"rank": "Int64"})
