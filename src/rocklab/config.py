@@ -70,7 +70,9 @@ def check_paths(raw_dir, results_dir) -> None:
     ------
     ConfigError
         ``raw_dir`` is not a folder or has no ``tests.csv``; ``results_dir``
-        is ``raw_dir`` or lies inside it (the campaign folder is only read).
+        is ``raw_dir`` or lies inside it (the campaign folder is only read),
+        holds it (a result could overwrite a record: ``results/tests/``),
+        or is a file.  Both are compared resolved, symbolic links followed.
     """
     raw = Path(raw_dir)
     campaign = "a campaign in the lab's raw format, docs/raw-format.md"
@@ -84,6 +86,13 @@ def check_paths(raw_dir, results_dir) -> None:
             f"results_dir {str(results_dir)!r} is inside raw_dir {str(raw)!r}: the campaign folder is only read, "
             "write the results elsewhere"
         )
+    if results in raw.parents:
+        raise ConfigError(
+            f"raw_dir {str(raw_dir)!r} is inside results_dir {str(results_dir)!r}: the results could overwrite "
+            "the campaign, write them elsewhere"
+        )
+    if results.exists() and not results.is_dir():
+        raise ConfigError(f"results_dir {str(results_dir)!r} is a file, not a folder")
 
 
 def recorded_path(path, workdir=None) -> str:
