@@ -2,8 +2,9 @@
 
 A tiny virtual-lab campaign and one small overturning map per model, up to
 the tables of every stage (no figure).  Tables (CSV, JSON) must be
-byte-identical; netCDF files identical in content, their ``history``
-attribute aside: it records when each file was written (rocklab.io.write_netcdf).
+byte-identical; netCDF files identical in content, the attributes of
+:data:`VOLATILE` aside: they record when a file was written and how long
+it took, not what it holds.
 """
 
 import json
@@ -33,6 +34,9 @@ CONFIG = {
 }
 #: The tables of every stage: reduction, QC, dissipation, diagnosis, maps.
 TABLES = ["qc.csv", "kinematics.csv", "tests.csv", "series.csv", "impacts.csv", "diagnosis.json", "maps/summary.csv"]
+#: netCDF attributes that differ from run to run: the time each file was written
+#: (rocklab.io.write_netcdf) and the time a map took to compute.
+VOLATILE = ("history", "compute_s")
 #: Where a job of each stage writes its log as it starts (rocklab.io.setup_logging).
 STAGES = {"reduction": "logs/reduce", "diagnosis": "logs/diagnosis", "map": "logs/maps"}
 
@@ -78,7 +82,8 @@ def _run_killed(campaign, results, config, stage, delay, sig, jobs_only=False):
 def _netcdf(path):
     with xr.open_dataset(path) as ds:
         ds = ds.load()
-    ds.attrs.pop("history", None)
+    for name in VOLATILE:
+        ds.attrs.pop(name, None)
     return ds
 
 
