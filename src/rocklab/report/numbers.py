@@ -436,6 +436,24 @@ def _bench(results: Path, name: str):
     return json.loads(path.read_text()) if path.is_file() else None
 
 
+def _scale(bench: dict) -> dict:
+    """The smallest and largest campaign of ``bench/scale.py`` and the line through them."""
+    small, large = bench["runs"][0], bench["runs"][-1]
+    ten = bench.get("ten_times_embedded") or {}
+    return {
+        "cores": bench["cores"],
+        "load_avg_1min": bench["load_avg_1min"],
+        **{f"{k}_n_tests": r["n_tests"] for k, r in (("small", small), ("large", large))},
+        **{f"{k}_s": r["wall_s"] for k, r in (("small", small), ("large", large))},
+        **{f"{k}_peak_mb": r["peak_rss_tree_mb"] for k, r in (("small", small), ("large", large))},
+        "s_per_test": bench.get("wall_s_per_test"),
+        "memory_ratio": bench.get("memory_ratio"),
+        "linear": bench.get("linear"),
+        "ten_times_n_tests": ten.get("n_tests"),
+        "ten_times_s": ten.get("wall_s"),
+    }
+
+
 def performance(results: Path) -> dict:
     """Timings: the workflow's job times and, when measured, ``make bench``."""
     jobs = _benchmarks(results)
@@ -474,6 +492,8 @@ def performance(results: Path) -> dict:
         if mp
         else None
     )
+    sc = _bench(results, "scale")
+    out["scale"] = _scale(sc) if sc else None
     ref = _bench(results, "maps_reference")
     out["maps_reference"] = (
         {
