@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rocklab.config import ConfigError, check_paths
+from rocklab.config import ConfigError, check_names, check_paths
 from rocklab.lab.campaign import open_campaign
 from rocklab.lab.reduction import qc_table, reduce_tests
 
@@ -435,6 +435,24 @@ def test_results_dir_and_raw_dir_kept_apart(tmp_path):
     (tmp_path / "afile").write_text("")
     with pytest.raises(ConfigError, match="is a file"):
         check_paths(raw, tmp_path / "afile")
+
+
+@pytest.mark.parametrize(
+    "section, key, value",
+    [
+        ("figures", "sample_test", "../../../etc/passwd"),
+        ("figures", "fig20_test", "T9999"),
+        ("maps", "figure_record", "../../x"),
+        ("maps", "records", ["Pac164", "../../../x"]),
+    ],
+)
+def test_names_in_the_config_must_be_inputs(section, key, value):
+    """A test or record the config names becomes a file name: one the inputs lack is refused."""
+    config = {"figures": {"sample_test": "", "fig20_test": ""}, "maps": {"records": [], "figure_record": "Pac164"}}
+    check_names(config, ["V0001"], {"Pac164"})
+    config[section][key] = value
+    with pytest.raises(ConfigError, match=f"config key {section}.{key}"):
+        check_names(config, ["V0001"], {"Pac164"})
 
 
 @pytest.mark.skipif(not SNAKEMAKE.exists(), reason="snakemake not installed beside this interpreter")

@@ -4,8 +4,9 @@ import json
 import re
 from pathlib import Path
 
-from rocklab.config import check_paths, recorded_path
+from rocklab.config import check_names, check_paths, recorded_path
 from rocklab.lab.campaign import UNREADABLE, open_campaign
+from rocklab.seismic.accelerograms import read_manifest
 
 # config is validated by the Snakefile, every default filled in from
 # workflow/schemas/config.schema.yaml: the rules read it without defaults.
@@ -17,6 +18,8 @@ RESULTS = Path(config["results_dir"])
 CAMPAIGN = open_campaign(RAW)
 #: The tests with a results file of their own (safe ids, first row of each).
 TEST_IDS = CAMPAIGN.test_ids
+# the tests and records the config names become file names too
+check_names(config, TEST_IDS, set(read_manifest().record))
 #: The unit of one reduction job: a series, or the tests refused at the door.
 REDUCTION_GROUPS = CAMPAIGN.reduction_groups()
 #: The tests of each series, in the order of tests.csv.
