@@ -123,7 +123,9 @@ def main(argv=None):
     ap.add_argument("--out", type=Path, default=Path("results/bench"))
     ap.add_argument("--sizes", type=int, nargs="+", default=[60, 600])
     ap.add_argument("--cores", type=int, default=2)
-    ap.add_argument("--workdir", type=Path, default=None, help="where campaigns and results go (default: a temp folder)")
+    ap.add_argument(
+        "--workdir", type=Path, default=None, help="where campaigns and results go (default: a temp folder)"
+    )
     args = ap.parse_args(argv)
     work = Path(args.workdir or tempfile.mkdtemp(prefix="rocklab-scale-"))
     runs = []
