@@ -118,6 +118,28 @@ def run_workflow(campaign: Path, results: Path, cores: int) -> dict:
     }
 
 
+def summary(runs: list, cores: int) -> dict:
+    """The runs, and the line through the smallest and the largest campaign."""
+    out = {"cores": cores, "cpu_count": os.cpu_count(), "load_avg_1min": os.getloadavg()[0], "runs": runs}
+    if len(runs) < 2:
+        return out
+    small, large = runs[0], runs[-1]
+    per_test = (large["wall_s"] - small["wall_s"]) / (large["n_tests"] - small["n_tests"])
+    fixed = small["wall_s"] - per_test * small["n_tests"]
+    reduce_per_test = [r["stage_s"].get("reduce", 0.0) / r["n_tests"] for r in runs]
+    linear = abs(reduce_per_test[-1] / reduce_per_test[0] - 1) < 0.25
+    n_ten = 10 * (len(pd.read_csv(EMBEDDED)) if EMBEDDED.exists() else 614)
+    out.update(
+        wall_s_per_test=per_test,
+        fixed_s=fixed,
+        reduce_s_per_test=reduce_per_test,
+        memory_ratio=large["peak_rss_tree_mb"] / small["peak_rss_tree_mb"],
+        linear=bool(linear),
+        ten_times_embedded={"n_tests": n_ten, "wall_s": fixed + per_test * n_ten if linear else None},
+    )
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=Path("results/bench"))
@@ -139,25 +161,10 @@ def main(argv=None):
         run = {"n_tests": n, "build_s": built, **run_workflow(campaign, results, args.cores)}
         print(f"{n} tests: {run['wall_s']:.1f} s, peak {run['peak_rss_tree_mb']:.0f} MB", flush=True)
         runs.append(run)
-    out = {"cores": args.cores, "cpu_count": os.cpu_count(), "load_avg_1min": os.getloadavg()[0], "runs": runs}
-    if len(runs) > 1:
-        small, large = runs[0], runs[-1]
-        dn = large["n_tests"] - small["n_tests"]
-        per_test = (large["wall_s"] - small["wall_s"]) / dn
-        fixed = small["wall_s"] - per_test * small["n_tests"]
-        reduce_per_test = [r["stage_s"].get("reduce", 0.0) / r["n_tests"] for r in runs]
-        linear = abs(reduce_per_test[-1] / reduce_per_test[0] - 1) < 0.25
-        n_ten = 10 * (len(pd.read_csv(EMBEDDED)) if EMBEDDED.exists() else 614)
-        out.update(
-            wall_s_per_test=per_test,
-            fixed_s=fixed,
-            reduce_s_per_test=reduce_per_test,
-            memory_ratio=large["peak_rss_tree_mb"] / small["peak_rss_tree_mb"],
-            linear=bool(linear),
-            ten_times_embedded={"n_tests": n_ten, "wall_s": fixed + per_test * n_ten if linear else None},
-        )
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "scale.json").write_text(json.dumps(out, indent=2) + "\n")
+        # after each size, so that a long run cut short keeps what it measured
+        out = summary(runs, args.cores)
+        args.out.mkdir(parents=True, exist_ok=True)
+        (args.out / "scale.json").write_text(json.dumps(out, indent=2) + "\n")
     print(json.dumps({k: v for k, v in out.items() if k != "runs"}, indent=2))
 
 
