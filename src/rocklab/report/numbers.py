@@ -448,7 +448,7 @@ def _scale(bench: dict) -> dict:
         **{f"{k}_peak_mb": r["peak_rss_tree_mb"] for k, r in (("small", small), ("large", large))},
         "s_per_test": bench.get("wall_s_per_test"),
         "memory_ratio": bench.get("memory_ratio"),
-        "linear": bench.get("linear"),
+        "at_most_linear": bench.get("at_most_linear"),
         "ten_times_n_tests": ten.get("n_tests"),
         "ten_times_s": ten.get("wall_s"),
     }
