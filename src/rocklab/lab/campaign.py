@@ -19,7 +19,8 @@ import os
 import re
 import zlib
 from dataclasses import dataclass, field
-from pathlib import Path, PurePosixPath
+from functools import cached_property, lru_cache
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -108,13 +109,22 @@ def check_identifier(value: str, what: str) -> str | None:
     return None
 
 
-def campaign_file(root: Path, relative: str, what: str = "file") -> tuple[Path | None, str | None]:
+def campaign_file(root, relative: str, what: str = "file") -> tuple[Path | None, str | None]:
     """The path of a campaign file named in a table, or why it is refused.
 
     The name is checked before the file system is touched: an absolute path
     or one that climbs out with ``..`` is refused as written; what is left
     is resolved (symbolic links followed) and refused when it lands outside
     the campaign folder.  Nothing outside the folder is ever opened.
+
+    Parameters
+    ----------
+    root : path-like
+        The campaign folder, resolved (``os.path.realpath``) or not.
+    relative : str
+        The name as the table gives it.
+    what : str
+        What the name is, for the message.
 
     Returns
     -------
@@ -125,14 +135,19 @@ def campaign_file(root: Path, relative: str, what: str = "file") -> tuple[Path |
         return None, f"empty {what}"
     if "\\" in relative or "\x00" in relative:
         return None, f"{what} {relative!r}: use / between folders, no backslash or NUL"
-    rel = PurePosixPath(relative)
-    if rel.is_absolute() or os.path.normpath(relative).split("/")[0] == "..":
+    if relative.startswith("/") or os.path.normpath(relative).split("/")[0] == "..":
         return None, f"{what} {relative!r} leaves the campaign folder (give a path inside it, relative to it)"
-    root = root.resolve()
-    path = (root / rel).resolve()
-    if not path.is_relative_to(root):
-        return None, f"{what} {relative!r} leads outside the campaign folder (a symbolic link to {str(path)!r})"
-    return path, None
+    # strings, not Path objects: this runs once per row of the test log
+    root = _real(os.fspath(root))
+    path = os.path.realpath(os.path.join(root, relative))
+    if not path.startswith(root + os.sep):
+        return None, f"{what} {relative!r} leads outside the campaign folder (a symbolic link to {path!r})"
+    return Path(path), None
+
+
+@lru_cache(maxsize=8)
+def _real(folder: str) -> str:
+    return os.path.realpath(folder)
 
 
 def _decode_lines(path: Path) -> list[tuple[int, str, str | None]]:
@@ -636,9 +651,18 @@ class Campaign:
             groups.setdefault(key, []).append(test_id)
         return groups
 
+    @cached_property
+    def _first_row(self) -> dict:
+        """Position in :attr:`tests` of the first row of each test_id (a
+        lookup per test would otherwise scan the log: quadratic in its size)."""
+        first = {}
+        for i, test_id in enumerate(self.tests.test_id):
+            first.setdefault(test_id, i)
+        return first
+
     def test_row(self, test_id) -> pd.Series:
-        rows = self.tests[self.tests.test_id == test_id]
-        return rows.iloc[0]
+        """The row of tests.csv that is reduced for ``test_id`` (its first)."""
+        return self.tests.iloc[self._first_row[test_id]]
 
     def record_path(self, test_id) -> Path:
         return self.root / self.test_row(test_id).file
