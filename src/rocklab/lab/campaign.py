@@ -293,7 +293,7 @@ class Refused:
 
 
 def _conflicting(table: Table, key_cols: list, good: pd.Series) -> dict:
-    """Rows whose key repeats an earlier row with other values: key -> error.
+    """Rows whose key repeats an earlier row with other values: row -> (key tuple, problem).
 
     A row repeated word for word is harmless (the first is read); a key
     given twice with different values is ambiguous and refused as a whole.
@@ -304,8 +304,9 @@ def _conflicting(table: Table, key_cols: list, good: pd.Series) -> dict:
     for key, group in df[good].groupby(key_cols, sort=False):
         if len(group) > 1 and len(group.drop_duplicates(values)) > 1:
             lines = ", ".join(str(n) for n in group.line)
-            name = key if isinstance(key, str) else "/".join(str(k) for k in key)
-            out[group.index[1]] = (name, f"{'/'.join(key_cols)} {name} given at lines {lines} with other values")
+            key = key if isinstance(key, tuple) else (key,)
+            name = "/".join(str(k) for k in key)
+            out[group.index[1]] = (key, f"{'/'.join(key_cols)} {name} given at lines {lines} with other values")
     return out
 
 
@@ -330,8 +331,8 @@ def read_specimens(campaign_dir) -> tuple[pd.DataFrame, Refused]:
     problems = {i: p for i, p in problems.items() if p}
     refused = Refused({df.specimen.iloc[i]: table.error(i, p) for i, p in problems.items()})
     good = ~df.index.isin(list(problems))
-    for i, (name, problem) in _conflicting(table, ["specimen"], pd.Series(good)).items():
-        refused.ids[name] = table.error(i, problem)
+    for i, (key, problem) in _conflicting(table, ["specimen"], pd.Series(good)).items():
+        refused.ids[key[0]] = table.error(i, problem)
     keep = good & ~df.specimen.isin(list(refused.ids))
     return df[keep].drop_duplicates("specimen").drop(columns="line").reset_index(drop=True), refused
 
@@ -364,8 +365,8 @@ def read_setups(campaign_dir) -> tuple[pd.DataFrame, Refused]:
     for i, p in problems.items():
         refused.ids.setdefault(df.setup.iloc[i], table.error(i, p))
     good = ~df.index.isin(list(problems))
-    for i, (name, problem) in _conflicting(table, ["setup", "channel"], pd.Series(good)).items():
-        refused.ids.setdefault(name.split("/")[0], table.error(i, problem))
+    for i, (key, problem) in _conflicting(table, ["setup", "channel"], pd.Series(good)).items():
+        refused.ids.setdefault(key[0], table.error(i, problem))
     keep = good & ~df.setup.isin(list(refused.ids))
     df = df[keep].drop_duplicates(["setup", "channel"]).drop(columns="line").reset_index(drop=True)
     return df.astype({"channel": int}), refused
