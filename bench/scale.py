@@ -8,8 +8,9 @@ reduction, QC, dissipation, diagnosis, their figures and pages; the maps and
 the limestone blocks do not depend on the campaign) with ``--cores``.  For
 each size: wall time, peak resident memory of the whole process tree
 (Snakemake and its jobs, summed at each sample of ``psutil``, every 0.2 s)
-and of its largest process, and the job time of each stage (Snakemake's
-benchmark files).  The time per test between two sizes, and the time a
+and of its largest process, the CPU time of the whole tree (less sensitive
+than the wall time to the load of a shared machine), and the job time of
+each stage (Snakemake's benchmark files).  The time per test between two sizes, and the time a
 campaign ten times the embedded one would take on that line, are written
 to ``<out>/scale.json``; the extrapolation is only given when the time per
 test of the reduction, the largest stage, grows by less than 25 % between
@@ -26,6 +27,7 @@ import argparse
 import gzip
 import json
 import os
+import resource
 import shutil
 import subprocess
 import sys
@@ -99,6 +101,8 @@ def run_workflow(campaign: Path, results: Path, cores: int) -> dict:
     # Fig. 9b of a specimen of the virtual lab (the default is one of the embedded campaign)
     cmd += ["--config", f"raw_dir={campaign}", f"results_dir={results}", "figures={'fig9_specimen': '1a'}"]
     log = (results.parent / f"{results.name}.log").open("w")
+    load = os.getloadavg()[0]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     proc = subprocess.Popen(cmd, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT)
     ps = psutil.Process(proc.pid)
@@ -108,10 +112,15 @@ def run_workflow(campaign: Path, results: Path, cores: int) -> dict:
         peak_tree, peak_one = max(peak_tree, tree), max(peak_one, one)
         time.sleep(0.2)
     wall = time.perf_counter() - start
+    # every process of the tree, once waited for, is counted in its parent's children
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     if proc.returncode:
         raise RuntimeError(f"snakemake failed ({proc.returncode}), see {log.name}")
     return {
         "wall_s": wall,
+        "cpu_s": cpu,
+        "load_avg_1min_before": load,
         "peak_rss_tree_mb": peak_tree / 2**20,
         "peak_rss_process_mb": peak_one / 2**20,
         "stage_s": stage_times(results),
@@ -126,6 +135,7 @@ def summary(runs: list, cores: int) -> dict:
     small, large = runs[0], runs[-1]
     per_test = (large["wall_s"] - small["wall_s"]) / (large["n_tests"] - small["n_tests"])
     fixed = small["wall_s"] - per_test * small["n_tests"]
+    cpu_per_test = (large["cpu_s"] - small["cpu_s"]) / (large["n_tests"] - small["n_tests"])
     reduce_per_test = [r["stage_s"].get("reduce", 0.0) / r["n_tests"] for r in runs]
     # the start of each job spreads over more tests in a larger campaign: at most linear is the bound
     at_most_linear = reduce_per_test[-1] <= 1.25 * reduce_per_test[0]
@@ -133,6 +143,8 @@ def summary(runs: list, cores: int) -> dict:
     out.update(
         wall_s_per_test=per_test,
         fixed_s=fixed,
+        cpu_s_per_test=cpu_per_test,
+        cpu_fixed_s=small["cpu_s"] - cpu_per_test * small["n_tests"],
         reduce_s_per_test=reduce_per_test,
         memory_ratio=large["peak_rss_tree_mb"] / small["peak_rss_tree_mb"],
         at_most_linear=bool(at_most_linear),
