@@ -438,19 +438,21 @@ def _bench(results: Path, name: str):
 
 def _scale(bench: dict) -> dict:
     """The smallest and largest campaign of ``bench/scale.py`` and the line through them."""
-    small, large = bench["runs"][0], bench["runs"][-1]
+    runs = {"small": bench["runs"][0], "large": bench["runs"][-1]}
+    keys = {"n_tests": "n_tests", "s": "wall_s", "cpu_s": "cpu_s", "peak_mb": "peak_rss_tree_mb"}
+    keys["load"] = "load_avg_1min_before"
+    out = {f"{size}_{k}": run.get(key) for size, run in runs.items() for k, key in keys.items()}
     ten = bench.get("ten_times_embedded") or {}
+    cpu_ten = ten.get("cpu_s")
     return {
         "cores": bench["cores"],
-        "load_avg_1min": bench["load_avg_1min"],
-        **{f"{k}_n_tests": r["n_tests"] for k, r in (("small", small), ("large", large))},
-        **{f"{k}_s": r["wall_s"] for k, r in (("small", small), ("large", large))},
-        **{f"{k}_peak_mb": r["peak_rss_tree_mb"] for k, r in (("small", small), ("large", large))},
-        "s_per_test": bench.get("wall_s_per_test"),
+        **out,
+        "cpu_s_per_test": bench.get("cpu_s_per_test"),
         "memory_ratio": bench.get("memory_ratio"),
         "at_most_linear": bench.get("at_most_linear"),
         "ten_times_n_tests": ten.get("n_tests"),
-        "ten_times_s": ten.get("wall_s"),
+        "ten_times_cpu_s": cpu_ten,
+        "ten_times_wall_s_at_least": cpu_ten / bench["cores"] if cpu_ten is not None else None,
     }
 
 
