@@ -1,6 +1,6 @@
 """Benchmark: the campaign workflow on virtual-lab campaigns of growing size.
 
-    python bench/scale.py --out results/bench [--sizes 60 600] [--cores 2]
+    python bench/scale.py --out results/bench [--sizes 100 1000] [--cores 2]
 
 Builds a virtual-lab campaign of each size (``rocklab.lab.virtual_lab``) and
 runs the campaign's part of the main job on it (``snakemake campaign``:
@@ -160,7 +160,7 @@ def summary(runs: list, cores: int) -> dict:
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=Path("results/bench"))
-    ap.add_argument("--sizes", type=int, nargs="+", default=[60, 600])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[100, 1000])
     ap.add_argument("--cores", type=int, default=2)
     ap.add_argument(
         "--workdir", type=Path, default=None, help="where campaigns and results go (default: a temp folder)"
