@@ -70,7 +70,9 @@ def check_paths(raw_dir, results_dir) -> None:
     ------
     ConfigError
         ``raw_dir`` is not a folder or has no ``tests.csv``; ``results_dir``
-        is ``raw_dir`` or lies inside it (the campaign folder is only read).
+        is ``raw_dir`` or lies inside it (the campaign folder is only read),
+        holds it (a result could overwrite a record: ``results/tests/``),
+        or is a file.  Both are compared resolved, symbolic links followed.
     """
     raw = Path(raw_dir)
     campaign = "a campaign in the lab's raw format, docs/raw-format.md"
@@ -84,6 +86,48 @@ def check_paths(raw_dir, results_dir) -> None:
             f"results_dir {str(results_dir)!r} is inside raw_dir {str(raw)!r}: the campaign folder is only read, "
             "write the results elsewhere"
         )
+    if results in raw.parents:
+        raise ConfigError(
+            f"raw_dir {str(raw_dir)!r} is inside results_dir {str(results_dir)!r}: the results could overwrite "
+            "the campaign, write them elsewhere"
+        )
+    if results.exists() and not results.is_dir():
+        raise ConfigError(f"results_dir {str(results_dir)!r} is a file, not a folder")
+
+
+def check_names(config, test_ids, records) -> None:
+    """Refuse a test or accelerogram that the configuration names and the inputs lack.
+
+    They become file names of the results (``tests/<id>.nc``,
+    ``maps/<record>__<model>.nc``): a name that is not one of the campaign's
+    tests or of the manifest's records could make the workflow read or write
+    outside ``results_dir``, or fail late for want of an input.
+
+    Parameters
+    ----------
+    config : dict
+        The workflow configuration, its defaults filled in.
+    test_ids : sequence of str
+        The campaign's tests with a results file (``Campaign.test_ids``).
+    records : sequence of str
+        The records of the accelerogram manifest.
+
+    Raises
+    ------
+    ConfigError
+        Naming the key and the value.
+    """
+    for key in ("sample_test", "fig20_test"):
+        value = config["figures"][key]
+        if value and value not in test_ids:
+            raise ConfigError(f"config key figures.{key}: {value!r} is not a test of raw_dir's tests.csv")
+    maps = config["maps"]
+    for where, value in [
+        *(("maps.records", r) for r in maps["records"]),
+        ("maps.figure_record", maps["figure_record"]),
+    ]:
+        if value not in records:
+            raise ConfigError(f"config key {where}: {value!r} is not a record of the accelerogram manifest")
 
 
 def recorded_path(path, workdir=None) -> str:

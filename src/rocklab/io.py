@@ -18,6 +18,7 @@ seconds back.
 
 from __future__ import annotations
 
+import glob
 import logging
 import os
 import tempfile
@@ -93,7 +94,11 @@ def write_netcdf(ds, path):
     ds.attrs.setdefault("Conventions", CF_CONVENTIONS)
     line = f"{datetime.now(UTC):%Y-%m-%dT%H:%M:%SZ} rocklab {__version__}: wrote {path.name}"
     ds.attrs["history"] = "\n".join(filter(None, [ds.attrs.get("history", ""), line]))
-    fd, tmp = tempfile.mkstemp(suffix=".nc", dir=path.parent)
+    # a writer killed outright (SIGKILL) leaves its temporary file: the next
+    # write of the same file, the rerun, removes it
+    for stale in path.parent.glob(f".{glob.escape(path.name)}.*.tmp"):
+        stale.unlink(missing_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
     try:
         ds.to_netcdf(tmp, engine="netcdf4", encoding=encoding)

@@ -4,21 +4,26 @@ import json
 import re
 from pathlib import Path
 
-from rocklab.config import check_paths, recorded_path
-from rocklab.lab.campaign import open_campaign, row_series
+from rocklab.config import check_names, check_paths, recorded_path
+from rocklab.lab.campaign import UNREADABLE, open_campaign
+from rocklab.seismic.accelerograms import read_manifest
 
 # config is validated by the Snakefile, every default filled in from
 # workflow/schemas/config.schema.yaml: the rules read it without defaults.
 check_paths(config["raw_dir"], config["results_dir"])
 RAW = Path(config["raw_dir"])
 RESULTS = Path(config["results_dir"])
+# Every row checked at the door (docs/raw-format.md): a refused row is a row
+# of qc.csv, and no id or path of the tables names a file outside the two folders.
 CAMPAIGN = open_campaign(RAW)
-TEST_IDS = list(dict.fromkeys(CAMPAIGN.tests.test_id))
-
-#: The tests of each series, in the order of tests.csv (the unit of one reduction job).
-TESTS_BY_SERIES = {}
-for _row in CAMPAIGN.tests.drop_duplicates("test_id").itertuples():
-    TESTS_BY_SERIES.setdefault(row_series(_row), []).append(_row.test_id)
+#: The tests with a results file of their own (safe ids, first row of each).
+TEST_IDS = CAMPAIGN.test_ids
+# the tests and records the config names become file names too
+check_names(config, TEST_IDS, set(read_manifest().record))
+#: The unit of one reduction job: a series, or the tests refused at the door.
+REDUCTION_GROUPS = CAMPAIGN.reduction_groups()
+#: The tests of each series, in the order of tests.csv.
+TESTS_BY_SERIES = {k: v for k, v in REDUCTION_GROUPS.items() if k != UNREADABLE}
 
 
 def res(*parts):
@@ -41,10 +46,10 @@ def record_inputs(test_ids):
     """The tests' records that exist where the log points.
 
     A missing record is not a missing input: the test is reduced to an
-    'unreadable' entry and the rest of the campaign goes on.
+    'unreadable' entry and the rest of the campaign goes on.  A row refused
+    at the door has no input: its file may lie outside the campaign folder.
     """
-    rows = (CAMPAIGN.test_row(t) for t in test_ids)
-    paths = (RAW / row.file for row in rows if row.file)
+    paths = (CAMPAIGN.record_path(t) for t in test_ids if t not in CAMPAIGN.log.errors)
     return [str(p) for p in paths if p.is_file()]
 
 
@@ -55,7 +60,8 @@ def test_params(test_id):
     of tests.csv reduces that test's series again, not the whole campaign.
     """
     row = CAMPAIGN.test_row(test_id)
-    out = {"row": {k: str(v) for k, v in row.items()}}
+    # not its line: a row added above it changes nothing of this test
+    out = {"row": {k: str(v) for k, v in row.items() if k != "line"}}
     if row.specimen in set(CAMPAIGN.specimens.specimen):
         out["specimen"] = {k: str(v) for k, v in CAMPAIGN.specimen(row.specimen).items()}
     out["setup"] = CAMPAIGN.setup(row.setup).astype(str).to_dict("records")

@@ -3,10 +3,10 @@
 # the motion extracted from it (release, impacts, peaks), stored once for the
 # dissipation tables and the diagnosis.
 #
-# One job per series, not per test: a job spends ten times longer starting
+# One job per series (and one for the tests refused at the door), not per test: a job spends ten times longer starting
 # Python and importing the library (1.0 s) than reducing one test (0.1 s).
 
-for _k, (_series, _ids) in enumerate(TESTS_BY_SERIES.items()):
+for _k, (_series, _ids) in enumerate(REDUCTION_GROUPS.items()):
 
     rule:
         name:

@@ -10,11 +10,16 @@ campaign folder.
 
 from __future__ import annotations
 
+import codecs
+import csv
 import gzip
 import hashlib
 import io
+import os
+import re
 import zlib
 from dataclasses import dataclass, field
+from functools import cached_property, lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -54,6 +59,16 @@ DIRECTIONS = ("push", "pull")
 
 #: Relative tolerance between the declared sampling rate and the time column.
 RATE_TOLERANCE = 1e-3
+#: Longest id (test_id, specimen) that names a results file.
+ID_MAX_LENGTH = 64
+#: Ids that can name a results file: letters, digits and . _ -, starting with a letter or a digit.
+SAFE_ID = re.compile(rf"[A-Za-z0-9][A-Za-z0-9._-]{{0,{ID_MAX_LENGTH - 1}}}")
+#: Control characters (tab aside) that no table or record may hold.
+CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f]")
+#: The ``# units:`` of a record: time in seconds, readings in mm.
+UNITS = ("s", "mm")
+#: The reduction group of the tests refused at the door (:meth:`Campaign.reduction_groups`).
+UNREADABLE = "unreadable"
 
 
 class RawFormatError(ValueError):
@@ -75,88 +90,297 @@ class RawFormatError(ValueError):
         super().__init__(f"{where}: {problem}")
 
 
-def _read_table(path: Path, columns: dict, optional=()) -> pd.DataFrame:
-    """Read a campaign table as strings and convert column by column."""
+def check_identifier(value: str, what: str) -> str | None:
+    """Why ``value`` cannot name a file of the results (None when it can).
+
+    Test ids name the files ``results/tests/<id>.nc`` and specimen ids the
+    series (``<specimen>-2s``) that name logs and figures: only letters,
+    digits and ``. _ -``, starting with a letter or a digit, at most
+    :data:`ID_MAX_LENGTH` characters, so that no id can climb out of the
+    results folder (``../x``), hide a file (``.x``) or break a rule name.
+    """
+    if not value:
+        return f"empty {what}"
+    if not SAFE_ID.fullmatch(value):
+        return (
+            f"{what} {value!r} is not a safe name (letters, digits and . _ - only, starting with a letter or"
+            f" digit, at most {ID_MAX_LENGTH} characters)"
+        )
+    return None
+
+
+def campaign_file(root, relative: str, what: str = "file") -> tuple[Path | None, str | None]:
+    """The path of a campaign file named in a table, or why it is refused.
+
+    The name is checked before the file system is touched: an absolute path
+    or one that climbs out with ``..`` is refused as written; what is left
+    is resolved (symbolic links followed) and refused when it lands outside
+    the campaign folder.  Nothing outside the folder is ever opened.
+
+    Parameters
+    ----------
+    root : path-like
+        The campaign folder, resolved (``os.path.realpath``) or not.
+    relative : str
+        The name as the table gives it.
+    what : str
+        What the name is, for the message.
+
+    Returns
+    -------
+    (Path, None) or (None, str)
+        The resolved path, or the problem in words.
+    """
+    if not relative:
+        return None, f"empty {what}"
+    if "\\" in relative or "\x00" in relative:
+        return None, f"{what} {relative!r}: use / between folders, no backslash or NUL"
+    if relative.startswith("/") or os.path.normpath(relative).split("/")[0] == "..":
+        return None, f"{what} {relative!r} leaves the campaign folder (give a path inside it, relative to it)"
+    # strings, not Path objects: this runs once per row of the test log
+    root = _real(os.fspath(root))
+    path = os.path.realpath(os.path.join(root, relative))
+    if not path.startswith(root + os.sep):
+        return None, f"{what} {relative!r} leads outside the campaign folder (a symbolic link to {path!r})"
+    return Path(path), None
+
+
+@lru_cache(maxsize=8)
+def _real(folder: str) -> str:
+    return os.path.realpath(folder)
+
+
+def _decode_lines(path: Path) -> list[tuple[int, str, str | None]]:
+    """Lines of a text table as (line number, text, problem).
+
+    UTF-8 with or without a byte-order mark, LF or CRLF line ends; a line
+    that is not UTF-8 or holds a control character is kept, shown with
+    replacement characters, with its problem.
+    """
+    blob = path.read_bytes()
+    if blob.startswith(codecs.BOM_UTF8):
+        blob = blob[len(codecs.BOM_UTF8) :]
+    out = []
+    for n, raw in enumerate(blob.splitlines(), start=1):
+        problem = None
+        try:
+            text = raw.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            text = raw.decode("utf-8", errors="replace")
+            problem = f"not UTF-8 text (byte {exc.start + 1} of the line)"
+        if problem is None and CONTROL.search(text):
+            problem = "a control character in the line"
+        out.append((n, text, problem))
+    return out
+
+
+@dataclass
+class Table:
+    """A campaign table as read: its rows, converted, and each row's problem.
+
+    Attributes
+    ----------
+    path : Path
+    rows : DataFrame
+        Every data row, in file order, the declared columns converted (a value
+        that could not be converted is NaN and its row has a problem), plus
+        ``line``: the row's 1-based line number in the file.
+    problems : dict
+        Row index (of ``rows``) to the problem in words.
+    """
+
+    path: Path
+    rows: pd.DataFrame
+    problems: dict
+
+    def error(self, i, problem=None) -> RawFormatError:
+        """The :class:`RawFormatError` of row ``i`` (its own problem by default)."""
+        return RawFormatError(self.path, int(self.rows.line.iloc[i]), problem or self.problems[i])
+
+
+def _number(text: str, kind) -> tuple[float, str | None]:
+    if text == "":
+        return np.nan, None
+    try:
+        value = float(text)
+    except ValueError:
+        return np.nan, f"{text!r} is not a number"
+    if not np.isfinite(value):
+        return np.nan, f"{text!r} is not a finite number"
+    if kind is int and value % 1 != 0:
+        return np.nan, f"{text!r} is not an integer"
+    return value, None
+
+
+def read_table(path: Path, columns: dict, optional=()) -> Table:
+    """Read a campaign table and check it row by row.
+
+    Blanks around a field, a byte-order mark, CRLF line ends, blank lines
+    and columns beyond ``columns`` (ignored) are harmless and read.  A row
+    with the wrong number of fields, a value that is not a finite number
+    where one is expected, a line that is not UTF-8 text, is kept with its
+    problem.
+
+    Raises
+    ------
+    RawFormatError
+        The table as a whole is unusable: not found, not a regular file,
+        no header, a required column missing or a column named twice.
+    """
     if not path.exists():
         raise RawFormatError(path, None, "file not found")
-    try:
-        raw = pd.read_csv(path, dtype=str, keep_default_na=False, skipinitialspace=True)
-    except (pd.errors.ParserError, UnicodeDecodeError) as exc:
-        raise RawFormatError(path, None, f"not a readable CSV table ({exc})") from None
-    missing = [c for c in columns if c not in raw.columns and c not in optional]
+    if not path.is_file():
+        raise RawFormatError(path, None, "not a regular file")
+    lines = [ln for ln in _decode_lines(path) if ln[1].strip()]
+    if not lines:
+        raise RawFormatError(path, None, "empty file: no header row")
+    head_n, head_text, head_problem = lines[0]
+    if head_problem:
+        raise RawFormatError(path, head_n, f"header row: {head_problem}")
+    header = [c.strip() for c in next(csv.reader([head_text]))]
+    missing = [c for c in columns if c not in header and c not in optional]
     if missing:
-        raise RawFormatError(path, 1, f"missing column(s) {', '.join(missing)}")
-    out = {}
+        raise RawFormatError(path, head_n, f"missing column(s) {', '.join(missing)}")
+    twice = sorted({c for c in header if header.count(c) > 1 and c in columns})
+    if twice:
+        raise RawFormatError(path, head_n, f"column(s) {', '.join(twice)} named twice")
+    index = {c: header.index(c) for c in columns if c in header}
+    records, problems = [], {}
+    for i, (n, text, problem) in enumerate(lines[1:]):
+        fields = [f.strip() for f in next(csv.reader([text]), [])]
+        if problem is None and len(fields) != len(header):
+            what = "truncated row" if len(fields) < len(header) else "too many fields"
+            problem = f"{what}: {len(fields)} fields, expected {len(header)} (the header's)"
+        rec = {"line": n}
+        for col, kind in columns.items():
+            value = fields[index[col]] if col in index and index[col] < len(fields) else ""
+            if kind is str:
+                rec[col] = value
+                continue
+            rec[col], bad = _number(value, kind)
+            if bad and problem is None:
+                problem = f"column {col}: {bad}"
+        if problem:
+            problems[i] = problem
+        records.append(rec)
+    rows = pd.DataFrame(records, columns=["line", *columns])
     for col, kind in columns.items():
-        values = raw[col].str.strip() if col in raw.columns else pd.Series([""] * len(raw))
-        if kind is str:
-            out[col] = values
+        values = rows[col].astype(str if kind is str else float)
+        # whole numbers stay integers, as the lab wrote them (the params that decide a rerun show them)
+        if kind is not str and len(values) and np.isfinite(values).all() and (values % 1 == 0).all():
+            values = values.astype(int)
+        rows[col] = values
+    return Table(path, rows, problems)
+
+
+def _table_path(campaign_dir, name) -> Path:
+    path, problem = campaign_file(Path(campaign_dir), name, "table")
+    if problem:
+        raise RawFormatError(Path(campaign_dir) / name, None, problem)
+    return path
+
+
+@dataclass
+class Refused:
+    """Ids of a table refused at the door, each with its reason, and the table's own fault."""
+
+    ids: dict = field(default_factory=dict)
+    table: RawFormatError | None = None
+
+    def reason(self, key) -> RawFormatError | None:
+        """Why ``key`` is refused (the table's fault first), or None."""
+        return self.table or self.ids.get(key)
+
+
+def _conflicting(table: Table, key_cols: list, good: pd.Series) -> dict:
+    """Rows whose key repeats an earlier row with other values: row -> (key tuple, problem).
+
+    A row repeated word for word is harmless (the first is read); a key
+    given twice with different values is ambiguous and refused as a whole.
+    """
+    df = table.rows
+    values = [c for c in df.columns if c != "line"]
+    out = {}
+    for key, group in df[good].groupby(key_cols, sort=False):
+        if len(group) > 1 and len(group.drop_duplicates(values)) > 1:
+            lines = ", ".join(str(n) for n in group.line)
+            key = key if isinstance(key, tuple) else (key,)
+            name = "/".join(str(k) for k in key)
+            out[group.index[1]] = (key, f"{'/'.join(key_cols)} {name} given at lines {lines} with other values")
+    return out
+
+
+def read_specimens(campaign_dir) -> tuple[pd.DataFrame, Refused]:
+    """Specimens, one row per specimen, dimensions in mm, and the ones refused.
+
+    A specimen is refused (its tests become unreadable, naming the row) when
+    its row has a problem, its id is not a safe name, a dimension or the
+    unit weight is not positive, or it is given twice with different values.
+    """
+    path = _table_path(campaign_dir, "specimens.csv")
+    table = read_table(path, SPECIMEN_COLUMNS)
+    df, problems = table.rows, dict(table.problems)
+    for i, row in enumerate(df.itertuples(index=False)):
+        if i in problems:
             continue
-        num = pd.to_numeric(values.replace("", np.nan), errors="coerce")
-        bad = values.ne("") & num.isna()
-        if bad.any():
-            i = int(np.flatnonzero(bad.to_numpy())[0])
-            raise RawFormatError(path, i + 2, f"column {col}: {values.iloc[i]!r} is not a number")
-        if kind is int:
-            if num.isna().any() or (num % 1 != 0).any():
-                i = int(np.flatnonzero((num.isna() | (num % 1 != 0)).to_numpy())[0])
-                raise RawFormatError(path, i + 2, f"column {col}: {values.iloc[i]!r} is not an integer")
-            num = num.astype(int)
-        out[col] = num
-    return pd.DataFrame(out)
+        problems[i] = check_identifier(row.specimen, "specimen")
+        for col in ("length_mm", "height_mm", "thickness_mm", "unit_weight_kN_m3"):
+            value = getattr(row, col)
+            if problems[i] is None and not value > 0:
+                problems[i] = f"column {col}: empty" if np.isnan(value) else f"column {col}: {value:g} must be positive"
+    problems = {i: p for i, p in problems.items() if p}
+    refused = Refused({df.specimen.iloc[i]: table.error(i, p) for i, p in problems.items()})
+    good = ~df.index.isin(list(problems))
+    for i, (key, problem) in _conflicting(table, ["specimen"], pd.Series(good)).items():
+        refused.ids[key[0]] = table.error(i, problem)
+    keep = good & ~df.specimen.isin(list(refused.ids))
+    return df[keep].drop_duplicates("specimen").drop(columns="line").reset_index(drop=True), refused
 
 
-def _require(path, df, col, allowed):
-    bad = ~df[col].isin(allowed)
-    if bad.any():
-        i = int(np.flatnonzero(bad.to_numpy())[0])
-        raise RawFormatError(path, i + 2, f"{col} {df[col].iloc[i]!r} is not one of {', '.join(allowed)}")
+def read_setups(campaign_dir) -> tuple[pd.DataFrame, Refused]:
+    """Transducer geometry, one row per (setup, channel), in mm, and the setups refused.
 
-
-def _require_unique(path, df, cols):
-    dup = df.duplicated(cols, keep="first")
-    if dup.any():
-        i = int(np.flatnonzero(dup.to_numpy())[0])
-        key = ", ".join(str(df[c].iloc[i]) for c in cols)
-        raise RawFormatError(path, i + 2, f"duplicated {'/'.join(cols)} {key}")
-
-
-def read_specimens(campaign_dir) -> pd.DataFrame:
-    """Specimens table, one row per specimen, dimensions in mm."""
-    path = Path(campaign_dir) / "specimens.csv"
-    df = _read_table(path, SPECIMEN_COLUMNS)
-    _require_unique(path, df, ["specimen"])
-    for col in ("length_mm", "height_mm", "thickness_mm", "unit_weight_kN_m3"):
-        bad = ~(df[col] > 0)
-        if bad.any():
-            i = int(np.flatnonzero(bad.to_numpy())[0])
-            raise RawFormatError(path, i + 2, f"{col} must be a positive number")
-    return df
-
-
-def read_setups(campaign_dir) -> pd.DataFrame:
-    """Transducer geometry, one row per (setup, channel), in mm."""
-    path = Path(campaign_dir) / "setups.csv"
-    df = _read_table(path, SETUP_COLUMNS)
-    _require_unique(path, df, ["setup", "channel"])
-    length = np.hypot.reduce(
-        df[["frame_x_mm", "frame_y_mm", "frame_z_mm"]].to_numpy()
-        - df[["wall_x_mm", "wall_y_mm", "wall_z_mm"]].to_numpy(),
-        axis=1,
-    )
-    if (length <= 0).any():
-        i = int(np.flatnonzero(length <= 0)[0])
-        raise RawFormatError(path, i + 2, "wall and frame points coincide")
-    return df
+    A setup is refused as a whole (its tests become unreadable, naming the
+    row) when one of its rows has a problem, gives a channel that is not a
+    non-negative integer, wall and frame points that coincide, or a channel
+    twice with different points: a transducer dropped quietly would change
+    the kinematics.
+    """
+    path = _table_path(campaign_dir, "setups.csv")
+    table = read_table(path, SETUP_COLUMNS)
+    df, problems = table.rows, dict(table.problems)
+    wall_xyz = df[["wall_x_mm", "wall_y_mm", "wall_z_mm"]].to_numpy(float)
+    frame_xyz = df[["frame_x_mm", "frame_y_mm", "frame_z_mm"]].to_numpy(float)
+    length = np.linalg.norm(frame_xyz - wall_xyz, axis=1)
+    for i, row in enumerate(df.itertuples(index=False)):
+        if i in problems:
+            continue
+        if not row.setup:
+            problems[i] = "empty setup"
+        elif not row.channel >= 0:
+            problems[i] = "column channel: empty" if np.isnan(row.channel) else f"channel {row.channel:g} is negative"
+        elif not length[i] > 0:
+            problems[i] = f"channel {int(row.channel)}: wall and frame points coincide"
+    refused = Refused()
+    for i, p in problems.items():
+        refused.ids.setdefault(df.setup.iloc[i], table.error(i, p))
+    good = ~df.index.isin(list(problems))
+    for i, (key, problem) in _conflicting(table, ["setup", "channel"], pd.Series(good)).items():
+        refused.ids.setdefault(key[0], table.error(i, problem))
+    keep = good & ~df.setup.isin(list(refused.ids))
+    df = df[keep].drop_duplicates(["setup", "channel"]).drop(columns="line").reset_index(drop=True)
+    return df.astype({"channel": int}), refused
 
 
 @dataclass
 class TestLog:
     """The test log, with the rows that cannot be reduced set apart.
 
-    ``tests`` holds every row of ``tests.csv`` (duplicates included);
-    ``errors`` maps a test_id to the :class:`RawFormatError` that makes it
-    unreadable, so one bad row never stops the campaign.
+    ``tests`` holds every row of ``tests.csv`` (duplicates included), with
+    ``line``, its line number in the file; ``errors`` maps a test_id to the
+    :class:`RawFormatError` that makes it unreadable, so one bad row never
+    stops the campaign.  A row that cannot have a results file of its own
+    (an unsafe or repeated test_id) is keyed ``<test_id>@<line>``.
     """
 
     tests: pd.DataFrame
@@ -164,46 +388,83 @@ class TestLog:
 
 
 def read_tests(campaign_dir, specimens=None, setups=None) -> TestLog:
-    """Test log with every row checked against specimens and setups.
+    """Test log with every row checked at the door.
 
-    A row whose specimen, setup, boundary or direction is unknown, or whose
-    test_id repeats an earlier row, is kept but recorded in
-    :attr:`TestLog.errors`.  A malformed table as a whole raises.
+    A row whose test_id is not a safe name or repeats an earlier row, whose
+    specimen or setup is unknown or refused, whose boundary or direction is
+    not an allowed word, whose contact depth is missing or not positive, or
+    whose file is empty, leaves the campaign folder or is not a regular
+    file, is kept and recorded in :attr:`TestLog.errors`.
+
+    Parameters
+    ----------
+    campaign_dir : path-like
+    specimens, setups : (DataFrame, Refused), optional
+        From :func:`read_specimens` and :func:`read_setups` (read when not given).
+
+    Raises
+    ------
+    RawFormatError
+        ``tests.csv`` as a whole is unusable (:func:`read_table`).
     """
-    campaign_dir = Path(campaign_dir)
-    path = campaign_dir / "tests.csv"
-    df = _read_table(path, TEST_COLUMNS, optional=("note", "contact_depth_mm"))
-    specimens = read_specimens(campaign_dir) if specimens is None else specimens
-    setups = read_setups(campaign_dir) if setups is None else setups
+    root = Path(campaign_dir)
+    path = _table_path(root, "tests.csv")
+    table = read_table(path, TEST_COLUMNS, optional=("note", "contact_depth_mm"))
+    specimens, bad_spec = _or_empty(read_specimens, root) if specimens is None else specimens
+    setups, bad_setup = _or_empty(read_setups, root) if setups is None else setups
+    df = table.rows
     known_spec, known_setup = set(specimens.specimen), set(setups.setup)
+    # the line of the first row of each test_id: the one reduced
+    first = {}
+    for tid, line in zip(df.test_id, df.line, strict=True):
+        first.setdefault(tid, line)
     errors = {}
-    seen = set()
     for i, row in enumerate(df.itertuples(index=False)):
-        line = i + 2
-        problem = None
-        if not row.test_id:
-            problem = "empty test_id"
-        elif row.test_id in seen:
-            problem = f"duplicated test_id {row.test_id}"
-        elif row.specimen not in known_spec:
-            problem = f"unknown specimen {row.specimen!r} (not in specimens.csv)"
-        elif row.setup not in known_setup:
-            problem = f"unknown setup {row.setup!r} (not in setups.csv)"
-        elif row.boundary not in BOUNDARIES:
-            problem = f"boundary {row.boundary!r} is not one of {', '.join(BOUNDARIES)}"
-        elif row.direction not in DIRECTIONS:
-            problem = f"direction {row.direction!r} is not one of {', '.join(DIRECTIONS)}"
-        elif row.boundary == "one-sided" and not row.contact_depth_mm > 0:
-            problem = "one-sided test without a positive contact_depth_mm"
-        elif not row.file:
-            problem = "empty file"
+        problem = table.problems.get(i) or check_identifier(row.test_id, "test_id")
+        if problem is None and first[row.test_id] != row.line:
+            problem = (
+                f"duplicated test_id {row.test_id}: the row at line {first[row.test_id]} is the one reduced,"
+                " this one is refused"
+            )
+        if problem is None and row.specimen not in known_spec and bad_spec.reason(row.specimen):
+            problem = f"specimen {row.specimen!r} refused: {bad_spec.reason(row.specimen)}"
+        elif problem is None and row.setup not in known_setup and bad_setup.reason(row.setup):
+            problem = f"setup {row.setup!r} refused: {bad_setup.reason(row.setup)}"
+        elif problem is None:
+            problem = _row_problem(root, row, known_spec, known_setup)
         if problem:
-            # A repeated id must not disqualify the first row that carries it.
-            first_use = row.test_id and row.test_id not in seen and row.test_id not in errors
-            key = row.test_id if first_use else f"{row.test_id or 'row'}@{line}"
-            errors[key] = RawFormatError(path, line, problem)
-        seen.add(row.test_id)
+            # an id that cannot name a file, or that an earlier row holds, gets no results file
+            unsafe = check_identifier(row.test_id, "test_id") or first[row.test_id] != row.line
+            errors[f"{row.test_id}@{row.line}" if unsafe else row.test_id] = table.error(i, problem)
     return TestLog(df, errors)
+
+
+def _or_empty(reader, root):
+    """A table reader's result, or no rows and the table's fault when it is unusable."""
+    try:
+        return reader(root)
+    except RawFormatError as exc:
+        columns = SPECIMEN_COLUMNS if reader is read_specimens else SETUP_COLUMNS
+        return pd.DataFrame({c: pd.Series(dtype=object if k is str else float) for c, k in columns.items()}), Refused(
+            table=exc
+        )
+
+
+def _row_problem(root, row, known_spec, known_setup) -> str | None:
+    """What makes a row of tests.csv unreadable by itself (None when nothing)."""
+    if row.specimen not in known_spec:
+        return f"unknown specimen {row.specimen!r} (not in specimens.csv)"
+    if row.setup not in known_setup:
+        return f"unknown setup {row.setup!r} (not in setups.csv)"
+    if row.boundary not in BOUNDARIES:
+        return f"boundary {row.boundary!r} is not one of {', '.join(BOUNDARIES)}"
+    if row.direction not in DIRECTIONS:
+        return f"direction {row.direction!r} is not one of {', '.join(DIRECTIONS)}"
+    if row.boundary == "one-sided" and not row.contact_depth_mm > 0:
+        return "one-sided test without a positive contact_depth_mm"
+    if not row.file:
+        return "empty file"
+    return campaign_file(Path(root), row.file)[1]
 
 
 @dataclass
@@ -269,8 +530,14 @@ def read_record(path, expected_test_id=None) -> Record:
     path = Path(path)
     if not path.exists():
         raise RawFormatError(path, None, "file not found")
+    if not path.is_file():
+        raise RawFormatError(path, None, "not a regular file")
     text, digest = _decompress(path)
-    lines = text.splitlines()
+    # a byte-order mark and CRLF line ends are harmless
+    lines = text.removeprefix("\ufeff").splitlines()
+    bad = next((n for n, ln in enumerate(lines, start=1) if CONTROL.search(ln)), None)
+    if bad is not None:
+        raise RawFormatError(path, bad, "a control character in the line")
     header, n_comment = {}, 0
     for line in lines:
         if not line.startswith("#"):
@@ -302,6 +569,11 @@ def read_record(path, expected_test_id=None) -> Record:
         raise RawFormatError(path, 1, "sampling_rate_hz must be positive")
     if expected_test_id is not None and header.get("test_id", expected_test_id) != expected_test_id:
         raise RawFormatError(path, 1, f"header test_id {header['test_id']!r} but tests.csv says {expected_test_id!r}")
+    units = tuple(u.strip() for u in header.get("units", ", ".join(UNITS)).split(","))
+    if units != UNITS:
+        raise RawFormatError(
+            path, 1, f"units {header['units']!r}: the format is time in s and readings in mm ('{', '.join(UNITS)}')"
+        )
 
     body = lines[n_comment + 1 :]
     first_data = head_line + 1
@@ -322,6 +594,10 @@ def read_record(path, expected_test_id=None) -> Record:
         i, j = np.argwhere(nonnum)[0]
         raise RawFormatError(path, first_data + int(i), f"{columns[j]}: {table.iat[i, j]!r} is not a number")
     data = values.to_numpy(float)
+    infinite = np.isinf(data)
+    if infinite.any():
+        i, j = np.argwhere(infinite)[0]
+        raise RawFormatError(path, first_data + int(i), f"{columns[j]}: {table.iat[i, j]!r} is not a finite number")
     time = data[:, 0]
     if np.isnan(time).any():
         i = int(np.flatnonzero(np.isnan(time))[0])
@@ -329,7 +605,8 @@ def read_record(path, expected_test_id=None) -> Record:
     step = np.diff(time)
     if (step <= 0).any():
         i = int(np.flatnonzero(step <= 0)[0]) + 1
-        raise RawFormatError(path, first_data + i, "time_s does not increase")
+        what = "repeats the previous row's" if step[i - 1] == 0 else "goes back"
+        raise RawFormatError(path, first_data + i, f"time_s {time[i]:g} {what} ({time[i - 1]:g}): time must increase")
     if time.size > 1:
         dt = 1.0 / fs
         off = np.abs(step - dt) > max(RATE_TOLERANCE * dt, 1.5e-4)
@@ -356,9 +633,37 @@ class Campaign:
     def tests(self) -> pd.DataFrame:
         return self.log.tests
 
+    @property
+    def test_ids(self) -> list:
+        """The tests that get a results file, in the order of tests.csv: one
+        per safe test_id, its first row (the others are refused rows)."""
+        return [t for t in dict.fromkeys(self.tests.test_id) if not check_identifier(t, "test_id")]
+
+    def reduction_groups(self) -> dict:
+        """The tests of :attr:`test_ids` by series, in the order of tests.csv.
+
+        The unit of one reduction job; the tests refused at the door, whose
+        specimen may not even be a safe name, go to the group ``unreadable``
+        (no series is called that: a series ends in ``-2s`` or ``-1s-cd<n>``).
+        """
+        groups = {}
+        for test_id in self.test_ids:
+            key = UNREADABLE if test_id in self.log.errors else row_series(self.test_row(test_id))
+            groups.setdefault(key, []).append(test_id)
+        return groups
+
+    @cached_property
+    def _first_row(self) -> dict:
+        """Position in :attr:`tests` of the first row of each test_id (a
+        lookup per test would otherwise scan the log: quadratic in its size)."""
+        first = {}
+        for i, test_id in enumerate(self.tests.test_id):
+            first.setdefault(test_id, i)
+        return first
+
     def test_row(self, test_id) -> pd.Series:
-        rows = self.tests[self.tests.test_id == test_id]
-        return rows.iloc[0]
+        """The row of tests.csv that is reduced for ``test_id`` (its first)."""
+        return self.tests.iloc[self._first_row[test_id]]
 
     def record_path(self, test_id) -> Path:
         return self.root / self.test_row(test_id).file
@@ -385,6 +690,6 @@ def series_id(specimen, boundary, contact_depth_mm) -> str:
 def open_campaign(campaign_dir) -> Campaign:
     """Read and cross-check the three tables of a campaign folder."""
     root = Path(campaign_dir)
-    specimens = read_specimens(root)
-    setups = read_setups(root)
-    return Campaign(root, specimens, setups, read_tests(root, specimens, setups))
+    specimens = _or_empty(read_specimens, root)
+    setups = _or_empty(read_setups, root)
+    return Campaign(root, specimens[0], setups[0], read_tests(root, specimens, setups))

@@ -123,22 +123,27 @@ def reduce_test(campaign: Campaign, test_id: str, options=None) -> xr.Dataset:
         rec = read_record(path, expected_test_id=test_id)
     except RawFormatError as exc:
         return _unreadable(meta, exc)
-    setup = campaign.setup(meta["setup"])
-    missing = sorted(set(rec.channels) - set(setup.channel))
+    described = campaign.setup(meta["setup"])
+    missing = sorted(set(rec.channels) - set(described.channel))
     if missing:
         return _unreadable(
             meta,
             RawFormatError(path, None, f"channel(s) {missing} not described in setups.csv for setup {meta['setup']}"),
         )
-    setup = setup.set_index("channel").loc[rec.channels].reset_index()
+    setup = described.set_index("channel").loc[rec.channels].reset_index()
 
     c = opt["channels"]
     repaired, reports = health.assess_channels(
         rec.readings, rec.fs, rec.channels, c["flat_run_s"], c["max_gap_s"], c["dead_span_mm"]
     )
-    roles = validity.channel_roles(setup, meta["thickness_mm"])
-    lost = {r.channel for r in reports if r.lost}
-    choice = validity.choose_channels(roles, lost, c["backup"], c["policy"], opt["validity"]["max_lost_out_of_plane"])
+    # a transducer of the setup with no column in the record is lost like a dead one (the backup stands in)
+    all_roles = validity.channel_roles(described, meta["thickness_mm"])
+    absent = sorted(set(described.channel) - set(rec.channels))
+    lost = {r.channel for r in reports if r.lost} | set(absent)
+    choice = validity.choose_channels(
+        all_roles, lost, c["backup"], c["policy"], opt["validity"]["max_lost_out_of_plane"], absent
+    )
+    roles = all_roles.set_index("channel").loc[rec.channels].reset_index()
 
     wall_xyz = setup[["wall_x_mm", "wall_y_mm", "wall_z_mm"]].to_numpy(float)
     frame_xyz = setup[["frame_x_mm", "frame_y_mm", "frame_z_mm"]].to_numpy(float)

@@ -77,7 +77,12 @@ class ChannelChoice:
 
 
 def choose_channels(
-    roles: pd.DataFrame, lost: set, backup=BACKUP_CHANNELS, policy=CHANNEL_POLICY, max_lost=MAX_LOST_OUT_OF_PLANE
+    roles: pd.DataFrame,
+    lost: set,
+    backup=BACKUP_CHANNELS,
+    policy=CHANNEL_POLICY,
+    max_lost=MAX_LOST_OUT_OF_PLANE,
+    absent=(),
 ) -> ChannelChoice:
     """Pick the kinematic channels as the lab does.
 
@@ -95,6 +100,9 @@ def choose_channels(
         squares).
     max_lost : int
         Most out-of-plane channels that may be lost before the test is rejected.
+    absent : sequence of int
+        The lost channels that are lost because the record has no column for
+        them (a channel of the setup the acquisition did not write); named so.
     """
     oop = roles.channel[roles.role == "out_of_plane"].tolist()
     inp = roles.channel[roles.role == "in_plane"].tolist()
@@ -111,15 +119,19 @@ def choose_channels(
         used += stand_in
         for c in stand_in:
             flags.append(f"backup ch{c} used")
+    names = {c: f"ch{c} not in the record" if c in absent else f"ch{c}" for c in roles.channel}
     for c in lost_oop:
-        flags.append(f"ch{c} lost")
+        flags.append(names[c] if c in absent else f"ch{c} lost")
     malfunction = None
     if len(lost_oop) > max_lost or len(used) < 3:
-        malfunction = f"{len(lost_oop)} out-of-plane channel(s) lost ({', '.join(f'ch{c}' for c in lost_oop)})"
+        malfunction = f"{len(lost_oop)} out-of-plane channel(s) lost ({', '.join(names[c] for c in lost_oop)})"
+        if len(used) < 3 and len(lost_oop) <= max_lost:
+            malfunction += f": {len(used)} left of the 3 the kinematics needs"
     good_inp = [c for c in inp if c not in lost]
     solve_v = bool(good_inp)
     if not solve_v:
         flags.append("in-plane channel lost: v = 0")
+    flags += [names[c] for c in inp if c in absent]
     return ChannelChoice(sorted(used + good_inp[:1]), solve_v, lost_oop, flags, malfunction)
 
 

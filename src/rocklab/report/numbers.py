@@ -502,6 +502,26 @@ def _bench(results: Path, name: str):
     return json.loads(path.read_text()) if path.is_file() else None
 
 
+def _scale(bench: dict) -> dict:
+    """The smallest and largest campaign of ``bench/scale.py`` and the line through them."""
+    runs = {"small": bench["runs"][0], "large": bench["runs"][-1]}
+    keys = {"n_tests": "n_tests", "s": "wall_s", "cpu_s": "cpu_s", "peak_mb": "peak_rss_tree_mb"}
+    keys["load"] = "load_avg_1min_before"
+    out = {f"{size}_{k}": run.get(key) for size, run in runs.items() for k, key in keys.items()}
+    ten = bench.get("ten_times_embedded") or {}
+    cpu_ten = ten.get("cpu_s")
+    return {
+        "cores": bench["cores"],
+        **out,
+        "cpu_s_per_test": bench.get("cpu_s_per_test"),
+        "memory_ratio": bench.get("memory_ratio"),
+        "at_most_linear": bench.get("at_most_linear"),
+        "ten_times_n_tests": ten.get("n_tests"),
+        "ten_times_cpu_s": cpu_ten,
+        "ten_times_wall_s_at_least": cpu_ten / bench["cores"] if cpu_ten is not None else None,
+    }
+
+
 def performance(results: Path) -> dict:
     """Timings: the workflow's job times and, when measured, ``make bench``."""
     jobs = _benchmarks(results)
@@ -540,6 +560,8 @@ def performance(results: Path) -> dict:
         if mp
         else None
     )
+    sc = _bench(results, "scale")
+    out["scale"] = _scale(sc) if sc else None
     ref = _bench(results, "maps_reference")
     out["maps_reference"] = (
         {
