@@ -9,7 +9,7 @@ BIN    := $(VENV)/bin
 CORES  ?= 2
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test lint bench docs report venv clean dryrun
+.PHONY: run test lint bench docs report venv clean dryrun unlock
 
 $(STAMP): requirements.lock pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -22,6 +22,10 @@ venv: $(STAMP)
 
 run: $(STAMP)
 	$(BIN)/snakemake --cores $(CORES) --printshellcmds --rerun-incomplete
+
+# After a run killed outright, Snakemake's lock on the results stays behind.
+unlock: $(STAMP)
+	$(BIN)/snakemake --unlock
 
 dryrun: $(STAMP)
 	$(BIN)/snakemake --cores $(CORES) --dry-run
