@@ -59,7 +59,7 @@ def test_every_key_is_read_by_the_workflow(schema):
         for key in obj["properties"]:
             assert f'["{key}"]' in text or where in whole, f"{where}.{key}"
     assert 'options={"channels": config["channels"], "validity": config["validity"]}' in text
-    assert 'p.eq17["a"], p.eq17["b"]' in (ROOT / "scripts" / "overturning_map.py").read_text()
+    assert 'p.eq17["a"], p.eq17["b"]' in (ROOT / "scripts" / "overturning_maps.py").read_text()
 
 
 def test_snakemake_fills_every_default(schema):

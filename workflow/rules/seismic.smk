@@ -1,6 +1,6 @@
-# Stage: overturning maps of Sect. 5 (Figs. 21-23). One job per (record,
-# model) map, since a map is the unit that takes time; then the indices of
-# Fig. 22 with the reductions between models, and the figures.
+# Stage: overturning maps of Sect. 5 (Figs. 21-23): the maps of each record,
+# then the indices of Fig. 22 with the reductions between models, and the
+# figures; the calibrated walls of the campaign's diagnosis beside them.
 from rocklab.seismic.accelerograms import accelerogram_dir, read_manifest
 from rocklab.seismic import calibrated
 from rocklab.seismic.overturning import MODELS
@@ -11,6 +11,18 @@ MAP_RECORDS = MAPS["records"] or list(MANIFEST.record)
 MAP_FIG_RECORD = MAPS["figure_record"]
 if MAP_FIG_RECORD not in MAP_RECORDS:
     MAP_FIG_RECORD = MAP_RECORDS[0]
+# The wall and the grid of every map, paper's or calibrated.
+MAP_PARAMS = {
+    "n": MAPS["n"],
+    "lo": MAPS["lo"],
+    "hi": MAPS["hi"],
+    "alpha": MAPS["alpha"],
+    "R": MAPS["R"],
+    "form": MAPS["form"],
+    "eq17": MAPS["eq17"],
+    "polarity": MAPS["polarity"],
+    "chunks": MAPS["chunks"],
+}
 
 
 def map_outputs():
@@ -27,12 +39,16 @@ def calibrated_outputs():
     return [res("maps", "calibrated.csv"), res("report", "map_calibrated.html")]
 
 
-def calibrated_map_models():
-    """The e-alone and calibrated models, named by the campaign's diagnosis (a checkpoint)."""
+def calibrated_map_inputs(wildcards):
+    """The maps of the paper's e-alone models and the folders of the calibrated
+    ones, for the boundaries the campaign's diagnosis (a checkpoint) calibrates."""
     with open(checkpoints.diagnosis.get().output.json) as f:
         names = calibrated.model_names(json.load(f))
     boundaries = {calibrated.parse_name(n)[0] for n in names}
-    return [calibrated.E_ALONE[b] for b in calibrated.PREFIX if b in boundaries] + names
+    e_alone = [calibrated.E_ALONE[b] for b in calibrated.PREFIX if b in boundaries]
+    return [map_path(r, m) for r in MAP_RECORDS for m in e_alone] + [
+        res("maps", "calibrated", r) for r in MAP_RECORDS if names
+    ]
 
 
 def record_file(wildcards):
@@ -40,36 +56,53 @@ def record_file(wildcards):
     return recorded_path(accelerogram_dir() / MANIFEST.set_index("record").loc[wildcards.record, "file"])
 
 
-rule overturning_map:
+# One job per record for the paper's models: a map is 1-3 s of work, less
+# than a job's start-up (imports, the numba kernel's cache), so 16 records x
+# 6 models as separate jobs would spend most of their time starting.
+rule overturning_maps:
     input:
         record=record_file,
-        # the calibrated walls (rocklab.seismic.calibrated) are the campaign's diagnosis
-        diagnosis=lambda wildcards: [res("diagnosis.json")] if calibrated.is_calibrated(wildcards.model) else [],
     output:
-        res("maps", "{record}__{model}.nc"),
+        [res("maps", f"{{record}}__{model}.nc") for model in MODELS],
     wildcard_constraints:
         record="|".join(map(re.escape, MAP_RECORDS)),
-        model="|".join([*map(re.escape, MODELS), calibrated.NAME_PATTERN]),
     params:
-        n=MAPS["n"],
-        lo=MAPS["lo"],
-        hi=MAPS["hi"],
-        alpha=MAPS["alpha"],
-        R=MAPS["R"],
-        form=MAPS["form"],
-        eq17=MAPS["eq17"],
-        polarity=MAPS["polarity"],
-        chunks=MAPS["chunks"],
+        models=list(MODELS),
+        **MAP_PARAMS,
     threads: MAPS["threads"]
     resources:
         mem_mb=1000,
         runtime=20,
     log:
-        res("logs", "maps", "{record}__{model}.log"),
+        res("logs", "maps", "{record}.log"),
     benchmark:
-        res("benchmarks", "maps", "{record}__{model}.tsv")
+        res("benchmarks", "maps", "{record}.tsv")
     script:
-        "../../scripts/overturning_map.py"
+        "../../scripts/overturning_maps.py"
+
+
+# The calibrated walls (rocklab.seismic.calibrated) are named by the
+# campaign's diagnosis, a checkpoint: their maps of a record go to one folder.
+rule calibrated_maps:
+    input:
+        record=record_file,
+        diagnosis=res("diagnosis.json"),
+    output:
+        directory(res("maps", "calibrated", "{record}")),
+    wildcard_constraints:
+        record="|".join(map(re.escape, MAP_RECORDS)),
+    params:
+        **MAP_PARAMS,
+    threads: MAPS["threads"]
+    resources:
+        mem_mb=1000,
+        runtime=30,
+    log:
+        res("logs", "maps_calibrated", "{record}.log"),
+    benchmark:
+        res("benchmarks", "maps_calibrated", "{record}.tsv")
+    script:
+        "../../scripts/overturning_maps.py"
 
 
 rule map_summary:
@@ -131,7 +164,7 @@ rule map_pages:
 # the campaign's diagnosis on every record, against the paper's e alone.
 rule map_calibrated:
     input:
-        maps=lambda wildcards: [map_path(r, m) for r in MAP_RECORDS for m in calibrated_map_models()],
+        maps=calibrated_map_inputs,
         diagnosis=res("diagnosis.json"),
     output:
         res("maps", "calibrated.csv"),

@@ -66,6 +66,9 @@ class MapWall:
     alpha: float
     p: float
     boundary: str
+    #: place in a series (0 first, 1 last) of a parameter that drifts over the
+    #: tests: the maps' wall stands for the middle of the series
+    order: float = 0.5
 
 
 def read_diagnosis(diagnosis):
