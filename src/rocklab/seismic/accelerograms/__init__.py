@@ -12,13 +12,16 @@ format name               module               units in the file   header in sta
 ``SOMERVILLE``            :mod:`.somerville`   cm/s^2 (``units=``) ``somerville``
 ``TWO_COLUMN``            :mod:`.columns`      g (``units=``)      ``text_columns``
 ``MULTI_COLUMN``          :mod:`.columns`      g (``units=``)      ``text_columns``
+``CSV_TWO_COLUMN``        :mod:`.columns`      g (``units=``)      ``text_columns``
+``SLAMMER``               :mod:`.slammer`      g (``units=``)      ``slammer``
 ``KNET``, ``KINEMETRICS_EVT``  obspy itself    counts x ``calib``  obspy's
 ========================  ===================  ==================  ===============
 
 Every rocklab reader returns float64 data in m/s^2 and sets
 ``stats.units = "m/s2"``; the units of the file are in the format dictionary
 (``units_in_file``).  :func:`read_accelerogram` also converts obspy's own
-K-NET and Kinemetrics EVT traces (counts) with ``stats.calib``.
+K-NET and Kinemetrics EVT traces (counts) with ``stats.calib``.  A SLAMMER
+record takes its dt from the ``EQdata.txt`` table beside it (or ``dt=``).
 
 Processing (:mod:`.processing`): baseline correction, PGA, PGV, record length
 and significant duration.  Shipped records (:mod:`.manifest`):

@@ -119,7 +119,7 @@ def read_manifest(path=None):
 
 def _reader_kwargs(row):
     kwargs = {"format": row["format"]}
-    if row["format"] in ("TWO_COLUMN", "MULTI_COLUMN", "SOMERVILLE"):
+    if row["format"] in ("TWO_COLUMN", "MULTI_COLUMN", "CSV_TWO_COLUMN", "SOMERVILLE", "SLAMMER"):
         kwargs["units"] = row["units"]
     return kwargs
 
