@@ -330,3 +330,12 @@ def test_load_record_by_path_needs_column_for_multitrace():
         acc.load_record(_path("sct190985.txt"))
     tr = acc.load_record(_path("sct190985.txt"), column=3)
     assert acc.peak_ground_acceleration(tr.data) / G == pytest.approx(0.17, rel=0.02)
+
+
+def test_table4_agreement_in_words():
+    ag = acc.table4_agreement()
+    assert list(ag.index) == list(acc.read_manifest().record)
+    assert ag.loc["IS1280", "pga_pgv_match"] and ag.loc["IS1280", "differences"] == ""
+    assert ag.loc["LucN80W", "differences"] == "PGA +13.3 %, PGV -9.1 %, 48.1 s long against 40 s"
+    assert ag.loc["Pac164", "pga_pgv_match"] and ag.loc["Pac164", "duration_match"] == "truncated"
+    assert set(ag.index[~ag.pga_pgv_match]) == set(DEPARTURES)

@@ -25,11 +25,20 @@ record takes its dt from the ``EQdata.txt`` table beside it (or ``dt=``).
 
 Processing (:mod:`.processing`): baseline correction, PGA, PGV, record length
 and significant duration.  Shipped records (:mod:`.manifest`):
-:func:`read_manifest`, :func:`load_record`, :func:`read_table4`.
+:func:`read_manifest`, :func:`load_record`, :func:`read_table4`,
+:func:`table4_agreement`.
 """
 
 from ._text import to_si
-from .manifest import accelerogram_dir, build_manifest, load_record, read_manifest, read_table4, write_manifest
+from .manifest import (
+    accelerogram_dir,
+    build_manifest,
+    load_record,
+    read_manifest,
+    read_table4,
+    table4_agreement,
+    write_manifest,
+)
 from .native import read_accelerogram, to_si_stream
 from .processing import (
     arias_intensity,
@@ -58,6 +67,7 @@ __all__ = [
     "read_table4",
     "record_duration",
     "significant_duration",
+    "table4_agreement",
     "to_si",
     "to_si_stream",
     "velocity",
