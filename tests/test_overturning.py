@@ -303,7 +303,10 @@ def test_workflow_maps_one_record(tmp_path):
     out = tmp_path / "out"
     summary = pd.read_csv(out / "maps" / "summary.csv")
     assert set(summary.model) == set(MODELS) and (summary.record == "Pac164").all()
-    assert len(pd.read_csv(out / "maps" / "reductions.csv")) == 18
+    # every record, then those matching Table 4 (Pac164 does): 3 comparisons x 2 indices x 3 statistics each
+    assert len(pd.read_csv(out / "maps" / "reductions.csv")) == 36
+    comparison = pd.read_csv(out / "maps" / "comparison.csv")
+    assert len(comparison) == 3 * 20 and comparison.N_O_baseline.notna().sum() == 3
     for n in (21, 22, 23):
         assert (out / "figures" / f"fig{n}.png").stat().st_size > 0
     assert "amplitude rows 1-2 of 3 done" in (out / "logs" / "maps" / "Pac164__2s-housner.log").read_text()
