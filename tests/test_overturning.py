@@ -97,10 +97,10 @@ def test_reductions_are_statistics_of_per_record_reductions():
 def test_record_comparison_sets_each_record_against_table4_and_the_papers_range():
     s = pd.DataFrame(
         {
-            "record": [r for r in ("r1", "r2", "r3", "r4", "x") for _ in range(2)],
-            "model": ["2s-housner", "2s-0.95"] * 5,
-            "N_O": [0.5, 0.25, 0.95, 0.94, 0.0, 0.0, 0.05, 0.0, 0.4, 0.2],
-            "scatter": [0.2, 0.1, 0.1, 0.1, np.nan, np.nan, 1.0, np.nan, 0.2, 0.2],
+            "record": [r for r in ("r1", "r2", "r3", "r4", "x", "y") for _ in range(2)],
+            "model": ["2s-housner", "2s-0.95"] * 6,
+            "N_O": [0.5, 0.25, 0.95, 0.94, 0.0, 0.0, 0.05, 0.0, 0.4, 0.2, 1.0, 0.973],
+            "scatter": [0.2, 0.1, 0.1, 0.1, np.nan, np.nan, 1.0, np.nan, 0.2, 0.2, 0.01, 0.01],
         }
     )
     table4 = pd.DataFrame({"row": [1, 2, 3, 4, 5], "record": ["r1", "r2", "r3", "r4", "r5"]})
@@ -113,7 +113,7 @@ def test_record_comparison_sets_each_record_against_table4_and_the_papers_range(
         index=pd.Index(["r1", "r2", "r3", "r4"], name="record"),
     )
     c = record_comparison(s, agreement, table4).set_index("record")
-    assert list(c.index) == ["r1", "r2", "r3", "r4", "r5", "x"] and c.loc["x", "table4_row"] is None
+    assert list(c.index) == ["r1", "r2", "r3", "r4", "r5", "x", "y"] and c.loc["x", "table4_row"] is None
     assert c.loc["r1", "N_O_reduction_pct"] == pytest.approx(50) and c.loc["r1", "in_paper_range"] is True
     assert c.loc["r1", "reason"] == "" and c.loc["r1", "paper_min_pct"] == 3 and c.loc["r1", "paper_max_pct"] == 89
     # 1 % < 3 %: nearly all of the map overturns; the record's difference from Table 4 is named
@@ -123,6 +123,8 @@ def test_record_comparison_sets_each_record_against_table4_and_the_papers_range(
     assert "every overturning of 2s-housner removed" in c.loc["r4", "reason"] and "thin bands" in c.loc["r4", "reason"]
     assert np.isnan(c.loc["r5", "N_O_baseline"]) and c.loc["r5", "reason"] == "no record of this row"
     assert c.loc["x", "table4_match"] is None and c.loc["x", "in_paper_range"] is True
+    # the paper prints whole percents: 2.7 % is its 3 %
+    assert c.loc["y", "N_O_reduction_pct"] == pytest.approx(2.7) and c.loc["y", "in_paper_range"] is True
 
 
 # ---------------------------------------------------------------- models

@@ -445,6 +445,11 @@ COMPARISON_COLUMNS = [
 ]
 
 
+def _in_paper_range(reduction, paper):
+    """True if ``reduction`` [%] rounds into the paper's range (it prints whole percents)."""
+    return bool(paper["min"] - 0.5 <= reduction < paper["max"] + 0.5)
+
+
 def _comparison_reason(row, paper):
     """Why a record's reduction is undefined or outside the paper's per-record range (empty if it is not)."""
     base, new, red = row["N_O_baseline"], row["N_O_model"], row["N_O_reduction_pct"]
@@ -458,7 +463,7 @@ def _comparison_reason(row, paper):
         words.append(f"every overturning of {b} removed (N_O {base:.3f} -> 0)")
     elif red < 0:
         words.append(f"more overturnings with {m}")
-    if paper and not paper["min"] <= red <= paper["max"]:
+    if paper and not _in_paper_range(red, paper):
         side = "below the paper's smallest" if red < paper["min"] else "above the paper's largest"
         words.append(f"{side} reduction")
         if base >= 0.9:
@@ -475,10 +480,11 @@ def record_comparison(summary, agreement=None, table4=None, comparisons=COMPARIS
 
     The paper gives no per-record value in its text (Fig. 22 shows them as
     bars); it gives, for e_an,2s -> 0.95 e_an,2s, the range of the per-record
-    N_O reduction, 3 % to 89 % (:data:`PAPER_REDUCTIONS`).  Each record's
-    reduction is set against that range, with the record's agreement with
-    its Table 4 row, and the reason where the reduction is undefined or out
-    of the range.
+    N_O reduction, 3 % to 89 % (:data:`PAPER_REDUCTIONS`), in whole percents,
+    so a reduction is within it when it rounds into it (2.5 % to 89.5 %).
+    Each record's reduction is set against that range, with the record's
+    agreement with its Table 4 row, and the reason where the reduction is
+    undefined or out of the range.
 
     Parameters
     ----------
@@ -537,9 +543,7 @@ def record_comparison(summary, agreement=None, table4=None, comparisons=COMPARIS
                 "table4_differences": agreement.loc[record, "differences"] if known else "",
             }
             defined = not pd.isna(row["N_O_reduction_pct"])
-            row["in_paper_range"] = (
-                bool(paper["min"] <= row["N_O_reduction_pct"] <= paper["max"]) if paper and defined else None
-            )
+            row["in_paper_range"] = _in_paper_range(row["N_O_reduction_pct"], paper) if paper and defined else None
             row["reason"] = _comparison_reason(row, paper)
             rows.append(row)
     out = pd.DataFrame(rows, columns=COMPARISON_COLUMNS)
