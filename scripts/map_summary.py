@@ -1,9 +1,17 @@
-"""Snakemake shim: indices of every map (Fig. 22) and reductions between models."""
+"""Snakemake shim: indices of every map (Fig. 22), reductions between models, record-by-record comparison."""
 
 from rocklab.io import load_datasets, setup_logging, write_table
-from rocklab.seismic.overturning import reductions, summary_table
+from rocklab.seismic.accelerograms import table4_agreement
+from rocklab.seismic.overturning import TABLE4_SUBSET, record_comparison, reductions, summary_table
 
 setup_logging(snakemake.log[0])
 summary = summary_table(load_datasets(snakemake.input.maps))
+agreement = table4_agreement()
+matching = agreement.index[agreement.pga_pgv_match]
 write_table(summary, snakemake.output.summary, snakemake.params.summary_schema)
-write_table(reductions(summary), snakemake.output.reductions, snakemake.params.reductions_schema)
+write_table(
+    reductions(summary, subsets={TABLE4_SUBSET: matching}),
+    snakemake.output.reductions,
+    snakemake.params.reductions_schema,
+)
+write_table(record_comparison(summary, agreement), snakemake.output.comparison, snakemake.params.comparison_schema)

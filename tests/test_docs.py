@@ -13,6 +13,7 @@ import yaml
 
 from rocklab.report import numbers as nb
 from rocklab.report import pages
+from rocklab.seismic.overturning import record_comparison
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
@@ -81,6 +82,7 @@ READ = (
     "maps/summary.csv",
     "maps/reductions.csv",
     "maps/calibrated.csv",
+    "maps/comparison.csv",
 )
 
 
@@ -399,21 +401,28 @@ def tiny_results(tmp_path):
             "reversals_amplitude": reversals,
         }
 
-    _write(
-        r / "maps" / "summary.csv",
-        [
-            cell("A", "2s-housner", 50, 10, 4),
-            cell("A", "2s-0.95", 40, 6, 2),
-            cell("B", "2s-housner", 90, 5, 5),
-            cell("B", "2s-0.95", 80, 8, 2),
-            cell("C", "2s-housner", 5, 1, 1),
-            cell("C", "2s-0.95", 0, 0, 0),
-        ],
+    summary = [
+        cell("A", "2s-housner", 50, 10, 4),
+        cell("A", "2s-0.95", 40, 6, 2),
+        cell("B", "2s-housner", 90, 5, 5),
+        cell("B", "2s-0.95", 80, 8, 2),
+        cell("C", "2s-housner", 5, 1, 1),
+        cell("C", "2s-0.95", 0, 0, 0),
+    ]
+    _write(r / "maps" / "summary.csv", summary)
+    # A and B are rows 1 and 2 of a small Table 4 (B with a PGA unlike the table's), D (row 3) is
+    # not shipped, C is no Table 4 record
+    table4 = pd.DataFrame({"row": [1, 2, 3], "record": ["A", "B", "D"]})
+    agreement = pd.DataFrame(
+        {"table4_row": [1, 2], "pga_pgv_match": [True, False], "differences": ["", "PGA +13.3 %"]},
+        index=pd.Index(["A", "B"], name="record"),
     )
+    record_comparison(pd.DataFrame(summary), agreement, table4).to_csv(r / "maps" / "comparison.csv", index=False)
     _write(
         r / "maps" / "reductions.csv",
         [
             {
+                "records": "all",
                 "baseline": "2s-housner",
                 "model": "2s-0.95",
                 "index": "N_O",
@@ -511,6 +520,14 @@ def test_map_numbers_and_the_other_normalisations_of_the_scatter(tiny_results):
         "paper_mean": 25,
         "paper_min": 3,
     }
+    assert m["comparison"]["missing_rows"] == ["3 (D)"]
+    two = m["comparison"]["by_comparison"]["2s-housner__2s-0.95"]
+    assert [(r["row"], r["record"]) for r in two["records"]] == [(1, "A"), (2, "B"), (None, "C")]
+    # A 20 %, B 11 % within the paper's 3-89 %; C loses every overturning: 100 %, outside
+    assert (two["n_in_paper_range"], two["n_with_paper_range"], two["out_of_paper_range"]) == (2, 3, ["C"])
+    assert two["records"][1]["table4_differences"] == "PGA +13.3 %" and not two["records"][1]["table4_match"]
+    assert "every overturning of 2s-housner removed" in two["records"][2]["reason"]
+    assert "| 2 | B | PGA +13.3 % | 0.900 → 0.800 | 11.1 | yes |" in pages.maps_comparison(nb.extract(tiny_results))
     s = m["scatter_2s"]
     assert s["n_records"] == 2  # C: no overturning left
     # reversals per overturning: A 4/50 -> 2/40, B 5/90 -> 2/80

@@ -94,6 +94,9 @@ from rocklab.seismic.accelerograms import accelerogram_dir, load_record
 
 record = load_record("40EIC180")
 stream = obspy.read(accelerogram_dir() / "IELC180.AT2")  # no format: obspy asks the wheel's plugins
+# the two plugins added last, SLAMMER finding its dt in the wheel's EQdata.txt
+slammer = obspy.read(accelerogram_dir() / "TAF-111")[0]
+csv = obspy.read(accelerogram_dir() / "RSN1086_NORTHR_SYL360.AT2")[0]
 events = read_events()
 print(json.dumps({
     "rocklab": rocklab.__file__,
@@ -103,6 +106,7 @@ print(json.dumps({
     "licenses": sorted(f.name for f in files("rocklab") if "licenses" in f.parts),
     "npts": record.stats.npts,
     "format": stream[0].stats._format,
+    "new_formats": [slammer.stats._format, slammer.stats.delta, csv.stats._format],
     "trials": int(events.source_id.nunique()),
 }))
 """
@@ -117,6 +121,7 @@ def test_wheel_holds_the_library_its_data_and_licence(installed):
     assert out["licenses"] == ["LICENSE"]
     assert out["npts"] == 2688  # elcentro_NS_full.dat (manifest.csv)
     assert out["format"] == "PEER_LEGACY_AT2"
+    assert out["new_formats"] == ["SLAMMER", 0.01, "CSV_TWO_COLUMN"]
     assert out["trials"] == 134  # 135 trials, one duplicate left out (README of the tables)
 
 

@@ -23,6 +23,7 @@ from rocklab.seismic.overturning import (
     map_indices,
     named_model,
     overturning_map,
+    record_comparison,
     record_reductions,
     reductions,
     summary_table,
@@ -87,7 +88,43 @@ def test_reductions_are_statistics_of_per_record_reductions():
     assert red.loc[("N_O", "min"), "reduction_pct"] == pytest.approx(10)
     assert red.loc[("N_O", "max"), "paper_pct"] == 89
     assert red.loc[("scatter", "mean"), "reduction_pct"] == pytest.approx(25)
-    assert (red.n_records == 2).all()
+    assert (red.n_records == 2).all() and (red.records == "all").all()
+    sub = reductions(s, subsets={"matching": ["r2", "r3", "not-run"]})
+    sub = sub[sub.records == "matching"].set_index(["index", "statistic"])
+    assert sub.loc[("N_O", "max"), "reduction_pct"] == pytest.approx(10) and (sub.n_records == 1).all()
+
+
+def test_record_comparison_sets_each_record_against_table4_and_the_papers_range():
+    s = pd.DataFrame(
+        {
+            "record": [r for r in ("r1", "r2", "r3", "r4", "x", "y") for _ in range(2)],
+            "model": ["2s-housner", "2s-0.95"] * 6,
+            "N_O": [0.5, 0.25, 0.95, 0.94, 0.0, 0.0, 0.05, 0.0, 0.4, 0.2, 1.0, 0.973],
+            "scatter": [0.2, 0.1, 0.1, 0.1, np.nan, np.nan, 1.0, np.nan, 0.2, 0.2, 0.01, 0.01],
+        }
+    )
+    table4 = pd.DataFrame({"row": [1, 2, 3, 4, 5], "record": ["r1", "r2", "r3", "r4", "r5"]})
+    agreement = pd.DataFrame(
+        {
+            "table4_row": [1, 2, 3, 4],
+            "pga_pgv_match": [True, False, True, True],
+            "differences": ["", "PGA +9 %", "", ""],
+        },
+        index=pd.Index(["r1", "r2", "r3", "r4"], name="record"),
+    )
+    c = record_comparison(s, agreement, table4).set_index("record")
+    assert list(c.index) == ["r1", "r2", "r3", "r4", "r5", "x", "y"] and c.loc["x", "table4_row"] is None
+    assert c.loc["r1", "N_O_reduction_pct"] == pytest.approx(50) and c.loc["r1", "in_paper_range"] is True
+    assert c.loc["r1", "reason"] == "" and c.loc["r1", "paper_min_pct"] == 3 and c.loc["r1", "paper_max_pct"] == 89
+    # 1 % < 3 %: nearly all of the map overturns; the record's difference from Table 4 is named
+    assert c.loc["r2", "in_paper_range"] is False and not c.loc["r2", "table4_match"]
+    assert "falls in 95 %" in c.loc["r2", "reason"] and "PGA +9 %" in c.loc["r2", "reason"]
+    assert c.loc["r3", "in_paper_range"] is None and "undefined" in c.loc["r3", "reason"]
+    assert "every overturning of 2s-housner removed" in c.loc["r4", "reason"] and "thin bands" in c.loc["r4", "reason"]
+    assert np.isnan(c.loc["r5", "N_O_baseline"]) and c.loc["r5", "reason"] == "no record of this row"
+    assert c.loc["x", "table4_match"] is None and c.loc["x", "in_paper_range"] is True
+    # the paper prints whole percents: 2.7 % is its 3 %
+    assert c.loc["y", "N_O_reduction_pct"] == pytest.approx(2.7) and c.loc["y", "in_paper_range"] is True
 
 
 # ---------------------------------------------------------------- models
@@ -268,7 +305,10 @@ def test_workflow_maps_one_record(tmp_path):
     out = tmp_path / "out"
     summary = pd.read_csv(out / "maps" / "summary.csv")
     assert set(summary.model) == set(MODELS) and (summary.record == "Pac164").all()
-    assert len(pd.read_csv(out / "maps" / "reductions.csv")) == 18
+    # every record, then those matching Table 4 (Pac164 does): 3 comparisons x 2 indices x 3 statistics each
+    assert len(pd.read_csv(out / "maps" / "reductions.csv")) == 36
+    comparison = pd.read_csv(out / "maps" / "comparison.csv")
+    assert len(comparison) == 3 * 20 and comparison.N_O_baseline.notna().sum() == 3
     for n in (21, 22, 23):
         assert (out / "figures" / f"fig{n}.png").stat().st_size > 0
     assert "amplitude rows 1-2 of 3 done" in (out / "logs" / "maps" / "Pac164.log").read_text()

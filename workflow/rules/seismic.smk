@@ -26,9 +26,9 @@ MAP_PARAMS = {
 
 
 def map_outputs():
-    return [res("maps", "summary.csv"), res("maps", "reductions.csv")] + [
+    return [res("maps", name) for name in ("summary.csv", "reductions.csv", "comparison.csv")] + [
         res("figures", f"fig{n}.png") for n in (21, 22, 23)
-    ] + [res("report", f"{name}.html") for name in ("map_summary", "map_reductions")]
+    ] + [res("report", f"{name}.html") for name in ("map_summary", "map_reductions", "map_comparison")]
 
 
 def map_path(record, model):
@@ -111,9 +111,11 @@ rule map_summary:
     output:
         summary=res("maps", "summary.csv"),
         reductions=res("maps", "reductions.csv"),
+        comparison=res("maps", "comparison.csv"),
     params:
         summary_schema=schema_path("map_summary.schema.yaml"),
         reductions_schema=schema_path("map_reductions.schema.yaml"),
+        comparison_schema=schema_path("map_comparison.schema.yaml"),
     log:
         res("logs", "map_summary.log"),
     benchmark:
@@ -139,18 +141,23 @@ rule map_figures:
         "../../scripts/map_figures.py"
 
 
-# The report's pages of the two tables: sortable, filterable, columns described.
+# The report's pages of the three tables: sortable, filterable, columns described.
 rule map_pages:
     input:
         map_summary=res("maps", "summary.csv"),
         map_reductions=res("maps", "reductions.csv"),
+        map_comparison=res("maps", "comparison.csv"),
     output:
         map_summary=report_page("map_summary", "maps", "maps/summary.csv, the indices of every map"),
         map_reductions=report_page("map_reductions", "maps", "maps/reductions.csv, from one model to another"),
+        map_comparison=report_page(
+            "map_comparison", "maps", "maps/comparison.csv, record by record against Table 4 and the paper"
+        ),
     params:
         schemas={
             "map_summary": schema_path("map_summary.schema.yaml"),
             "map_reductions": schema_path("map_reductions.schema.yaml"),
+            "map_comparison": schema_path("map_comparison.schema.yaml"),
         },
     log:
         res("logs", "report_pages", "maps.log"),

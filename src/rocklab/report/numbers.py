@@ -401,6 +401,39 @@ def _scatter_reductions(summary: pd.DataFrame, baseline: str, model: str) -> dic
     }
 
 
+def _record_comparison(comparison: pd.DataFrame) -> dict:
+    """Record by record, each comparison of ``comparison.csv`` (the reductions
+    against the paper's per-record range) and the Table 4 rows without a
+    shipped record."""
+    c = comparison.astype({"table4_differences": str, "reason": str}).replace({"nan": ""})
+    missing = c[c["table4_match"].isna() & c["table4_row"].notna()].drop_duplicates("table4_row")
+    out = {"missing_rows": [f"{int(r.table4_row)} ({r.record})" for r in missing.itertuples()], "by_comparison": {}}
+    for (baseline, model), rows in c.groupby(["baseline", "model"], sort=False):
+        mapped = rows[rows["N_O_baseline"].notna()]
+        defined = mapped[mapped["in_paper_range"].notna()]
+        out["by_comparison"][f"{baseline}__{model}"] = {
+            "records": [
+                {
+                    "row": None if pd.isna(r.table4_row) else int(r.table4_row),
+                    "record": r.record,
+                    "N_O_baseline": r.N_O_baseline,
+                    "N_O_model": r.N_O_model,
+                    "N_O_reduction_pct": r.N_O_reduction_pct,
+                    "scatter_reduction_pct": r.scatter_reduction_pct,
+                    "in_paper_range": None if pd.isna(r.in_paper_range) else bool(r.in_paper_range),
+                    "table4_match": None if pd.isna(r.table4_match) else bool(r.table4_match),
+                    "table4_differences": r.table4_differences,
+                    "reason": r.reason,
+                }
+                for r in mapped.itertuples()
+            ],
+            "n_in_paper_range": int(defined["in_paper_range"].astype(bool).sum()),
+            "n_with_paper_range": len(defined),
+            "out_of_paper_range": [r.record for r in defined.itertuples() if not bool(r.in_paper_range)],
+        }
+    return out
+
+
 def maps(results: Path) -> dict:
     """Sect. 5: the overturning indices of every record and model, the reductions."""
     summary = _csv(results / "maps", "summary.csv")
@@ -418,12 +451,14 @@ def maps(results: Path) -> dict:
         },
         "reductions": {},
     }
+    # the statistics over every record under "reductions", over a subset under "reductions_<subset>"
     for r in reductions.itertuples():
-        key = f"{r.baseline}__{r.model}"
-        entry = out["reductions"].setdefault(key, {})
+        section = "reductions" if r.records == "all" else f"reductions_{r.records}"
+        entry = out.setdefault(section, {}).setdefault(f"{r.baseline}__{r.model}", {})
         entry.setdefault(r.index, {"n_records": r.n_records})[r.statistic] = r.reduction_pct
         if not pd.isna(r.paper_pct):
             entry[r.index][f"paper_{r.statistic}"] = r.paper_pct
+    out["comparison"] = _record_comparison(_csv(results / "maps", "comparison.csv"))
     if {"2s-housner", "2s-0.95"} <= set(models):
         out["scatter_2s"] = _scatter_reductions(summary, "2s-housner", "2s-0.95")
         n_o = s["N_O"].unstack("model")
@@ -565,6 +600,10 @@ def performance(results: Path) -> dict:
     ref = _bench(results, "maps_reference")
     out["maps_reference"] = (
         {
+            "records": ref["records"],
+            "workers": ref["workers"],
+            "total_s": ref["total_s"],
+            "complete": ref["complete"],
             "n_maps": len(ref["maps"]),
             "agreement_pct_min": min(m["agreement_pct"] for m in ref["maps"]),
             "n_full_agreement": sum(m["agreement_pct"] == 100 for m in ref["maps"]),

@@ -12,21 +12,33 @@ format name               module               units in the file   header in sta
 ``SOMERVILLE``            :mod:`.somerville`   cm/s^2 (``units=``) ``somerville``
 ``TWO_COLUMN``            :mod:`.columns`      g (``units=``)      ``text_columns``
 ``MULTI_COLUMN``          :mod:`.columns`      g (``units=``)      ``text_columns``
+``CSV_TWO_COLUMN``        :mod:`.columns`      g (``units=``)      ``text_columns``
+``SLAMMER``               :mod:`.slammer`      g (``units=``)      ``slammer``
 ``KNET``, ``KINEMETRICS_EVT``  obspy itself    counts x ``calib``  obspy's
 ========================  ===================  ==================  ===============
 
 Every rocklab reader returns float64 data in m/s^2 and sets
 ``stats.units = "m/s2"``; the units of the file are in the format dictionary
 (``units_in_file``).  :func:`read_accelerogram` also converts obspy's own
-K-NET and Kinemetrics EVT traces (counts) with ``stats.calib``.
+K-NET and Kinemetrics EVT traces (counts) with ``stats.calib``.  A SLAMMER
+record takes its dt from the ``EQdata.txt`` table beside it (or ``dt=``).
 
 Processing (:mod:`.processing`): baseline correction, PGA, PGV, record length
 and significant duration.  Shipped records (:mod:`.manifest`):
-:func:`read_manifest`, :func:`load_record`, :func:`read_table4`.
+:func:`read_manifest`, :func:`load_record`, :func:`read_table4`,
+:func:`table4_agreement`.
 """
 
 from ._text import to_si
-from .manifest import accelerogram_dir, build_manifest, load_record, read_manifest, read_table4, write_manifest
+from .manifest import (
+    accelerogram_dir,
+    build_manifest,
+    load_record,
+    read_manifest,
+    read_table4,
+    table4_agreement,
+    write_manifest,
+)
 from .native import read_accelerogram, to_si_stream
 from .processing import (
     arias_intensity,
@@ -55,6 +67,7 @@ __all__ = [
     "read_table4",
     "record_duration",
     "significant_duration",
+    "table4_agreement",
     "to_si",
     "to_si_stream",
     "velocity",

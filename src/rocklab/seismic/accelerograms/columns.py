@@ -1,8 +1,10 @@
 """Header-less numeric column text: time plus one (two-column) or several acceleration columns (obspy plugins).
 
-Examples: ``elcentro_NS_full.dat`` (t, a in g), ``Northridge_Sylmar_County.dat``
-(t, a in m/s^2), ``sct190985.txt`` (t, N-S, E-W, V in g).  The file says
-nothing about units or components, so the caller must:
+Examples: ``elcentro_NS_full.dat`` (t, a in g, whitespace-separated),
+``sct190985.txt`` (t, N-S, E-W, V in g), ``RSN1086_NORTHR_SYL360.AT2``
+(``t,a`` comma-separated in g: an NGA-West2 record converted to two columns,
+despite its name).  The file says nothing about units or components, so the
+caller must:
 
 * ``units=`` -- acceleration units of every column, default ``"g"``
   (``"m/s2"``, ``"cm/s2"``/``"gal"``, ``"mm/s2"`` also accepted);
@@ -15,10 +17,12 @@ The time step is the mean spacing of the time column, which must be uniform
 (within 1 % of dt); a non-zero first time becomes ``starttime`` (seconds after
 the obspy epoch 1970-01-01), since the true trigger time is unknown.
 
-Format names ``TWO_COLUMN`` (exactly t + 1 column) and ``MULTI_COLUMN``
-(t + 2 or more columns, one trace each).  Header in ``stats.text_columns``:
-``column`` (1-based column of the file), ``ncolumns``, ``t0``, ``dt``,
-``units_in_file``.
+Format names ``TWO_COLUMN`` (exactly t + 1 column, whitespace-separated),
+``MULTI_COLUMN`` (t + 2 or more columns, one trace each) and
+``CSV_TWO_COLUMN`` (exactly ``t,a``, comma-separated, e.g. the NGA-West2
+conversions of the shuang2099/Ground-motion-truncation-method repository).
+Header in ``stats.text_columns``: ``column`` (1-based column of the file),
+``ncolumns``, ``delimiter``, ``t0``, ``dt``, ``units_in_file``.
 """
 
 from __future__ import annotations
@@ -34,14 +38,21 @@ DEFAULT_UNITS = "g"
 _PROBE_LINES = 50
 
 
-def _ncolumns(filename):
-    """Number of columns if the head is uniform numeric columns with a time axis, else None."""
+def _ncolumns(filename, delimiter=None):
+    """Number of columns if the head is uniform numeric columns with a time axis, else None.
+
+    ``delimiter`` None: columns separated by whitespace; else by that character.
+    """
     lines = head_lines(filename, 4096)
     if not lines:
         return None
     lines = [line for line in lines[:_PROBE_LINES] if line.strip()]
     if len(lines) < 3:
         return None
+    if delimiter is not None:
+        # the same check as for whitespace columns, on the fields between delimiters; a field
+        # holding blanks inside (whitespace columns) is no number
+        lines = [" ".join(field.strip().replace(" ", "-") or "-" for field in line.split(delimiter)) for line in lines]
     ncol = len(lines[0].split())
     if ncol < 2 or not all(all_floats(line, ncol) for line in lines):
         return None
@@ -63,8 +74,13 @@ def _is_multi_column(filename):
     return ncol is not None and ncol >= 3
 
 
-def _read_columns(filename, headonly, units, components, station):
-    table = np.loadtxt(filename, dtype=np.float64, ndmin=2)
+def _is_csv_two_column(filename):
+    """True for header-less ``t,a`` comma-separated text with a uniform time column."""
+    return _ncolumns(filename, ",") == 2
+
+
+def _read_columns(filename, headonly, units, components, station, delimiter=None):
+    table = np.loadtxt(filename, dtype=np.float64, ndmin=2, delimiter=delimiter)
     t = table[:, 0]
     n, ncol = table.shape
     if n < 2:
@@ -81,7 +97,7 @@ def _read_columns(filename, headonly, units, components, station):
         raise ValueError(f"{filename}: {ncol - 1} acceleration columns but {len(components)} component names")
     traces = []
     for k, name in enumerate(components, start=2):
-        info = {"column": k, "ncolumns": ncol, "t0": float(t[0]), "dt": float(dt)}
+        info = {"column": k, "ncolumns": ncol, "delimiter": delimiter or "whitespace", "t0": float(t[0]), "dt": dt}
         traces.append(
             make_trace(
                 table[:, k - 1],
@@ -107,3 +123,10 @@ def _read_two_column(filename, headonly=False, units=DEFAULT_UNITS, components=N
 def _read_multi_column(filename, headonly=False, units=DEFAULT_UNITS, components=None, station="", **kwargs):
     """Read ``t a1 a2 ...`` text: one trace per column in m/s^2 (see module doc)."""
     return _read_columns(filename, headonly, units, components, station)
+
+
+def _read_csv_two_column(filename, headonly=False, units=DEFAULT_UNITS, components=None, station="", **kwargs):
+    """Read ``t,a`` comma-separated text: one trace in m/s^2 (``units`` default g, see module doc)."""
+    if _ncolumns(filename, ",") != 2:
+        raise ValueError(f"{filename}: not two comma-separated columns t,a")
+    return _read_columns(filename, headonly, units, components, station, delimiter=",")

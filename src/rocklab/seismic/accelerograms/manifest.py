@@ -44,6 +44,9 @@ DEFAULT_PROCESSING = {"pre_event": None, "velocity_order": 1, "freqmin": None, "
 ENV_DIR = "ROCKLAB_ACCELEROGRAMS"
 
 PGA_TOLERANCE_PCT = 2.0
+#: PGV depends more on the processing (filter corners) than PGA: a record of Table 4's
+#: station and component matches its PGV within this bound [%].
+PGV_TOLERANCE_PCT = 4.0
 DURATION_TOLERANCE_PCT = 1.0
 
 MANIFEST_COLUMNS = [
@@ -119,7 +122,7 @@ def read_manifest(path=None):
 
 def _reader_kwargs(row):
     kwargs = {"format": row["format"]}
-    if row["format"] in ("TWO_COLUMN", "MULTI_COLUMN", "SOMERVILLE"):
+    if row["format"] in ("TWO_COLUMN", "MULTI_COLUMN", "CSV_TWO_COLUMN", "SOMERVILLE", "SLAMMER"):
         kwargs["units"] = row["units"]
     return kwargs
 
@@ -229,6 +232,41 @@ def build_manifest(raw_dir=None):
             }
         )
     return pd.DataFrame(rows)[MANIFEST_COLUMNS].astype({"column": "Int64"})
+
+
+def table4_agreement(manifest=None):
+    """How each shipped record compares with its Table 4 row, in a flag and in words.
+
+    Parameters
+    ----------
+    manifest : DataFrame, optional
+        :func:`read_manifest` (default: the shipped one).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Indexed by record: ``table4_row``; ``pga_pgv_match``, PGA within
+        :data:`PGA_TOLERANCE_PCT` and PGV within :data:`PGV_TOLERANCE_PCT` of
+        Table 4; ``duration_match`` (match, truncated or longer, see the
+        module doc); ``differences``, what departs from Table 4 in words
+        (empty for a full match), e.g. ``"PGA +13.3 %, PGV -9.1 %; 48.1 s
+        long against 40 s"``.
+    """
+    m = read_manifest() if manifest is None else manifest
+    rows = {}
+    for r in m.itertuples():
+        pga_ok = abs(r.pga_match_pct) <= PGA_TOLERANCE_PCT
+        pgv_ok = abs(r.pgv_match_pct) <= PGV_TOLERANCE_PCT
+        words = [f"PGA {r.pga_match_pct:+.1f} %"] * (not pga_ok) + [f"PGV {r.pgv_match_pct:+.1f} %"] * (not pgv_ok)
+        if r.duration_match != "match":
+            words.append(f"{r.duration_s:.1f} s long against {r.t4_duration_s:g} s")
+        rows[r.record] = {
+            "table4_row": int(r.table4_row),
+            "pga_pgv_match": bool(pga_ok and pgv_ok),
+            "duration_match": r.duration_match,
+            "differences": ", ".join(words),
+        }
+    return pd.DataFrame.from_dict(rows, orient="index").rename_axis("record")
 
 
 def write_manifest(raw_dir=None):
