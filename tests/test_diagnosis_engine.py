@@ -84,3 +84,22 @@ def test_structure_slopes_have_the_small_sample_correction(n_tests):
     # the uncorrected error is sqrt((G - 1) / G) of it: 9.5 % too small with 6 tests, 15.5 % with 4 (issue 12)
     meat_only = ref_se * np.sqrt((n_tests - 1) / n_tests)
     assert se / meat_only == pytest.approx({4: 1.1547, 6: 1.0954, 12: 1.0445}[n_tests], abs=1e-4)
+
+
+@pytest.mark.parametrize("n_tests", [5, 12])
+def test_one_step_heldout_matches_the_refit_of_every_fold(n_tests):
+    problem = DecayProblem(n_tests=n_tests, seed=n_tests)
+    every = np.arange(n_tests)
+    f = engine.fit(problem, every, ("decay",))
+    ho = engine.heldout(problem, ("decay",), f)
+    # the refit of each fold's training tests (the engine's former held-out fits)
+    ref = np.full(n_tests, np.nan)
+    for held in engine._folds(n_tests):
+        g = engine.fit(problem, np.setdiff1d(every, held), ("decay",), x0=f.values)
+        r, x = problem.residuals(held, ("decay",), g.values)["g"], problem.noise(held)["g"]
+        v = g.var["g"][0] + g.var["g"][1] * x**2 + engine.VAR_FLOOR
+        ref[held] = np.mean(r**2 / v + np.log(v), axis=1)
+    base = engine.heldout(problem, ())["deviance"]
+    # per test, and the gain over the base model the selection weighs, to a per cent of that gain
+    assert ho["deviance"] == pytest.approx(ref, abs=0.01 * np.mean(base - ref))
+    assert np.mean(base - ho["deviance"]) == pytest.approx(np.mean(base - ref), rel=1e-3)
