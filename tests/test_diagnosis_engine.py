@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from scipy import optimize
 
 from rocklab.diagnosis import engine
 from rocklab.diagnosis.engine import Param, Problem
@@ -103,3 +104,35 @@ def test_one_step_heldout_matches_the_refit_of_every_fold(n_tests):
     # per test, and the gain over the base model the selection weighs, to a per cent of that gain
     assert ho["deviance"] == pytest.approx(ref, abs=0.01 * np.mean(base - ref))
     assert np.mean(base - ho["deviance"]) == pytest.approx(np.mean(base - ref), rel=1e-3)
+
+
+class NoisyDecayProblem(DecayProblem):
+    """DecayProblem whose noise grows as its noise covariate: the weights of the fit matter."""
+
+    def __init__(self, seed=0):
+        super().__init__(noise=0.0, seed=seed)
+        rng = np.random.default_rng(seed + 1)
+        self.cov = rng.uniform(0.5, 3.0, self.x.shape)
+        self.y = self.y * np.exp(rng.normal(0.0, 0.01, self.x.shape) * np.sqrt(1.0 + 4.0 * self.cov**2))
+
+    def noise(self, sub):
+        return {"g": self.cov[sub]}
+
+
+def test_reweighted_passes_reach_the_fixed_point_of_the_likelihood():
+    problem = NoisyDecayProblem(seed=4)
+    every = np.arange(problem.n_tests)
+    f = engine.fit(problem, every, ("decay",))
+    assert f.converged and f.passes > 1 and f.var["g"][1] > 0
+    # the fixed point: a full search with the fit's own weights stays where the fit ended
+    x = problem.noise(every)["g"]
+    w = 1.0 / np.sqrt(f.var["g"][0] + f.var["g"][1] * x**2 + engine.VAR_FLOOR)
+    sol = optimize.least_squares(
+        lambda v: (problem.residuals(every, ("decay",), {"k": v[0], "q": v[1]})["g"] * w).ravel(),
+        [f.values["k"], f.values["q"]],
+        xtol=1e-12,
+        ftol=1e-12,
+    )
+    ci = engine.parameter_intervals(problem, f, n_boot=40, seed=1)
+    for i, k in enumerate(("k", "q")):
+        assert sol.x[i] == pytest.approx(f.values[k], abs=5e-3 * (ci[k][1] - ci[k][0])), k  # one pass: 6-8 %
