@@ -3,12 +3,13 @@
     python bench/diagnosis.py --out results/bench [--results results]
 
 Reads the reduced tests and their motion (``<results>/tests``,
-``<results>/motion``, as the workflow's ``diagnose_series`` jobs do) and
+``<results>/motion``, as the workflow's ``diagnose_series_*`` jobs do) and
 times :func:`rocklab.diagnosis.diagnose_records` on each series with the
 workflow's settings (``config/config.yaml``, defaults from its schema):
 CPU and wall seconds, the verdict.  With the workflow's job benchmarks
-(``<results>/benchmarks/diagnosis/*.tsv``) it also sums the job times of
-the diagnosis, start-up and reading included.  Writes
+(``<results>/benchmarks/diagnosis/<boundary>.tsv`` and
+``diagnosis.tsv``) it also sums the job times of the diagnosis, start-up
+and reading included.  Writes
 ``<out>/diagnosis.json`` and prints the totals.
 """
 
@@ -52,7 +53,10 @@ def main():
             "discovered": [f["effect"] for f in entry["findings"] if f.get("discovered")] if entry else [],
         }
         print(f"{key}: {series[key]['cpu_s']:.2f} s CPU")
-    jobs = sorted((args.results / "benchmarks" / "diagnosis").glob("*.tsv"))
+    # the workflow's jobs: one per boundary condition, then the checkpoint summing them up
+    bench = args.results / "benchmarks"
+    jobs = [bench / "diagnosis" / f"{b}.tsv" for b in ("two-sided", "one-sided")] + [bench / "diagnosis.tsv"]
+    jobs = [p for p in jobs if p.exists()]
     job_s = [float(pd.read_csv(p, sep="\t")["s"].iloc[0]) for p in jobs]
     out = {
         "n_series": len(series),

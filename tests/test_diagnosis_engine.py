@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from scipy import optimize
 
 from rocklab.diagnosis import engine
 from rocklab.diagnosis.engine import Param, Problem
@@ -84,3 +85,54 @@ def test_structure_slopes_have_the_small_sample_correction(n_tests):
     # the uncorrected error is sqrt((G - 1) / G) of it: 9.5 % too small with 6 tests, 15.5 % with 4 (issue 12)
     meat_only = ref_se * np.sqrt((n_tests - 1) / n_tests)
     assert se / meat_only == pytest.approx({4: 1.1547, 6: 1.0954, 12: 1.0445}[n_tests], abs=1e-4)
+
+
+@pytest.mark.parametrize("n_tests", [5, 12])
+def test_one_step_heldout_matches_the_refit_of_every_fold(n_tests):
+    problem = DecayProblem(n_tests=n_tests, seed=n_tests)
+    every = np.arange(n_tests)
+    f = engine.fit(problem, every, ("decay",))
+    ho = engine.heldout(problem, ("decay",), f)
+    # the refit of each fold's training tests (the engine's former held-out fits)
+    ref = np.full(n_tests, np.nan)
+    for held in engine._folds(n_tests):
+        g = engine.fit(problem, np.setdiff1d(every, held), ("decay",), x0=f.values)
+        r, x = problem.residuals(held, ("decay",), g.values)["g"], problem.noise(held)["g"]
+        v = g.var["g"][0] + g.var["g"][1] * x**2 + engine.VAR_FLOOR
+        ref[held] = np.mean(r**2 / v + np.log(v), axis=1)
+    base = engine.heldout(problem, ())["deviance"]
+    # per test, and the gain over the base model the selection weighs, to a per cent of that gain
+    assert ho["deviance"] == pytest.approx(ref, abs=0.01 * np.mean(base - ref))
+    assert np.mean(base - ho["deviance"]) == pytest.approx(np.mean(base - ref), rel=1e-3)
+
+
+class NoisyDecayProblem(DecayProblem):
+    """DecayProblem whose noise grows as its noise covariate: the weights of the fit matter."""
+
+    def __init__(self, seed=0):
+        super().__init__(noise=0.0, seed=seed)
+        rng = np.random.default_rng(seed + 1)
+        self.cov = rng.uniform(0.5, 3.0, self.x.shape)
+        self.y = self.y * np.exp(rng.normal(0.0, 0.01, self.x.shape) * np.sqrt(1.0 + 4.0 * self.cov**2))
+
+    def noise(self, sub):
+        return {"g": self.cov[sub]}
+
+
+def test_reweighted_passes_reach_the_fixed_point_of_the_likelihood():
+    problem = NoisyDecayProblem(seed=4)
+    every = np.arange(problem.n_tests)
+    f = engine.fit(problem, every, ("decay",))
+    assert f.converged and f.passes > 1 and f.var["g"][1] > 0
+    # the fixed point: a full search with the fit's own weights stays where the fit ended
+    x = problem.noise(every)["g"]
+    w = 1.0 / np.sqrt(f.var["g"][0] + f.var["g"][1] * x**2 + engine.VAR_FLOOR)
+    sol = optimize.least_squares(
+        lambda v: (problem.residuals(every, ("decay",), {"k": v[0], "q": v[1]})["g"] * w).ravel(),
+        [f.values["k"], f.values["q"]],
+        xtol=1e-12,
+        ftol=1e-12,
+    )
+    ci = engine.parameter_intervals(problem, f, n_boot=40, seed=1)
+    for i, k in enumerate(("k", "q")):
+        assert sol.x[i] == pytest.approx(f.values[k], abs=5e-3 * (ci[k][1] - ci[k][0])), k  # one pass: 6-8 %

@@ -196,7 +196,9 @@ def fit(problem: Problem, idx, ext, x0=None, n_irls=None) -> Fit:
     Iteratively reweighted least squares: with the weights of the noise
     model (:func:`noise_variance`) of the previous pass, a bounded
     least-squares fit, then the noise model again; its fixed point is the
-    maximum of the likelihood.  Non-convex parameters start both at their
+    maximum of the likelihood.  The first pass searches; the weights of the
+    next ones move the optimum by little, and each is one Gauss-Newton step
+    with the derivatives at the first pass's optimum, reweighted.  Non-convex parameters start both at their
     null and at the value the data suggest (:meth:`Problem.starts`); the
     better end wins.  ``x0`` (a previous fit) gives a single warm start, and
     two passes (``n_irls``, default 5 cold, 2 warm) then suffice.
@@ -229,20 +231,31 @@ def fit(problem: Problem, idx, ext, x0=None, n_irls=None) -> Fit:
     for x in starts:
         R = problem.residuals(sub, ext, dict(zip(names, x)))
         var = _variances({g: R[g] for g in masks}, X)
-        passes, converged = 0, False
+        passes, converged, jac = 0, False, None
         for _ in range(n_irls):
             passes += 1
             w = {g: 1.0 / np.sqrt(var[g][0] + var[g][1] * xm[g] ** 2 + VAR_FLOOR) for g in masks}
 
-            def res(xx, w=w):
-                R = problem.residuals(sub, ext, dict(zip(names, xx)))
+            def stacked(R, w=w):
                 return np.concatenate(
                     [np.nan_to_num(R[g][m], nan=1.0, posinf=1.0, neginf=-1.0) * w[g] for g, m in masks.items()]
                 )
 
-            sol = optimize.least_squares(res, x, bounds=(lo, hi), x_scale="jac", diff_step=1e-5, xtol=1e-9, ftol=1e-9)
-            moved = np.max(np.abs(sol.x - x) / (hi - lo))
-            x = sol.x
+            def res(xx):
+                return stacked(problem.residuals(sub, ext, dict(zip(names, xx))))
+
+            wv = np.concatenate([w[g] for g in masks])
+            if jac is None:
+                sol = optimize.least_squares(
+                    res, x, bounds=(lo, hi), x_scale="jac", diff_step=1e-5, xtol=1e-9, ftol=1e-9
+                )
+                step, jac = sol.x - x, sol.jac / wv[:, None]
+            else:
+                # the weights moved the optimum by little: one Gauss-Newton step from the last pass's
+                # optimum, with its derivatives (at that point) reweighted, instead of a new search
+                step = optimize.lsq_linear(jac * wv[:, None], -stacked(R), bounds=(lo - x, hi - x)).x
+            moved = np.max(np.abs(step) / (hi - lo))
+            x = np.clip(x + step, lo, hi)
             R = problem.residuals(sub, ext, dict(zip(names, x)))
             var = _variances({g: np.where(m, R[g], np.nan) for g, m in masks.items()}, X)
             if moved < 1e-6:
@@ -263,8 +276,20 @@ def _folds(n, k_max=5):
     return [idx[idx % k == j] for j in range(k)] if n > 1 else [idx]
 
 
-def heldout(problem: Problem, ext, start=None):
+def heldout(problem: Problem, ext, fitted: Fit | None = None):
     """Per-test held-out deviance of ``ext`` fitted on the other tests (K-fold), and measures.
+
+    The fit of each fold's training tests is one Gauss-Newton step from the
+    fit of all tests (``fitted``; made here when None), over the training
+    tests' weighted residuals and derivatives at it (:func:`_linearised`,
+    the linearisation of the bootstrap, :func:`parameter_intervals`); its
+    noise model (:func:`noise_variance`) is then that of the training
+    tests' residuals at the step's parameters.  A fold leaves out a fifth
+    of the tests (one, up to six): its fit differs from the full one by
+    about its standard errors, where the residuals are linear in the
+    parameters, so the step lands on the refit of the fold's tests (the
+    engine's former held-out fits, at ten times the cost:
+    tests/test_diagnosis_engine.py).
 
     Returns
     -------
@@ -274,20 +299,29 @@ def heldout(problem: Problem, ext, start=None):
         :meth:`Problem.heldout_measures`.
     """
     n = problem.n_tests
+    every = problem.subset(np.arange(n))
+    X = problem.noise(every)
+    if problem.params(ext):
+        fitted = fitted or fit(problem, np.arange(n), ext)
+        names, x0, lo, hi, A, y = _linearised(problem, every, fitted)
     dev = np.full(n, np.nan)
     meas = {}
     for held in _folds(n):
         train = np.setdiff1d(np.arange(n), held) if n > 1 else held
-        f = fit(problem, train, ext, x0=start)
-        sub = problem.subset(held)
-        X = problem.noise(sub)
-        R = {g: r for g, r in problem.residuals(sub, ext, f.values).items() if g in f.var}
-        for j, i in enumerate(held):
-            Ri = {g: r[j : j + 1] for g, r in R.items()}
-            Xi = {g: X[g][j : j + 1] for g in R}
+        values = {}
+        if problem.params(ext):
+            step = optimize.lsq_linear(
+                np.concatenate([A[i] for i in train]), np.concatenate([y[i] for i in train]), bounds=(lo, hi)
+            )
+            values = dict(zip(names, map(float, x0 + step.x)))
+        R = problem.residuals(every, ext, values)
+        var = _variances({g: r[train] for g, r in R.items()}, {g: x[train] for g, x in X.items()})
+        for i in held:
+            Ri = {g: r[i : i + 1] for g, r in R.items() if g in var}
+            Xi = {g: X[g][i : i + 1] for g in Ri}
             nobs = sum(r.size for r, _ in _obs(Ri, Xi).values())
-            dev[i] = _deviance(Ri, Xi, f.var) / nobs if nobs else np.nan
-        for name, x in problem.heldout_measures(sub, ext, f.values).items():
+            dev[i] = _deviance(Ri, Xi, var) / nobs if nobs else np.nan
+        for name, x in problem.heldout_measures(problem.subset(held), ext, values).items():
             meas.setdefault(name, np.full(n, np.nan))[held] = x
     return {"deviance": dev, **meas}
 
@@ -310,46 +344,61 @@ def _jacobian(problem: Problem, sub, ext, values):
     return R, J
 
 
-def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
-    """Percentile 95 % intervals of the parameters, whole tests resampled (bootstrap over tests).
+def _linearised(problem: Problem, sub, fitted: Fit):
+    """The least-squares problem of ``fitted`` linearised at its parameters, test by test.
 
-    Each resample is fitted by one Gauss-Newton step from the full fit
-    (the estimating-function bootstrap of Hu & Kalbfleisch 2000, within the
-    bounds): the residuals of every test and their derivatives are computed
-    once, at the full fit, with the weights of its noise model, and a
-    resample weighs each test by the times it was drawn.  The resamples
-    differ from the full fit by a few times its standard errors, where the
-    residuals are linear in the parameters to well below those errors (the
-    refit of every resample with its own noise model, the engine's former
-    bootstrap, gives the same intervals to a few per cent of their width at
-    twenty times the cost: tests/test_diagnosis_engine.py).
+    Returns
+    -------
+    names : list of str
+    x0, lo, hi : ndarray
+        The fitted parameters, and their bounds less x0.
+    A, y : list of ndarray
+        Per test of ``sub``: the derivatives of its finite residuals (every
+        group), weighted by the fit's noise model, and minus those residuals
+        weighted alike: the step of a set of tests is the least-squares
+        solution of their stacked A dx = y.
     """
-    t0 = time.perf_counter()
-    rng = np.random.default_rng(seed)
     names = list(fitted.values)
-    if not names:
-        return {}
-    all_idx = np.arange(problem.n_tests)
-    sub = problem.subset(all_idx)
     X = problem.noise(sub)
     R, J = _jacobian(problem, sub, fitted.ext, fitted.values)
     x0 = np.array([fitted.values[k] for k in names], float)
     plist = problem.params(fitted.ext)
     lo = np.array([q.lower for q in plist], float) - x0
     hi = np.array([q.upper for q in plist], float) - x0
-    # per test: the weighted derivatives and residuals of its finite observations, every group
-    A, y = [[] for _ in all_idx], [[] for _ in all_idx]
+    tests = range(len(next(iter(R.values()))))
+    A, y = [[] for _ in tests], [[] for _ in tests]
     for g, r in R.items():
         if g not in fitted.var:
             continue
         d = np.stack(J[g], axis=-1)
         ok = np.isfinite(r) & np.isfinite(X[g]) & np.all(np.isfinite(d), axis=-1)
         w = 1.0 / np.sqrt(fitted.var[g][0] + fitted.var[g][1] * np.where(ok, X[g], 0.0) ** 2 + VAR_FLOOR)
-        for i in all_idx:
+        for i in tests:
             A[i].append(d[i][ok[i]] * w[i][ok[i], None])
             y[i].append(-r[i][ok[i]] * w[i][ok[i]])
-    A = [np.concatenate(a) for a in A]
-    y = [np.concatenate(b) for b in y]
+    return names, x0, lo, hi, [np.concatenate(a) for a in A], [np.concatenate(b) for b in y]
+
+
+def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
+    """Percentile 95 % intervals of the parameters, whole tests resampled (bootstrap over tests).
+
+    Each resample is fitted by one Gauss-Newton step from the full fit
+    (the estimating-function bootstrap of Hu & Kalbfleisch 2000, within the
+    bounds): the residuals of every test and their derivatives are computed
+    once, at the full fit, with the weights of its noise model
+    (:func:`_linearised`), and a resample weighs each test by the times it
+    was drawn.  The resamples differ from the full fit by a few times its
+    standard errors, where the residuals are linear in the parameters to
+    well below those errors (the refit of every resample with its own noise
+    model, the engine's former bootstrap, gives the same intervals to a few
+    per cent of their width at twenty times the cost:
+    tests/test_diagnosis_engine.py).
+    """
+    t0 = time.perf_counter()
+    rng = np.random.default_rng(seed)
+    if not fitted.values:
+        return {}
+    names, x0, lo, hi, A, y = _linearised(problem, problem.subset(np.arange(problem.n_tests)), fitted)
     draws = []
     for _ in range(n_boot):
         counts = np.bincount(rng.integers(0, problem.n_tests, problem.n_tests), minlength=problem.n_tests)
@@ -579,7 +628,7 @@ def select_effects(
             )
         accepted = False
         for dbic, eff, ext, f in cands:
-            ho = heldout(problem, ext, start=f.values)
+            ho = heldout(problem, ext, f)
             d = cur_ho["deviance"] - ho["deviance"]
             gain, se = _paired(d)
             if not _improves(d):
@@ -615,7 +664,7 @@ def select_effects(
         for old in [e for e in current if e != eff and e in steps]:
             ext = tuple(e for e in current if e != old)
             f = fit_of(ext)
-            ho = heldout(problem, ext, start=f.values)
+            ho = heldout(problem, ext, f)
             loss, se = _paired(ho["deviance"] - cur_ho["deviance"])
             if not _improves(ho["deviance"] - cur_ho["deviance"]) or f.bic - cur_fit.bic < bic_margin:
                 rejected[old] = f"carried by {eff} (removing it costs {loss:.3g} +- {se:.2g} held out)"
@@ -707,10 +756,10 @@ def family_against_listed(problem: Problem, family, sel, *, n_boot=40, seed=0, f
             fits[ext] = fit(problem, all_idx, ext)
     best = min(problem.candidates(), key=lambda c: fits[(c,)].bic)
     f = fits[(family,)]
-    ho = heldout(problem, (family,), start=f.values)
+    ho = heldout(problem, (family,), f)
     ci = parameter_intervals(problem, f, n_boot=n_boot, seed=seed)
     vs_base, se_base = paired_gain(sel["base"]["deviance"], ho["deviance"])
-    vs_best, se_best = paired_gain(heldout(problem, (best,), start=fits[(best,)].values)["deviance"], ho["deviance"])
+    vs_best, se_best = paired_gain(heldout(problem, (best,), fits[(best,)])["deviance"], ho["deviance"])
     return {
         "effect": family,
         "form": cause.law,
