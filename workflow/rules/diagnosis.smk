@@ -21,9 +21,10 @@ def limestone_outputs():
 
 
 #: The series of each boundary condition, in the order of tests.csv (one diagnosis job each).
+#: (the tests refused at the door are in no series: they have no diagnosis)
 SERIES_BY_BOUNDARY = {}
-for _row in CAMPAIGN.tests.drop_duplicates("test_id").itertuples():
-    SERIES_BY_BOUNDARY.setdefault(_row.boundary, {}).setdefault(row_series(_row), None)
+for _series, _ids in TESTS_BY_SERIES.items():
+    SERIES_BY_BOUNDARY.setdefault(CAMPAIGN.test_row(_ids[0]).boundary, []).append(_series)
 
 # One job per boundary condition, not per series: a job spends 2 s starting
 # Python and importing the library, as long as diagnosing a small series, so
