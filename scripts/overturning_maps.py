@@ -5,7 +5,6 @@ Rule ``overturning_maps``: the paper's models, one file per model.  Rule
 one file per model in the output folder.
 """
 
-import json
 from pathlib import Path
 
 import numba
@@ -22,7 +21,7 @@ diagnosis = snakemake.input.get("diagnosis")
 if diagnosis:
     folder = Path(snakemake.output[0])
     folder.mkdir(parents=True, exist_ok=True)
-    names = calibrated.model_names(json.loads(Path(diagnosis).read_text()))
+    names = calibrated.model_names(diagnosis)
     paths = [folder / f"{snakemake.wildcards.record}__{name}.nc" for name in names]
 else:
     names, paths = p.models, snakemake.output

@@ -42,8 +42,7 @@ def calibrated_outputs():
 def calibrated_map_inputs(wildcards):
     """The maps of the paper's e-alone models and the folders of the calibrated
     ones, for the boundaries the campaign's diagnosis (a checkpoint) calibrates."""
-    with open(checkpoints.diagnosis.get().output.json) as f:
-        names = calibrated.model_names(json.load(f))
+    names = calibrated.model_names(checkpoints.diagnosis.get().output.json)
     boundaries = {calibrated.parse_name(n)[0] for n in names}
     e_alone = [calibrated.E_ALONE[b] for b in calibrated.PREFIX if b in boundaries]
     return [map_path(r, m) for r in MAP_RECORDS for m in e_alone] + [
