@@ -11,7 +11,7 @@ import jsonschema
 import pytest
 import yaml
 
-from rocklab.config import SCHEMA, ConfigError, check_paths, recorded_path, schema_error
+from rocklab.config import SCHEMA, ConfigError, calibrated_map_n, check_paths, recorded_path, schema_error
 
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
@@ -130,6 +130,14 @@ def test_check_paths(tmp_path):
     for inside in (raw, raw / "results", raw / "a" / ".." / "b", tmp_path / "x" / ".." / "campaign"):
         with pytest.raises(ConfigError, match="is inside raw_dir"):
             check_paths(raw, inside)
+
+
+def test_the_calibrated_maps_grid_is_a_subgrid_of_the_papers():
+    assert calibrated_map_n(201, 101) == 101
+    # a quick look at n = 3 keeps its own grid
+    assert calibrated_map_n(3, 101) == 3
+    with pytest.raises(ConfigError, match="maps.calibrated_n: 151 with maps.n = 201"):
+        calibrated_map_n(201, 151)
 
 
 def test_recorded_path_is_relative_inside_the_working_directory(tmp_path):

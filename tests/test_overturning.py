@@ -26,6 +26,8 @@ from rocklab.seismic.overturning import (
     record_comparison,
     record_reductions,
     reductions,
+    subgrid,
+    subgrid_step,
     summary_table,
 )
 from rocklab.simulation.batch import overturning_batch
@@ -181,6 +183,19 @@ def test_more_dissipation_overturns_less_on_the_whole():
     n_o = {name: float(overturning_map(tr, model=name, n=21).overturned.mean()) for name in MODELS}
     assert n_o["2s-0.95"] < n_o["2s-housner"]
     assert n_o["1s-zero"] <= n_o["1s-1.05"]
+
+
+def test_a_subgrid_is_the_coarser_map_cell_for_cell(pacoima):
+    ag, dt = pacoima
+    fine = overturning_map(ag, dt, "2s-housner", n=9)
+    coarse = subgrid(fine, 5)
+    direct = overturning_map(ag, dt, "2s-housner", n=5)
+    np.testing.assert_array_equal(coarse.amplitude_scale, direct.amplitude_scale)
+    np.testing.assert_array_equal(coarse.overturned, direct.overturned)
+    assert subgrid(fine, 9).identical(fine) and subgrid_step(201, 101) == 2
+    for n_sub in (151, 1, 202):
+        with pytest.raises(ValueError, match="not a subgrid"):
+            subgrid_step(201, n_sub)
 
 
 def test_duration_scaling_is_a_smaller_wall(pacoima):

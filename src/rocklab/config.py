@@ -130,6 +130,26 @@ def check_names(config, test_ids, records) -> None:
             raise ConfigError(f"config key {where}: {value!r} is not a record of the accelerogram manifest")
 
 
+def calibrated_map_n(n, calibrated_n) -> int:
+    """Values of A_S/A and of D_S/D of the calibrated walls' maps: ``maps.calibrated_n``, at most ``maps.n``.
+
+    Raises
+    ------
+    ConfigError
+        Naming ``maps.calibrated_n`` when its grid is not a subgrid of the
+        paper's maps of ``n`` values (the e-alone maps are read on its cells).
+    """
+    # overturning imports numba: only where maps are configured
+    from rocklab.seismic.overturning import subgrid_step
+
+    n_cal = min(calibrated_n, n)
+    try:
+        subgrid_step(n, n_cal)
+    except ValueError as err:
+        raise ConfigError(f"config key maps.calibrated_n: {n_cal} with maps.n = {n}: {err}") from None
+    return n_cal
+
+
 def recorded_path(path, workdir=None) -> str:
     """``path`` as the workflow records it: relative to ``workdir`` when inside it, else absolute.
 

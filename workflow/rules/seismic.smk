@@ -4,8 +4,10 @@
 from rocklab.seismic.accelerograms import accelerogram_dir, read_manifest
 from rocklab.seismic import calibrated
 from rocklab.seismic.overturning import MODELS
+from rocklab.config import calibrated_map_n
 
 MAPS = config["maps"]
+CALIBRATED_N = calibrated_map_n(MAPS["n"], MAPS["calibrated_n"])
 MANIFEST = read_manifest()
 MAP_RECORDS = MAPS["records"] or list(MANIFEST.record)
 MAP_FIG_RECORD = MAPS["figure_record"]
@@ -91,7 +93,7 @@ rule calibrated_maps:
     wildcard_constraints:
         record="|".join(map(re.escape, MAP_RECORDS)),
     params:
-        **MAP_PARAMS,
+        **{**MAP_PARAMS, "n": CALIBRATED_N},
     threads: MAPS["threads"]
     resources:
         mem_mb=1000,
@@ -176,6 +178,7 @@ rule map_calibrated:
         res("maps", "calibrated.csv"),
     params:
         schema=schema_path("map_calibrated.schema.yaml"),
+        n=CALIBRATED_N,
     log:
         res("logs", "map_calibrated.log"),
     benchmark:

@@ -52,7 +52,6 @@ from rocklab.physics.restitution import CALIBRATED_RATIO_ONE_SIDED, CALIBRATED_R
 from rocklab.seismic import calibrated
 from rocklab.simulation.batch import overturning_batch
 from rocklab.simulation.model import OVERTURN, RockingModel
-from rocklab.simulation.reference import simulate_ground
 
 log = logging.getLogger(__name__)
 
@@ -151,6 +150,32 @@ def named_model(name, alpha=ALPHA, R=R, form="linear", eq17=None, diagnosis=None
 def scales(n=201, lo=0.5, hi=1.5):
     """Grid of A_S/A (or D_S/D) values: ``n`` values from ``lo`` to ``hi``."""
     return np.linspace(float(lo), float(hi), int(n))
+
+
+def subgrid_step(n, n_sub):
+    """Stride k such that every k-th of :func:`scales` ``(n)`` is :func:`scales` ``(n_sub)`` (same range).
+
+    Raises
+    ------
+    ValueError
+        When ``n_sub - 1`` does not divide ``n - 1`` (no such stride).
+    """
+    n, n_sub = int(n), int(n_sub)
+    if n_sub < 2 or n_sub > n or (n - 1) % (n_sub - 1):
+        raise ValueError(
+            f"a grid of {n_sub} values is not a subgrid of one of {n} ({n - 1} is not a multiple of {n_sub - 1})"
+        )
+    return (n - 1) // (n_sub - 1)
+
+
+def subgrid(ds, n):
+    """Map ``ds`` (:func:`overturning_map`) read on the cells of an ``n`` x ``n`` grid of the same range.
+
+    The scatter index of :func:`map_indices` depends on the grid (changes
+    grow as n, overturnings as n^2): maps are compared on the same cells.
+    """
+    k = subgrid_step(ds.sizes["amplitude_scale"], n)
+    return ds.isel(amplitude_scale=slice(None, None, k), duration_scale=slice(None, None, k))
 
 
 def overturning_map(
@@ -575,6 +600,10 @@ def record_comparison(summary, agreement=None, table4=None, comparisons=COMPARIS
 
 
 def _reference_one(args):
+    # imported here: scipy.integrate is 0.4 s of the start-up of every map job,
+    # which never calls the reference
+    from rocklab.simulation.reference import simulate_ground
+
     model, ag, dt, a, d, rtol, atol, overturn, tail = args
     return simulate_ground(model, a * ag, dt * d, overturn=overturn, rtol=rtol, atol=atol, tail=tail).overturned
 
