@@ -52,58 +52,66 @@ def calibrated_map_inputs(wildcards):
     ]
 
 
-def record_file(wildcards):
-    """The shipped file of the record, so that replacing it recomputes its maps."""
-    return recorded_path(accelerogram_dir() / MANIFEST.set_index("record").loc[wildcards.record, "file"])
+def record_path(record):
+    """The shipped file of a record, so that replacing it recomputes its maps."""
+    return recorded_path(accelerogram_dir() / MANIFEST.set_index("record").loc[record, "file"])
 
 
-# One job per record for the paper's models: a map is 1-3 s of work, less
-# than a job's start-up (imports, the numba kernel's cache), so 16 records x
-# 6 models as separate jobs would spend most of their time starting.
-rule overturning_maps:
-    input:
-        record=record_file,
-    output:
-        [res("maps", f"{{record}}__{model}.nc") for model in MODELS],
-    wildcard_constraints:
-        record="|".join(map(re.escape, MAP_RECORDS)),
-    params:
-        models=list(MODELS),
-        **MAP_PARAMS,
-    threads: MAPS["threads"]
-    resources:
-        mem_mb=1000,
-        runtime=20,
-    log:
-        res("logs", "maps", "{record}.log"),
-    benchmark:
-        res("benchmarks", "maps", "{record}.tsv")
-    script:
-        "../../scripts/overturning_maps.py"
+# The maps of several records per job (maps.records_per_job): a job's
+# start-up (imports, the numba kernel's cache) is 1.5-2 s, as much as the
+# maps of a short record, and 16 records x 2 rules as separate jobs spent
+# about a fifth of the maps' time starting.  Each record keeps its own log.
+MAP_BATCHES = [
+    MAP_RECORDS[i : i + MAPS["records_per_job"]] for i in range(0, len(MAP_RECORDS), MAPS["records_per_job"])
+]
 
+for k, batch in enumerate(MAP_BATCHES, 1):
 
-# The calibrated walls (rocklab.seismic.calibrated) are named by the
-# campaign's diagnosis, a checkpoint: their maps of a record go to one folder.
-rule calibrated_maps:
-    input:
-        record=record_file,
-        diagnosis=res("diagnosis.json"),
-    output:
-        directory(res("maps", "calibrated", "{record}")),
-    wildcard_constraints:
-        record="|".join(map(re.escape, MAP_RECORDS)),
-    params:
-        **{**MAP_PARAMS, "n": CALIBRATED_N},
-    threads: MAPS["threads"]
-    resources:
-        mem_mb=1000,
-        runtime=30,
-    log:
-        res("logs", "maps_calibrated", "{record}.log"),
-    benchmark:
-        res("benchmarks", "maps_calibrated", "{record}.tsv")
-    script:
-        "../../scripts/overturning_maps.py"
+    rule:
+        name:
+            f"overturning_maps_{k}"
+        input:
+            records=[record_path(r) for r in batch],
+        output:
+            [map_path(r, m) for r in batch for m in MODELS],
+        params:
+            records=batch,
+            models=list(MODELS),
+            **MAP_PARAMS,
+        threads: MAPS["threads"]
+        resources:
+            mem_mb=1000,
+            runtime=20 * len(batch),
+        log:
+            [res("logs", "maps", f"{r}.log") for r in batch],
+        benchmark:
+            res("benchmarks", "maps", f"batch{k}.tsv")
+        script:
+            "../../scripts/overturning_maps.py"
+
+    # The calibrated walls (rocklab.seismic.calibrated) are named by the
+    # campaign's diagnosis, a checkpoint: their maps of a record go to one folder.
+    rule:
+        name:
+            f"calibrated_maps_{k}"
+        input:
+            records=[record_path(r) for r in batch],
+            diagnosis=res("diagnosis.json"),
+        output:
+            [directory(res("maps", "calibrated", r)) for r in batch],
+        params:
+            records=batch,
+            **{**MAP_PARAMS, "n": CALIBRATED_N},
+        threads: MAPS["threads"]
+        resources:
+            mem_mb=1000,
+            runtime=30 * len(batch),
+        log:
+            [res("logs", "maps_calibrated", f"{r}.log") for r in batch],
+        benchmark:
+            res("benchmarks", "maps_calibrated", f"batch{k}.tsv")
+        script:
+            "../../scripts/overturning_maps.py"
 
 
 rule map_summary:
