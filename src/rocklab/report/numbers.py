@@ -512,6 +512,11 @@ def calibrated(results: Path) -> dict | None:
             },
             "matters_most": offs["finding_off"].iloc[0] if len(offs) else None,
         }
+    # the grid of the calibrated walls' maps (maps.calibrated_n), the e-alone maps read on it
+    first = next(iter(sorted((results / "maps" / "calibrated").glob("*/*.nc"))), None)
+    if first is not None:
+        with xr.open_dataset(first) as ds:
+            out["grid_n"] = int(ds.sizes["amplitude_scale"])
     return out
 
 
