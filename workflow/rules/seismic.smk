@@ -82,6 +82,7 @@ for k, batch in enumerate(MAP_BATCHES, 1):
         resources:
             mem_mb=1000,
             runtime=20 * len(batch),
+            cpus_per_task=MAPS["threads"],
         log:
             [res("logs", "maps", f"{r}.log") for r in batch],
         benchmark:
@@ -106,6 +107,7 @@ for k, batch in enumerate(MAP_BATCHES, 1):
         resources:
             mem_mb=1000,
             runtime=30 * len(batch),
+            cpus_per_task=MAPS["threads"],
         log:
             [res("logs", "maps_calibrated", f"{r}.log") for r in batch],
         benchmark:
