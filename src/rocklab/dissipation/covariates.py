@@ -170,7 +170,7 @@ PAPER_CLAIMS = (
 # --- the tables -------------------------------------------------------------------------------
 
 
-def test_covariates(tests, qc=None):
+def with_test_order(tests, qc=None):
     """tests.csv with the test's place in its series (``order``, 0 first to 1 last).
 
     Parameters
@@ -553,7 +553,7 @@ def campaign_effects(tests, diagnosis=(), qc=None, margin=MARGIN, claims=PAPER_C
         campaign_effects.csv (:data:`COLUMNS`): one row per (boundary,
         response, covariate term) and per claim on a mean; statements first.
     """
-    tests = test_covariates(tests, qc)
+    tests = with_test_order(tests, qc)
     values = series_values(tests, diagnosis)
     rows = []
     means = values.groupby(["boundary", "response"]).value.mean().to_dict()
@@ -592,7 +592,7 @@ def series_fits(tests, diagnosis=(), qc=None):
     dict
         (boundary, response) -> :class:`SeriesFit` (None where too few series).
     """
-    values = series_values(test_covariates(tests, qc), diagnosis)
+    values = series_values(with_test_order(tests, qc), diagnosis)
     out = {}
     for (boundary, response), frame in values.groupby(["boundary", "response"], sort=True):
         covariates = [c for c in SERIES_COVARIATES if c != "contact_depth_mm" or boundary == "one-sided"]
