@@ -161,7 +161,8 @@ def test_no_planted_effect_gives_no_contradiction_and_small_effects_are_supporte
     table = campaign_effects(synthetic_tests(seed=6, tau=0.01))
     # the one effect planted: the two boundary conditions have different means
     assert row(table, "both", "boundary").verdict == "contradicted"
-    tested = table[~table.verdict.str.startswith("not testable") & (table.covariate != "boundary")]
+    effects = ~table.covariate.isin(["boundary", "mean"])
+    tested = table[~table.verdict.str.startswith("not testable") & effects]
     assert not (tested.verdict == "contradicted").any(), tested[tested.verdict == "contradicted"]
     for covariate in ("h_over_b", "unit", "contact_depth_mm", "order"):
         assert row(table, "one-sided", covariate).verdict == "supported"
@@ -247,3 +248,24 @@ def test_diagnosis_parameters_are_modelled_per_series():
     fits = series_fits(tests, entries)
     part = fits[("one-sided", "e_ratio")].partial("contact_depth_mm")
     assert np.all(part["low"] <= part["line"]) and np.all(part["line"] <= part["high"])
+
+
+def test_the_docs_numbers_and_tables_of_the_campaign_level(tmp_path):
+    from rocklab.io import write_table
+    from rocklab.report import numbers as nb
+    from rocklab.report import pages
+
+    assert nb.campaign_level(tmp_path) is None
+    table = campaign_effects(synthetic_tests(seed=13, slope_hb=-0.01))
+    write_table(table, tmp_path / "diagnosis" / "campaign_effects.csv", SCHEMA)
+    c = nb.campaign_level(tmp_path)
+    assert c["order"] == [k.key for k in PAPER_CLAIMS]
+    assert c["margin_relative"] == pytest.approx(0.1)
+    assert c["statements"]["ratio_2s_aspect"]["verdict"] == "contradicted"
+    assert c["n_statements"] == len(PAPER_CLAIMS)
+    assert c["n_effects"] == c["n_judged"] + c["n_not_testable"]
+    numbers = {"campaign_level": nb._tree(c)}
+    text = pages.campaign_statements(numbers)
+    assert text.count("\n") == len(PAPER_CLAIMS) + 1 and "**contradicted**" in text
+    assert pages.campaign_found({"campaign_level": {"found": []}}) == "None."
+    assert pages.campaign_statements({"campaign_level": None}) == "not measured."
