@@ -10,6 +10,7 @@ import pytest
 from scipy import stats
 
 from rocklab.dissipation.covariates import (
+    COLUMNS,
     PAPER_CLAIMS,
     campaign_effects,
     fit_series,
@@ -269,3 +270,21 @@ def test_the_docs_numbers_and_tables_of_the_campaign_level(tmp_path):
     assert text.count("\n") == len(PAPER_CLAIMS) + 1 and "**contradicted**" in text
     assert pages.campaign_found({"campaign_level": {"found": []}}) == "None."
     assert pages.campaign_statements({"campaign_level": None}) == "not measured."
+
+
+def test_the_figure_draws_every_fitted_parameter_and_a_campaign_too_small_for_any():
+    from rocklab.plots.covariates import covariate_figure
+
+    tests = synthetic_tests(seed=14)
+    fig = covariate_figure(series_fits(tests), campaign_effects(tests))
+    assert len(fig.axes) == 2 * 3
+    few = tests[tests.series.isin(["1a-2s", "1b-1s-cd60"])]
+    assert all(f is None for f in series_fits(few).values())
+    fig = covariate_figure(series_fits(few), campaign_effects(few))
+    assert "no parameter" in fig.axes[0].texts[0].get_text()
+
+
+def test_a_campaign_without_a_valid_test_has_an_empty_table():
+    empty = synthetic_tests().iloc[:0]
+    assert campaign_effects(empty).columns.tolist() == list(COLUMNS) and campaign_effects(empty).empty
+    assert series_fits(empty) == {}

@@ -79,7 +79,7 @@ def test_the_campaign_target_plans_no_map_and_no_limestone_job(tmp_path):
     assert not {"overturning_maps", "calibrated_maps", "map_summary", "limestone_diagnosis", "docs"} & set(campaign), (
         campaign
     )
-    assert {"qc_table", "dissipation_tables", "diagnosis_figures", "qc_pages"} <= set(campaign)
+    assert {"qc_table", "dissipation_tables", "diagnosis_figures", "qc_pages", "campaign_effects"} <= set(campaign)
     assert any(r.startswith("diagnose_series_") for r in campaign), campaign
     everything = _planned_jobs("all", folder, results)
     assert everything["overturning_maps"] == 1 and everything["limestone_diagnosis"] == 1

@@ -584,6 +584,9 @@ def campaign_effects(tests, diagnosis=(), qc=None, margin=MARGIN, claims=PAPER_C
             covariates = ["boundary", "h_over_b", "unit"]
             fit_rows = between_series_rows(frame, "both", response, frame.source.iloc[0], covariates)
             rows += [r for r in fit_rows if r["covariate"] == "boundary"]
+    if not rows:
+        # no valid test: the table has its columns and no row
+        return pd.DataFrame(columns=list(COLUMNS))
     table = _judge(rows, claims, means, margin)
     # the paper's statements first, in the paper's order, then the rest
     rank = {c.key: i for i, c in enumerate(claims)}

@@ -39,6 +39,11 @@ def covariate_figure(fits, effects=None):
     matplotlib.figure.Figure
     """
     responses = sorted({r for (_, r), f in fits.items() if f is not None})
+    if not responses:
+        fig, ax = plt.subplots(figsize=(6, 2))
+        ax.axis("off")
+        ax.text(0.5, 0.5, "no parameter has enough series for a between-series fit", ha="center", va="center")
+        return fig
     height = 1.9 * len(responses) + 1.2
     fig, axes = plt.subplots(len(responses), len(COLUMNS), figsize=(11, height), squeeze=False, sharex="col")
     # fixed margins in inches: tight_layout costs a second on this many panels
