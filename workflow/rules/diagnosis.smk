@@ -17,7 +17,7 @@ def diagnosis_outputs():
 
 
 def campaign_effects_outputs():
-    return [res("diagnosis", "campaign_effects.csv"), res("figures", "campaign_covariates.png")]
+    return [res("report", "campaign_effects.html"), res("figures", "campaign_covariates.png")]
 
 
 def limestone_outputs():
@@ -163,8 +163,7 @@ rule campaign_effects:
         qc=res("qc.csv"),
         diagnosis=res("diagnosis.json"),
     output:
-        table=report_item(res("diagnosis", "campaign_effects.csv"), "campaign_effects", "diagnosis",
-                          "campaign_effects.csv, the paper's campaign-wide statements tested", "Summary"),
+        table=res("diagnosis", "campaign_effects.csv"),
         figure=report_item(res("figures", "campaign_covariates.png"), "campaign_covariates", "diagnosis",
                            "the parameters against h/b and contact depth", "Summary"),
     params:
@@ -176,3 +175,20 @@ rule campaign_effects:
         res("benchmarks", "campaign_effects.tsv")
     script:
         "../../scripts/campaign_effects.py"
+
+
+# The report's page of campaign_effects.csv: sortable, filterable, columns described.
+rule campaign_effects_pages:
+    input:
+        campaign_effects=res("diagnosis", "campaign_effects.csv"),
+    output:
+        campaign_effects=report_page("campaign_effects", "diagnosis",
+                                     "campaign_effects.csv, the paper's campaign-wide statements tested", "Summary"),
+    params:
+        schemas={"campaign_effects": schema_path("campaign_effects.schema.yaml")},
+    log:
+        res("logs", "report_pages", "campaign_effects.log"),
+    benchmark:
+        res("benchmarks", "report_pages", "campaign_effects.tsv")
+    script:
+        "../../scripts/report_pages.py"
