@@ -77,6 +77,7 @@ def test_snakemake_fills_every_default(schema):
 
 def test_library_defaults_equal_the_schema(schema):
     from rocklab.diagnosis import diagnose_records
+    from rocklab.dissipation.covariates import campaign_effects
     from rocklab.dissipation.statistics import campaign_tables
     from rocklab.lab import channels, validity
     from rocklab.physics.impact import AmplitudeLaw
@@ -86,7 +87,9 @@ def test_library_defaults_equal_the_schema(schema):
     assert d["channels"] == channels.OPTIONS
     assert d["validity"] == validity.RULES
     assert d["statistics"] == _signature_defaults(campaign_tables, "n_boot", "seed")
-    assert d["diagnosis"] == _signature_defaults(diagnose_records, "n_boot", "n_history", "seed")
+    diagnosis = dict(d["diagnosis"])
+    assert diagnosis.pop("campaign_margin") == _signature_defaults(campaign_effects, "margin")["margin"]
+    assert diagnosis == _signature_defaults(diagnose_records, "n_boot", "n_history", "seed")
     maps = d["maps"]
     assert (maps["alpha"], maps["R"]) == (overturning.ALPHA, overturning.R)
     names = ("n", "lo", "hi", "alpha", "R", "form", "polarity", "chunks")

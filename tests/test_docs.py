@@ -78,6 +78,7 @@ READ = (
     "amplitude_laws.csv",
     "effects.csv",
     "diagnosis.json",
+    "diagnosis/campaign_effects.csv",
     "limestone_diagnosis.json",
     "maps/summary.csv",
     "maps/reductions.csv",

@@ -152,7 +152,7 @@ def test_report_holds_every_stage_with_captions(report):
     items = _report_data(path, "results")
     names = {Path(p).name: entry for p, entry in items.items()}
     pages = ["qc", "kinematics", "tests", "series", "table3", "summary", "amplitude_laws", "effects"]
-    pages += ["diagnosis", "limestone_diagnosis", "map_summary", "map_reductions", "map_comparison"]
+    pages += ["diagnosis", "campaign_effects", "limestone_diagnosis", "map_summary", "map_reductions", "map_comparison"]
     assert {f"{p}.html" for p in pages} <= set(names)
     assert {n for n in names if n.endswith(".csv")} == set(), "tables are shown as pages, not offered as downloads"
     figures = {f"fig{n:02d}.png" for n in (6, 8, 9, 10, 11, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23)}

@@ -78,7 +78,7 @@ def test_the_campaign_target_plans_no_map_and_no_limestone_job(tmp_path):
     campaign = _planned_jobs("campaign", folder, results)
     assert not {"map_summary", "limestone_diagnosis", "docs"} & set(campaign), campaign
     assert not any(r.startswith(("overturning_maps_", "calibrated_maps_")) for r in campaign), campaign
-    assert {"qc_table", "dissipation_tables", "diagnosis_figures", "qc_pages"} <= set(campaign)
+    assert {"qc_table", "dissipation_tables", "diagnosis_figures", "qc_pages", "campaign_effects"} <= set(campaign)
     assert any(r.startswith("diagnose_series_") for r in campaign), campaign
     everything = _planned_jobs("all", folder, results)
     # one record: one job of the paper's maps

@@ -13,7 +13,11 @@ BLOCKS = Path(recorded_path(TABLES))
 
 def diagnosis_outputs():
     return [res("diagnosis.json"), res("report", "diagnosis.html"), res("figures", "fig14.png"),
-            res("figures", "fig15.png"), res("figures", "diagnosis")]
+            res("figures", "fig15.png"), res("figures", "diagnosis")] + campaign_effects_outputs()
+
+
+def campaign_effects_outputs():
+    return [res("report", "campaign_effects.html"), res("figures", "campaign_covariates.png")]
 
 
 def limestone_outputs():
@@ -146,5 +150,45 @@ rule limestone_pages:
         res("logs", "report_pages", "limestone.log"),
     benchmark:
         res("benchmarks", "report_pages", "limestone.tsv")
+    script:
+        "../../scripts/report_pages.py"
+
+
+# The campaign level (issue 12): every parameter of the series against the
+# specimen and test covariates, the paper's campaign-wide statements tested;
+# from the tables, not the tests' files (a second or two).
+rule campaign_effects:
+    input:
+        tests=res("tests.csv"),
+        qc=res("qc.csv"),
+        diagnosis=res("diagnosis.json"),
+    output:
+        table=res("diagnosis", "campaign_effects.csv"),
+        figure=report_item(res("figures", "campaign_covariates.png"), "campaign_covariates", "diagnosis",
+                           "the parameters against h/b and contact depth", "Summary"),
+    params:
+        margin=DIAGNOSIS["campaign_margin"],
+        schema=schema_path("campaign_effects.schema.yaml"),
+    log:
+        res("logs", "campaign_effects.log"),
+    benchmark:
+        res("benchmarks", "campaign_effects.tsv")
+    script:
+        "../../scripts/campaign_effects.py"
+
+
+# The report's page of campaign_effects.csv: sortable, filterable, columns described.
+rule campaign_effects_pages:
+    input:
+        campaign_effects=res("diagnosis", "campaign_effects.csv"),
+    output:
+        campaign_effects=report_page("campaign_effects", "diagnosis",
+                                     "campaign_effects.csv, the paper's campaign-wide statements tested", "Summary"),
+    params:
+        schemas={"campaign_effects": schema_path("campaign_effects.schema.yaml")},
+    log:
+        res("logs", "report_pages", "campaign_effects.log"),
+    benchmark:
+        res("benchmarks", "report_pages", "campaign_effects.tsv")
     script:
         "../../scripts/report_pages.py"

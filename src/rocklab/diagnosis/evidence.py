@@ -16,6 +16,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from rocklab.diagnosis.model import ModelParams, impact_speeds, release
+from rocklab.lab.campaign import order_in_series
 from rocklab.lab.motion import extract_motion
 from rocklab.physics import restitution
 from rocklab.physics.flight import apex_after, landing_speed, quarter_period
@@ -130,9 +131,8 @@ def in_series_order(tests):
     their order is the order of the tests: what a drift between tests
     (wear, debris) follows.
     """
-    rank = {tid: i for i, tid in enumerate(sorted(t.test_id for t in tests))}
-    n = max(len(tests) - 1, 1)
-    return [replace(t, order=rank[t.test_id] / n) for t in tests]
+    order = order_in_series([t.test_id for t in tests])
+    return [replace(t, order=order[t.test_id]) for t in tests]
 
 
 def records_by_series(datasets, motions=None):

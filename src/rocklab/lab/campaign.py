@@ -439,6 +439,28 @@ def read_tests(campaign_dir, specimens=None, setups=None) -> TestLog:
     return TestLog(df, errors)
 
 
+def order_in_series(test_ids) -> dict:
+    """Each test's place in its series, 0 (first) to 1 (last), from the order of the ids.
+
+    Test ids of a campaign grow with the date of the test (``T0001``...),
+    so their order is the order in which the tests were performed: what a
+    drift between tests (hinge wear, mortar debris) follows.
+
+    Parameters
+    ----------
+    test_ids : sequence of str
+        The tests of one series.
+
+    Returns
+    -------
+    dict
+        test_id -> place in [0, 1]; a lone test is at 0.
+    """
+    rank = {tid: i for i, tid in enumerate(sorted(test_ids))}
+    n = max(len(rank) - 1, 1)
+    return {tid: i / n for tid, i in rank.items()}
+
+
 def _or_empty(reader, root):
     """A table reader's result, or no rows and the table's fault when it is unusable."""
     try:

@@ -313,6 +313,56 @@ def diagnosis(results: Path) -> dict:
     return out
 
 
+def campaign_level(results: Path) -> dict | None:
+    """Issue 12, item 2: the paper's campaign-wide statements tested and the effects found
+    (``diagnosis/campaign_effects.csv``); None without the table."""
+    path = results / "diagnosis" / "campaign_effects.csv"
+    if not path.is_file():
+        return None
+    table = pd.read_csv(path, keep_default_na=False, na_values=[""])
+    fields = ("verdict", "estimate", "ci_low", "ci_high", "p", "n_series", "n_tests", "margin", "term", "claim")
+    stated = table[table["statement"].fillna("") != ""]
+    rest = table[table["statement"].fillna("") == ""]
+    judged = rest[~rest["verdict"].str.startswith("not testable")]
+    near = stated[stated["claim"].str.startswith("mean within")]
+    return {
+        # the relative margin of the verdicts (config diagnosis: campaign_margin)
+        "margin_relative": (near["margin"] / near["claimed_value"].abs()).iloc[0] if len(near) else None,
+        "order": stated["statement"].tolist(),
+        "statements": {
+            r["statement"]: {
+                **{f: r[f] for f in fields},
+                "boundary": r["boundary"],
+                "response": r["response"],
+                "covariate": r["covariate"],
+                "paper": r["paper"],
+            }
+            for _, r in stated.iterrows()
+        },
+        "n_statements": len(stated),
+        "n_supported": int((stated["verdict"] == "supported").sum()),
+        "n_effects": len(rest),
+        "n_judged": len(judged),
+        "n_not_testable": len(rest) - len(judged),
+        "verdicts": {v: int(n) for v, n in judged["verdict"].value_counts().sort_index().items()},
+        # the exploratory effects found: the campaign's facts beyond the paper's words
+        "found": [
+            {
+                "boundary": r["boundary"],
+                "response": r["response"],
+                "covariate": r["covariate"],
+                "term": r["term"],
+                "estimate": r["estimate"],
+                "ci_low": r["ci_low"],
+                "ci_high": r["ci_high"],
+                "p_holm": r["p_holm"],
+                "n_series": r["n_series"],
+            }
+            for _, r in judged[judged["verdict"] == "contradicted"].iterrows()
+        ],
+    }
+
+
 def _family(families: list[dict]) -> dict | None:
     """The first generalised family of the limestone blocks (issue 12): form, parameters, intervals, gains."""
     if not families:
@@ -683,6 +733,7 @@ SECTIONS = {
     "dissipation": dissipation,
     "diagnosis": diagnosis,
     "limestone": limestone,
+    "campaign_level": campaign_level,
     "maps": maps,
     "calibrated": calibrated,
     "performance": performance,

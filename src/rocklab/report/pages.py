@@ -205,6 +205,53 @@ def diagnosis_series(n: Mapping) -> str:
     return markdown_table(["series", "boundary", "tests", "causes named", "unexplained"], rows)
 
 
+def _effect_cell(e: Mapping, spec: str = ".3g") -> str:
+    """ "estimate [low, high]" of a campaign-level row, or "-" where it was not testable."""
+    if e.get("estimate") is None:
+        return "-"
+    return f"{show(e['estimate'], spec)} [{show(e['ci_low'], spec)}, {show(e['ci_high'], spec)}]"
+
+
+def campaign_statements(n: Mapping) -> str:
+    """The paper's campaign-wide statements tested (``diagnosis/campaign_effects.csv``)."""
+    c = n.get("campaign_level")
+    if c is None:
+        return NOT_MEASURED + "."
+    rows = [
+        [
+            e["paper"],
+            f"{e['boundary']}: {e['response']}, {e['covariate'] if e['covariate'] != 'mean' else 'its mean'}",
+            e["claim"],
+            f"{e['term']}: {_effect_cell(e)}" if e["term"] else _effect_cell(e),
+            show(e["p"], ".2g"),
+            f"{show(e['n_series'])} ({show(e['n_tests'])})",
+            f"**{e['verdict']}**",
+        ]
+        for e in (c["statements"][key] for key in c["order"])
+    ]
+    header = ["the paper", "parameter, covariate", "claim", "effect [95 % CI]", "p", "series (tests)", "verdict"]
+    return markdown_table(header, rows)
+
+
+def campaign_found(n: Mapping) -> str:
+    """The effects the exploratory checks found (Holm-adjusted), beyond the paper's statements."""
+    c = n.get("campaign_level")
+    if c is None:
+        return NOT_MEASURED + "."
+    rows = [
+        [
+            f"{e['boundary']}: {e['response']}",
+            e["covariate"],
+            f"{e['term']}: {_effect_cell(e)}",
+            show(e["p_holm"], ".2g"),
+            show(e["n_series"]),
+        ]
+        for e in c["found"]
+    ]
+    header = ["parameter", "covariate", "effect [95 % CI]", "Holm p", "series"]
+    return markdown_table(header, rows) if rows else "None."
+
+
 def limestone_groups(n: Mapping) -> str:
     """The limestone blocks by slenderness."""
     rows = [
@@ -424,6 +471,8 @@ TABLES: dict[str, Callable[[Mapping], str]] = {
     "minority_two_sided": lambda n: minority(n, "two_sided"),
     "minority_one_sided": lambda n: minority(n, "one_sided"),
     "diagnosis_series": diagnosis_series,
+    "campaign_statements": campaign_statements,
+    "campaign_found": campaign_found,
     "limestone_groups": limestone_groups,
     "maps_records": maps_records,
     "calibrated_walls": calibrated_walls,

@@ -1,0 +1,290 @@
+"""The campaign level (rocklab.dissipation.covariates): planted effects found with the right
+sign and interval, null ones not (at the nominal rate), single levels not testable, the
+paper's statements judged without over-claiming, the table against its schema."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy import stats
+
+from rocklab.dissipation.covariates import (
+    COLUMNS,
+    PAPER_CLAIMS,
+    campaign_effects,
+    fit_series,
+    ols,
+    series_fits,
+    series_values,
+    verdict,
+    with_test_order,
+    within_series_row,
+)
+from rocklab.io import validate_table
+from rocklab.lab.campaign import order_in_series
+
+SCHEMA = "workflow/schemas/campaign_effects.schema.yaml"
+
+#: The campaign's design: (specimen, h/b, unit); every specimen two-sided and one-sided at three contact depths.
+SPECIMENS = (
+    ("1a", 9.6, "clay brick"),
+    ("1b", 7.1, "clay brick"),
+    ("2a", 14.4, "clay brick"),
+    ("2b", 12.0, "clay brick"),
+    ("3a", 13.3, "tuff"),
+    ("3b", 10.4, "tuff"),
+    ("5a", 14.6, "tuff"),
+    ("5c", 6.5, "tuff"),
+)
+
+
+def synthetic_tests(
+    seed=0, n_tests=8, slope_hb=0.0, tuff=0.0, per_mm=0.0, drift=0.0, tau=0.02, sigma=0.005, units=None
+):
+    """tests.csv of a campaign with known effects on e_ratio (theta0_over_alpha has none).
+
+    e_ratio = mean + slope_hb (h/b - 10) + tuff [unit is tuff] + per_mm (CD - 120)
+    + drift (order - 1/2) + a series effect (sd tau) + a test's noise (sd sigma).
+    """
+    rng = np.random.default_rng(seed)
+    rows, k = [], 0
+    for specimen, hb, unit in SPECIMENS:
+        unit = units or unit
+        for boundary, cd in (("two-sided", np.nan), ("one-sided", 60.0), ("one-sided", 120.0), ("one-sided", 260.0)):
+            mean = 0.95 if boundary == "two-sided" else 1.2
+            series = f"{specimen}-2s" if boundary == "two-sided" else f"{specimen}-1s-cd{cd:g}"
+            level = mean + slope_hb * (hb - 10) + tuff * (unit == "tuff") + rng.normal(0, tau)
+            level += per_mm * (cd - 120) if boundary == "one-sided" else 0.0
+            for i in range(n_tests):
+                k += 1
+                order = i / (n_tests - 1)
+                rows.append(
+                    {
+                        "test_id": f"T{k:04d}",
+                        "series": series,
+                        "specimen": specimen,
+                        "boundary": boundary,
+                        "contact_depth_mm": cd,
+                        "direction": "push",
+                        "h_over_b": hb,
+                        "unit": unit,
+                        "e_ratio": level + drift * (order - 0.5) + rng.normal(0, sigma),
+                        "theta0_over_alpha": 0.9 + rng.normal(0, 0.01) + rng.normal(0, 0.001),
+                    }
+                )
+    return pd.DataFrame(rows)
+
+
+def row(table, boundary, covariate, response="e_ratio"):
+    r = table[(table.boundary == boundary) & (table.response == response) & (table.covariate == covariate)]
+    assert len(r) == 1, r
+    return r.iloc[0]
+
+
+# --- the pieces against independent checks ----------------------------------------------------
+
+
+def test_ols_is_the_textbook_simple_regression():
+    rng = np.random.default_rng(1)
+    x = rng.uniform(5, 15, 12)
+    y = 0.9 + 0.01 * x + rng.normal(0, 0.02, 12)
+    coef, cov, df = ols(y, np.column_stack([np.ones(12), x]))
+    ref = stats.linregress(x, y)
+    assert coef[1] == pytest.approx(ref.slope)
+    assert np.sqrt(cov[1, 1]) == pytest.approx(ref.stderr)
+    assert df == 10
+
+
+def test_order_in_series_runs_from_zero_to_one_in_the_order_of_the_ids():
+    assert order_in_series(["T0003", "T0001", "T0002"]) == {"T0001": 0.0, "T0002": 0.5, "T0003": 1.0}
+    assert order_in_series(["T0009"]) == {"T0009": 0.0}
+
+
+def test_the_place_counts_the_rejected_tests_of_the_series():
+    tests = pd.DataFrame({"test_id": ["T1", "T3"], "series": ["s", "s"]})
+    qc = pd.DataFrame({"test_id": ["T1", "T2", "T3"], "series": ["s", "s", "s"]})
+    assert with_test_order(tests, qc).order.tolist() == [0.0, 1.0]
+    assert with_test_order(tests).order.tolist() == [0.0, 1.0]
+    tests = pd.DataFrame({"test_id": ["T1", "T2"], "series": ["s", "s"]})
+    assert with_test_order(tests, qc).order.tolist() == [0.0, 0.5]
+
+
+@pytest.mark.parametrize(
+    "kind, low, high, p, value, margin, expected",
+    [
+        ("zero", -0.01, 0.01, 0.5, 0, 0.05, "supported"),
+        ("zero", -0.10, 0.10, 0.5, 0, 0.05, "inconclusive"),
+        ("zero", 0.01, 0.03, 0.001, 0, 0.05, "contradicted"),
+        ("below", 0.92, 0.97, 0.01, 1.0, 0, "supported"),
+        ("below", 0.98, 1.02, 0.5, 1.0, 0, "inconclusive"),
+        ("below", 1.01, 1.05, 0.01, 1.0, 0, "contradicted"),
+        ("near", 0.93, 0.97, 0.01, 1.0, 0.1, "supported"),
+        ("near", 0.85, 0.95, 0.01, 1.0, 0.1, "inconclusive"),
+        ("near", 0.70, 0.80, 0.01, 1.0, 0.1, "contradicted"),
+    ],
+)
+def test_verdicts(kind, low, high, p, value, margin, expected):
+    assert verdict(kind, low, high, p, value, margin) == expected
+
+
+# --- planted effects, null effects ------------------------------------------------------------
+
+
+def test_a_planted_aspect_ratio_effect_is_found_with_its_sign_and_interval():
+    slope = -0.01
+    table = campaign_effects(synthetic_tests(seed=3, slope_hb=slope))
+    for boundary in ("two-sided", "one-sided"):
+        r = row(table, boundary, "h_over_b")
+        truth = slope * (r.span_high - r.span_low)
+        assert r.estimate < 0 and r.ci_low <= truth <= r.ci_high
+        assert r.verdict == "contradicted"
+    assert row(table, "two-sided", "h_over_b").statement == "ratio_2s_aspect"
+
+
+def test_a_planted_unit_and_contact_depth_effect_is_found():
+    table = campaign_effects(synthetic_tests(seed=4, tuff=0.06, per_mm=3e-4))
+    unit = row(table, "one-sided", "unit")
+    assert unit.term == "tuff - clay brick" and unit.ci_low <= 0.06 <= unit.ci_high and unit.verdict == "contradicted"
+    cd = row(table, "one-sided", "contact_depth_mm")
+    assert cd.slope > 0 and cd.ci_low <= 3e-4 * 200 <= cd.ci_high and cd.verdict == "contradicted"
+    # two-sided walls have no contact depth: no row
+    assert table[(table.boundary == "two-sided") & (table.covariate == "contact_depth_mm")].empty
+
+
+def test_a_drift_over_the_tests_of_a_series_is_found():
+    r = row(campaign_effects(synthetic_tests(seed=5, drift=-0.02)), "one-sided", "order")
+    assert r.ci_low <= -0.02 <= r.ci_high < 0 and r.verdict == "contradicted"
+    assert r.n_series == 24 and r.df == 23
+
+
+def test_no_planted_effect_gives_no_contradiction_and_small_effects_are_supported():
+    table = campaign_effects(synthetic_tests(seed=6, tau=0.01))
+    # the one effect planted: the two boundary conditions have different means
+    assert row(table, "both", "boundary").verdict == "contradicted"
+    effects = ~table.covariate.isin(["boundary", "mean"])
+    tested = table[~table.verdict.str.startswith("not testable") & effects]
+    assert not (tested.verdict == "contradicted").any(), tested[tested.verdict == "contradicted"]
+    for covariate in ("h_over_b", "unit", "contact_depth_mm", "order"):
+        assert row(table, "one-sided", covariate).verdict == "supported"
+
+
+def test_the_false_positive_rate_of_a_null_covariate_is_nominal_and_the_interval_covers():
+    rng = np.random.default_rng(7)
+    hb = np.array([s[1] for s in SPECIMENS] * 2)
+    unit = np.array([s[2] for s in SPECIMENS] * 2)
+    rejected = covered = 0
+    n = 400
+    for _ in range(n):
+        frame = pd.DataFrame({"h_over_b": hb, "unit": unit, "n_tests": 5})
+        frame["value"] = 1.0 + 0.004 * (hb - 10) + rng.normal(0, 0.03, len(hb))
+        fit, terms = fit_series(frame, ["h_over_b", "unit"])
+        j = next(t[1] for t in terms if t[0] == "unit")
+        t = fit.coef[j] / np.sqrt(fit.cov[j, j])
+        rejected += 2 * stats.t.sf(abs(t), fit.df) < 0.05
+        k = next(t[1] for t in terms if t[0] == "h_over_b")
+        half = stats.t.ppf(0.975, fit.df) * np.sqrt(fit.cov[k, k])
+        covered += abs(fit.coef[k] - 0.004) <= half
+    # 400 draws: the binomial sd of a 5 % rate is 1.1 %
+    assert 0.015 <= rejected / n <= 0.09
+    assert 0.91 <= covered / n <= 0.985
+
+
+# --- what cannot be tested --------------------------------------------------------------------
+
+
+def test_a_single_level_covariate_is_not_testable_never_judged():
+    table = campaign_effects(synthetic_tests(seed=8, units="clay brick"))
+    for boundary in ("two-sided", "one-sided"):
+        r = row(table, boundary, "unit")
+        assert r.verdict == "not testable: only one level (clay brick)"
+        assert np.isnan(r.estimate) and np.isnan(r.p)
+    # every test pushed: the direction has one level
+    assert row(table, "two-sided", "direction").verdict == "not testable: only one level (push)"
+
+
+def test_a_covariate_confounded_with_another_is_not_testable():
+    tests = synthetic_tests(seed=9)
+    tests = tests[tests.specimen.isin(["1a", "5a"])]  # two series a boundary: h/b and unit go together
+    r = row(campaign_effects(tests), "two-sided", "unit")
+    assert r.verdict.startswith("not testable")
+
+
+def test_direction_tested_in_one_series_only_is_not_testable():
+    tests = with_test_order(synthetic_tests(seed=10))
+    tests.loc[tests.series.eq("1a-2s") & (tests.order > 0.5), "direction"] = "pull"
+    r = within_series_row(tests[tests.boundary == "two-sided"], "two-sided", "e_ratio", "direction")
+    assert r["verdict"] == "not testable: varies within 1 series (2 needed)"
+
+
+# --- the table ---------------------------------------------------------------------------------
+
+
+def test_the_paper_statements_come_first_each_once_and_the_table_meets_its_schema():
+    table = campaign_effects(synthetic_tests(seed=11))
+    validate_table(table, SCHEMA)
+    keys = [c.key for c in PAPER_CLAIMS]
+    assert table.statement.iloc[: len(keys)].tolist() == keys
+    assert (table.statement.iloc[len(keys) :] == "").all()
+    assert table.p_holm.iloc[: len(keys)].isna().all()
+    bad = table.copy()
+    bad.loc[0, "boundary"] = "three-sided"
+    with pytest.raises(Exception, match="row 1, boundary"):
+        validate_table(bad, SCHEMA)
+
+
+def test_diagnosis_parameters_are_modelled_per_series():
+    tests = synthetic_tests(seed=12)
+    names = sorted(tests.series.unique())
+    finding = "instability_angle"
+    entries = [
+        {"scope": "series", "key": s, "findings": [{"effect": finding, "params": {"alpha_r_over_alpha": a}}]}
+        for s, a in zip(names, np.linspace(0.7, 0.9, len(names)))
+    ]
+    values = series_values(tests, entries)
+    assert set(values.response) == {"e_ratio", "theta0_over_alpha", "instability_angle.alpha_r_over_alpha"}
+    table = campaign_effects(tests, entries)
+    r = row(table, "both", "boundary", "instability_angle.alpha_r_over_alpha")
+    assert r.source == "diagnosis" and r.n_series == 32
+    fits = series_fits(tests, entries)
+    part = fits[("one-sided", "e_ratio")].partial("contact_depth_mm")
+    assert np.all(part["low"] <= part["line"]) and np.all(part["line"] <= part["high"])
+
+
+def test_the_docs_numbers_and_tables_of_the_campaign_level(tmp_path):
+    from rocklab.io import write_table
+    from rocklab.report import numbers as nb
+    from rocklab.report import pages
+
+    assert nb.campaign_level(tmp_path) is None
+    table = campaign_effects(synthetic_tests(seed=13, slope_hb=-0.01))
+    write_table(table, tmp_path / "diagnosis" / "campaign_effects.csv", SCHEMA)
+    c = nb.campaign_level(tmp_path)
+    assert c["order"] == [k.key for k in PAPER_CLAIMS]
+    assert c["margin_relative"] == pytest.approx(0.1)
+    assert c["statements"]["ratio_2s_aspect"]["verdict"] == "contradicted"
+    assert c["n_statements"] == len(PAPER_CLAIMS)
+    assert c["n_effects"] == c["n_judged"] + c["n_not_testable"]
+    numbers = {"campaign_level": nb._tree(c)}
+    text = pages.campaign_statements(numbers)
+    assert text.count("\n") == len(PAPER_CLAIMS) + 1 and "**contradicted**" in text
+    assert pages.campaign_found({"campaign_level": {"found": []}}) == "None."
+    assert pages.campaign_statements({"campaign_level": None}) == "not measured."
+
+
+def test_the_figure_draws_every_fitted_parameter_and_a_campaign_too_small_for_any():
+    from rocklab.plots.covariates import covariate_figure
+
+    tests = synthetic_tests(seed=14)
+    fig = covariate_figure(series_fits(tests), campaign_effects(tests))
+    assert len(fig.axes) == 2 * 3
+    few = tests[tests.series.isin(["1a-2s", "1b-1s-cd60"])]
+    assert all(f is None for f in series_fits(few).values())
+    fig = covariate_figure(series_fits(few), campaign_effects(few))
+    assert "no parameter" in fig.axes[0].texts[0].get_text()
+
+
+def test_a_campaign_without_a_valid_test_has_an_empty_table():
+    empty = synthetic_tests().iloc[:0]
+    assert campaign_effects(empty).columns.tolist() == list(COLUMNS) and campaign_effects(empty).empty
+    assert series_fits(empty) == {}
