@@ -212,6 +212,18 @@ SCENARIOS = {
         for d in (0.08, 0.15)
         for noise in (0.002, 0.01)
     },
+    # a rounded hinge (issue 12): the flight of apex A rocks on alpha_r (1 - k) + k A, which no
+    # constant angle fits at all amplitudes
+    **{
+        f"rounding-{k}-noise-{noise}": (
+            "two-sided",
+            {"impact": I.Scaled(H(), 0.95), "hinge_rounding": k},
+            {"alpha_ratio": 0.9, "noise_mm": noise},
+            {"instability_amplitude": {"alpha_r_over_alpha": 0.9, "rounding": k}, "restitution_scale": {"c": 0.95}},
+        )
+        for k in (0.1, 0.3)
+        for noise in (0.002, 0.01)
+    },
 }
 
 
@@ -274,6 +286,18 @@ def test_a_drift_between_tests_is_discovered(diagnosed, name):
     assert g["vs_best_listed"] > 2 * g["vs_best_listed_se"] and g["vs_base"] >= g["vs_best_listed"]
     assert all(not x["discovered"] for x in e["findings"] if x is not f)
     assert f"Discovered beyond the catalogue: {f['effect']}" in D.diagnosis_markdown([e])
+
+
+@pytest.mark.parametrize("name", [k for k in SCENARIOS if k.startswith("rounding-")])
+def test_an_angle_that_depends_on_the_amplitude_is_discovered(diagnosed, name):
+    e = diagnosed[name]
+    f = next(f for f in e["findings"] if f["effect"] == "instability_amplitude")
+    assert f["discovered"] and f["reduces_to"] == "no closed form of the library"
+    # the constant angle cannot fit the flight times at all amplitudes
+    assert "instability_amplitude" not in e["listed_verdict"]
+    g = f["heldout_gain"]
+    assert g["vs_best_listed"] > 2 * g["vs_best_listed_se"] and g["vs_base"] >= g["vs_best_listed"]
+    assert "instability_angle" not in e["verdict"]
 
 
 def test_a_stop_is_named_only_where_the_walls_stop_dead(diagnosed):

@@ -15,6 +15,7 @@ from rocklab.diagnosis.causes import (
     contact_gap,
     flight_damping,
     hinge_asymmetry,
+    instability_amplitude,
     instability_angle,
     restitution_amplitude,
     restitution_drift,
@@ -37,6 +38,7 @@ CAUSES = [
 FAMILIES = [
     restitution_housner_loss.CAUSE,
     restitution_drift.CAUSE,
+    instability_amplitude.CAUSE,
 ]
 
 

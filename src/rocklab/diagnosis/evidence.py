@@ -257,10 +257,11 @@ def residuals(S: TestStack, mp: ModelParams, cache=None):
     R = {"impact": log_ratio(v_hat * (1.0 - FILTER_DAMPING_BIAS * zeta), S.va, vf)}
     # peak to peak: from the measured apex before (theta0 at rest for the first), a landing,
     # the impact, a rise
-    v_land = landing_speed(S.A[:, :-1], mp.hinge(S.side[:, 1:]), p, zeta)
+    k_r = mp.rounding[:, None]
+    v_land = landing_speed(S.A[:, :-1], mp.hinge(S.side[:, 1:]), p, zeta, k_r)
     v_land = np.c_[release(S, mp)[0], v_land]
-    R["peak"] = log_ratio(apex_after(impact_speeds(v_land, S.side, mp)[0], a_ap, p, zeta), S.A, f)
-    key = mp.a_pos.tobytes() + mp.a_neg.tobytes()
+    R["peak"] = log_ratio(apex_after(impact_speeds(v_land, S.side, mp)[0], a_ap, p, zeta, k_r), S.A, f)
+    key = mp.a_pos.tobytes() + mp.a_neg.tobytes() + mp.rounding.tobytes()
     if cache is not None and cache.get("stack") is S and cache.get("angles") == key:
         R["time"] = cache["time"]
     else:
@@ -268,7 +269,10 @@ def residuals(S: TestStack, mp: ModelParams, cache=None):
         A_t = np.where(S.A[:, :-1] > 3 * f, S.A[:, :-1], np.nan)
         R["time"] = np.where(
             np.isfinite(A_t),
-            log_ratio(2.0 * quarter_period(np.nan_to_num(A_t), a_ap[:, :-1], p), S.tb[:, 1:] - S.ta[:, :-1]),
+            log_ratio(
+                2.0 * quarter_period(np.nan_to_num(A_t), mp.flight(np.nan_to_num(A_t), apex_side[:, :-1]), p),
+                S.tb[:, 1:] - S.ta[:, :-1],
+            ),
             np.nan,
         )
         if cache is not None:

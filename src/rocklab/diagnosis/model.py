@@ -21,6 +21,7 @@ from rocklab.physics import restitution
 from rocklab.physics.flight import (
     apex,
     apex_after,
+    flight_angle,
     landing_speed,
     potential,
     quarter_period,
@@ -55,6 +56,7 @@ class ModelParams:
     amp_b: np.ndarray
     a_pos: np.ndarray  # rocking angles of the hinges [rad]
     a_neg: np.ndarray
+    rounding: np.ndarray  # dependence of the rocking angle on the flight's amplitude (flight.flight_angle)
     zeta: np.ndarray
     gap: np.ndarray  # [rad]
     stop: np.ndarray  # landing speed [thetadot_r] below which the wall stops dead (0: never)
@@ -65,6 +67,11 @@ class ModelParams:
     def hinge(self, side):
         """Rocking angle of hinge ``side`` (array of +1 / -1) [rad]."""
         return np.where(side > 0, per_test(self.a_pos, side), per_test(self.a_neg, side))
+
+    def flight(self, A, side):
+        """Rocking angle [rad] of a flight of apex A [rad] on hinge ``side``
+        (:func:`rocklab.physics.flight.flight_angle`)."""
+        return flight_angle(A, self.hinge(side), per_test(self.rounding, side))
 
     def row(self, i):
         """The model of test ``i`` (scalars)."""
@@ -94,6 +101,7 @@ def base_params(tests) -> ModelParams:
         amp_b=0.0 * ones,
         a_pos=alpha,
         a_neg=alpha,
+        rounding=0.0 * ones,
         zeta=0.0 * ones,
         gap=0.0 * alpha,
         stop=0.0 * ones,
@@ -191,15 +199,18 @@ def next_flight(v, side, mp: ModelParams):
     A : ndarray
         Apex of the next flight [rad].
     side, a : ndarray
-        Its hinge (+1 / -1) and that hinge's rocking angle [rad].
+        Its hinge (+1 / -1) and the angle it rocks on [rad] (that hinge's,
+        or :meth:`ModelParams.flight` of its apex where the angle depends on
+        the amplitude).
     depth, duration : ndarray
         The excursion past theta = 0 of the impact (:func:`impact_speeds`).
     """
     v = np.where(v < mp.stop * overturning_velocity(mp.alpha, mp.p), 0.0, v)
     v_out, d, tau, _, _ = impact_speeds(v, side, mp)
     side = np.where(mp.one_sided, side, -side)
-    a = mp.hinge(side)
-    return apex_after(v_out, a, mp.p, mp.zeta), side, a, d, tau
+    a, k = mp.hinge(side), mp.rounding
+    A = apex_after(v_out, a, mp.p, mp.zeta, k)
+    return A, side, flight_angle(A, a, k), d, tau
 
 
 def release(S, mp: ModelParams):
@@ -215,6 +226,8 @@ def release(S, mp: ModelParams):
     """
     a0 = mp.hinge(S.side0)
     th = release_rotation(S.theta0, a0)
+    # the fall from the release is a flight of apex th: on its angle where the angle depends on the amplitude
+    a0 = mp.flight(th, S.side0)
     v = np.sqrt(landing_speed(th, a0, mp.p, mp.zeta) ** 2 + S.v0**2)
     saved = quarter_period_linear(th / a0) - quarter_period_linear(th / a0, S.v0 / (mp.p * a0))
     return v, quarter_period(th, a0, mp.p) - saved / mp.p
@@ -295,6 +308,7 @@ def rocking_model(test, ext=(), values=None, base="analytic") -> RockingModel:
         flight_damping=float(mp.zeta),
         gap=float(mp.gap),
         transverse_impact=transverse,
+        hinge_rounding=float(mp.rounding),
     )
 
 

@@ -49,6 +49,7 @@ SHORT = {
     "restitution_scale": "escale",
     "restitution_amplitude": "eamp",
     "instability_angle": "alpha",
+    "instability_amplitude": "alphaamp",
     "flight_damping": "zeta",
     "hinge_asymmetry": "asym",
     "contact_gap": "gap",
@@ -178,7 +179,10 @@ def calibrated_model(diagnosis, name, alpha, R, form="linear"):
         A name that is no calibrated model, or whose finding the diagnosis
         does not name.
     ValueError
-        A diagnosis whose boundary names no cause.
+        A diagnosis whose boundary names no cause, or an instability angle
+        that depends on the amplitude (``instability_amplitude``): it is
+        defined flight by flight in free rocking, and under ground motion a
+        flight's apex is not known when it starts.
     """
     from rocklab.diagnosis.model import rocking_model
 
@@ -190,6 +194,12 @@ def calibrated_model(diagnosis, name, alpha, R, form="linear"):
         raise KeyError(f"{name}: the diagnosis does not name {off} for {boundary} walls ({', '.join(found)})")
     ext = [c for c in found if c != off]
     values = {k: v for c in ext for k, v in found[c].items()}
+    if "instability_amplitude" in ext:
+        raise ValueError(
+            f"{name}: the diagnosis names instability_amplitude for {boundary} walls (rounding "
+            f"{values['rounding']:+.3f}), an angle that depends on each flight's apex, which ground motion "
+            f"leaves unknown when the flight starts: no map of it (its constant member is instability_angle)"
+        )
     model = rocking_model(MapWall(float(alpha), float(wall.frequency_parameter(R)), boundary), ext, values)
     return replace(model, form=form)
 

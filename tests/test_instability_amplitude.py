@@ -1,0 +1,96 @@
+"""An instability angle that depends on the amplitude: its one home, the simulator and the maps' refusal.
+
+The flight of apex A rocks on a(A) = alpha_r (1 - k) + k A
+(:func:`rocklab.physics.flight.flight_angle`).  Each closed form is checked
+against an independent computation (a root search, the event-driven
+simulator); the diagnosis' scenarios are in tests/test_diagnosis.py.
+"""
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from rocklab.diagnosis import model as dm
+from rocklab.physics import flight
+from rocklab.physics import impact as I
+from rocklab.simulation.model import RockingModel
+from rocklab.simulation.reference import simulate_free, simulate_ground
+
+A_S, P = 0.08, 3.3
+
+
+@pytest.mark.parametrize("k", [0.4, -0.3])
+def test_the_apex_solves_the_energy_balance_on_its_own_angle(k):
+    v = np.array([0.02, 0.1, 0.18, 0.3])
+    A = flight.apex_after(v, A_S, P, 0.0, k)
+    for vi, Ai in zip(v, A):
+        E = 0.5 * vi**2
+        if E >= flight.potential(A_S, A_S, P):
+            assert Ai == A_S  # it overturns, as on the rigid hinge
+            continue
+        root = brentq(lambda x, E=E: flight.potential(x, flight.flight_angle(x, A_S, k), P) - E, 0.0, A_S, xtol=1e-15)
+        assert Ai == pytest.approx(root, rel=1e-10)
+    # back down the same flight: the landing speed is the take-off speed
+    np.testing.assert_allclose(flight.landing_speed(A[:3], A_S, P, 0.0, k), v[:3], rtol=1e-10)
+    # released at the instability angle the flight rocks on it; k = 0 is the rigid hinge
+    assert flight.flight_angle(A_S, A_S, k) == A_S
+    assert flight.flight_angle(0.0, A_S, k) == pytest.approx(A_S * (1 - k))
+    assert flight.apex_after(0.1, A_S, P, 0.0, 0.0) == flight.apex(0.005, A_S, P)
+
+
+@pytest.mark.parametrize("k", [0.3, -0.3])
+def test_the_simulator_and_the_free_run_share_the_flights(k):
+    """The exact simulator's impacts against the diagnosis' flight-by-flight free run."""
+    model = RockingModel(
+        alpha=A_S / 0.9, p=P, impact=I.Scaled(I.HousnerTwoSided(), 0.95), alpha_rock=A_S, hinge_rounding=k
+    )
+    h = simulate_free(model, 0.85 * A_S, 0.0, t_end=4.0, fs=400)
+    imp = h.impacts
+    t, peaks, v_after = imp.t.to_numpy(), imp.theta_peak_before.to_numpy(), np.abs(imp.thetadot_after.to_numpy())
+    assert len(t) >= 3
+    A = flight.apex_after(v_after[:-1], A_S, P, 0.0, k)
+    np.testing.assert_allclose(A, peaks[1:], rtol=1e-9)
+    T = 2 * flight.quarter_period(A, flight.flight_angle(A, A_S, k), P)
+    np.testing.assert_allclose(T, np.diff(t), rtol=1e-8)
+    # the fall from the release rocks on the angle of the release rotation
+    a0 = flight.flight_angle(0.85 * A_S, A_S, k)
+    assert t[0] == pytest.approx(flight.quarter_period(0.85 * A_S, a0, P), rel=1e-8)
+    # the diagnosis' model of it builds the same simulator model
+    ext, values = ("instability_amplitude",), {"alpha_r_over_alpha": 0.9, "rounding": k}
+    mp = dm.model_params([_wall()], ext, values).row(0)
+    assert mp.flight(0.5 * A_S, 1) == pytest.approx(flight.flight_angle(0.5 * A_S, A_S, k))
+    sim = dm.rocking_model(_wall(), ext, values)
+    assert sim.alpha_pos == pytest.approx(A_S) and sim.hinge_rounding == k
+
+
+def _wall():
+    from rocklab.seismic.calibrated import MapWall
+
+    return MapWall(A_S / 0.9, P, "two-sided")
+
+
+def test_ground_motion_and_the_maps_refuse_it_clearly():
+    model = RockingModel(alpha=0.1, p=P, hinge_rounding=0.2)
+    with pytest.raises(ValueError, match="under ground motion"):
+        simulate_ground(model, np.zeros(10), 0.01)
+    with pytest.raises(NotImplementedError, match="depends on the amplitude"):
+        model.numba_params()
+    with pytest.raises(ValueError, match="hinge_rounding must be"):
+        RockingModel(alpha=0.1, p=P, hinge_rounding=1.0)
+    from rocklab.seismic.calibrated import calibrated_model
+
+    diagnosis = [
+        {
+            "scope": "boundary",
+            "boundary": "two-sided",
+            "verdict": ["instability_amplitude", "restitution_scale"],
+            "findings": [
+                {"effect": "instability_amplitude", "params": {"alpha_r_over_alpha": 0.9, "rounding": 0.2}},
+                {"effect": "restitution_scale", "params": {"c": 0.95}},
+            ],
+        }
+    ]
+    with pytest.raises(ValueError, match="names instability_amplitude for two-sided walls"):
+        calibrated_model(diagnosis, "2s-calibrated", 0.1, 1.0)
+    # switched off, the rest of the calibrated wall is mapped
+    assert calibrated_model(diagnosis, "2s-calibrated-no-alphaamp", 0.1, 1.0).alpha_pos == 0.1
