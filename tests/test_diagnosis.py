@@ -102,6 +102,15 @@ def sticking(v_stick, c):
     return {"impact": I.Custom(e)}
 
 
+def by_speed(g):
+    """e = e_an,2s g(thetadot^- / thetadot_r): an impact law of the speed that no cause of the catalogue holds."""
+
+    def e(thetadot, side, alpha, p):
+        return restitution.two_sided(alpha) * g(abs(thetadot) / wall.overturning_velocity(alpha, p))
+
+    return {"impact": I.Custom(e)}
+
+
 H, A2, A1 = I.HousnerTwoSided, alpha_of(TWO), alpha_of(ONE)
 # name: (boundary, simulator model, series keywords, {effect: {parameter: truth}}); None = outside the catalogue
 SCENARIOS = {
@@ -224,6 +233,15 @@ SCENARIOS = {
         for k in (0.1, 0.3)
         for noise in (0.002, 0.01)
     },
+    # the impact law as a flexible function of the speed (issue 12): affine in it, a form of the
+    # family's closed forms outside the catalogue, and a bump that no closed form holds
+    "speed-affine": (
+        "two-sided",
+        by_speed(lambda x: 0.9 + 0.1 * x),
+        {},
+        {"restitution_speed": {f"g{j}": 0.9 + 0.1 * j / 3 for j in range(4)}},
+    ),
+    "speed-bump": ("two-sided", by_speed(lambda x: 0.95 + 0.05 * np.exp(-0.5 * ((x - 0.45) / 0.2) ** 2)), {}, None),
 }
 
 
@@ -298,6 +316,18 @@ def test_an_angle_that_depends_on_the_amplitude_is_discovered(diagnosed, name):
     g = f["heldout_gain"]
     assert g["vs_best_listed"] > 2 * g["vs_best_listed_se"] and g["vs_base"] >= g["vs_best_listed"]
     assert "instability_angle" not in e["verdict"]
+
+
+def test_an_impact_law_of_the_speed_is_discovered_with_its_closed_form(diagnosed):
+    f = next(f for f in diagnosed["speed-affine"]["findings"] if f["effect"] == "restitution_speed")
+    assert f["discovered"] and f["reduces_to"].startswith("affine in the speed: e/e_an = 0.900 +0.100")
+    # a bump: the flexible law with no closed form, or the structure flagged; never Eq. 17 or the scale alone
+    e = diagnosed["speed-bump"]
+    found = next((f for f in e["findings"] if f["effect"] == "restitution_speed"), None)
+    if found is not None:
+        assert found["discovered"] and found["reduces_to"] == "no closed form of the library"
+    else:
+        assert e["unexplained"] and e["residual_structure"]
 
 
 def test_a_stop_is_named_only_where_the_walls_stop_dead(diagnosed):

@@ -21,6 +21,7 @@ from rocklab.diagnosis.causes import (
     restitution_drift,
     restitution_housner_loss,
     restitution_scale,
+    restitution_speed,
     stop_threshold,
 )
 from rocklab.diagnosis.evidence import observe
@@ -39,6 +40,7 @@ FAMILIES = [
     restitution_housner_loss.CAUSE,
     restitution_drift.CAUSE,
     instability_amplitude.CAUSE,
+    restitution_speed.CAUSE,
 ]
 
 
