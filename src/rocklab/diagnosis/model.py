@@ -79,6 +79,12 @@ class ModelParams:
         return replace(self, **arrays, extra={k: np.asarray(v)[i] for k, v in self.extra.items()})
 
 
+def log_columns(tests):
+    """The columns of the test log that the tests share (those :func:`rocklab.diagnosis.evidence.in_series_order`
+    kept; none for a wall without a log)."""
+    return tuple(sorted(set.intersection(*(set(getattr(t, "log", {})) for t in tests)))) if tests else ()
+
+
 def per_test(x, like):
     """Per-test array broadcast against a (tests, impacts) array."""
     x = np.asarray(x)
@@ -106,6 +112,8 @@ def base_params(tests) -> ModelParams:
         gap=0.0 * alpha,
         stop=0.0 * ones,
         order=np.array([t.order for t in tests], float),
+        # the test log's columns a drift may follow (their place in the series' range, 0 to 1)
+        extra={f"log:{c}": np.array([t.log[c] for t in tests], float) for c in log_columns(tests)},
     )
 
 
@@ -118,9 +126,12 @@ def model_params(tests, ext=(), values=None, base=None) -> ModelParams:
     """
     # the catalogue's causes need this module (their stages run the model): read it at call time
     from rocklab.diagnosis import catalogue
+    from rocklab.diagnosis.causes.restitution_drift import column_of
 
     mp = base_params(tests) if base is None else base
-    for cause in catalogue.in_order():
+    # a drift along a column of the test log that these tests (the maps' wall) lack still acts
+    columns = set(log_columns(tests)) | {column_of(c) for c in ext if column_of(c)}
+    for cause in catalogue.in_order(tuple(sorted(columns))):
         if cause.name in ext:
             mp = cause.apply(mp, cause.values(values or {}))
     return mp

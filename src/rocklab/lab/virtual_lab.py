@@ -485,6 +485,9 @@ class VirtualTest:
     effects : Effects
     note : str
         Operator's note written in tests.csv.
+    log : dict
+        Further columns of the test's row of tests.csv (column -> value: a
+        date, a temperature the operator wrote, ...).
     """
 
     test_id: str
@@ -502,6 +505,7 @@ class VirtualTest:
     faults: list = field(default_factory=list)
     effects: Effects = field(default_factory=Effects)
     note: str = ""
+    log: dict = field(default_factory=dict)
 
     @property
     def setup(self) -> str:
@@ -702,6 +706,7 @@ def write_campaign(out_dir, tests, specimens=None, layouts=None, seed=0, t_end=4
                 "setup": test.setup,
                 "file": rel,
                 "note": test.note,
+                **test.log,
             }
         )
         truths.append(

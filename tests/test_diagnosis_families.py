@@ -1,9 +1,11 @@
-"""An instability angle that depends on the amplitude: its one home, the simulator and the maps' refusal.
+"""The generalised families of the diagnosis (issue 12): their physics' one home and what feeds them.
 
-The flight of apex A rocks on a(A) = alpha_r (1 - k) + k A
-(:func:`rocklab.physics.flight.flight_angle`).  Each closed form is checked
-against an independent computation (a root search, the event-driven
-simulator); the diagnosis' scenarios are in tests/test_diagnosis.py.
+An instability angle that depends on the amplitude, the flight of apex A
+on a(A) = alpha_r (1 - k) + k A (:func:`rocklab.physics.flight.flight_angle`):
+each closed form against an independent computation (a root search, the
+event-driven simulator), and the refusals where it has no meaning.  The
+test log's columns, which a drift may follow, from tests.csv to the
+diagnosis.  The diagnosis' scenarios are in tests/test_diagnosis.py.
 """
 
 import numpy as np
@@ -94,3 +96,29 @@ def test_ground_motion_and_the_maps_refuse_it_clearly():
         calibrated_model(diagnosis, "2s-calibrated", 0.1, 1.0)
     # switched off, the rest of the calibrated wall is mapped
     assert calibrated_model(diagnosis, "2s-calibrated-no-alphaamp", 0.1, 1.0).alpha_pos == 0.1
+
+
+def test_the_test_log_reaches_the_diagnosis(tmp_path):
+    """Columns of tests.csv beyond the lab's own reach the diagnosis as numbers (a date in days), each
+    test's place in the series' range: what a drift may follow (tests/test_diagnosis.py hides one)."""
+    from rocklab.diagnosis.evidence import in_series_order, measured_test, records_by_series
+    from rocklab.lab import virtual_lab as vl
+    from rocklab.lab.campaign import open_campaign
+    from rocklab.lab.reduction import reduce_test
+
+    logs = [
+        {"date": "2024-03-01T10:00", "temperature_C": "21.5", "operator": "AB"},
+        {"date": "2024-03-03T10:00", "temperature_C": "19.0", "operator": "CD"},
+        {"date": "2024-03-02T22:00", "temperature_C": "", "operator": "AB"},
+    ]
+    plan = [vl.VirtualTest(f"T{i}", "1a", effects=vl.Effects.off(), log=log) for i, log in enumerate(logs)]
+    vl.write_campaign(tmp_path, plan, t_end=3.0)
+    campaign = open_campaign(tmp_path)
+    datasets = [reduce_test(campaign, f"T{i}") for i in range(3)]
+    assert datasets[0].attrs["log_temperature_C"] == 21.5 and "log_operator" not in datasets[0].attrs
+    assert "log_temperature_C" not in datasets[2].attrs  # empty: left out
+    assert datasets[1].attrs["log_date"] - datasets[0].attrs["log_date"] == pytest.approx(2.0)
+    (records,) = records_by_series(datasets).values()
+    tests = in_series_order([measured_test(r) for r in records])
+    # only what every test has is a column; each test's place in its range
+    assert [t.log for t in tests] == [{"date": 0.0}, {"date": 1.0}, {"date": pytest.approx(1.5 / 2)}]
