@@ -351,6 +351,27 @@ def test_a_family_hidden_is_discovered(diagnosed, name):
     assert D.catalogue.by_name(family).family not in e["verdict"]
 
 
+@pytest.mark.parametrize("name", ["rounding-0.3-noise-0.002", "speed-affine"])
+def test_a_discovery_is_drawn_against_the_data_and_the_best_listed(diagnosed, name):
+    from rocklab.plots.diagnosis import discovery_figure
+
+    boundary, model, kw, _ = SCENARIOS[name]
+    recs = virtual_series(name, boundary, model, seed=list(SCENARIOS).index(name), **kw)
+    fig = discovery_figure([D.measured_test(r) for r in recs], diagnosed[name])
+    data, found, listed = fig.axes[0].lines
+    assert "(discovered)" in found.get_label() and listed.get_label().startswith("best listed")
+    # the discovered curve runs through the data, the best listed one does not
+    x, y = (np.asarray(a, float) for a in data.get_data())
+    ok = np.isfinite(x) & np.isfinite(y) & (x > 0.2)
+
+    def misfit(line):
+        return np.median(np.abs(np.interp(x[ok], *line.get_data()) - y[ok]))
+
+    # the impact ratios' noise is of the size of the difference between the affine law and Eq. 17
+    assert misfit(found) < (0.2 if name.startswith("rounding") else 1.0) * misfit(listed)
+    assert discovery_figure([], {"findings": []}) is None
+
+
 def test_an_impact_law_of_the_speed_is_discovered_with_its_closed_form(diagnosed):
     f = next(f for f in diagnosed["speed-affine"]["findings"] if f["effect"] == "restitution_speed")
     assert f["discovered"] and f["reduces_to"].startswith("affine in the speed: e/e_an = 0.900 +0.100")

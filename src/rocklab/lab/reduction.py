@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import logging
+import re
 
 import numpy as np
 import pandas as pd
@@ -47,24 +48,29 @@ def _options(options):
     return out
 
 
+#: Names of the test log's columns that become attributes of a reduced test (``log_<column>``).
+LOG_COLUMN = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,63}")
+
+
 def log_values(row) -> dict:
     """The test log's own columns of a tests.csv row (beyond :data:`rocklab.lab.campaign.TEST_COLUMNS`), as numbers.
 
     ``log_<column>``: a number as written, a date or time (ISO 8601) in
     days since 1970-01-01; a value that is neither (an operator's remark)
-    or empty is left out.  What a drift between tests may follow
-    (:mod:`rocklab.diagnosis.causes.restitution_drift`).
+    or empty, and a column whose name is no identifier (it names an
+    attribute of the reduced test), are left out.  What a drift between
+    tests may follow (:mod:`rocklab.diagnosis.causes.restitution_drift`).
     """
     out = {}
     for col, text in row.items():
-        if col in TEST_COLUMNS or col == "line" or not str(text).strip():
+        if col in TEST_COLUMNS or col == "line" or not str(text).strip() or not LOG_COLUMN.fullmatch(str(col)):
             continue
         try:
             value = float(text)
         except ValueError:
             try:
                 value = (pd.Timestamp(str(text)).tz_localize(None) - pd.Timestamp(0)) / pd.Timedelta(days=1)
-            except ValueError:
+            except (ValueError, TypeError, OverflowError):
                 continue
         if np.isfinite(value):
             out[f"log_{col}"] = float(value)
