@@ -92,7 +92,7 @@ def test_ground_motion_and_the_maps_refuse_it_clearly():
             ],
         }
     ]
-    with pytest.raises(ValueError, match="names instability_amplitude for two-sided walls"):
+    with pytest.raises(ValueError, match="names instability_amplitude for two-sided walls .*-no-alphaamp"):
         calibrated_model(diagnosis, "2s-calibrated", 0.1, 1.0)
     # switched off, the rest of the calibrated wall is mapped
     assert calibrated_model(diagnosis, "2s-calibrated-no-alphaamp", 0.1, 1.0).alpha_pos == 0.1

@@ -50,10 +50,18 @@ SHORT = {
     "restitution_amplitude": "eamp",
     "instability_angle": "alpha",
     "instability_amplitude": "alphaamp",
+    "restitution_speed": "espeed",
     "flight_damping": "zeta",
     "hinge_asymmetry": "asym",
     "contact_gap": "gap",
     "stop_threshold": "stop",
+}
+
+#: Findings the maps' wall cannot carry, and why.
+NOT_MAPPED = {
+    "instability_amplitude": "an angle that depends on each flight's apex, which ground motion leaves unknown "
+    "when the flight starts (its constant member is instability_angle)",
+    "restitution_speed": "an impact law of the diagnosis' closed forms (an impact hook) that the simulators lack",
 }
 
 #: Model names of the calibrated walls: ``{2s,1s}-calibrated[-no-<short>]``.
@@ -179,10 +187,8 @@ def calibrated_model(diagnosis, name, alpha, R, form="linear"):
         A name that is no calibrated model, or whose finding the diagnosis
         does not name.
     ValueError
-        A diagnosis whose boundary names no cause, or an instability angle
-        that depends on the amplitude (``instability_amplitude``): it is
-        defined flight by flight in free rocking, and under ground motion a
-        flight's apex is not known when it starts.
+        A diagnosis whose boundary names no cause, or a finding of
+        :data:`NOT_MAPPED`.
     """
     from rocklab.diagnosis.model import rocking_model
 
@@ -194,12 +200,13 @@ def calibrated_model(diagnosis, name, alpha, R, form="linear"):
         raise KeyError(f"{name}: the diagnosis does not name {off} for {boundary} walls ({', '.join(found)})")
     ext = [c for c in found if c != off]
     values = {k: v for c in ext for k, v in found[c].items()}
-    if "instability_amplitude" in ext:
-        raise ValueError(
-            f"{name}: the diagnosis names instability_amplitude for {boundary} walls (rounding "
-            f"{values['rounding']:+.3f}), an angle that depends on each flight's apex, which ground motion "
-            f"leaves unknown when the flight starts: no map of it (its constant member is instability_angle)"
-        )
+    for cause in ext:
+        if cause in NOT_MAPPED:
+            raise ValueError(
+                f"{name}: the diagnosis names {cause} for {boundary} walls "
+                f"({', '.join(f'{k} = {v:.4g}' for k, v in found[cause].items())}), {NOT_MAPPED[cause]}: "
+                f"no map of it (model {name.split('-no-')[0]}-no-{SHORT[cause]} leaves it out)"
+            )
     model = rocking_model(MapWall(float(alpha), float(wall.frequency_parameter(R)), boundary), ext, values)
     return replace(model, form=form)
 
