@@ -13,7 +13,7 @@ import pytest
 from scipy.optimize import brentq
 
 from rocklab.diagnosis import model as dm
-from rocklab.physics import flight
+from rocklab.physics import flight, restitution
 from rocklab.physics import impact as I
 from rocklab.simulation.model import RockingModel
 from rocklab.simulation.reference import simulate_free, simulate_ground
@@ -71,7 +71,7 @@ def _wall():
     return MapWall(A_S / 0.9, P, "two-sided")
 
 
-def test_ground_motion_and_the_maps_refuse_it_clearly():
+def test_ground_motion_refuses_it_and_the_maps_carry_its_constant_member(caplog):
     model = RockingModel(alpha=0.1, p=P, hinge_rounding=0.2)
     with pytest.raises(ValueError, match="under ground motion"):
         simulate_ground(model, np.zeros(10), 0.01)
@@ -79,23 +79,28 @@ def test_ground_motion_and_the_maps_refuse_it_clearly():
         model.numba_params()
     with pytest.raises(ValueError, match="hinge_rounding must be"):
         RockingModel(alpha=0.1, p=P, hinge_rounding=1.0)
-    from rocklab.seismic.calibrated import calibrated_model
+    from rocklab.seismic.calibrated import calibrated_model, model_names
 
     diagnosis = [
         {
             "scope": "boundary",
             "boundary": "two-sided",
-            "verdict": ["instability_amplitude", "restitution_scale"],
+            "verdict": ["instability_amplitude", "restitution_speed", "restitution_scale"],
             "findings": [
                 {"effect": "instability_amplitude", "params": {"alpha_r_over_alpha": 0.9, "rounding": 0.2}},
+                {"effect": "restitution_speed", "params": {f"g{j}": 0.9 for j in range(4)}},
                 {"effect": "restitution_scale", "params": {"c": 0.95}},
             ],
         }
     ]
-    with pytest.raises(ValueError, match="names instability_amplitude for two-sided walls .*-no-alphaamp"):
-        calibrated_model(diagnosis, "2s-calibrated", 0.1, 1.0)
-    # switched off, the rest of the calibrated wall is mapped
-    assert calibrated_model(diagnosis, "2s-calibrated-no-alphaamp", 0.1, 1.0).alpha_pos == 0.1
+    # the maps' wall: the angle of the flights that overturn it, the flexible law left off, each said in the log
+    with caplog.at_level("WARNING", logger="rocklab.seismic.calibrated"):
+        assert model_names(diagnosis) == ["2s-calibrated", "2s-calibrated-no-alpha", "2s-calibrated-no-escale"]
+    assert "instability_amplitude is carried on the maps' wall by instability_angle" in caplog.text
+    assert "restitution_speed is left off the maps' wall" in caplog.text
+    model = calibrated_model(diagnosis, "2s-calibrated", 0.1, 1.0)
+    assert model.alpha_pos == pytest.approx(0.09) and model.hinge_rounding == 0.0
+    assert model.numba_law()[0, 0] == pytest.approx(0.95 * restitution.two_sided(0.1))
 
 
 def test_the_test_log_reaches_the_diagnosis(tmp_path):

@@ -194,7 +194,7 @@ def series_figures(entries, test_paths, motion_paths=()):
     Returns
     -------
     dict
-        Series id -> Figure, ``<series>-discovered`` -> the figure of
+        Series id -> Figure, ``discovered/<series>`` -> the figure of
         :func:`discovery_figure` where the series has a discovered form,
         plus ``fig14`` and ``fig15``: the largest
         two-sided and one-sided series, as the paper's figures (a note when
@@ -213,7 +213,7 @@ def series_figures(entries, test_paths, motion_paths=()):
         out[e["key"]] = history_figure(test, e)
         found = discovery_figure([test], e)
         if found is not None:
-            out[f"{e['key']}-discovered"] = found
+            out[f"discovered/{e['key']}"] = found
     for name, boundary in (("fig14", "two-sided"), ("fig15", "one-sided")):
         own = [e for e in series if e["boundary"] == boundary]
         out[name] = out[max(own, key=lambda e: e["n_tests"])["key"]] if own else _empty(boundary)
