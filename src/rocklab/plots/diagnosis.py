@@ -22,8 +22,10 @@ import xarray as xr
 
 from rocklab.diagnosis import block_tests, measured_test, records_by_series, simulate_measured
 from rocklab.diagnosis.catalogue import by_name
-from rocklab.diagnosis.evidence import flight_time_alpha, observe
+from rocklab.diagnosis.causes import restitution_drift
+from rocklab.diagnosis.evidence import flight_time_alpha, in_series_order, observe
 from rocklab.diagnosis.model import impact_speeds, model_params
+from rocklab.io import valid_tests
 from rocklab.lab.motion import read_motion
 from rocklab.physics import restitution
 from rocklab.physics.flight import quarter_period
@@ -119,7 +121,7 @@ def discovery_figure(tests, entry):
     Parameters
     ----------
     tests : list of rocklab.diagnosis.MeasuredTest
-        Tests of the series (the sample test at least).
+        Tests of the series, in series order (:func:`rocklab.diagnosis.evidence.in_series_order`).
     entry : dict
 
     Returns
@@ -144,20 +146,27 @@ def discovery_figure(tests, entry):
         if fam == "instability_angle":
             x = ob.S.A[:, :-1] / ob.alpha
             ax.plot(x.ravel(), ob.a_T.ravel(), ".", color="0.3", ms=3, zorder=3, label="measured flights")
-            A = np.linspace(0.02, 1.0, 60)[None, :] * ob.alpha
+            # up to the largest flight measured: at the instability point the flight time is unbounded
+            A = np.linspace(0.02, np.nanmax(x), 60)[None, :] * ob.alpha
             for ext, v, style, label in ((chosen, values, "-", lab), (listed, listed_values, "--", lab_listed)):
                 y = _flight_angle_seen(tests, ext, v, A)
                 ax.plot(A[0] / ob.alpha[0, 0], y[0], style, lw=1.5, label=label)
             ax.set_xlabel("apex of the flight / alpha")
             ax.set_ylabel("alpha_r / alpha from the flight time (Housner)")
-        elif f["effect"] == "restitution_drift":
+        elif f["effect"].startswith(restitution_drift.NAME):
+            column = restitution_drift.column_of(f["effect"])
+            n = np.array([t.order if column is None else t.log.get(column, np.nan) for t in tests])
             med = np.array([np.median(ob.ratio[i][ob.ok[i]]) if ob.ok[i].any() else np.nan for i in range(len(tests))])
-            ax.plot(ob.S.order, med, "ko", ms=4, label="measured, per test (median over its impacts)")
+            ax.plot(n, med, "ko", ms=4, label="measured, per test (median over its impacts)")
             for ext, v, style, label in ((chosen, values, "-", lab), (listed, listed_values, "--", lab_listed)):
                 y = np.median(_impact_law(tests, ext, v, np.array([0.3, 0.5, 0.7])), axis=1)
-                order = np.argsort(ob.S.order)
-                ax.plot(ob.S.order[order], y[order], style, lw=1.5, label=label)
-            ax.set_xlabel("place of the test in the series (0 first, 1 last)")
+                order = np.argsort(n)
+                ax.plot(n[order], y[order], style, lw=1.5, label=label)
+            ax.set_xlabel(
+                "place of the test in the series (0 first, 1 last)"
+                if column is None
+                else f"the test's {column} over the series' range (0 least, 1 largest)"
+            )
             ax.set_ylabel("e / e_an")
         else:
             ax.plot(ob.vr[ob.ok], ob.ratio[ob.ok], ".", color="0.3", ms=3, zorder=3, label="measured impacts")
@@ -186,7 +195,8 @@ def series_figures(entries, test_paths, motion_paths=()):
         results/diagnosis.json.
     test_paths : sequence of path
         Reduced tests (``results/tests/<test_id>.nc``): at least the sample
-        test of every series.
+        test of every series, and every test of a series with a form
+        discovered beyond the catalogue (:func:`discovery_figure`).
     motion_paths : sequence of path, optional
         Their stored motions (``results/motion/<test_id>.nc``); a test
         without one has its motion extracted again.
@@ -209,11 +219,9 @@ def series_figures(entries, test_paths, motion_paths=()):
         motion = {test_id: read_motion(motions[test_id])} if test_id in motions else None
         with xr.open_dataset(paths[test_id]) as ds:
             (recs,) = records_by_series([ds.load()], motion).values()
-        test = measured_test(recs[0])
-        out[e["key"]] = history_figure(test, e)
-        found = discovery_figure([test], e)
-        if found is not None:
-            out[f"discovered/{e['key']}"] = found
+        out[e["key"]] = history_figure(measured_test(recs[0]), e)
+        if any(f.get("discovered") for f in e["findings"]):
+            out[f"discovered/{e['key']}"] = discovery_figure(_series_tests(e["key"], paths, motions), e)
     for name, boundary in (("fig14", "two-sided"), ("fig15", "one-sided")):
         own = [e for e in series if e["boundary"] == boundary]
         out[name] = out[max(own, key=lambda e: e["n_tests"])["key"]] if own else _empty(boundary)
@@ -284,6 +292,15 @@ def family_figure(result, events):
     ax.legend(fontsize=7, loc="best")
     fig.tight_layout()
     return fig
+
+
+def _series_tests(key, paths, motions):
+    """The valid tests of series ``key`` among ``paths`` (stem -> path) as the diagnosis read them."""
+    datasets = [ds for ds in valid_tests(paths.values()) if ds.attrs.get("series") == key]
+    ids = [ds.attrs["test_id"] for ds in datasets]
+    stored = {t: read_motion(motions[t]) for t in ids if t in motions}
+    (recs,) = records_by_series(datasets, stored).values()
+    return in_series_order([t for t in map(measured_test, recs) if t.n_impacts >= 2])
 
 
 def _empty(boundary):
