@@ -11,4 +11,6 @@ entries = json.loads(Path(snakemake.input.diagnosis).read_text())
 out = Path(snakemake.output.series)
 out.mkdir(parents=True, exist_ok=True)
 for name, fig in series_figures(entries, snakemake.input.tests, snakemake.input.motions).items():
-    fig.savefig(snakemake.output[name] if name in ("fig14", "fig15") else out / f"{name}.png", dpi=110)
+    path = Path(snakemake.output[name]) if name in ("fig14", "fig15") else out / f"{name}.png"
+    path.parent.mkdir(parents=True, exist_ok=True)  # discovered/<series>: the forms found beyond the catalogue
+    fig.savefig(path, dpi=110)

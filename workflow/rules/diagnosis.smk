@@ -91,12 +91,15 @@ rule diagnosis_pages:
 
 
 def diagnosis_samples(kind):
-    """The sample test of every diagnosed series (the tests the figures draw), once the diagnosis has run."""
+    """The sample test of every diagnosed series (the tests the figures draw), once the diagnosis has run,
+    and every test of a series with a form discovered beyond the catalogue (drawn against them all)."""
 
     def inputs(wildcards):
         with open(checkpoints.diagnosis.get().output.json) as f:
-            entries = json.load(f)
-        return sorted({res(kind, f"{e['sample_test']}.nc") for e in entries if e["scope"] == "series"})
+            entries = [e for e in json.load(f) if e["scope"] == "series"]
+        ids = {e["sample_test"] for e in entries}
+        ids |= {t for e in entries if any(f.get("discovered") for f in e["findings"]) for t in TESTS_BY_SERIES[e["key"]]}
+        return sorted(res(kind, f"{t}.nc") for t in ids)
 
     return inputs
 

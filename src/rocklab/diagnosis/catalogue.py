@@ -15,14 +15,17 @@ from rocklab.diagnosis.causes import (
     contact_gap,
     flight_damping,
     hinge_asymmetry,
+    instability_amplitude,
     instability_angle,
     restitution_amplitude,
     restitution_drift,
     restitution_housner_loss,
     restitution_scale,
+    restitution_speed,
     stop_threshold,
 )
 from rocklab.diagnosis.evidence import observe
+from rocklab.diagnosis.model import log_columns
 
 CAUSES = [
     restitution_scale.CAUSE,
@@ -37,17 +40,27 @@ CAUSES = [
 FAMILIES = [
     restitution_housner_loss.CAUSE,
     restitution_drift.CAUSE,
+    instability_amplitude.CAUSE,
+    restitution_speed.CAUSE,
 ]
 
 
-def in_order():
-    """The causes and the families in the order they act on the model."""
-    return [*CAUSES[:-1], *FAMILIES, CAUSES[-1]]
+def in_order(columns=()):
+    """The causes and the families in the order they act on the model.
+
+    ``columns``: the test log's columns a drift may follow, each a family
+    beside the drift along the test order (:func:`restitution_drift.along_log`).
+    """
+    families = list(FAMILIES)
+    i = families.index(restitution_drift.CAUSE) + 1
+    families[i:i] = restitution_drift.along_log(tuple(columns))
+    return [*CAUSES[:-1], *families, CAUSES[-1]]
 
 
 def by_name(name):
-    """The cause of the catalogue called ``name``."""
-    return next(c for c in in_order() if c.name == name)
+    """The cause of the catalogue called ``name`` (a drift along a column of the test log too)."""
+    column = restitution_drift.column_of(name)
+    return next(c for c in in_order(() if column is None else (column,)) if c.name == name)
 
 
 def null_values():
@@ -55,9 +68,12 @@ def null_values():
     return {q.name: q.null for c in in_order() for q in c.params}
 
 
-def for_boundary(boundary, stage="selection", families=False):
-    """The causes of a stage that can occur in a boundary condition, in catalogue order (and the families)."""
-    return [c for c in in_order() if c.stage == stage and boundary in c.boundaries and (families or not c.family)]
+def for_boundary(boundary, stage="selection", families=False, columns=()):
+    """The causes of a stage that can occur in a boundary condition, in catalogue order (and the families,
+    with a drift along each of the test log's ``columns``)."""
+    return [
+        c for c in in_order(columns) if c.stage == stage and boundary in c.boundaries and (families or not c.family)
+    ]
 
 
 def signatures(tests):
@@ -71,7 +87,7 @@ def signatures(tests):
     """
     ob = observe(tests)
     out = {}
-    for cause in for_boundary(tests[0].boundary, families=True):
+    for cause in for_boundary(tests[0].boundary, families=True, columns=log_columns(tests)):
         s = cause.signature(ob)
         if s is not None:
             out[cause.name] = s

@@ -708,7 +708,8 @@ def beyond_the_catalogue(problem: Problem, sel, *, signature, n_boot=40, seed=0,
     Where ``sel`` (a selection of the listed causes,
     :func:`select_effects`) leaves structure in the residual groups (not
     only what the stage after selection addresses, :meth:`Problem.extra_structure`)
-    that no candidate turned down would remove, the selection is run again with the
+    that no candidate turned down by the held-out test or the bootstrap would remove (one turned
+    down by the information criterion removes it only with a worse fit), the selection is run again with the
     families of the problem's causes among the candidates (the same engine:
     information criterion, signature, held-out deviance, bootstrap).  When
     it names a family, it replaces ``sel``, with ``catalogue`` (the
@@ -716,7 +717,11 @@ def beyond_the_catalogue(problem: Problem, sel, *, signature, n_boot=40, seed=0,
     with the families that would remove the structure but fall short of the
     evidence to be named added to its weak evidence.
     """
-    if sel["weak"] or problem.candidates(True) == problem.candidates():
+    # weak evidence for a listed cause that the held-out test or the bootstrap turned down stands; one the
+    # information criterion turned down removes the structure only with a worse fit: a form it lacks
+    if any(not w["reason"].startswith("BIC") for w in sel["weak"].values()):
+        return sel
+    if problem.candidates(True) == problem.candidates():
         return sel
     # structure of the residual groups: what the stage after selection addresses (a stop) is not the families'
     every = problem.subset(np.arange(problem.n_tests))

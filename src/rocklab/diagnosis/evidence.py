@@ -15,7 +15,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from rocklab.diagnosis.model import ModelParams, impact_speeds, release
+from rocklab.diagnosis.model import ModelParams, impact_speeds, log_columns, release
 from rocklab.lab.campaign import order_in_series
 from rocklab.lab.motion import extract_motion
 from rocklab.physics import restitution
@@ -42,7 +42,10 @@ class MeasuredTest:
     ``depth`` the excursion past theta = 0 [rad]; ``v_release`` the speed
     towards the vertical with which the wall left the screw [rad/s];
     ``order`` its place in its series, 0 (first) to 1 (last)
-    (:func:`in_series_order`).
+    (:func:`in_series_order`); ``log`` the numbers of its row of the test
+    log (:func:`rocklab.lab.reduction.log_values`, by column), each its
+    place between the series' least and largest value (0 to 1) once
+    :func:`in_series_order` has read the series.
     """
 
     test_id: str
@@ -66,6 +69,7 @@ class MeasuredTest:
     alpha_fall: float = np.nan
     series: str = ""
     order: float = 0.5
+    log: dict = field(default_factory=dict)
     t: np.ndarray | None = field(default=None, repr=False)
     theta: np.ndarray | None = field(default=None, repr=False)
 
@@ -119,6 +123,7 @@ def measured_test(record) -> MeasuredTest:
         v_release=max(float(m.thetadot_release), 0.0),
         alpha_fall=float(m.alpha_fall),
         series=str(record.get("series", "")),
+        log=dict(record.get("log", {})),
         t=t,
         theta=theta,
     )
@@ -132,7 +137,18 @@ def in_series_order(tests):
     (wear, debris) follows.
     """
     order = order_in_series([t.test_id for t in tests])
-    return [replace(t, order=order[t.test_id]) for t in tests]
+    # a column of the test log that every test has and that varies over the series: its place in its range
+    cols = sorted(set.intersection(*(set(t.log) for t in tests))) if tests else []
+    span = {c: (min(t.log[c] for t in tests), max(t.log[c] for t in tests)) for c in cols}
+    span = {c: (lo, hi) for c, (lo, hi) in span.items() if hi > lo}
+    return [
+        replace(
+            t,
+            order=order[t.test_id],
+            log={c: (t.log[c] - lo) / (hi - lo) for c, (lo, hi) in span.items()},
+        )
+        for t in tests
+    ]
 
 
 def records_by_series(datasets, motions=None):
@@ -163,6 +179,7 @@ def records_by_series(datasets, motions=None):
                 "p": float(a["p"]),
                 "boundary": a["boundary"],
                 "direction": a["direction"],
+                "log": {k[4:]: float(v) for k, v in a.items() if k.startswith("log_")},
             }
         )
     return dict(sorted(out.items()))
@@ -257,10 +274,11 @@ def residuals(S: TestStack, mp: ModelParams, cache=None):
     R = {"impact": log_ratio(v_hat * (1.0 - FILTER_DAMPING_BIAS * zeta), S.va, vf)}
     # peak to peak: from the measured apex before (theta0 at rest for the first), a landing,
     # the impact, a rise
-    v_land = landing_speed(S.A[:, :-1], mp.hinge(S.side[:, 1:]), p, zeta)
+    k_r = mp.rounding[:, None]
+    v_land = landing_speed(S.A[:, :-1], mp.hinge(S.side[:, 1:]), p, zeta, k_r)
     v_land = np.c_[release(S, mp)[0], v_land]
-    R["peak"] = log_ratio(apex_after(impact_speeds(v_land, S.side, mp)[0], a_ap, p, zeta), S.A, f)
-    key = mp.a_pos.tobytes() + mp.a_neg.tobytes()
+    R["peak"] = log_ratio(apex_after(impact_speeds(v_land, S.side, mp)[0], a_ap, p, zeta, k_r), S.A, f)
+    key = mp.a_pos.tobytes() + mp.a_neg.tobytes() + mp.rounding.tobytes()
     if cache is not None and cache.get("stack") is S and cache.get("angles") == key:
         R["time"] = cache["time"]
     else:
@@ -268,7 +286,10 @@ def residuals(S: TestStack, mp: ModelParams, cache=None):
         A_t = np.where(S.A[:, :-1] > 3 * f, S.A[:, :-1], np.nan)
         R["time"] = np.where(
             np.isfinite(A_t),
-            log_ratio(2.0 * quarter_period(np.nan_to_num(A_t), a_ap[:, :-1], p), S.tb[:, 1:] - S.ta[:, :-1]),
+            log_ratio(
+                2.0 * quarter_period(np.nan_to_num(A_t), mp.flight(np.nan_to_num(A_t), apex_side[:, :-1]), p),
+                S.tb[:, 1:] - S.ta[:, :-1],
+            ),
             np.nan,
         )
         if cache is not None:
@@ -305,11 +326,15 @@ def covariates(S: TestStack):
     k, lA = S.k, np.log(np.maximum(S.A, 1e-300))
     # a property of the test: its per-test medians against it (a drift between tests)
     order = S.order[:, None] + 0.0 * k
-    pair = lambda a, b, o: {"impact index": a, "amplitude": b, "test order": o}  # noqa: E731
+    logs = {f"test log {c}": np.array([t.log[c] for t in S.tests])[:, None] + 0.0 * k for c in log_columns(S.tests)}
+
+    def pair(a, b, o, cut=None):
+        return {"impact index": a, "amplitude": b, "test order": o, **{n: x[:, :cut] for n, x in logs.items()}}
+
     return {
         "impact": pair(k, lv, order),
         "peak": pair(k, lA, order),
-        "time": pair(k[:, :-1], lA[:, :-1], order[:, :-1]),
+        "time": pair(k[:, :-1], lA[:, :-1], order[:, :-1], -1),
         "gap_time": pair(k, lv, order),
     }
 

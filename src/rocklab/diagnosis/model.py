@@ -21,6 +21,7 @@ from rocklab.physics import restitution
 from rocklab.physics.flight import (
     apex,
     apex_after,
+    flight_angle,
     landing_speed,
     potential,
     quarter_period,
@@ -55,6 +56,7 @@ class ModelParams:
     amp_b: np.ndarray
     a_pos: np.ndarray  # rocking angles of the hinges [rad]
     a_neg: np.ndarray
+    rounding: np.ndarray  # dependence of the rocking angle on the flight's amplitude (flight.flight_angle)
     zeta: np.ndarray
     gap: np.ndarray  # [rad]
     stop: np.ndarray  # landing speed [thetadot_r] below which the wall stops dead (0: never)
@@ -66,10 +68,21 @@ class ModelParams:
         """Rocking angle of hinge ``side`` (array of +1 / -1) [rad]."""
         return np.where(side > 0, per_test(self.a_pos, side), per_test(self.a_neg, side))
 
+    def flight(self, A, side):
+        """Rocking angle [rad] of a flight of apex A [rad] on hinge ``side``
+        (:func:`rocklab.physics.flight.flight_angle`)."""
+        return flight_angle(A, self.hinge(side), per_test(self.rounding, side))
+
     def row(self, i):
         """The model of test ``i`` (scalars)."""
         arrays = {k: np.asarray(v)[i] for k, v in vars(self).items() if isinstance(v, np.ndarray)}
         return replace(self, **arrays, extra={k: np.asarray(v)[i] for k, v in self.extra.items()})
+
+
+def log_columns(tests):
+    """The columns of the test log that the tests share (those :func:`rocklab.diagnosis.evidence.in_series_order`
+    kept; none for a wall without a log)."""
+    return tuple(sorted(set.intersection(*(set(getattr(t, "log", {})) for t in tests)))) if tests else ()
 
 
 def per_test(x, like):
@@ -94,10 +107,13 @@ def base_params(tests) -> ModelParams:
         amp_b=0.0 * ones,
         a_pos=alpha,
         a_neg=alpha,
+        rounding=0.0 * ones,
         zeta=0.0 * ones,
         gap=0.0 * alpha,
         stop=0.0 * ones,
         order=np.array([t.order for t in tests], float),
+        # the test log's columns a drift may follow (their place in the series' range, 0 to 1)
+        extra={f"log:{c}": np.array([t.log[c] for t in tests], float) for c in log_columns(tests)},
     )
 
 
@@ -110,9 +126,12 @@ def model_params(tests, ext=(), values=None, base=None) -> ModelParams:
     """
     # the catalogue's causes need this module (their stages run the model): read it at call time
     from rocklab.diagnosis import catalogue
+    from rocklab.diagnosis.causes.restitution_drift import column_of
 
     mp = base_params(tests) if base is None else base
-    for cause in catalogue.in_order():
+    # a drift along a column of the test log that these tests (the maps' wall) lack still acts
+    columns = set(log_columns(tests)) | {column_of(c) for c in ext if column_of(c)}
+    for cause in catalogue.in_order(tuple(sorted(columns))):
         if cause.name in ext:
             mp = cause.apply(mp, cause.values(values or {}))
     return mp
@@ -191,15 +210,18 @@ def next_flight(v, side, mp: ModelParams):
     A : ndarray
         Apex of the next flight [rad].
     side, a : ndarray
-        Its hinge (+1 / -1) and that hinge's rocking angle [rad].
+        Its hinge (+1 / -1) and the angle it rocks on [rad] (that hinge's,
+        or :meth:`ModelParams.flight` of its apex where the angle depends on
+        the amplitude).
     depth, duration : ndarray
         The excursion past theta = 0 of the impact (:func:`impact_speeds`).
     """
     v = np.where(v < mp.stop * overturning_velocity(mp.alpha, mp.p), 0.0, v)
     v_out, d, tau, _, _ = impact_speeds(v, side, mp)
     side = np.where(mp.one_sided, side, -side)
-    a = mp.hinge(side)
-    return apex_after(v_out, a, mp.p, mp.zeta), side, a, d, tau
+    a, k = mp.hinge(side), mp.rounding
+    A = apex_after(v_out, a, mp.p, mp.zeta, k)
+    return A, side, flight_angle(A, a, k), d, tau
 
 
 def release(S, mp: ModelParams):
@@ -215,6 +237,8 @@ def release(S, mp: ModelParams):
     """
     a0 = mp.hinge(S.side0)
     th = release_rotation(S.theta0, a0)
+    # the fall from the release is a flight of apex th: on its angle where the angle depends on the amplitude
+    a0 = mp.flight(th, S.side0)
     v = np.sqrt(landing_speed(th, a0, mp.p, mp.zeta) ** 2 + S.v0**2)
     saved = quarter_period_linear(th / a0) - quarter_period_linear(th / a0, S.v0 / (mp.p * a0))
     return v, quarter_period(th, a0, mp.p) - saved / mp.p
@@ -295,6 +319,7 @@ def rocking_model(test, ext=(), values=None, base="analytic") -> RockingModel:
         flight_damping=float(mp.zeta),
         gap=float(mp.gap),
         transverse_impact=transverse,
+        hinge_rounding=float(mp.rounding),
     )
 
 

@@ -7,7 +7,7 @@ import numpy as np
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.engine import Problem
 from rocklab.diagnosis.evidence import TestStack, covariates, log_ratio, noise_covariates, residuals
-from rocklab.diagnosis.model import base_params, free_run, model_params
+from rocklab.diagnosis.model import base_params, free_run, log_columns, model_params
 
 
 class WallProblem(Problem):
@@ -18,7 +18,7 @@ class WallProblem(Problem):
         self.n_tests = len(self.tests)
         self.S = TestStack.of(self.tests)
         self.boundary = self.tests[0].boundary
-        self.causes = tuple(catalogue.for_boundary(self.boundary, families=True))
+        self.causes = tuple(catalogue.for_boundary(self.boundary, families=True, columns=log_columns(self.tests)))
         self.after_selection = tuple(catalogue.for_boundary(self.boundary, "after selection"))
         self._sig = None
         self._cache = {}

@@ -187,7 +187,11 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         "unexplained": unexplained,
         "residual_structure": structure,
         "findings": findings,
-        **({"listed_verdict": sel["catalogue"]["effects"]} if "catalogue" in sel else {}),
+        **(
+            {"listed_verdict": sel["catalogue"]["effects"], "listed_params": sel["catalogue"]["fit"].values}
+            if "catalogue" in sel
+            else {}
+        ),
         "weak_evidence": {k: v["reason"] for k, v in sel["weak"].items()},
         "rejected": sel["rejected"],
         "signatures": {k: v["text"] for k, v in sig.items()},

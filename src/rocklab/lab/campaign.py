@@ -212,11 +212,12 @@ def _number(text: str, kind) -> tuple[float, str | None]:
     return value, None
 
 
-def read_table(path: Path, columns: dict, optional=()) -> Table:
+def read_table(path: Path, columns: dict, optional=(), keep_extra=False) -> Table:
     """Read a campaign table and check it row by row.
 
     Blanks around a field, a byte-order mark, CRLF line ends, blank lines
-    and columns beyond ``columns`` (ignored) are harmless and read.  A row
+    and columns beyond ``columns`` (ignored, or kept as text with
+    ``keep_extra``: the test log's own columns) are harmless and read.  A row
     with the wrong number of fields, a value that is not a finite number
     where one is expected, a line that is not UTF-8 text, is kept with its
     problem.
@@ -245,13 +246,14 @@ def read_table(path: Path, columns: dict, optional=()) -> Table:
     if twice:
         raise RawFormatError(path, head_n, f"column(s) {', '.join(twice)} named twice")
     index = {c: header.index(c) for c in columns if c in header}
+    extra = [c for c in header if keep_extra and c and c not in columns and c != "line" and header.count(c) == 1]
     records, problems = [], {}
     for i, (n, text, problem) in enumerate(lines[1:]):
         fields = [f.strip() for f in next(csv.reader([text]), [])]
         if problem is None and len(fields) != len(header):
             what = "truncated row" if len(fields) < len(header) else "too many fields"
             problem = f"{what}: {len(fields)} fields, expected {len(header)} (the header's)"
-        rec = {"line": n}
+        rec = {"line": n, **{c: fields[header.index(c)] if header.index(c) < len(fields) else "" for c in extra}}
         for col, kind in columns.items():
             value = fields[index[col]] if col in index and index[col] < len(fields) else ""
             if kind is str:
@@ -263,7 +265,7 @@ def read_table(path: Path, columns: dict, optional=()) -> Table:
         if problem:
             problems[i] = problem
         records.append(rec)
-    rows = pd.DataFrame(records, columns=["line", *columns])
+    rows = pd.DataFrame(records, columns=["line", *columns, *extra])
     for col, kind in columns.items():
         values = rows[col].astype(str if kind is str else float)
         # whole numbers stay integers, as the lab wrote them (the params that decide a rerun show them)
@@ -409,7 +411,7 @@ def read_tests(campaign_dir, specimens=None, setups=None) -> TestLog:
     """
     root = Path(campaign_dir)
     path = _table_path(root, "tests.csv")
-    table = read_table(path, TEST_COLUMNS, optional=("note", "contact_depth_mm"))
+    table = read_table(path, TEST_COLUMNS, optional=("note", "contact_depth_mm"), keep_extra=True)
     specimens, bad_spec = _or_empty(read_specimens, root) if specimens is None else specimens
     setups, bad_setup = _or_empty(read_setups, root) if setups is None else setups
     df = table.rows

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import logging
+import re
 
 import numpy as np
 import pandas as pd
@@ -18,7 +19,7 @@ import xarray as xr
 from rocklab.io import cf_attrs
 from rocklab.lab import channels as health
 from rocklab.lab import kinematics, release, validity
-from rocklab.lab.campaign import Campaign, RawFormatError, read_record, row_series
+from rocklab.lab.campaign import TEST_COLUMNS, Campaign, RawFormatError, read_record, row_series
 from rocklab.physics import wall
 
 log = logging.getLogger(__name__)
@@ -47,8 +48,37 @@ def _options(options):
     return out
 
 
+#: Names of the test log's columns that become attributes of a reduced test (``log_<column>``).
+LOG_COLUMN = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,63}")
+
+
+def log_values(row) -> dict:
+    """The test log's own columns of a tests.csv row (beyond :data:`rocklab.lab.campaign.TEST_COLUMNS`), as numbers.
+
+    ``log_<column>``: a number as written, a date or time (ISO 8601) in
+    days since 1970-01-01; a value that is neither (an operator's remark)
+    or empty, and a column whose name is no identifier (it names an
+    attribute of the reduced test), are left out.  What a drift between
+    tests may follow (:mod:`rocklab.diagnosis.causes.restitution_drift`).
+    """
+    out = {}
+    for col, text in row.items():
+        if col in TEST_COLUMNS or col == "line" or not str(text).strip() or not LOG_COLUMN.fullmatch(str(col)):
+            continue
+        try:
+            value = float(text)
+        except ValueError:
+            try:
+                value = (pd.Timestamp(str(text)).tz_localize(None) - pd.Timestamp(0)) / pd.Timedelta(days=1)
+            except (ValueError, TypeError, OverflowError):
+                continue
+        if np.isfinite(value):
+            out[f"log_{col}"] = float(value)
+    return out
+
+
 def test_metadata(campaign: Campaign, test_id: str) -> dict:
-    """Specimen, setup and wall constants of a test (lengths in mm, SI for p)."""
+    """Specimen, setup and wall constants of a test (lengths in mm, SI for p), its log (:func:`log_values`)."""
     row = campaign.test_row(test_id)
     spec = campaign.specimen(row.specimen)
     h, b = float(spec.height_mm), float(spec.thickness_mm)
@@ -76,6 +106,7 @@ def test_metadata(campaign: Campaign, test_id: str) -> dict:
         "R_m": R,
         "p": p,
         "overturning_velocity": float(wall.overturning_velocity(alpha, p)),
+        **log_values(row),
     }
 
 

@@ -479,12 +479,15 @@ class VirtualTest:
     residual_kind : {'rotation', 'sliding'}
     model : dict
         Further ``RockingModel`` keywords (``impact``, ``alpha_neg``,
-        ``flight_damping``, ``gap``, ``form``, ...), every physical effect of
+        ``flight_damping``, ``gap``, ``form``, ``hinge_rounding``, ...), every physical effect of
         the simulator; ``alpha_rock`` defaults to alpha_ratio * alpha.
     faults : list of Fault
     effects : Effects
     note : str
         Operator's note written in tests.csv.
+    log : dict
+        Further columns of the test's row of tests.csv (column -> value: a
+        date, a temperature the operator wrote, ...).
     """
 
     test_id: str
@@ -502,6 +505,7 @@ class VirtualTest:
     faults: list = field(default_factory=list)
     effects: Effects = field(default_factory=Effects)
     note: str = ""
+    log: dict = field(default_factory=dict)
 
     @property
     def setup(self) -> str:
@@ -618,6 +622,7 @@ def simulate_virtual_test(test: VirtualTest, specimen, layout, rng=None, t_end=4
             "thetadot0": thetadot0,
             "impact_law": _law_name(model.impact) or "default",
             "flight_damping": model.flight_damping,
+            "hinge_rounding": model.hinge_rounding,
             "gap": model.gap,
             "form": model.form,
             "e_first": float(ratios[0]) if ratios.size else np.nan,
@@ -701,6 +706,7 @@ def write_campaign(out_dir, tests, specimens=None, layouts=None, seed=0, t_end=4
                 "setup": test.setup,
                 "file": rel,
                 "note": test.note,
+                **test.log,
             }
         )
         truths.append(
@@ -722,6 +728,7 @@ def write_campaign(out_dir, tests, specimens=None, layouts=None, seed=0, t_end=4
                 "overturning_velocity": truth["overturning_velocity"],
                 "impact_law": truth["impact_law"],
                 "flight_damping": truth["flight_damping"],
+                "hinge_rounding": truth["hinge_rounding"],
                 "gap": truth["gap"],
                 "form": truth["form"],
                 "e_true": truth["e_true"],

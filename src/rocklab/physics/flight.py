@@ -48,6 +48,56 @@ def energy(theta, thetadot, a, p, linear=False):
     return 0.5 * thetadot**2 + (potential_linear if linear else potential)(theta, a, p)
 
 
+def flight_angle(A, a, k=0.0):
+    """Rocking angle [rad] of a flight of apex A on a hinge whose angle depends on the amplitude.
+
+    a (1 - k) + k min(A, a): a rounded or crushing hinge (the three-branch
+    moment-rotation of Doherty et al. 2002, Sect. 3, taken flight by flight)
+    on which a flight released at the instability angle a rocks on a, and
+    smaller flights on an angle closer to a (1 - k): k > 0 the smaller
+    flights rock on a smaller angle (a rounded hinge: the pivot moves inwards
+    as the amplitude falls), k < 0 on a larger one.  k = 0 is the rigid
+    hinge of constant angle a.
+
+    Parameters
+    ----------
+    A : array_like
+        Apex of the flight [rad].
+    a : array_like
+        Instability angle of the hinge [rad].
+    k : array_like
+        Dependence on the amplitude [-], -1 < k < 1.
+    """
+    if not np.any(k):
+        return a
+    return a - k * (a - np.minimum(A, a))
+
+
+def _apex_on_flight_angle(E, a, p, k):
+    """Apex [rad] of a flight of energy E on the angle :func:`flight_angle` of its own apex.
+
+    Solves potential(A, a (1 - k) + k A, p) = E: the linearised balance
+    (Eq. 10's potential) is the quadratic (k - 1/2) A^2 + (1 - k) a A = E / p^2,
+    whose root starts Newton's iteration on the exact one (4 steps: 1e-12
+    of alpha at the amplitudes of the tests).  A wall with the energy of the
+    instability rotation overturns (A = a), as :func:`apex`.
+    """
+    E, a, p, k = np.broadcast_arrays(*(np.asarray(x, float) for x in (E, a, p, k)))
+    c = np.maximum(E, 0.0) / p**2
+    b = (1.0 - k) * a
+    disc = b**2 - 2.0 * (1.0 - 2.0 * k) * c
+    with np.errstate(invalid="ignore", divide="ignore"):
+        A = np.where(disc > 0, 2.0 * c / (b + np.sqrt(np.maximum(disc, 0.0))), a)
+    A = np.clip(np.nan_to_num(A, nan=0.0), 0.0, a)
+    for _ in range(4):
+        u, w = (1.0 - k) * (a - A), a - k * (a - A)
+        f = np.cos(u) - np.cos(w) - c
+        df = (1.0 - k) * np.sin(u) + k * np.sin(w)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            A = np.clip(A - np.where(df > 0, f / df, 0.0), 0.0, a)
+    return np.where(c >= 1.0 - np.cos(a), a, A)
+
+
 def apex(E, a, p):
     """|theta| at which a wall with energy E per unit I_O stops on hinge a [rad] (a if it overturns)."""
     c = np.cos(a) + np.maximum(E, 0.0) / p**2
@@ -83,20 +133,32 @@ def quarter_period(A, a, p):
     return np.sum(_GL_W * 2.0 * Ac / g, axis=-1)
 
 
-def landing_speed(A, a, p, zeta=0.0):
-    """|thetadot| on arrival at theta = 0 from an apex A on hinge a [rad/s], loss 2 zeta p int |thetadot|."""
+def landing_speed(A, a, p, zeta=0.0, k=0.0):
+    """|thetadot| on arrival at theta = 0 from an apex A on hinge a [rad/s], loss 2 zeta p int |thetadot|.
+
+    ``k``: the hinge's angle depends on the amplitude (:func:`flight_angle`).
+    """
+    a = flight_angle(A, a, k)
     E = potential(A, a, p) - 2.0 * zeta * p * (path_integral(A, a, p) if np.any(zeta) else 0.0)
     return np.sqrt(2.0 * np.maximum(E, 0.0))
 
 
-def apex_after(v, a, p, zeta=0.0):
-    """Apex [rad] reached on hinge a by a wall leaving theta = 0 at |thetadot| = v."""
+def apex_after(v, a, p, zeta=0.0, k=0.0):
+    """Apex [rad] reached on hinge a by a wall leaving theta = 0 at |thetadot| = v.
+
+    ``k``: the hinge's angle depends on the amplitude (:func:`flight_angle`),
+    so the apex and the angle of the flight are solved together.
+    """
     E = 0.5 * np.asarray(v, float) ** 2
-    A = apex(E, a, p)
+
+    def rise(E):
+        return _apex_on_flight_angle(E, a, p, k) if np.any(k) else apex(E, a, p)
+
+    A = rise(E)
     if np.any(zeta):
         # the loss of the rise depends on the apex it reaches: a few fixed-point passes
         for _ in range(3):
-            A = apex(E - 2.0 * zeta * p * path_integral(A, a, p), a, p)
+            A = rise(E - 2.0 * zeta * p * path_integral(A, flight_angle(A, a, k), p))
     return A
 
 

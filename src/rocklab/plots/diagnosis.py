@@ -21,8 +21,15 @@ import numpy as np
 import xarray as xr
 
 from rocklab.diagnosis import block_tests, measured_test, records_by_series, simulate_measured
+from rocklab.diagnosis.catalogue import by_name
+from rocklab.diagnosis.causes import restitution_drift
+from rocklab.diagnosis.evidence import flight_time_alpha, in_series_order, observe
+from rocklab.diagnosis.model import impact_speeds, model_params
+from rocklab.io import valid_tests
 from rocklab.lab.motion import read_motion
 from rocklab.physics import restitution
+from rocklab.physics.flight import quarter_period
+from rocklab.physics.wall import overturning_velocity
 
 #: Literature models of panel a: label -> base of :func:`rocklab.diagnosis.model.rocking_model`.
 LITERATURE = {
@@ -81,6 +88,104 @@ def history_figure(test, entry):
     return fig
 
 
+def _impact_law(tests, ext, values, x):
+    """e / e_an of a model at impact speeds x [thetadot_r] on each test's release hinge, shape (tests, x)."""
+    mp = model_params(tests, ext, values)
+    vr = overturning_velocity(mp.alpha, mp.p)[:, None]
+    side = np.array([t.side0 for t in tests], float)[:, None] + 0.0 * x
+    v = x * vr
+    return impact_speeds(v, side, mp)[0] / (v * np.abs(mp.e0)[:, None])
+
+
+def _flight_angle_seen(tests, ext, values, A):
+    """alpha_r / alpha that Housner's closed form gives the model's flight time at apexes A [rad], (tests, A)."""
+    mp = model_params(tests, ext, values)
+    p, alpha = mp.p[:, None], mp.alpha[:, None]
+    side = np.array([t.side0 for t in tests], float)[:, None] + 0.0 * A
+    return flight_time_alpha(A, 2.0 * quarter_period(A, mp.flight(A, side), p), p) / alpha
+
+
+def discovery_figure(tests, entry):
+    """Each form the diagnosis discovered beyond the catalogue against the data and the best listed model.
+
+    One panel per discovered finding of ``entry`` (a series of
+    results/diagnosis.json), in the variables of the family's signature:
+    an instability angle that depends on the amplitude as the angle each
+    flight time gives (Housner's closed form inverted) against the
+    flight's apex; an impact law as e/e_an against the impact speed
+    (per impact), or against the test's place in the series (the
+    per-test medians) for a drift.  The models are read the same way:
+    the discovered family at its fit, and the listed causes the catalogue
+    chose alone (``listed_verdict``, ``listed_params``).
+
+    Parameters
+    ----------
+    tests : list of rocklab.diagnosis.MeasuredTest
+        Tests of the series, in series order (:func:`rocklab.diagnosis.evidence.in_series_order`).
+    entry : dict
+
+    Returns
+    -------
+    matplotlib.figure.Figure or None
+        None when nothing was discovered.
+    """
+    found = [f for f in entry["findings"] if f.get("discovered")]
+    if not found:
+        return None
+    ob = observe(tests)
+    listed, listed_values = entry.get("listed_verdict", []), entry.get("listed_params", {})
+    values = {k: v for f in entry["findings"] for k, v in f["params"].items()}
+    # the stop acts on the free run's end, not on the laws drawn here
+    chosen = [f["effect"] for f in entry["findings"] if f["effect"] != "stop_threshold"]
+    fig, axes = plt.subplots(1, len(found), figsize=(7 * len(found), 4.5), squeeze=False)
+    for ax, f in zip(axes[0], found):
+        fam = by_name(f["effect"]).family
+        pars = ", ".join(f"{k} = {v:.3g}" for k, v in f["params"].items())
+        lab = f"{f['effect']} (discovered): {pars}\n{f['reduces_to']}"
+        lab_listed = f"best listed: {' + '.join(listed) or 'the base model'}"
+        if fam == "instability_angle":
+            x = ob.S.A[:, :-1] / ob.alpha
+            ax.plot(x.ravel(), ob.a_T.ravel(), ".", color="0.3", ms=3, zorder=3, label="measured flights")
+            # up to the largest flight measured: at the instability point the flight time is unbounded
+            A = np.linspace(0.02, np.nanmax(x), 60)[None, :] * ob.alpha
+            for ext, v, style, label in ((chosen, values, "-", lab), (listed, listed_values, "--", lab_listed)):
+                y = _flight_angle_seen(tests, ext, v, A)
+                ax.plot(A[0] / ob.alpha[0, 0], y[0], style, lw=1.5, label=label)
+            ax.set_xlabel("apex of the flight / alpha")
+            ax.set_ylabel("alpha_r / alpha from the flight time (Housner)")
+        elif f["effect"].startswith(restitution_drift.NAME):
+            column = restitution_drift.column_of(f["effect"])
+            n = np.array([t.order if column is None else t.log.get(column, np.nan) for t in tests])
+            med = np.array([np.median(ob.ratio[i][ob.ok[i]]) if ob.ok[i].any() else np.nan for i in range(len(tests))])
+            ax.plot(n, med, "ko", ms=4, label="measured, per test (median over its impacts)")
+            for ext, v, style, label in ((chosen, values, "-", lab), (listed, listed_values, "--", lab_listed)):
+                y = np.median(_impact_law(tests, ext, v, np.array([0.3, 0.5, 0.7])), axis=1)
+                order = np.argsort(n)
+                ax.plot(n[order], y[order], style, lw=1.5, label=label)
+            ax.set_xlabel(
+                "place of the test in the series (0 first, 1 last)"
+                if column is None
+                else f"the test's {column} over the series' range (0 least, 1 largest)"
+            )
+            ax.set_ylabel("e / e_an")
+        else:
+            ax.plot(ob.vr[ob.ok], ob.ratio[ob.ok], ".", color="0.3", ms=3, zorder=3, label="measured impacts")
+            x = np.linspace(0.02, 1.0, 60)
+            for ext, v, style, label in ((chosen, values, "-", lab), (listed, listed_values, "--", lab_listed)):
+                ax.plot(x, _impact_law(tests, ext, v, x)[0], style, lw=1.5, label=label)
+            ax.set_xlabel("impact speed / thetadot_r")
+            ax.set_ylabel("e / e_an")
+        gain = f["heldout_gain"]
+        ax.set_title(
+            f"{entry['key']}: held-out gain {gain['vs_best_listed']:.3g} +- {gain['vs_best_listed_se']:.2g} "
+            "over the best listed model",
+            fontsize=9,
+        )
+        ax.legend(fontsize=7, loc="best")
+    fig.tight_layout()
+    return fig
+
+
 def series_figures(entries, test_paths, motion_paths=()):
     """Figs. 14-15 for the sample test of every series of results/diagnosis.json.
 
@@ -90,7 +195,8 @@ def series_figures(entries, test_paths, motion_paths=()):
         results/diagnosis.json.
     test_paths : sequence of path
         Reduced tests (``results/tests/<test_id>.nc``): at least the sample
-        test of every series.
+        test of every series, and every test of a series with a form
+        discovered beyond the catalogue (:func:`discovery_figure`).
     motion_paths : sequence of path, optional
         Their stored motions (``results/motion/<test_id>.nc``); a test
         without one has its motion extracted again.
@@ -98,7 +204,9 @@ def series_figures(entries, test_paths, motion_paths=()):
     Returns
     -------
     dict
-        Series id -> Figure, plus ``fig14`` and ``fig15``: the largest
+        Series id -> Figure, ``discovered/<series>`` -> the figure of
+        :func:`discovery_figure` where the series has a discovered form,
+        plus ``fig14`` and ``fig15``: the largest
         two-sided and one-sided series, as the paper's figures (a note when
         the campaign has none).
     """
@@ -112,6 +220,8 @@ def series_figures(entries, test_paths, motion_paths=()):
         with xr.open_dataset(paths[test_id]) as ds:
             (recs,) = records_by_series([ds.load()], motion).values()
         out[e["key"]] = history_figure(measured_test(recs[0]), e)
+        if any(f.get("discovered") for f in e["findings"]):
+            out[f"discovered/{e['key']}"] = discovery_figure(_series_tests(e["key"], paths, motions), e)
     for name, boundary in (("fig14", "two-sided"), ("fig15", "one-sided")):
         own = [e for e in series if e["boundary"] == boundary]
         out[name] = out[max(own, key=lambda e: e["n_tests"])["key"]] if own else _empty(boundary)
@@ -182,6 +292,15 @@ def family_figure(result, events):
     ax.legend(fontsize=7, loc="best")
     fig.tight_layout()
     return fig
+
+
+def _series_tests(key, paths, motions):
+    """The valid tests of series ``key`` among ``paths`` (stem -> path) as the diagnosis read them."""
+    datasets = [ds for ds in valid_tests(paths.values()) if ds.attrs.get("series") == key]
+    ids = [ds.attrs["test_id"] for ds in datasets]
+    stored = {t: read_motion(motions[t]) for t in ids if t in motions}
+    (recs,) = records_by_series(datasets, stored).values()
+    return in_series_order([t for t in map(measured_test, recs) if t.n_impacts >= 2])
 
 
 def _empty(boundary):

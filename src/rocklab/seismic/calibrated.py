@@ -32,6 +32,7 @@ Models
 from __future__ import annotations
 
 import json
+import logging
 import re
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -40,6 +41,8 @@ import numpy as np
 import pandas as pd
 
 from rocklab.physics import wall
+
+log = logging.getLogger(__name__)
 
 #: Prefix of the model names of a boundary condition (as the paper's models).
 PREFIX = {"two-sided": "2s", "one-sided": "1s"}
@@ -53,6 +56,17 @@ SHORT = {
     "hinge_asymmetry": "asym",
     "contact_gap": "gap",
     "stop_threshold": "stop",
+}
+
+#: Findings of the families (issue 12) that the maps' wall cannot carry as found: the member of their
+#: family it carries instead (None: none), and why.
+ON_THE_MAPS = {
+    "instability_amplitude": (
+        "instability_angle",
+        "its angle at the instability point, alpha_r = r alpha, the one of the flights that overturn a wall: "
+        "under ground motion a flight's apex, which sets its angle, is unknown when the flight starts",
+    ),
+    "restitution_speed": (None, "an impact law of the diagnosis' closed forms (a hook) that the simulators lack"),
 }
 
 #: Model names of the calibrated walls: ``{2s,1s}-calibrated[-no-<short>]``.
@@ -100,7 +114,9 @@ def boundary_findings(diagnosis, boundary):
     -------
     dict
         cause name -> {parameter: value}; empty when the boundary has no
-        series or none names a cause.
+        series or none names a cause.  A finding of :data:`ON_THE_MAPS` is
+        carried by the member of its family the maps' wall can hold, or left
+        off, with a warning in the log.
     """
     entries = read_diagnosis(diagnosis)
     entry = next((e for e in entries if e.get("scope") == "boundary" and e.get("boundary") == boundary), None)
@@ -113,11 +129,20 @@ def boundary_findings(diagnosis, boundary):
     from rocklab.diagnosis.catalogue import by_name
 
     # a finding also reports statistics of its parameters (spread_log): only the cause's own parameters
-    return {
-        f["effect"]: {q.name: float(f["params"][q.name]) for q in by_name(f["effect"]).params}
-        for f in entry["findings"]
-        if f["effect"] in entry["verdict"]
-    }
+    out = {}
+    for f in entry["findings"]:
+        cause = f["effect"]
+        if cause not in entry["verdict"]:
+            continue
+        if cause in ON_THE_MAPS:
+            member, why = ON_THE_MAPS[cause]
+            if member is None:
+                log.warning("%s walls: %s is left off the maps' wall: %s", boundary, cause, why)
+                continue
+            log.warning("%s walls: %s is carried on the maps' wall by %s, %s", boundary, cause, member, why)
+            cause = member
+        out[cause] = {q.name: float(f["params"][q.name]) for q in by_name(cause).params}
+    return out
 
 
 def model_names(diagnosis):

@@ -56,7 +56,7 @@ One-sided rocking and the gap
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -110,6 +110,13 @@ class RockingModel:
     form : {"exact", "linear"}
     transverse_impact : ImpactLaw, optional
         Law of the impact on the transverse walls (gap > 0); default Eqs. 12-13.
+    hinge_rounding : float
+        k of a rocking angle that depends on the amplitude (a rounded or
+        crushing hinge, :func:`rocklab.physics.flight.flight_angle`): each
+        free flight of apex A rocks on alpha_s (1 - k) + k A, the fall from
+        the release on that of the release rotation; -1 < k < 1, 0 the rigid
+        hinge.  Free rocking only (under ground motion a flight's apex is
+        not known when it starts), not in the gap of a one-sided wall.
     """
 
     alpha: float
@@ -122,6 +129,7 @@ class RockingModel:
     gap: float = 0.0
     form: str = "exact"
     transverse_impact: _impact.ImpactLaw | None = field(default=None)
+    hinge_rounding: float = 0.0
 
     def __post_init__(self):
         if self.boundary not in ("two-sided", "one-sided"):
@@ -130,6 +138,8 @@ class RockingModel:
             raise ValueError(f"form must be 'exact' or 'linear', not {self.form!r}")
         if self.gap < 0 or (self.gap > 0 and self.boundary != "one-sided"):
             raise ValueError("gap must be >= 0 and is only meaningful for one-sided rocking")
+        if not -1.0 < self.hinge_rounding < 1.0:
+            raise ValueError(f"hinge_rounding must be in (-1, 1), not {self.hinge_rounding!r}")
 
     @classmethod
     def from_wall(cls, height_m, thickness_m, **kw):
@@ -208,8 +218,36 @@ class RockingModel:
     def reachable_sides(self):
         return (1,) if self.one_sided else (1, -1)
 
+    def flight_model(self, theta, thetadot, side):
+        """The model of the free flight that starts at (theta, thetadot) on hinge ``side``.
+
+        Itself, unless the rocking angle depends on the amplitude
+        (``hinge_rounding``): then the rigid model on the angle of this
+        flight, from its apex (:func:`rocklab.physics.flight.apex_after` from
+        theta = 0, the release rotation otherwise).
+        """
+        if not self.hinge_rounding or (self.one_sided and side < 0):
+            return self
+        a, k = self.alpha_side(side), self.hinge_rounding
+        A = flight.apex_after(abs(thetadot), a, self.p, self.flight_damping, k) if theta == 0 else abs(theta)
+        angle = float(flight.flight_angle(A, a, k))
+        pos, neg = (angle, self.alpha_minus) if side > 0 else (self.alpha_pos, angle)
+        return replace(self, alpha_rock=pos, alpha_neg=neg, hinge_rounding=0.0)
+
     def numba_params(self, overturn=OVERTURN, rest_tol=REST_TOL, substeps=1):
-        """Flat parameter vector of the numba engines (see ``_P_*`` indices)."""
+        """Flat parameter vector of the numba engines (see ``_P_*`` indices).
+
+        Raises
+        ------
+        NotImplementedError
+            For a rocking angle that depends on the amplitude (``hinge_rounding``):
+            the engines integrate ground motion, where a flight's apex is not known when it starts.
+        """
+        if self.hinge_rounding:
+            raise NotImplementedError(
+                f"a rocking angle that depends on the amplitude (hinge_rounding = {self.hinge_rounding:g}) is "
+                "defined flight by flight in free rocking; the engines integrate ground motion"
+            )
         return np.array(
             [
                 self.alpha_pos,

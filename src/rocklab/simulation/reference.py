@@ -103,6 +103,11 @@ def _reference(model, rec, theta0, thetadot0, t_end, fs, overturn, rest_tol, rto
     rest_at = 0.0
     overturned, t_ov, t_rest = False, None, (0.0 if resting else None)
     t_hard = t_end + tail
+    if model.hinge_rounding and not rec.free:
+        raise ValueError(
+            "a rocking angle that depends on the amplitude (hinge_rounding) is defined flight by flight in "
+            "free rocking: under ground motion a flight's apex is not known when it starts"
+        )
 
     def fill(ta, tb, sol=None, value=0.0):
         sel = (t_out >= ta) & (t_out <= tb)
@@ -134,7 +139,7 @@ def _reference(model, rec, theta0, thetadot0, t_end, fs, overturn, rest_tol, rto
         # one straight piece of the record at a time: the solution is smooth
         # inside it, so the error control never meets the record's kinks
         t_seg, a0, slope, tk = rec.piece(t, t_hard)
-        rhs = model.equation_of_motion(s, a0, slope, tk)
+        rhs = model.flight_model(th, thd, s).equation_of_motion(s, a0, slope, tk)
 
         # a segment that starts on the edge (after an impact, or at an onset)
         # must not find that edge again at its first instant: when the first

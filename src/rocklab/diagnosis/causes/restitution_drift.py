@@ -4,11 +4,17 @@ e = c e_an exp(d (n - 1/2)), n the test's place in the series from 0
 (first) to 1 (last): hinge wear, or mortar debris gathering between tests
 (the paper blames debris for the scatter of theta0/alpha).  Its member
 d = 0 is the listed scale (:mod:`rocklab.diagnosis.causes.restitution_scale`).
+The place may also be that of a column of the test log (a date, a time, a
+value the operator wrote: :func:`along_log`): one family per column,
+``restitution_drift[<column>]``, n the test's value between the series'
+least (0) and largest (1), so that the engine chooses what the drift
+follows as it chooses between causes.
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
+from functools import lru_cache
 
 import numpy as np
 from scipy import stats
@@ -17,47 +23,75 @@ from rocklab.diagnosis.causes import Cause, restitution_scale
 from rocklab.diagnosis.engine import Param
 
 D = Param("drift", -1.0, 1.0, 0.0, practical=0.005)
+NAME = "restitution_drift"
 
 
-def apply(mp, v):
-    factor = v["c"] * np.exp(v["drift"] * (mp.order - 0.5))
-    return replace(mp, c_pos=factor * mp.c_pos, c_neg=factor * mp.c_neg)
+def column_of(name):
+    """The test log's column a drift named ``name`` follows (None: the test order, or no drift)."""
+    if name.startswith(f"{NAME}[") and name.endswith("]"):
+        return name[len(NAME) + 1 : -1]
+    return None
 
 
-def signature(ob):
-    """The per-test median of the measured e/e_an against the test's place in the series."""
-    med = np.array([np.median(ob.ratio[i][ob.ok[i]]) if ob.ok[i].any() else np.nan for i in range(len(ob.tests))])
-    order = ob.S.order
-    ok = np.isfinite(med)
-    if ok.sum() < 4 or np.ptp(order[ok]) == 0:
-        return None
-    fit = stats.linregress(order[ok], np.log(med[ok]))
-    return {
-        "value": float(fit.slope),
-        "supports": bool(fit.pvalue < 0.01 and abs(fit.slope) > D.practical),
-        "text": f"log of the per-test median e/e_an against the test's place in the series: slope "
-        f"{fit.slope:+.4f} over the series (p = {fit.pvalue:.2g}, {ok.sum()} tests)",
-    }
+def _place(mp_or_tests, column):
+    """n of each test: its place in the series, or in the range of a column of the test log."""
+    if isinstance(mp_or_tests, list):
+        return np.array([t.order if column is None else t.log[column] for t in mp_or_tests], float)
+    # a wall without the column (the maps' wall) stands for the middle of the series, as for the order
+    return mp_or_tests.order if column is None else mp_or_tests.extra.get(f"log:{column}", 0.5 + 0 * mp_or_tests.order)
 
 
-def starts(sig):
-    return {"drift": sig.get("restitution_drift", {}).get("value", 0.0)}
+def _cause(column, others=()):
+    def apply(mp, v):
+        factor = v["c"] * np.exp(v["drift"] * (_place(mp, column) - 0.5))
+        return replace(mp, c_pos=factor * mp.c_pos, c_neg=factor * mp.c_neg)
+
+    what = "the test's place in the series" if column is None else f"the test's value of {column} in the test log"
+
+    def signature(ob):
+        """The per-test median of the measured e/e_an against n."""
+        med = np.array([np.median(ob.ratio[i][ob.ok[i]]) if ob.ok[i].any() else np.nan for i in range(len(ob.tests))])
+        order = _place(ob.tests, column)
+        ok = np.isfinite(med)
+        if ok.sum() < 4 or np.ptp(order[ok]) == 0:
+            return None
+        fit = stats.linregress(order[ok], np.log(med[ok]))
+        return {
+            "value": float(fit.slope),
+            "supports": bool(fit.pvalue < 0.01 and abs(fit.slope) > D.practical),
+            "text": f"log of the per-test median e/e_an against {what}: slope "
+            f"{fit.slope:+.4f} over the series (p = {fit.pvalue:.2g}, {ok.sum()} tests)",
+        }
+
+    name = NAME if column is None else f"{NAME}[{column}]"
+
+    def starts(sig):
+        return {"drift": sig.get(name, {}).get("value", 0.0)} if column is None else {}
+
+    def closed_form(values, ci):
+        if CAUSE.holds(ci, "drift", 0.0):
+            return "restitution_scale: e = c e_an, no drift"
+        return "no closed form of the library"
+
+    n = f"n the test's {column} (0 to 1 over the series)" if column else "n the test's place in the series (0 to 1)"
+    return Cause(
+        name=name,
+        law=f"e = c e_an exp(d (n - 1/2)), {n}",
+        params=(restitution_scale.C, D),
+        apply=apply,
+        signature=signature,
+        starts=starts,
+        replaces=("restitution_scale", *(o for o in others if o != name)),
+        family="restitution_scale",
+        closed_form=closed_form,
+    )
 
 
-def closed_form(values, ci):
-    if CAUSE.holds(ci, "drift", 0.0):
-        return "restitution_scale: e = c e_an, no drift"
-    return "no closed form of the library"
+@lru_cache(maxsize=64)
+def along_log(columns):
+    """The drifts along each column of the test log ``columns`` (a tuple), each replacing the other drifts."""
+    names = (NAME, *(f"{NAME}[{c}]" for c in columns))
+    return tuple(_cause(c, names) for c in columns)
 
 
-CAUSE = Cause(
-    name="restitution_drift",
-    law="e = c e_an exp(d (n - 1/2)), n the test's place in the series (0 to 1)",
-    params=(restitution_scale.C, D),
-    apply=apply,
-    signature=signature,
-    starts=starts,
-    replaces=("restitution_scale",),
-    family="restitution_scale",
-    closed_form=closed_form,
-)
+CAUSE = _cause(None)

@@ -1,0 +1,71 @@
+"""An instability angle that depends on the amplitude (a family of the instability angle, issue 12).
+
+A rounded or crushing hinge: the flight of apex A rocks on
+a(A) = alpha_r (1 - k) + k A, alpha_r = r alpha the angle of the flights
+released at it (:func:`rocklab.physics.flight.flight_angle`; the
+three-branch moment-rotation of Doherty et al. 2002 that improves the
+paper's match, Sect. 3, taken flight by flight).  Its member k = 0 is the
+listed constant angle (:mod:`rocklab.diagnosis.causes.instability_angle`),
+which does not fit the flight times at all amplitudes when k is not 0.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from rocklab.diagnosis.causes import Cause, instability_angle
+from rocklab.diagnosis.engine import Param, within_slope
+
+K = Param("rounding", -0.6, 0.8, 0.0, practical=0.02)
+
+
+def apply(mp, v):
+    r = v["alpha_r_over_alpha"]
+    return replace(mp, a_pos=r * mp.a_pos, a_neg=r * mp.a_neg, rounding=v["rounding"] * np.ones_like(mp.alpha))
+
+
+def signature(ob):
+    """The trend of the flight times' angle (Housner inverted) with the flight's amplitude, within tests.
+
+    a(A) / alpha = r (1 - k) + k A / alpha: the slope of the angle over
+    alpha that each flight time gives (:attr:`rocklab.diagnosis.evidence.Observed.a_T`)
+    against the apex over alpha is k.
+    """
+    x = ob.S.A[:, :-1] / ob.alpha
+    ok = np.isfinite(ob.a_T) & np.isfinite(x)
+    slope, p, span = within_slope(np.where(ok, ob.a_T, 0.0), x, ok)
+    if not np.isfinite(p):
+        return None
+    return {
+        "value": float(slope),
+        "supports": bool(p < 0.01 and abs(slope) > K.practical),
+        "text": f"the flight times' alpha_r/alpha against the flight's apex over alpha: slope {slope:+.3f} "
+        f"within tests (p = {p:.2g}, {int(ok.sum())} flights over {span:.2f} of alpha)",
+    }
+
+
+def starts(sig):
+    return {"rounding": sig.get("instability_amplitude", {}).get("value", K.null)}
+
+
+def closed_form(values, ci):
+    if not CAUSE.holds(ci, "rounding", 0.0):
+        return "no closed form of the library"
+    if CAUSE.holds(ci, "alpha_r_over_alpha", 1.0):
+        return "the rigid hinge: alpha_r = alpha"
+    return f"instability_angle: a constant alpha_r = {values['alpha_r_over_alpha']:.3f} alpha"
+
+
+CAUSE = Cause(
+    name="instability_amplitude",
+    law="the flight of apex A rocks on alpha_r (1 - k) + k A, alpha_r = r alpha (a rounded or crushing hinge)",
+    params=(instability_angle.R, K),
+    apply=apply,
+    signature=signature,
+    starts=starts,
+    replaces=("instability_angle",),
+    family="instability_angle",
+    closed_form=closed_form,
+)
