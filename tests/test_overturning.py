@@ -429,6 +429,21 @@ def test_calibrated_models_need_a_diagnosis_that_names_them(tmp_path):
         named_model("2s-calibrated", diagnosis=bad)
 
 
+def test_a_drift_along_a_column_of_the_test_log_is_mapped_at_the_middle_of_the_series():
+    from rocklab.seismic import calibrated
+
+    diagnosis = _diagnosis()
+    two = diagnosis[1]
+    two["verdict"].append("restitution_drift[temperature_C]")
+    two["findings"].append({"effect": "restitution_drift[temperature_C]", "params": {"c": 0.9, "drift": 0.2}})
+    names = calibrated.model_names(diagnosis)
+    assert "2s-calibrated-no-drift" in names
+    full, off = (named_model(n, diagnosis=diagnosis) for n in ("2s-calibrated", "2s-calibrated-no-drift"))
+    # the middle of the series: the drift's factor is c exp(0) = c
+    assert full.numba_law()[0][0] == pytest.approx(0.9 * off.numba_law()[0][0])
+    assert "restitution_drift[temperature_C] switched off" in calibrated.describe(diagnosis, "2s-calibrated-no-drift")
+
+
 @pytest.mark.parametrize("name", ["2s-calibrated", "1s-calibrated", "1s-calibrated-no-gap"])
 def test_calibrated_maps_agree_with_the_event_driven_reference(pacoima, name):
     """3 x 3 cells of the 201 grid (sticking, alpha_r, amplitude law, gap): a

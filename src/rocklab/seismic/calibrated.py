@@ -56,7 +56,16 @@ SHORT = {
     "hinge_asymmetry": "asym",
     "contact_gap": "gap",
     "stop_threshold": "stop",
+    "restitution_housner_loss": "hloss",
+    "restitution_drift": "drift",
 }
+
+
+def short_name(cause):
+    """The short name of a finding in the model names: a drift along a column of the test log
+    (``restitution_drift[<column>]``) is a drift."""
+    return SHORT[cause.split("[", 1)[0]]
+
 
 #: Findings of the families (issue 12) that the maps' wall cannot carry as found: the member of their
 #: family it carries instead (None: none), and why.
@@ -153,7 +162,7 @@ def model_names(diagnosis):
         found = boundary_findings(diagnosis, boundary)
         if found:
             names.append(f"{prefix}-calibrated")
-            names += [f"{prefix}-calibrated-no-{SHORT[c]}" for c in found]
+            names += [f"{prefix}-calibrated-no-{short_name(c)}" for c in found]
     return names
 
 
@@ -171,6 +180,17 @@ def parse_name(name):
         raise KeyError(f"{name!r} is no calibrated model (<2s|1s>-calibrated[-no-<{'|'.join(SHORT.values())}>])")
     boundary = {v: k for k, v in PREFIX.items()}[m.group(1)]
     return boundary, (short_to_cause[m.group(2)] if m.group(2) else None)
+
+
+def _switched_off(found, off, name, boundary):
+    """The finding of ``found`` that model ``name`` switches off (``off`` from :func:`parse_name`;
+    a drift along any column of the test log is a drift), None for the full wall."""
+    if off is None:
+        return None
+    match = [c for c in found if short_name(c) == SHORT[off]]
+    if not match:
+        raise KeyError(f"{name}: the diagnosis does not name {off} for {boundary} walls ({', '.join(found)})")
+    return match[0]
 
 
 def is_calibrated(name):
@@ -211,8 +231,7 @@ def calibrated_model(diagnosis, name, alpha, R, form="linear"):
     found = boundary_findings(diagnosis, boundary)
     if not found:
         raise ValueError(f"{name}: the diagnosis names no cause for {boundary} walls, nothing to calibrate")
-    if off is not None and off not in found:
-        raise KeyError(f"{name}: the diagnosis does not name {off} for {boundary} walls ({', '.join(found)})")
+    off = _switched_off(found, off, name, boundary)
     ext = [c for c in found if c != off]
     values = {k: v for c in ext for k, v in found[c].items()}
     model = rocking_model(MapWall(float(alpha), float(wall.frequency_parameter(R)), boundary), ext, values)
@@ -223,6 +242,7 @@ def describe(diagnosis, name):
     """One line on what a calibrated model holds, with the pooled parameters."""
     boundary, off = parse_name(name)
     found = boundary_findings(diagnosis, boundary)
+    off = _switched_off(found, off, name, boundary)
     parts = [f"{c} (" + ", ".join(f"{k} = {v:.3g}" for k, v in p.items()) + ")" for c, p in found.items() if c != off]
     text = f"{boundary}, calibrated on the campaign's diagnosis: " + ("; ".join(parts) or "no finding")
     return text + (f"; {off} switched off" if off else "")
@@ -294,7 +314,7 @@ def calibrated_table(summary, diagnosis):
         if not found:
             continue
         full, base = f"{prefix}-calibrated", E_ALONE[boundary]
-        models = [base, full] + [f"{full}-no-{SHORT[c]}" for c in found]
+        models = [base, full] + [f"{full}-no-{short_name(c)}" for c in found]
         missing = [m for m in models if m not in present]
         if missing:
             raise KeyError(f"the maps summary lacks the models {', '.join(missing)}")
