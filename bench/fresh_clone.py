@@ -50,13 +50,14 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="results/bench")
     ap.add_argument("--cores", type=int, default=2)
+    ap.add_argument("--keep", type=Path, help="clone into this new folder and keep it (its results/ for make docs)")
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
     load = os.getloadavg()
     with tempfile.TemporaryDirectory(prefix="rocklab-clone-") as tmp:
-        clone = Path(tmp) / "rocklab"
+        clone = args.keep or Path(tmp) / "rocklab"
         subprocess.run(["git", "clone", "--quiet", str(ROOT), str(clone)], check=True)
         make = ["make", f"CORES={args.cores}"]
         install_s, install_cpu = _timed([*make, "venv"], clone, out / "fresh_clone_install.log")
