@@ -71,7 +71,7 @@ def test_limestone_blocks():
 
 
 @pytest.mark.parametrize(
-    "loss_fraction, loss_constant, noise", [(0.6, 0.02, 0.02), (0.6, 0.02, 0.01), (0.8, 0.01, 0.01)]
+    "loss_fraction, loss_constant, noise", [(0.6, 0.02, 0.02), (0.6, 0.02, 0.01), (0.8, 0.01, 0.02), (0.8, 0.01, 0.01)]
 )
 def test_an_impact_law_affine_in_housners_loss_is_discovered(loss_fraction, loss_constant, noise):
     ev = synthetic_events(
