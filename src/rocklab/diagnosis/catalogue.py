@@ -14,6 +14,7 @@ from __future__ import annotations
 from rocklab.diagnosis.causes import (
     contact_gap,
     flight_damping,
+    flight_loss,
     hinge_asymmetry,
     instability_angle,
     restitution_amplitude,
@@ -37,6 +38,7 @@ CAUSES = [
 FAMILIES = [
     restitution_housner_loss.CAUSE,
     restitution_drift.CAUSE,
+    flight_loss.CAUSE,
 ]
 
 

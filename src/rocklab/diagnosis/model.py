@@ -59,8 +59,20 @@ class ModelParams:
     gap: np.ndarray  # [rad]
     stop: np.ndarray  # landing speed [thetadot_r] below which the wall stops dead (0: never)
     order: np.ndarray  # the test's place in its series, 0 (first) to 1 (last)
+    mu: np.ndarray = None  # dry friction at the hinge [-] (rocklab.physics.flight.loss_deceleration)
+    kappa: np.ndarray = None  # quadratic drag in flight [1/rad]
     extra: dict = field(default_factory=dict)
     impact_hooks: tuple = ()
+
+    def __post_init__(self):
+        for name in ("mu", "kappa"):
+            if getattr(self, name) is None:
+                setattr(self, name, np.zeros_like(self.zeta))
+
+    def flight_loss(self, like=None):
+        """zeta, mu, kappa of the losses in flight (:func:`rocklab.physics.flight.loss_deceleration`),
+        per test, broadcast against ``like``: the keywords of the flight's closed forms."""
+        return {k: per_test(getattr(self, k), like) for k in ("zeta", "mu", "kappa")}
 
     def hinge(self, side):
         """Rocking angle of hinge ``side`` (array of +1 / -1) [rad]."""
@@ -199,7 +211,7 @@ def next_flight(v, side, mp: ModelParams):
     v_out, d, tau, _, _ = impact_speeds(v, side, mp)
     side = np.where(mp.one_sided, side, -side)
     a = mp.hinge(side)
-    return apex_after(v_out, a, mp.p, mp.zeta), side, a, d, tau
+    return apex_after(v_out, a, mp.p, **mp.flight_loss()), side, a, d, tau
 
 
 def release(S, mp: ModelParams):
@@ -215,7 +227,7 @@ def release(S, mp: ModelParams):
     """
     a0 = mp.hinge(S.side0)
     th = release_rotation(S.theta0, a0)
-    v = np.sqrt(landing_speed(th, a0, mp.p, mp.zeta) ** 2 + S.v0**2)
+    v = np.sqrt(landing_speed(th, a0, mp.p, **mp.flight_loss()) ** 2 + S.v0**2)
     saved = quarter_period_linear(th / a0) - quarter_period_linear(th / a0, S.v0 / (mp.p * a0))
     return v, quarter_period(th, a0, mp.p) - saved / mp.p
 
@@ -238,7 +250,7 @@ def free_run(S, mp: ModelParams, n_max=600):
     A = a = None  # apex and hinge of the previous flight, from the first impact on
     for k in range(n_max):
         if k:
-            v = landing_speed(A, a, mp.p, mp.zeta)
+            v = landing_speed(A, a, mp.p, **mp.flight_loss())
         A, side, a, d, tau = next_flight(v, side, mp)
         out["t_before"][:, k] = t
         out["t_after"][:, k] = t + tau
@@ -293,6 +305,8 @@ def rocking_model(test, ext=(), values=None, base="analytic") -> RockingModel:
         alpha_rock=float(mp.a_pos),
         alpha_neg=float(mp.a_neg),
         flight_damping=float(mp.zeta),
+        hinge_friction=float(mp.mu),
+        flight_drag=float(mp.kappa),
         gap=float(mp.gap),
         transverse_impact=transverse,
     )

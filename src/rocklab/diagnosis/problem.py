@@ -43,6 +43,15 @@ class WallProblem(Problem):
         mp = model_params(sub.tests, ext, values)
         return [st for cause in self.after_selection for st in cause.unexplained(sub, mp)]
 
+    def form_structure(self, ext):
+        """Where a family's signature says its listed member in ``ext`` has the wrong form
+        (``against_member``: the flight-loss curve of :mod:`rocklab.diagnosis.causes.flight_loss`)."""
+        return [
+            self.signature[c.name]["against_member"]
+            for c in self.causes
+            if c.family in ext and self.signature.get(c.name, {}).get("against_member")
+        ]
+
     @property
     def signature(self):
         """The causes' signatures in these tests (:func:`rocklab.diagnosis.catalogue.signatures`)."""
