@@ -159,8 +159,13 @@ def test_a_loss_in_flight_of_another_form_is_discovered(diagnosed, name):
     _, _, truth, member = SCENARIOS[name]
     e = diagnosed[name]
     assert "flight_loss" in e["verdict"] and not e["unexplained"], (e["verdict"], e["residual_structure"])
-    # the listed causes alone took it for the viscous loss
-    assert "flight_damping" in e["listed_verdict"] and "flight_loss" not in e["listed_verdict"]
+    # the listed causes alone took it for the viscous loss, or missed it (the filter hides a short
+    # flight's loss in the measured e, and a median over all flights sees none)
+    assert "flight_loss" not in e["listed_verdict"] and set(e["listed_verdict"]) <= {
+        "flight_damping",
+        "restitution_scale",
+        "restitution_amplitude",
+    }
     f = next(f for f in e["findings"] if f["effect"] == "flight_loss")
     assert f["discovered"] and f["reduces_to"].startswith(member)
     for k, x in truth.items():
@@ -181,3 +186,13 @@ def test_a_viscous_loss_is_still_the_listed_flight_damping():
     e = D.diagnose_series(recs, key="visc", n_boot=10, n_history=0)
     assert e["verdict"] == ["flight_damping"] and not e["unexplained"] and "listed_verdict" not in e
     assert not e["residual_structure"] and "dry friction" in e["signatures"]["flight_loss"]
+
+
+def test_the_figure_of_a_discovered_flight_loss(diagnosed):
+    from rocklab.plots.diagnosis import family_curve_figure
+
+    name = "friction-0.02-noise-0.002"
+    f = next(f for f in diagnosed[name]["findings"] if f["effect"] == "flight_loss")
+    fig = family_curve_figure(f, name)
+    labels = [line.get_label() for line in fig.axes[0].get_lines()]
+    assert len(labels) == 3 and "dry friction" in labels[2] and labels[1].startswith("best listed member")

@@ -44,13 +44,17 @@ class WallProblem(Problem):
         return [st for cause in self.after_selection for st in cause.unexplained(sub, mp)]
 
     def form_structure(self, ext):
-        """Where a family's signature says its listed member in ``ext`` has the wrong form
-        (``against_member``: the flight-loss curve of :mod:`rocklab.diagnosis.causes.flight_loss`)."""
-        return [
-            self.signature[c.name]["against_member"]
-            for c in self.causes
-            if c.family in ext and self.signature.get(c.name, {}).get("against_member")
-        ]
+        """What a family's signature says the model ``ext`` misses: its listed member of the wrong
+        form (``against_member``), or no member at all (``unmodelled``); the flight-loss curve of
+        :mod:`rocklab.diagnosis.causes.flight_loss`."""
+        out = []
+        for c in self.causes:
+            sig = self.signature.get(c.name) or {}
+            if c.family in ext and sig.get("against_member"):
+                out.append(sig["against_member"])
+            elif c.family and not {c.name, c.family} & set(ext) and sig.get("unmodelled"):
+                out.append(sig["unmodelled"])
+        return out
 
     @property
     def signature(self):

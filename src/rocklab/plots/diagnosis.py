@@ -98,7 +98,8 @@ def series_figures(entries, test_paths, motion_paths=()):
     Returns
     -------
     dict
-        Series id -> Figure, plus ``fig14`` and ``fig15``: the largest
+        Series id -> Figure, ``<series>-<family>`` -> the curve of a family
+        discovered in it (:func:`family_curve_figure`), plus ``fig14`` and ``fig15``: the largest
         two-sided and one-sided series, as the paper's figures (a note when
         the campaign has none).
     """
@@ -112,10 +113,56 @@ def series_figures(entries, test_paths, motion_paths=()):
         with xr.open_dataset(paths[test_id]) as ds:
             (recs,) = records_by_series([ds.load()], motion).values()
         out[e["key"]] = history_figure(measured_test(recs[0]), e)
+        for f in e["findings"]:
+            if "curve" in f:
+                out[f"{e['key']}-{f['effect']}"] = family_curve_figure(f, e["key"])
     for name, boundary in (("fig14", "two-sided"), ("fig15", "one-sided")):
         own = [e for e in series if e["boundary"] == boundary]
         out[name] = out[max(own, key=lambda e: e["n_tests"])["key"]] if own else _empty(boundary)
     return out
+
+
+def family_curve_figure(finding, key):
+    """A discovered family's curve against the data and the catalogue's best member.
+
+    For the losses in flight (:mod:`rocklab.diagnosis.causes.flight_loss`):
+    the speed each long flight loses between take-off and the next impact,
+    relative to its take-off speed, against that speed over thetadot_r,
+    with the flight-loss curve of the family fitted and of the listed
+    viscous loss fitted by the catalogue alone.
+
+    Parameters
+    ----------
+    finding : dict
+        A finding of results/diagnosis.json with a ``curve``
+        (:attr:`rocklab.diagnosis.causes.Cause.curve`).
+    key : str
+        Its series.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    c = finding["curve"]
+    fig, ax = plt.subplots(figsize=(8, 5))
+    ax.plot(c["measured"]["x"], c["measured"]["y"], "o", color="0.5", ms=3, label=c["measured"]["label"])
+    ax.plot(c["best_listed"]["x"], c["best_listed"]["y"], "--", color="C1", label=c["best_listed"]["label"])
+    gain = finding["heldout_gain"]
+    ax.plot(
+        c["family"]["x"],
+        c["family"]["y"],
+        color="C3",
+        lw=1.5,
+        label=f"{c['family']['label']}, discovered: {finding['reduces_to']}\n"
+        f"held-out gain {gain['vs_best_listed']:.3g} +- {gain['vs_best_listed_se']:.2g} over the listed causes, "
+        f"{gain['vs_base']:.3g} +- {gain['vs_base_se']:.2g} over the base model",
+    )
+    ax.set_xlabel(c["x"])
+    ax.set_ylabel(c["y"])
+    ax.set_title(f"Series {key}: {finding['effect']}, the curve found against the data")
+    ax.legend(fontsize=7, loc="best")
+    fig.tight_layout()
+    return fig
 
 
 def family_figure(result, events):
