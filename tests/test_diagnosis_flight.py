@@ -8,6 +8,8 @@ series that hide dry friction or drag, where the listed viscous loss has the
 wrong form.
 """
 
+import json
+
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -196,3 +198,17 @@ def test_the_figure_of_a_discovered_flight_loss(diagnosed):
     fig = family_curve_figure(f, name)
     labels = [line.get_label() for line in fig.axes[0].get_lines()]
     assert len(labels) == 3 and "dry friction" in labels[2] and labels[1].startswith("best listed member")
+    assert f"Discovered beyond the catalogue: flight_loss, {f['family']}" in D.diagnosis_markdown([diagnosed[name]])
+    json.dumps(diagnosed[name])  # the curve is plain lists
+
+
+def test_the_closed_form_a_family_reduces_to():
+    from rocklab.diagnosis.causes.flight_loss import CAUSE
+
+    v = {"zeta": 0.0, "mu_over_alpha": 0.01, "kappa_alpha": 0.0}
+    ci = {"zeta": (0.0, 1e-5), "mu_over_alpha": (0.009, 0.011), "kappa_alpha": (0.0, 2e-4)}
+    assert CAUSE.closed_form(v, ci).startswith("dry friction")
+    ci["zeta"] = (0.003, 0.005)
+    assert CAUSE.closed_form(v, ci) == "no closed form of the library"  # a mixture
+    ci = {"zeta": (0.0, 0.01), "mu_over_alpha": (0.0, 0.01), "kappa_alpha": (0.0, 1e-4)}
+    assert CAUSE.closed_form(v, ci).startswith("undecided between flight_damping")
