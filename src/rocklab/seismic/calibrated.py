@@ -53,6 +53,7 @@ SHORT = {
     "restitution_amplitude": "eamp",
     "instability_angle": "alpha",
     "flight_damping": "zeta",
+    "flight_loss": "floss",
     "hinge_asymmetry": "asym",
     "contact_gap": "gap",
     "stop_threshold": "stop",
@@ -223,7 +224,9 @@ def calibrated_model(diagnosis, name, alpha, R, form="linear"):
         A name that is no calibrated model, or whose finding the diagnosis
         does not name.
     ValueError
-        A diagnosis whose boundary names no cause.
+        A diagnosis whose boundary names no cause, or names dry friction or
+        drag in flight (:mod:`rocklab.diagnosis.causes.flight_loss`), which
+        the numba engine of the maps does not simulate.
     """
     from rocklab.diagnosis.model import rocking_model
 
@@ -234,6 +237,12 @@ def calibrated_model(diagnosis, name, alpha, R, form="linear"):
     off = _switched_off(found, off, name, boundary)
     ext = [c for c in found if c != off]
     values = {k: v for c in ext for k, v in found[c].items()}
+    if values.get("mu_over_alpha", 0.0) or values.get("kappa_alpha", 0.0):
+        raise ValueError(
+            f"{name}: the diagnosis names dry friction or drag in flight for {boundary} walls (flight_loss: "
+            f"mu/alpha = {values.get('mu_over_alpha', 0.0):.3g}, kappa alpha = {values.get('kappa_alpha', 0.0):.3g}), "
+            "which the maps' numba engine does not simulate"
+        )
     model = rocking_model(MapWall(float(alpha), float(wall.frequency_parameter(R)), boundary), ext, values)
     return replace(model, form=form)
 
