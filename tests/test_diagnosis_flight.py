@@ -95,22 +95,41 @@ def test_the_losses_by_their_dependence_on_the_speed():
         assert np.log(loss[1] / loss[0]) / np.log(v[1] / v[0]) == pytest.approx(n, abs=0.05), kw
 
 
-def test_the_engine_and_the_maps_refuse_dry_friction_and_drag():
+def test_the_engine_refuses_dry_friction_and_drag_the_maps_carry_the_viscous_member(caplog):
+    from rocklab.seismic.overturning import overturning_map
+
     with pytest.raises(NotImplementedError, match="no dry friction or drag in flight"):
         RockingModel(alpha=ALPHA, p=P, hinge_friction=0.001).numba_params()
+    loss = {"zeta": 0.004, "mu_over_alpha": 0.01, "kappa_alpha": 0.02}
     entry = {
         "scope": "boundary",
         "boundary": "two-sided",
-        "verdict": ["flight_loss"],
-        "findings": [{"effect": "flight_loss", "params": {"zeta": 0.0, "mu_over_alpha": 0.01, "kappa_alpha": 0.0}}],
+        "verdict": ["flight_loss", "restitution_scale"],
+        "findings": [{"effect": "flight_loss", "params": loss}, {"effect": "restitution_scale", "params": {"c": 0.95}}],
     }
-    assert calibrated.model_names([entry]) == ["2s-calibrated", "2s-calibrated-no-floss"]
-    with pytest.raises(ValueError, match="dry friction or drag in flight.*numba engine"):
-        calibrated.calibrated_model([entry], "2s-calibrated", 0.1, 1.0)
-    # the family reduced to its viscous member runs on the maps' engine
-    entry["findings"][0]["params"] = {"zeta": 0.01, "mu_over_alpha": 0.0, "kappa_alpha": 0.0}
+    # the maps' wall holds the family's viscous member, and the log says what it loses
+    with caplog.at_level("WARNING", logger="rocklab.seismic.calibrated"):
+        assert calibrated.model_names([entry]) == ["2s-calibrated", "2s-calibrated-no-zeta", "2s-calibrated-no-escale"]
+    assert "flight_loss is carried on the maps' wall by flight_damping" in caplog.text
+    assert "mu_over_alpha = 0.01" in caplog.text and "kappa_alpha = 0.02" in caplog.text
     model = calibrated.calibrated_model([entry], "2s-calibrated", 0.1, 1.0)
-    assert model.flight_damping == 0.01 and model.numba_params()[3] == 0.01
+    assert (model.flight_damping, model.hinge_friction, model.flight_drag) == (0.004, 0.0, 0.0)
+    assert model.numba_params()[3] == 0.004
+    assert calibrated.calibrated_model([entry], "2s-calibrated-no-zeta", 0.1, 1.0).flight_damping == 0.0
+    # the maps job runs on it (its numba engine, every model the diagnosis names)
+    t = np.arange(0.0, 2.0, 0.01)
+    ag = np.where(t < 0.5, 3.0 * np.sin(2 * np.pi * t), 0.0)
+    for name in calibrated.model_names([entry]):
+        m = overturning_map(ag, 0.01, name, n=3, diagnosis=[entry], tail=2.0)
+        assert m.overturned.dtype == bool and m.overturned.size == 9
+    # friction alone: its viscous member is at its null and carries nothing, so the finding is left off
+    caplog.clear()
+    entry["findings"][0]["params"] = {"zeta": 0.0, "mu_over_alpha": 0.01, "kappa_alpha": 0.0}
+    with caplog.at_level("WARNING", logger="rocklab.seismic.calibrated"):
+        assert calibrated.model_names([entry]) == ["2s-calibrated", "2s-calibrated-no-escale"]
+    assert "flight_loss is left off the maps' wall: its member flight_damping is at its null" in caplog.text
+    entry["verdict"] = ["flight_loss"]
+    assert calibrated.model_names([entry]) == []
 
 
 def test_the_virtual_lab_records_the_hidden_losses(tmp_path):

@@ -53,7 +53,6 @@ SHORT = {
     "restitution_amplitude": "eamp",
     "instability_angle": "alpha",
     "flight_damping": "zeta",
-    "flight_loss": "floss",
     "hinge_asymmetry": "asym",
     "contact_gap": "gap",
     "stop_threshold": "stop",
@@ -77,6 +76,11 @@ ON_THE_MAPS = {
         "under ground motion a flight's apex, which sets its angle, is unknown when the flight starts",
     ),
     "restitution_speed": (None, "an impact law of the diagnosis' closed forms (a hook) that the simulators lack"),
+    "flight_loss": (
+        "flight_damping",
+        "its viscous member, zeta: the maps' numba engine does not simulate dry friction or drag in flight "
+        "(mu/alpha, kappa alpha), which are lost",
+    ),
 }
 
 #: Model names of the calibrated walls: ``{2s,1s}-calibrated[-no-<short>]``.
@@ -146,10 +150,15 @@ def boundary_findings(diagnosis, boundary):
             continue
         if cause in ON_THE_MAPS:
             member, why = ON_THE_MAPS[cause]
-            if member is None:
-                log.warning("%s walls: %s is left off the maps' wall: %s", boundary, cause, why)
+            found = ", ".join(f"{k} = {float(v):.3g}" for k, v in f["params"].items())
+            # a member at its null carries nothing: a model switching it off would be the same wall
+            if member is None or all(float(f["params"][q.name]) == q.null for q in by_name(member).params):
+                why = why if member is None else f"its member {member} is at its null; {why}"
+                log.warning("%s walls: %s is left off the maps' wall: %s (found: %s)", boundary, cause, why, found)
                 continue
-            log.warning("%s walls: %s is carried on the maps' wall by %s, %s", boundary, cause, member, why)
+            log.warning(
+                "%s walls: %s is carried on the maps' wall by %s, %s (found: %s)", boundary, cause, member, why, found
+            )
             cause = member
         out[cause] = {q.name: float(f["params"][q.name]) for q in by_name(cause).params}
     return out
@@ -224,9 +233,8 @@ def calibrated_model(diagnosis, name, alpha, R, form="linear"):
         A name that is no calibrated model, or whose finding the diagnosis
         does not name.
     ValueError
-        A diagnosis whose boundary names no cause, or names dry friction or
-        drag in flight (:mod:`rocklab.diagnosis.causes.flight_loss`), which
-        the numba engine of the maps does not simulate.
+        A diagnosis whose boundary names no cause the maps' wall carries
+        (:func:`boundary_findings`).
     """
     from rocklab.diagnosis.model import rocking_model
 
@@ -237,12 +245,6 @@ def calibrated_model(diagnosis, name, alpha, R, form="linear"):
     off = _switched_off(found, off, name, boundary)
     ext = [c for c in found if c != off]
     values = {k: v for c in ext for k, v in found[c].items()}
-    if values.get("mu_over_alpha", 0.0) or values.get("kappa_alpha", 0.0):
-        raise ValueError(
-            f"{name}: the diagnosis names dry friction or drag in flight for {boundary} walls (flight_loss: "
-            f"mu/alpha = {values.get('mu_over_alpha', 0.0):.3g}, kappa alpha = {values.get('kappa_alpha', 0.0):.3g}), "
-            "which the maps' numba engine does not simulate"
-        )
     model = rocking_model(MapWall(float(alpha), float(wall.frequency_parameter(R)), boundary), ext, values)
     return replace(model, form=form)
 
