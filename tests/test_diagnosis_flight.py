@@ -69,6 +69,42 @@ def test_closed_forms_of_a_flight_match_the_exact_simulator(kw):
     np.testing.assert_allclose(v_off, np.abs(imp.thetadot_after[:-1]), rtol=1e-8)
 
 
+@pytest.mark.parametrize("k", [0.3, -0.2])
+@pytest.mark.parametrize("kw", [{"hinge_friction": 0.002}, {"hinge_friction": 0.001, "flight_drag": 2.0}])
+def test_losses_on_an_angle_that_depends_on_the_amplitude_match_the_exact_simulator(k, kw):
+    """A flight rocks on the angle of its own apex (flight_angle(A, alpha, k)) and loses on that angle:
+    the closed forms, solving apex and angle together, against the event-driven simulator."""
+    from rocklab.diagnosis import model as dm
+    from rocklab.seismic.calibrated import MapWall
+
+    m = RockingModel(alpha=ALPHA, p=P, impact=H(), hinge_rounding=k, **kw)
+    h = simulate_free(m, 0.8 * ALPHA, 0.0, t_end=8.0, fs=400, rtol=1e-11, atol=1e-13)
+    imp = h.impacts.iloc[:12]
+    assert len(imp) >= 6
+    loss = {"mu": m.hinge_friction, "kappa": m.flight_drag, "k": k}
+    pk, v_after = imp.theta_peak_before.to_numpy(), np.abs(imp.thetadot_after.to_numpy())
+    np.testing.assert_allclose(flight.landing_speed(pk, ALPHA, P, **loss), np.abs(imp.thetadot_before), rtol=1e-8)
+    A = flight.apex_after(v_after[:-1], ALPHA, P, **loss)
+    np.testing.assert_allclose(A, pk[1:], rtol=1e-8)
+    np.testing.assert_allclose(flight.takeoff_speed(pk[1:], ALPHA, P, **loss), v_after[:-1], rtol=1e-8)
+    # both matter: on the rigid hinge, or without the losses, the same take-off speeds reach other apexes
+    rigid = flight.apex_after(v_after[:-1], ALPHA, P, mu=loss["mu"], kappa=loss["kappa"])
+    lossless = flight.apex_after(v_after[:-1], ALPHA, P, k=k)
+    assert np.min(np.abs(rigid / pk[1:] - 1)) > 1e-3 and np.min(np.abs(lossless / pk[1:] - 1)) > 1e-4
+    # the diagnosis' model of both families: the same simulator model, the same flights
+    wall = MapWall(ALPHA, P, "two-sided")
+    ext = ("instability_amplitude", "flight_loss")
+    values = {"alpha_r_over_alpha": 1.0, "rounding": k, "zeta": 0.0}
+    values |= {"mu_over_alpha": loss["mu"] / ALPHA, "kappa_alpha": loss["kappa"] * ALPHA}
+    sim = dm.rocking_model(wall, ext, values)
+    assert (sim.hinge_rounding, sim.hinge_friction, sim.flight_drag) == pytest.approx((k, loss["mu"], loss["kappa"]))
+    mp = dm.model_params([wall], ext, values)
+    v_before = np.abs(imp.thetadot_before.to_numpy())[None, :-1]
+    A_model, _, a, _, _ = dm.next_flight(v_before, np.ones_like(v_before), mp)
+    np.testing.assert_allclose(A_model[0], pk[1:], rtol=1e-8)
+    np.testing.assert_allclose(a[0], flight.flight_angle(pk[1:], ALPHA, k), rtol=1e-8)
+
+
 def test_drag_takes_the_energy_of_its_work():
     """Energy balance over one flight: 1/2 (v_off^2 - v_land^2) = int kappa |thetadot|^3 dt."""
     kappa = 3.0
@@ -135,9 +171,10 @@ def test_the_engine_refuses_dry_friction_and_drag_the_maps_carry_the_viscous_mem
 def test_the_virtual_lab_records_the_hidden_losses(tmp_path):
     from rocklab.lab import virtual_lab as vl
 
-    plan = [vl.VirtualTest("T1", theta0_ratio=0.9, model={"hinge_friction": 0.002, "flight_drag": 0.5})]
-    truth = vl.write_campaign(tmp_path, plan, t_end=5.0)
-    assert truth.hinge_friction[0] == 0.002 and truth.flight_drag[0] == 0.5
+    # with an angle that depends on the amplitude too: both families' keys at once
+    model = {"hinge_friction": 0.002, "flight_drag": 0.5, "hinge_rounding": 0.2}
+    truth = vl.write_campaign(tmp_path, [vl.VirtualTest("T1", theta0_ratio=0.9, model=model)], t_end=5.0)
+    assert (truth.hinge_friction[0], truth.flight_drag[0], truth.hinge_rounding[0]) == (0.002, 0.5, 0.2)
 
 
 # name: (simulator model, series keywords, truth of the family's parameters, member it reduces to)
