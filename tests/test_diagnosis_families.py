@@ -24,7 +24,7 @@ A_S, P = 0.08, 3.3
 @pytest.mark.parametrize("k", [0.4, -0.3])
 def test_the_apex_solves_the_energy_balance_on_its_own_angle(k):
     v = np.array([0.02, 0.1, 0.18, 0.3])
-    A = flight.apex_after(v, A_S, P, 0.0, k)
+    A = flight.apex_after(v, A_S, P, 0.0, k=k)
     for vi, Ai in zip(v, A):
         E = 0.5 * vi**2
         if E >= flight.potential(A_S, A_S, P):
@@ -33,11 +33,11 @@ def test_the_apex_solves_the_energy_balance_on_its_own_angle(k):
         root = brentq(lambda x, E=E: flight.potential(x, flight.flight_angle(x, A_S, k), P) - E, 0.0, A_S, xtol=1e-15)
         assert Ai == pytest.approx(root, rel=1e-10)
     # back down the same flight: the landing speed is the take-off speed
-    np.testing.assert_allclose(flight.landing_speed(A[:3], A_S, P, 0.0, k), v[:3], rtol=1e-10)
+    np.testing.assert_allclose(flight.landing_speed(A[:3], A_S, P, 0.0, k=k), v[:3], rtol=1e-10)
     # released at the instability angle the flight rocks on it; k = 0 is the rigid hinge
     assert flight.flight_angle(A_S, A_S, k) == A_S
     assert flight.flight_angle(0.0, A_S, k) == pytest.approx(A_S * (1 - k))
-    assert flight.apex_after(0.1, A_S, P, 0.0, 0.0) == flight.apex(0.005, A_S, P)
+    assert flight.apex_after(0.1, A_S, P, 0.0, k=0.0) == flight.apex(0.005, A_S, P)
 
 
 @pytest.mark.parametrize("k", [0.3, -0.3])
@@ -50,7 +50,7 @@ def test_the_simulator_and_the_free_run_share_the_flights(k):
     imp = h.impacts
     t, peaks, v_after = imp.t.to_numpy(), imp.theta_peak_before.to_numpy(), np.abs(imp.thetadot_after.to_numpy())
     assert len(t) >= 3
-    A = flight.apex_after(v_after[:-1], A_S, P, 0.0, k)
+    A = flight.apex_after(v_after[:-1], A_S, P, 0.0, k=k)
     np.testing.assert_allclose(A, peaks[1:], rtol=1e-9)
     T = 2 * flight.quarter_period(A, flight.flight_angle(A, A_S, k), P)
     np.testing.assert_allclose(T, np.diff(t), rtol=1e-8)

@@ -14,6 +14,7 @@ from __future__ import annotations
 from rocklab.diagnosis.causes import (
     contact_gap,
     flight_damping,
+    flight_loss,
     hinge_asymmetry,
     instability_amplitude,
     instability_angle,
@@ -42,6 +43,7 @@ FAMILIES = [
     restitution_drift.CAUSE,
     instability_amplitude.CAUSE,
     restitution_speed.CAUSE,
+    flight_loss.CAUSE,
 ]
 
 

@@ -99,6 +99,10 @@ class Problem:
         """Structure outside the residual groups (list of statements)."""
         return []
 
+    def form_structure(self, ext):
+        """Fit-free evidence that a cause of ``ext`` has the wrong form (list of statements)."""
+        return []
+
     def resolution(self, x):
         """Typical resolution [log units] of a group from its noise covariates ``x``."""
         return float(np.median(x))
@@ -231,7 +235,7 @@ def fit(problem: Problem, idx, ext, x0=None, n_irls=None) -> Fit:
     for x in starts:
         R = problem.residuals(sub, ext, dict(zip(names, x)))
         var = _variances({g: R[g] for g in masks}, X)
-        passes, converged, jac = 0, False, None
+        passes, converged, jac, m2 = 0, False, None, np.inf
         for _ in range(n_irls):
             passes += 1
             w = {g: 1.0 / np.sqrt(var[g][0] + var[g][1] * xm[g] ** 2 + VAR_FLOOR) for g in masks}
@@ -255,9 +259,16 @@ def fit(problem: Problem, idx, ext, x0=None, n_irls=None) -> Fit:
                 # optimum, with its derivatives (at that point) reweighted, instead of a new search
                 step = optimize.lsq_linear(jac * wv[:, None], -stacked(R), bounds=(lo - x, hi - x)).x
             moved = np.max(np.abs(step) / (hi - lo))
-            x = np.clip(x + step, lo, hi)
-            R = problem.residuals(sub, ext, dict(zip(names, x)))
-            var = _variances({g: np.where(m, R[g], np.nan) for g, m in masks.items()}, X)
+            x_new = np.clip(x + step, lo, hi)
+            R_new = problem.residuals(sub, ext, dict(zip(names, x_new)))
+            var_new = _variances({g: np.where(m, R_new[g], np.nan) for g, m in masks.items()}, X)
+            m2_new = _deviance({g: np.where(m, R_new[g], np.nan) for g, m in masks.items()}, X, var_new)
+            if m2_new > m2 + 1e-6 * abs(m2):
+                # a step along a direction the data barely fix (causes nearly confounded, as the members
+                # of a family) can overshoot: the likelihood, not the step, has the last word
+                converged = True
+                break
+            x, R, var, m2 = x_new, R_new, var_new, m2_new
             if moved < 1e-6:
                 converged = True
                 break
@@ -462,7 +473,9 @@ def structure(problem: Problem, idx, ext, values):
     covariate that is a property of the test the regression of the per-test
     means on it; reported when p < :data:`STRUCTURE_P` and the effect
     over the observed range exceeds :data:`STRUCTURE_MIN` and the median
-    noise covariate of the group (its resolution, :meth:`Problem.resolution`).
+    noise covariate of the group (its resolution, :meth:`Problem.resolution`);
+    and what the fit-free evidence says of the form of the causes in
+    ``ext`` (:meth:`Problem.form_structure`).
 
     Returns
     -------
@@ -498,7 +511,7 @@ def structure(problem: Problem, idx, ext, values):
                 slope, p_val, span = within_slope(r, x, ok)
             if np.isfinite(p_val) and p_val < STRUCTURE_P and abs(slope * span) > size:
                 found.append(f"{g}: trend with {label} {slope * span:+.3f} over the range (p = {p_val:.1g})")
-    return found + problem.extra_structure(sub, ext, values)
+    return found + problem.form_structure(ext) + problem.extra_structure(sub, ext, values)
 
 
 def within_slope(r, x, ok):

@@ -11,6 +11,7 @@ physics (impact, peak, time, gap_time; docs/diagnosis-method.md).
 
 from __future__ import annotations
 
+import inspect
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -19,7 +20,7 @@ from rocklab.diagnosis.model import ModelParams, impact_speeds, log_columns, rel
 from rocklab.lab.campaign import order_in_series
 from rocklab.lab.motion import extract_motion
 from rocklab.physics import restitution
-from rocklab.physics.flight import apex_after, landing_speed, quarter_period
+from rocklab.physics.flight import apex_after, landing_speed, quarter_period, speed_loss
 from rocklab.physics.wall import overturning_velocity
 
 #: The derivative filter of :mod:`rocklab.lab.motion` fits undamped flights: with a
@@ -28,6 +29,59 @@ from rocklab.physics.wall import overturning_velocity
 #: over walls with p = 3.0-4.3 rad/s and zeta = 0.005-0.02, exact simulator;
 #: checked in tests/test_diagnosis.py).
 FILTER_DAMPING_BIAS = 0.35
+
+# the fit windows of the derivative filter (rocklab.lab.motion.extract_motion's defaults)
+_FILTER = {k: v.default for k, v in inspect.signature(extract_motion).parameters.items()}
+
+
+def filter_loss_bias(S, mp: ModelParams):
+    """Factor by which the derivative filter reads the velocity ratio of each impact under dry friction and drag.
+
+    The filter (:mod:`rocklab.lab.flight_fit`) fits each side of an impact
+    with the linearised flight through the apex, one symmetric curve: where
+    its window reaches past the apex into the other half of the flight,
+    which the losses make slower (falling) or faster (rising), the speed it
+    reads is lowered (take-off) or raised (impact) by that share s of the
+    window times the flight's relative speed loss l (:func:`rocklab.physics.flight.speed_loss`,
+    dry friction and drag; the viscous part is :data:`FILTER_DAMPING_BIAS`):
+    (1 - s_a l_after) / (1 + s_b l_before).  A short flight, inside one
+    window, reads l/2 on each side: the loss of a flight moves into the
+    measured e, as a lower restitution would.  Within one half, a constant
+    moment (dry friction) is what the fitted curve's free acceleration
+    absorbs; drag, like a viscous loss of zeta = kappa v / (2 p) at the
+    impact speed v, biases it by :data:`FILTER_DAMPING_BIAS` times that, in
+    the share 1 - 2 s_a of the window the flight's other half leaves.
+
+    Returns
+    -------
+    ndarray
+        (tests, impacts); 1 without dry friction or drag.
+    """
+    if not (np.any(mp.mu) or np.any(mp.kappa)):
+        return 1.0
+    p = mp.p[:, None]
+    loss = {k: v for k, v in mp.flight_loss(S.A).items() if k != "zeta"}
+    W = _FILTER["window_p"] / p
+    guard, pre = _FILTER["ring_guard_s"], 2.5 * S.tfloor[:, None]
+    # each flight on its own angle (ModelParams.flight, where the angle depends on the amplitude)
+    A = np.nan_to_num(S.A)
+    a_after = mp.flight(A, np.where(mp.one_sided[:, None], S.side, -S.side))
+    T = quarter_period(A, a_after, p)
+    g = np.minimum(guard, 0.8 * T)
+    end = np.minimum(g + W, 1.8 * T)
+    s_a = np.where(end > g, np.maximum(end - T, 0.0) / np.maximum(end - g, 1e-300), 0.0)
+    l_a = speed_loss(A, a_after, p, **loss)
+    # the flight before impact k + 1 is the flight after impact k, on the hinge it lands from
+    a_b = mp.flight(A[:, :-1], S.side[:, 1:])
+    Tb = quarter_period(A[:, :-1], a_b, p)
+    start = np.maximum(np.minimum(guard, 0.8 * Tb), 2.0 * Tb - W)
+    stop = 2.0 * Tb - pre
+    s_b = np.where(stop > start, np.maximum(Tb - start, 0.0) / np.maximum(stop - start, 1e-300), 0.0)
+    l_b = speed_loss(A[:, :-1], a_b, p, **loss)
+    # the first impact ends the fall from the release: no rise in its window
+    up = np.c_[np.zeros(len(S.tests)), s_b * l_b]
+    within = 1.0 - FILTER_DAMPING_BIAS * loss["kappa"] * np.nan_to_num(S.vb) / (2.0 * p) * (1.0 - 2.0 * s_a)
+    return within * (1.0 - s_a * np.nan_to_num(l_a)) / (1.0 + np.nan_to_num(up))
 
 
 @dataclass
@@ -266,18 +320,17 @@ def residuals(S: TestStack, mp: ModelParams, cache=None):
         Group name -> (tests, impacts) array, NaN where there is no observation.
     """
     f, vf = S.floor[:, None], S.vfloor[:, None]
-    p, zeta = mp.p[:, None], mp.zeta[:, None]
+    p, zeta, loss = mp.p[:, None], mp.zeta[:, None], mp.flight_keywords(S.A)
     one = mp.one_sided[:, None]
     apex_side = np.where(one, S.side, -S.side)
     a_ap = mp.hinge(apex_side)
     v_hat, _, tau_hat, _, _ = impact_speeds(S.vb, S.side, mp)
-    R = {"impact": log_ratio(v_hat * (1.0 - FILTER_DAMPING_BIAS * zeta), S.va, vf)}
+    R = {"impact": log_ratio(v_hat * (1.0 - FILTER_DAMPING_BIAS * zeta) * filter_loss_bias(S, mp), S.va, vf)}
     # peak to peak: from the measured apex before (theta0 at rest for the first), a landing,
     # the impact, a rise
-    k_r = mp.rounding[:, None]
-    v_land = landing_speed(S.A[:, :-1], mp.hinge(S.side[:, 1:]), p, zeta, k_r)
+    v_land = landing_speed(S.A[:, :-1], mp.hinge(S.side[:, 1:]), p, **loss)
     v_land = np.c_[release(S, mp)[0], v_land]
-    R["peak"] = log_ratio(apex_after(impact_speeds(v_land, S.side, mp)[0], a_ap, p, zeta, k_r), S.A, f)
+    R["peak"] = log_ratio(apex_after(impact_speeds(v_land, S.side, mp)[0], a_ap, p, **loss), S.A, f)
     key = mp.a_pos.tobytes() + mp.a_neg.tobytes() + mp.rounding.tobytes()
     if cache is not None and cache.get("stack") is S and cache.get("angles") == key:
         R["time"] = cache["time"]

@@ -61,8 +61,27 @@ class ModelParams:
     gap: np.ndarray  # [rad]
     stop: np.ndarray  # landing speed [thetadot_r] below which the wall stops dead (0: never)
     order: np.ndarray  # the test's place in its series, 0 (first) to 1 (last)
+    mu: np.ndarray = None  # dry friction at the hinge [-] (rocklab.physics.flight.loss_deceleration)
+    kappa: np.ndarray = None  # quadratic drag in flight [1/rad]
     extra: dict = field(default_factory=dict)
     impact_hooks: tuple = ()
+
+    def __post_init__(self):
+        for name in ("mu", "kappa"):
+            if getattr(self, name) is None:
+                setattr(self, name, np.zeros_like(self.zeta))
+
+    def flight_loss(self, like=None):
+        """zeta, mu, kappa of the losses in flight (:func:`rocklab.physics.flight.loss_deceleration`),
+        per test, broadcast against ``like``: the keywords of the flight's closed forms on a flight's
+        own angle (:meth:`flight`)."""
+        return {k: per_test(getattr(self, k), like) for k in ("zeta", "mu", "kappa")}
+
+    def flight_keywords(self, like=None):
+        """:meth:`flight_loss` and k, the dependence of the rocking angle on the amplitude
+        (:func:`rocklab.physics.flight.flight_angle`): the keywords of the flight's closed forms on
+        the hinge's angle (:meth:`hinge`), which find the flight's own."""
+        return {**self.flight_loss(like), "k": per_test(self.rounding, like)}
 
     def hinge(self, side):
         """Rocking angle of hinge ``side`` (array of +1 / -1) [rad]."""
@@ -219,9 +238,9 @@ def next_flight(v, side, mp: ModelParams):
     v = np.where(v < mp.stop * overturning_velocity(mp.alpha, mp.p), 0.0, v)
     v_out, d, tau, _, _ = impact_speeds(v, side, mp)
     side = np.where(mp.one_sided, side, -side)
-    a, k = mp.hinge(side), mp.rounding
-    A = apex_after(v_out, a, mp.p, mp.zeta, k)
-    return A, side, flight_angle(A, a, k), d, tau
+    a = mp.hinge(side)
+    A = apex_after(v_out, a, mp.p, **mp.flight_keywords())
+    return A, side, flight_angle(A, a, mp.rounding), d, tau
 
 
 def release(S, mp: ModelParams):
@@ -238,8 +257,8 @@ def release(S, mp: ModelParams):
     a0 = mp.hinge(S.side0)
     th = release_rotation(S.theta0, a0)
     # the fall from the release is a flight of apex th: on its angle where the angle depends on the amplitude
+    v = np.sqrt(landing_speed(th, a0, mp.p, **mp.flight_keywords()) ** 2 + S.v0**2)
     a0 = mp.flight(th, S.side0)
-    v = np.sqrt(landing_speed(th, a0, mp.p, mp.zeta) ** 2 + S.v0**2)
     saved = quarter_period_linear(th / a0) - quarter_period_linear(th / a0, S.v0 / (mp.p * a0))
     return v, quarter_period(th, a0, mp.p) - saved / mp.p
 
@@ -259,10 +278,10 @@ def free_run(S, mp: ModelParams, n_max=600):
     out = {k: np.zeros((T, n_max)) for k in ("peaks", "t_before", "t_after", "depth")}
     v, t = release(S, mp)
     first = t.copy()
-    A = a = None  # apex and hinge of the previous flight, from the first impact on
+    A = a = None  # apex and own angle of the previous flight, from the first impact on
     for k in range(n_max):
         if k:
-            v = landing_speed(A, a, mp.p, mp.zeta)
+            v = landing_speed(A, a, mp.p, **mp.flight_loss())
         A, side, a, d, tau = next_flight(v, side, mp)
         out["t_before"][:, k] = t
         out["t_after"][:, k] = t + tau
@@ -317,6 +336,8 @@ def rocking_model(test, ext=(), values=None, base="analytic") -> RockingModel:
         alpha_rock=float(mp.a_pos),
         alpha_neg=float(mp.a_neg),
         flight_damping=float(mp.zeta),
+        hinge_friction=float(mp.mu),
+        flight_drag=float(mp.kappa),
         gap=float(mp.gap),
         transverse_impact=transverse,
         hinge_rounding=float(mp.rounding),

@@ -43,6 +43,19 @@ class WallProblem(Problem):
         mp = model_params(sub.tests, ext, values)
         return [st for cause in self.after_selection for st in cause.unexplained(sub, mp)]
 
+    def form_structure(self, ext):
+        """What a family's signature says the model ``ext`` misses: its listed member of the wrong
+        form (``against_member``), or no member at all (``unmodelled``); the flight-loss curve of
+        :mod:`rocklab.diagnosis.causes.flight_loss`."""
+        out = []
+        for c in self.causes:
+            sig = self.signature.get(c.name) or {}
+            if c.family in ext and sig.get("against_member"):
+                out.append(sig["against_member"])
+            elif c.family and not {c.name, c.family} & set(ext) and sig.get("unmodelled"):
+                out.append(sig["unmodelled"])
+        return out
+
     @property
     def signature(self):
         """The causes' signatures in these tests (:func:`rocklab.diagnosis.catalogue.signatures`)."""

@@ -160,6 +160,9 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
                 **discovery(problem, eff, sel),
             }
         )
+        cause = catalogue.by_name(eff)
+        if cause.curve is not None and "catalogue" in sel:
+            findings[-1]["curve"] = cause.curve(tests, values, sel["catalogue"]["fit"].values)
     findings.sort(key=lambda f: -f["gain"]["deviance_per_obs"])
     # the causes estimated once the chosen model is known, from what it leaves
     structure = list(sel["structure"])

@@ -479,8 +479,11 @@ class VirtualTest:
     residual_kind : {'rotation', 'sliding'}
     model : dict
         Further ``RockingModel`` keywords (``impact``, ``alpha_neg``,
-        ``flight_damping``, ``gap``, ``form``, ``hinge_rounding``, ...), every physical effect of
-        the simulator; ``alpha_rock`` defaults to alpha_ratio * alpha.
+        ``flight_damping``, ``hinge_friction``, ``flight_drag``, ``gap``,
+        ``form``, ``hinge_rounding``, ...), every physical effect of the
+        simulator; ``alpha_rock`` defaults to alpha_ratio * alpha.  With dry
+        friction mu, release below (1 - mu / alpha) of the rocking angle (a
+        wall held by friction at its apex is not simulated).
     faults : list of Fault
     effects : Effects
     note : str
@@ -623,6 +626,8 @@ def simulate_virtual_test(test: VirtualTest, specimen, layout, rng=None, t_end=4
             "impact_law": _law_name(model.impact) or "default",
             "flight_damping": model.flight_damping,
             "hinge_rounding": model.hinge_rounding,
+            "hinge_friction": model.hinge_friction,
+            "flight_drag": model.flight_drag,
             "gap": model.gap,
             "form": model.form,
             "e_first": float(ratios[0]) if ratios.size else np.nan,
@@ -729,6 +734,8 @@ def write_campaign(out_dir, tests, specimens=None, layouts=None, seed=0, t_end=4
                 "impact_law": truth["impact_law"],
                 "flight_damping": truth["flight_damping"],
                 "hinge_rounding": truth["hinge_rounding"],
+                "hinge_friction": truth["hinge_friction"],
+                "flight_drag": truth["flight_drag"],
                 "gap": truth["gap"],
                 "form": truth["form"],
                 "e_true": truth["e_true"],

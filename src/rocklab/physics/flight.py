@@ -133,21 +133,89 @@ def quarter_period(A, a, p):
     return np.sum(_GL_W * 2.0 * Ac / g, axis=-1)
 
 
-def landing_speed(A, a, p, zeta=0.0, k=0.0):
-    """|thetadot| on arrival at theta = 0 from an apex A on hinge a [rad/s], loss 2 zeta p int |thetadot|.
+def loss_deceleration(thetadot, p, zeta=0.0, mu=0.0, kappa=0.0, sign=np.sign):
+    """Deceleration of the losses in flight, by their dependence on the angular velocity [rad/s^2].
 
-    ``k``: the hinge's angle depends on the amplitude (:func:`flight_angle`).
+    2 zeta p thetadot + mu p^2 sign(thetadot) + kappa thetadot |thetadot|: a viscous
+    loss (zeta [-], proportional to thetadot), dry friction at the hinge (a
+    constant moment mu m g R, mu [-] its ratio to the weight's moment arm R)
+    and quadratic drag (kappa [1/rad], -kappa thetadot |thetadot|).  At small
+    amplitude (A << alpha, a near-constant restoring p^2 alpha) the speed a
+    flight loses, relative to its speed v, is of order mu / alpha (dry
+    friction: constant), 4 zeta v / (3 p alpha) (viscous: proportional to v)
+    and kappa v^2 / (2 p^2 alpha) (drag: proportional to v^2).  ``sign``:
+    :func:`numpy.sign`, or a scalar one where speed matters.
+    """
+    return 2.0 * zeta * p * thetadot + mu * p**2 * sign(thetadot) + kappa * thetadot * abs(thetadot)
+
+
+def _work(A, a, p, mu, kappa, rise):
+    """int_0^A p^2 (sin(a - s) +- mu) exp(+-2 kappa s) ds [rad^2/s^2] (+ on the rise, - on the fall).
+
+    The exact energy balance of a flight with dry friction and drag: on the
+    rise d(thetadot^2/2)/dtheta = -p^2 (sin(a - theta) + mu) - kappa thetadot^2,
+    linear in thetadot^2, so the take-off energy that reaches the apex A is
+    this integral (and on the fall the landing energy from A, with the signs
+    of mu and kappa turned).  The integrand is smooth: Gauss-Legendre.
+    """
+    sgn = 1.0 if rise else -1.0
+    A, a, p, mu, kappa = (np.asarray(x, float)[..., None] for x in np.broadcast_arrays(A, a, p, mu, kappa))
+    s = A * _GL_S
+    f = (np.sin(a - s) + sgn * mu) * np.exp(sgn * 2.0 * kappa * s)
+    return p[..., 0] ** 2 * A[..., 0] * np.sum(_GL_W * f, axis=-1)
+
+
+def _rise_slope(A, a, p, mu, kappa, k):
+    """d/dA of the rise's :func:`_work` on the angle :func:`flight_angle` of its own apex [rad/s^2].
+
+    The integrand at A plus, the angle moving with the apex (d a / d A = k
+    below a), k int_0^A p^2 cos(a - s) exp(2 kappa s) ds.
     """
     a = flight_angle(A, a, k)
-    E = potential(A, a, p) - 2.0 * zeta * p * (path_integral(A, a, p) if np.any(zeta) else 0.0)
-    return np.sqrt(2.0 * np.maximum(E, 0.0))
+    A_, a_, kappa_ = (np.asarray(x, float)[..., None] for x in np.broadcast_arrays(A, a, kappa))
+    s = A_ * _GL_S
+    d_angle = A_[..., 0] * np.sum(_GL_W * np.cos(a_ - s) * np.exp(2.0 * kappa_ * s), axis=-1)
+    return p**2 * ((np.sin(a - A) + mu) * np.exp(2.0 * kappa * A) + np.where(A < a, k, 0.0) * d_angle)
 
 
-def apex_after(v, a, p, zeta=0.0, k=0.0):
-    """Apex [rad] reached on hinge a by a wall leaving theta = 0 at |thetadot| = v.
+# apex_after's Newton passes on the losses' work: at most, and the step [of the hinge's angle] that ends them
+_NEWTON_MAX, _NEWTON_TOL = 40, 1e-12
 
+
+def _viscous(zeta, p, A, a):
+    # first order in zeta: the loss along the undamped path
+    return 2.0 * zeta * p * (path_integral(A, a, p) if np.any(zeta) else 0.0)
+
+
+def landing_speed(A, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):
+    """|thetadot| on arrival at theta = 0 from an apex A on hinge a [rad/s], with the losses in flight.
+
+    The losses of :func:`loss_deceleration`: dry friction and drag exact
+    (:func:`_work`), the viscous loss 2 zeta p int |thetadot| to first order
+    in zeta.  A wall whose restoring moment at its apex is below the
+    friction moment (sin(a - A) <= mu) stays there: landing speed 0.
+    ``k``: the hinge's angle depends on the amplitude, the whole flight
+    rocks on the angle of its apex (:func:`flight_angle`), so the losses
+    act on that angle, exactly as on a rigid hinge.
+    """
+    a = flight_angle(A, a, k)
+    if not (np.any(mu) or np.any(kappa)):
+        E = potential(A, a, p) - _viscous(zeta, p, A, a)
+        return np.sqrt(2.0 * np.maximum(E, 0.0))
+    E = _work(A, a, p, mu, kappa, rise=False) - _viscous(zeta, p, A, a)
+    return np.where(np.sin(a - A) > mu, np.sqrt(2.0 * np.maximum(E, 0.0)), 0.0)
+
+
+def apex_after(v, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):
+    """Apex [rad] reached on hinge a by a wall leaving theta = 0 at |thetadot| = v, with the losses in flight.
+
+    The inverse of :func:`landing_speed`'s balance on the rise: the undamped
+    apex, then a few Newton passes on the work of dry friction and drag
+    (:func:`_work`) and the first-order viscous loss; a if it overturns.
     ``k``: the hinge's angle depends on the amplitude (:func:`flight_angle`),
-    so the apex and the angle of the flight are solved together.
+    so the apex and the angle of the flight are solved together (the
+    undamped apex by :func:`_apex_on_flight_angle`, the losses' work on the
+    angle of the apex each Newton pass reaches, :func:`_rise_slope`).
     """
     E = 0.5 * np.asarray(v, float) ** 2
 
@@ -155,11 +223,52 @@ def apex_after(v, a, p, zeta=0.0, k=0.0):
         return _apex_on_flight_angle(E, a, p, k) if np.any(k) else apex(E, a, p)
 
     A = rise(E)
+    if np.any(mu) or np.any(kappa):
+        a_, p_, mu_, kappa_ = np.broadcast_arrays(a, p, mu, kappa)
+        # the instability rotation rocks on the hinge's own angle whatever k (flight_angle(a, a, k) = a)
+        over = E >= _work(a_, a_, p_, mu_, kappa_, rise=True) + _viscous(zeta, p, a_, a_)
+        # Newton from the undamped apex, above the damped one, kept inside the bracket [lo, hi] of
+        # the root (the work grows with A, convex or concave with the drag: a bare step may leave it)
+        A, lo = np.broadcast_arrays(A, 0.0 * E)
+        hi = A
+        for _ in range(_NEWTON_MAX):
+            af = flight_angle(A, a, k)
+            g = _work(A, af, p, mu, kappa, rise=True) + _viscous(zeta, p, A, af) - E
+            lo, hi = np.where(g < 0.0, A, lo), np.where(g > 0.0, A, hi)
+            step = A - g / np.maximum(_rise_slope(A, a, p, mu, kappa, k), 1e-12 * p**2)
+            step = np.where((step > lo) & (step < hi), step, 0.5 * (lo + hi))
+            done = np.all(np.abs(step - A) <= _NEWTON_TOL * a)
+            A = step
+            if done:
+                break
+        return np.where(over, a, A)
     if np.any(zeta):
         # the loss of the rise depends on the apex it reaches: a few fixed-point passes
         for _ in range(3):
             A = rise(E - 2.0 * zeta * p * path_integral(A, flight_angle(A, a, k), p))
     return A
+
+
+def takeoff_speed(A, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):
+    """|thetadot| at theta = 0 that reaches the apex A on hinge a with the losses in flight [rad/s].
+
+    The inverse of :func:`apex_after`: the rise's energy balance (:func:`_work`,
+    the viscous loss to first order) on the angle of the flight (:func:`flight_angle`).
+    """
+    a = flight_angle(A, a, k)
+    return np.sqrt(2.0 * (_work(A, a, p, mu, kappa, rise=True) + _viscous(zeta, p, A, a)))
+
+
+def speed_loss(A, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):
+    """Speed a flight of apex A loses between take-off and the next impact, over its take-off speed [-].
+
+    1 - :func:`landing_speed` / :func:`takeoff_speed`: the flight-loss curve
+    whose dependence on the speed tells the losses of
+    :func:`loss_deceleration` apart.
+    """
+    loss = {"zeta": zeta, "mu": mu, "kappa": kappa, "k": k}
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return 1.0 - landing_speed(A, a, p, **loss) / takeoff_speed(A, a, p, **loss)
 
 
 def transit_time(v, u, a, p):

@@ -112,7 +112,8 @@ def discovery_figure(tests, entry):
     results/diagnosis.json), in the variables of the family's signature:
     an instability angle that depends on the amplitude as the angle each
     flight time gives (Housner's closed form inverted) against the
-    flight's apex; an impact law as e/e_an against the impact speed
+    flight's apex; a family with a curve of its own (the losses in flight)
+    as :func:`family_curve_figure`; an impact law as e/e_an against the impact speed
     (per impact), or against the test's place in the series (the
     per-test medians) for a drift.  The models are read the same way:
     the discovered family at its fit, and the listed causes the catalogue
@@ -143,7 +144,10 @@ def discovery_figure(tests, entry):
         pars = ", ".join(f"{k} = {v:.3g}" for k, v in f["params"].items())
         lab = f"{f['effect']} (discovered): {pars}\n{f['reduces_to']}"
         lab_listed = f"best listed: {' + '.join(listed) or 'the base model'}"
-        if fam == "instability_angle":
+        if "curve" in f:
+            # a family with a curve of its own (the losses in flight against the flight's speed)
+            family_curve_figure(f, entry["key"], ax)
+        elif fam == "instability_angle":
             x = ob.S.A[:, :-1] / ob.alpha
             ax.plot(x.ravel(), ob.a_T.ravel(), ".", color="0.3", ms=3, zorder=3, label="measured flights")
             # up to the largest flight measured: at the instability point the flight time is unbounded
@@ -205,7 +209,8 @@ def series_figures(entries, test_paths, motion_paths=()):
     -------
     dict
         Series id -> Figure, ``discovered/<series>`` -> the figure of
-        :func:`discovery_figure` where the series has a discovered form,
+        :func:`discovery_figure` where the series has a discovered form
+        (a family's curve, :func:`family_curve_figure`, in its panel),
         plus ``fig14`` and ``fig15``: the largest
         two-sided and one-sided series, as the paper's figures (a note when
         the campaign has none).
@@ -226,6 +231,53 @@ def series_figures(entries, test_paths, motion_paths=()):
         own = [e for e in series if e["boundary"] == boundary]
         out[name] = out[max(own, key=lambda e: e["n_tests"])["key"]] if own else _empty(boundary)
     return out
+
+
+def family_curve_figure(finding, key, ax=None):
+    """A discovered family's curve against the data and the catalogue's best member.
+
+    For the losses in flight (:mod:`rocklab.diagnosis.causes.flight_loss`):
+    the speed each long flight loses between take-off and the next impact,
+    relative to its take-off speed, against that speed over thetadot_r,
+    with the flight-loss curve of the family fitted and of the listed
+    viscous loss fitted by the catalogue alone.
+
+    Parameters
+    ----------
+    finding : dict
+        A finding of results/diagnosis.json with a ``curve``
+        (:attr:`rocklab.diagnosis.causes.Cause.curve`).
+    key : str
+        Its series.
+    ax : matplotlib.axes.Axes, optional
+        Where to draw it (a panel of :func:`discovery_figure`); a new figure
+        if None.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    c = finding["curve"]
+    if ax is None:
+        ax = plt.subplots(figsize=(8, 5))[1]
+    ax.plot(c["measured"]["x"], c["measured"]["y"], "o", color="0.5", ms=3, label=c["measured"]["label"])
+    ax.plot(c["best_listed"]["x"], c["best_listed"]["y"], "--", color="C1", label=c["best_listed"]["label"])
+    gain = finding["heldout_gain"]
+    ax.plot(
+        c["family"]["x"],
+        c["family"]["y"],
+        color="C3",
+        lw=1.5,
+        label=f"{c['family']['label']}, discovered: {finding['reduces_to']}\n"
+        f"held-out gain {gain['vs_best_listed']:.3g} +- {gain['vs_best_listed_se']:.2g} over the listed causes, "
+        f"{gain['vs_base']:.3g} +- {gain['vs_base_se']:.2g} over the base model",
+    )
+    ax.set_xlabel(c["x"])
+    ax.set_ylabel(c["y"])
+    ax.set_title(f"Series {key}: {finding['effect']}, the curve found against the data")
+    ax.legend(fontsize=7, loc="best")
+    ax.figure.tight_layout()
+    return ax.figure
 
 
 def family_figure(result, events):

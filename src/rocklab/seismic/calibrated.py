@@ -76,6 +76,11 @@ ON_THE_MAPS = {
         "under ground motion a flight's apex, which sets its angle, is unknown when the flight starts",
     ),
     "restitution_speed": (None, "an impact law of the diagnosis' closed forms (a hook) that the simulators lack"),
+    "flight_loss": (
+        "flight_damping",
+        "its viscous member, zeta: the maps' numba engine does not simulate dry friction or drag in flight "
+        "(mu/alpha, kappa alpha), which are lost",
+    ),
 }
 
 #: Model names of the calibrated walls: ``{2s,1s}-calibrated[-no-<short>]``.
@@ -145,10 +150,15 @@ def boundary_findings(diagnosis, boundary):
             continue
         if cause in ON_THE_MAPS:
             member, why = ON_THE_MAPS[cause]
-            if member is None:
-                log.warning("%s walls: %s is left off the maps' wall: %s", boundary, cause, why)
+            found = ", ".join(f"{k} = {float(v):.3g}" for k, v in f["params"].items())
+            # a member at its null carries nothing: a model switching it off would be the same wall
+            if member is None or all(float(f["params"][q.name]) == q.null for q in by_name(member).params):
+                why = why if member is None else f"its member {member} is at its null; {why}"
+                log.warning("%s walls: %s is left off the maps' wall: %s (found: %s)", boundary, cause, why, found)
                 continue
-            log.warning("%s walls: %s is carried on the maps' wall by %s, %s", boundary, cause, member, why)
+            log.warning(
+                "%s walls: %s is carried on the maps' wall by %s, %s (found: %s)", boundary, cause, member, why, found
+            )
             cause = member
         out[cause] = {q.name: float(f["params"][q.name]) for q in by_name(cause).params}
     return out
@@ -223,7 +233,8 @@ def calibrated_model(diagnosis, name, alpha, R, form="linear"):
         A name that is no calibrated model, or whose finding the diagnosis
         does not name.
     ValueError
-        A diagnosis whose boundary names no cause.
+        A diagnosis whose boundary names no cause the maps' wall carries
+        (:func:`boundary_findings`).
     """
     from rocklab.diagnosis.model import rocking_model
 

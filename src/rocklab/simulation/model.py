@@ -6,7 +6,10 @@ rocking angle ``alpha_s`` (``alpha_rock`` for s = +1, ``alpha_neg`` for -1)::
     exact:   thetaddot = -p^2 [sin(s alpha_s - theta) + (ag/g) cos(s alpha_s - theta)]
     linear:  thetaddot =  p^2 theta - p^2 (s alpha_s + ag/g)         (Housner, small alpha)
 
-each with the optional viscous-like loss ``- 2 zeta p thetadot`` between impacts.
+each with the optional losses in flight between impacts,
+``- 2 zeta p thetadot - mu p^2 sign(thetadot) - kappa thetadot |thetadot|``: viscous,
+dry friction at the hinge and quadratic drag
+(:func:`rocklab.physics.flight.loss_deceleration`).
 
 Conventions
 -----------
@@ -73,6 +76,11 @@ REST_TOL = 1e-3
 OVERTURN = math.pi / 2
 
 
+def _sign(x):
+    """sign(x) of a float, 0 at 0 (the scalar right-hand side of the reference)."""
+    return 1.0 if x > 0.0 else (-1.0 if x < 0.0 else 0.0)
+
+
 def _restoring(theta, a, ag_g, linear, sin, cos):
     """thetaddot / p^2 without the flight loss on the hinge at signed angle
     ``a`` (module docstring, exact or linear); ``sin``, ``cos`` from math or
@@ -104,6 +112,14 @@ class RockingModel:
         alpha_rock.
     flight_damping : float
         zeta of the viscous-like term -2 zeta p thetadot between impacts [-].
+    hinge_friction : float
+        mu, dry friction at the hinge: a constant moment mu m g R opposing
+        thetadot, the deceleration mu p^2 sign(thetadot) [-].  A wall whose
+        restoring moment at an apex is below it (sin(alpha - |theta|) <= mu)
+        would stick there: not modelled (the integrator chatters), so
+        release it below alpha - mu.
+    flight_drag : float
+        kappa, quadratic drag -kappa thetadot |thetadot| [1/rad].
     gap : float
         One-sided only: inward rotation [rad] through which the wall rocks
         two-sided before striking the transverse walls.
@@ -127,6 +143,8 @@ class RockingModel:
     alpha_neg: float | None = None
     flight_damping: float = 0.0
     gap: float = 0.0
+    hinge_friction: float = 0.0
+    flight_drag: float = 0.0
     form: str = "exact"
     transverse_impact: _impact.ImpactLaw | None = field(default=None)
     hinge_rounding: float = 0.0
@@ -140,6 +158,8 @@ class RockingModel:
             raise ValueError("gap must be >= 0 and is only meaningful for one-sided rocking")
         if not -1.0 < self.hinge_rounding < 1.0:
             raise ValueError(f"hinge_rounding must be in (-1, 1), not {self.hinge_rounding!r}")
+        if min(self.flight_damping, self.hinge_friction, self.flight_drag) < 0:
+            raise ValueError("flight_damping, hinge_friction and flight_drag are losses: >= 0")
 
     @classmethod
     def from_wall(cls, height_m, thickness_m, **kw):
@@ -187,7 +207,9 @@ class RockingModel:
         """Angular acceleration [rad/s^2] on hinge ``side`` under ``ag`` [m/s^2]."""
         a = side * self.alpha_side(side)
         restoring = _restoring(theta, a, ag / wall.G, self.form == "linear", np.sin, np.cos)
-        return self.p**2 * restoring - 2.0 * self.flight_damping * self.p * thetadot
+        return self.p**2 * restoring - flight.loss_deceleration(
+            thetadot, self.p, self.flight_damping, self.hinge_friction, self.flight_drag
+        )
 
     def equation_of_motion(self, side, a0, slope, t0):
         """Right-hand side f(t, y) for solve_ivp, y = (theta, thetadot), on hinge
@@ -195,6 +217,19 @@ class RockingModel:
         numpy), since the event-driven reference calls it millions of times."""
         a = side * float(self.alpha_side(side))
         p2, c, g, lin = self.p**2, 2.0 * self.flight_damping * self.p, wall.G, self.form == "linear"
+
+        if self.hinge_friction or self.flight_drag:
+            loss = (self.p, self.flight_damping, self.hinge_friction, self.flight_drag)
+
+            def rhs_losses(t, y):
+                ag_g = (a0 + slope * (t - t0)) / g
+                return [
+                    y[1],
+                    p2 * _restoring(y[0], a, ag_g, lin, math.sin, math.cos)
+                    - flight.loss_deceleration(y[1], *loss, sign=_sign),
+                ]
+
+            return rhs_losses
 
         def rhs(t, y):
             return [y[1], p2 * _restoring(y[0], a, (a0 + slope * (t - t0)) / g, lin, math.sin, math.cos) - c * y[1]]
@@ -224,12 +259,13 @@ class RockingModel:
         Itself, unless the rocking angle depends on the amplitude
         (``hinge_rounding``): then the rigid model on the angle of this
         flight, from its apex (:func:`rocklab.physics.flight.apex_after` from
-        theta = 0, the release rotation otherwise).
+        theta = 0, with the losses in flight, the release rotation otherwise).
         """
         if not self.hinge_rounding or (self.one_sided and side < 0):
             return self
         a, k = self.alpha_side(side), self.hinge_rounding
-        A = flight.apex_after(abs(thetadot), a, self.p, self.flight_damping, k) if theta == 0 else abs(theta)
+        loss = {"zeta": self.flight_damping, "mu": self.hinge_friction, "kappa": self.flight_drag, "k": k}
+        A = flight.apex_after(abs(thetadot), a, self.p, **loss) if theta == 0 else abs(theta)
         angle = float(flight.flight_angle(A, a, k))
         pos, neg = (angle, self.alpha_minus) if side > 0 else (self.alpha_pos, angle)
         return replace(self, alpha_rock=pos, alpha_neg=neg, hinge_rounding=0.0)
@@ -241,12 +277,20 @@ class RockingModel:
         ------
         NotImplementedError
             For a rocking angle that depends on the amplitude (``hinge_rounding``):
-            the engines integrate ground motion, where a flight's apex is not known when it starts.
+            the engines integrate ground motion, where a flight's apex is not known when it starts;
+            for dry friction or drag in flight, which the engines do not
+            simulate (:mod:`rocklab.simulation.reference` does).
         """
         if self.hinge_rounding:
             raise NotImplementedError(
                 f"a rocking angle that depends on the amplitude (hinge_rounding = {self.hinge_rounding:g}) is "
                 "defined flight by flight in free rocking; the engines integrate ground motion"
+            )
+        if self.hinge_friction or self.flight_drag:
+            raise NotImplementedError(
+                f"the numba engine has no dry friction or drag in flight (hinge_friction = "
+                f"{self.hinge_friction:g}, flight_drag = {self.flight_drag:g}): simulate with "
+                "rocklab.simulation.reference"
             )
         return np.array(
             [
@@ -372,6 +416,9 @@ class RockingHistory:
                 alpha_rock=m.alpha_pos,
                 alpha_neg=m.alpha_minus,
                 flight_damping=m.flight_damping,
+                hinge_friction=m.hinge_friction,
+                flight_drag=m.flight_drag,
+                hinge_rounding=m.hinge_rounding,
                 gap=m.gap,
                 impact=type(m.base_law).__name__,
             )

@@ -73,6 +73,12 @@ class Cause:
         Families: ``closed_form(values, ci) -> str``, the closed form of
         the library the fitted member reduces to (its intervals hold the
         values of that form), or "no closed form of the library".
+    curve : callable, optional
+        Families: ``curve(tests, values, listed) -> dict``, the discovered
+        curve against the data and the best member of the catalogue
+        (``values``, ``listed``: the parameters of the chosen and of the
+        listed model), for the figure of
+        :func:`rocklab.plots.diagnosis.family_curve_figure`.
     """
 
     name: str
@@ -88,6 +94,7 @@ class Cause:
     estimate: Callable | None = None
     family: str | None = None
     closed_form: Callable | None = None
+    curve: Callable | None = None
 
     def holds(self, ci, name, value):
         """Whether the 95 % interval ``ci`` of parameter ``name`` holds ``value`` (to its practical margin)."""

@@ -70,7 +70,7 @@ def end_of_motion(S: TestStack, mp, min_ratio=3.0, window_s=1.0):
             if t_apex > lo:
                 pred = max(pred, A)
             t = t_apex + quarter_period(A, a, mpi.p)
-            A, side, a, _, tau = next_flight(landing_speed(A, a, mpi.p, mpi.zeta), side, mpi)
+            A, side, a, _, tau = next_flight(landing_speed(A, a, mpi.p, **mpi.flight_loss()), side, mpi)
             t = t + tau
         sel = (ts.t > lo) & (ts.t <= hi)
         win = odd_samples(0.25 / ts.dt)
@@ -115,8 +115,8 @@ def stop_speeds(S: TestStack, mp, min_ratio=3.0, tail_s=0.5):
         mpi = mp.row(i)
         # hinge of the flight after impact k (0-based)
         hinge = [float(S.side[i, k]) if mpi.one_sided else -float(S.side[i, k]) for k in (n - 2, n - 1)]
-        v_n = landing_speed(ts.peaks[n - 2], mpi.flight(ts.peaks[n - 2], hinge[0]), mpi.p, mpi.zeta)
-        v_l = landing_speed(ts.peaks[n - 1], mpi.flight(ts.peaks[n - 1], hinge[1]), mpi.p, mpi.zeta)
+        v_n = landing_speed(ts.peaks[n - 2], mpi.hinge(hinge[0]), mpi.p, **mpi.flight_keywords())
+        v_l = landing_speed(ts.peaks[n - 1], mpi.hinge(hinge[1]), mpi.p, **mpi.flight_keywords())
         if next_flight(v_l, hinge[1], mpi)[0] < min_ratio * ts.floor:
             continue
         if v_l >= v_n:  # a last flight higher than the one before: noise, no bracket

@@ -1,0 +1,242 @@
+"""Losses in flight by their dependence on the angular velocity (a family of the viscous loss, issue 12).
+
+The deceleration 2 zeta p thetadot + mu p^2 sign(thetadot) + kappa
+thetadot |thetadot| between impacts (:func:`rocklab.physics.flight.loss_deceleration`):
+viscous (zeta), dry friction at the hinge (a constant moment mu m g R) and
+quadratic drag (kappa), fitted as mu / alpha (the friction moment over the
+wall's restoring moment at rest, m g R sin alpha) and kappa alpha (the drag
+moment at thetadot_r over that same moment), both [-].  Its member mu =
+kappa = 0 is the listed :mod:`rocklab.diagnosis.causes.flight_damping`.
+
+Each law has its own flight-loss curve, the speed a flight loses between
+take-off and the next impact relative to its take-off speed v
+(:func:`rocklab.physics.flight.speed_loss`): at small amplitude of order
+mu / alpha (dry friction: constant in v), 4 zeta v / (3 p alpha) (viscous:
+proportional to v) and kappa v^2 / (2 p^2 alpha) (drag: as v^2).  Short
+flights show no loss in their measured speeds (the derivative filter moves
+it into the measured e, :func:`rocklab.diagnosis.evidence.filter_loss_bias`):
+the curve is read on the flights whose fit windows stay within one half.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+from scipy import stats
+
+from rocklab.diagnosis.causes import Cause, flight_damping
+from rocklab.diagnosis.engine import Param
+from rocklab.physics.flight import speed_loss, takeoff_speed
+from rocklab.physics.wall import overturning_velocity
+
+MU = Param("mu_over_alpha", 0.0, 0.2, 0.0, practical=5e-4)
+KAPPA = Param("kappa_alpha", 0.0, 2.0, 0.0, practical=1e-3)
+
+#: Flights above this fraction of alpha: the filter's windows stay within one half of them.
+LONG_FLIGHT = 0.3
+
+#: Log ratio of the residual sums of the flight-loss curve, viscous over the best member, that
+#: says the listed viscous loss has the wrong form (chi^2 of one degree of freedom at p = 1e-3).
+FORM_CHI2 = 10.8
+
+#: Median speed loss of the long flights that a model without a loss in flight misses.
+UNMODELLED_LOSS = 1e-3
+
+#: The members of the family: name, its parameter, the others at their null, the exponent of v in the loss.
+MEMBERS = (
+    ("flight_damping: viscous, -2 zeta p thetadot", "zeta", 1),
+    ("dry friction at the hinge, a constant moment mu m g R (RockingModel.hinge_friction)", "mu_over_alpha", 0),
+    ("quadratic drag, -kappa thetadot |thetadot| (RockingModel.flight_drag)", "kappa_alpha", 2),
+)
+
+
+def apply(mp, v):
+    return replace(
+        mp,
+        zeta=v["zeta"] * np.ones_like(mp.alpha),
+        mu=v["mu_over_alpha"] * mp.alpha,
+        kappa=v["kappa_alpha"] / mp.alpha,
+    )
+
+
+def long_flights(ob):
+    """Apex, take-off speed and relative speed loss of the flights the filter reads within one half.
+
+    Returns
+    -------
+    A, v, loss : ndarray
+        Flat arrays over the flights after an impact with apex above
+        :data:`LONG_FLIGHT` alpha and a next impact: apex [rad], take-off
+        speed [rad/s], 1 - next impact speed / take-off speed.
+    """
+    S = ob.S
+    with np.errstate(invalid="ignore", divide="ignore"):
+        loss = 1.0 - S.vb[:, 1:] / S.va[:, :-1]
+    A = S.A[:, :-1]
+    ok = np.isfinite(loss) & ob.big[:, :-1] & (A > LONG_FLIGHT * ob.alpha) & np.isfinite(S.va[:, :-1])
+    return A[ok], S.va[:, :-1][ok], loss[ok]
+
+
+def member_curves(A, v, alpha, p):
+    """Each member's flight-loss curve per unit of its parameter, as the derivative filter reads it.
+
+    The speed loss (:func:`rocklab.physics.flight.speed_loss`) less the
+    filter's bias within one half of a long flight
+    (:data:`rocklab.diagnosis.evidence.FILTER_DAMPING_BIAS` times zeta, or
+    kappa v / (2 p) for drag; none for dry friction): linear in the
+    parameter for the small losses of a wall.
+
+    Returns
+    -------
+    dict
+        Member parameter name -> array like ``A``.
+    """
+    from rocklab.diagnosis.evidence import FILTER_DAMPING_BIAS
+
+    u = 1e-3
+    return {
+        "zeta": speed_loss(A, alpha, p, zeta=u) / u - FILTER_DAMPING_BIAS,
+        "mu_over_alpha": speed_loss(A, alpha, p, mu=u * alpha) / u,
+        "kappa_alpha": speed_loss(A, alpha, p, kappa=u / alpha) / u - FILTER_DAMPING_BIAS * v / (2.0 * p * alpha),
+    }
+
+
+def signature(ob):
+    """The speed lost between take-off and the next impact against the flight's speed (long flights).
+
+    Each member's curve (:func:`member_curves`) fitted by its one parameter
+    (least squares); where another member fits the curve better than the
+    viscous loss beyond the noise (log ratio of the residual sums above
+    :data:`FORM_CHI2`, and by 2e-4 of the speed in RMS), the listed
+    ``flight_damping`` has the wrong form: ``against_member`` says so; where
+    the long flights lose more than :data:`UNMODELLED_LOSS` of their speed,
+    a model without a loss in flight misses it: ``unmodelled``
+    (:meth:`rocklab.diagnosis.problem.WallProblem.form_structure`).  Short
+    flights hide their loss in the measured e, so the listed loss's own
+    signature, a median over all flights, can miss a drag.
+    """
+    A, v, loss = long_flights(ob)
+    if v.size < 5 or np.ptp(loss) == 0:
+        return None
+    alpha, p = float(np.median(ob.alpha)), float(np.median(ob.p))
+    w = stats.wilcoxon(loss, alternative="greater")
+    fits = {}
+    for name, g in member_curves(A, v, alpha, p).items():
+        c = max(float(g @ loss / (g @ g)), 0.0)
+        fits[name] = (c, float(np.mean((loss - c * g) ** 2)))
+    best = min(fits, key=lambda k: fits[k][1])
+    rms = {k: np.sqrt(r) for k, (_, r) in fits.items()}
+    med = float(np.median(loss))
+    supports = bool(w.pvalue < 0.01 and med > 2e-4)
+    lr = v.size * np.log(fits["zeta"][1] / fits[best][1])
+    wrong = supports and best != "zeta" and lr > FORM_CHI2 and rms["zeta"] - rms[best] > 2e-4
+    label = {name: text.split(",")[0] for text, name, _ in MEMBERS}
+    return {
+        "value": med,
+        "best": best,
+        "start": fits[best][0],
+        "supports": supports,
+        "against_member": f"flight loss: the speed lost per flight follows {label[best]} "
+        f"(RMS {100 * rms[best]:.2f} % of the speed), not the viscous loss ({100 * rms['zeta']:.2f} %)"
+        if wrong
+        else None,
+        "unmodelled": f"flight loss: the flights above {LONG_FLIGHT:g} alpha lose {100 * med:.2f} % of their speed "
+        "between take-off and the next impact, and the model has no loss in flight"
+        if supports and med > UNMODELLED_LOSS
+        else None,
+        "text": f"speed lost per flight {100 * med:.2f} % (median of {v.size} flights above {LONG_FLIGHT:g} alpha, "
+        f"Wilcoxon p = {w.pvalue:.2g}); its curve against the speed fitted by each member: "
+        + ", ".join(f"{label[k]} {100 * rms[k]:.2f} %" for k in fits)
+        + " RMS",
+    }
+
+
+def starts(sig):
+    """The member that fits the flight-loss curve best, at its fitted value (not the listed viscous loss's)."""
+    s = sig.get("flight_loss")
+    if not s or s["best"] == "zeta":
+        return {}  # the listed loss's own start (its signature)
+    return {s["best"]: s["start"]}
+
+
+def closed_form(values, ci):
+    """The member of the family the intervals hold (the others at their null), or none."""
+    fits = [
+        text
+        for text, name, _ in MEMBERS
+        if all(CAUSE.holds(ci, q.name, q.null) for q in CAUSE.params if q.name != name)
+    ]
+    if len(fits) == 1:
+        return fits[0]
+    if fits:
+        return "undecided between " + "; ".join(fits)
+    return "no closed form of the library"
+
+
+def curve(tests, values, listed):
+    """The flight-loss curve of the fitted family and of the listed viscous loss, against the long flights.
+
+    Parameters
+    ----------
+    tests : list of MeasuredTest
+    values : dict
+        The family's parameters.
+    listed : dict
+        The parameters of the best model of the listed causes (zeta 0 where
+        it has no loss in flight).
+
+    Returns
+    -------
+    dict
+        ``x`` label and ``y`` label, ``measured`` ({x, y}: the long flights),
+        ``family`` and ``best_listed`` ({x, y, label}): take-off speed over
+        thetadot_r against the relative speed loss as the derivative filter
+        reads it (:func:`member_curves`), on the series' mean wall.
+    """
+    from rocklab.diagnosis.evidence import FILTER_DAMPING_BIAS, observe
+
+    ob = observe(tests)
+    _, v, loss = long_flights(ob)
+    alpha = float(np.mean(ob.alpha))
+    # the wall as found: its instability angle, and its dependence on the amplitude (instability_amplitude)
+    a, k = alpha * values.get("alpha_r_over_alpha", 1.0), values.get("rounding", 0.0)
+    p = float(np.mean(ob.p))
+    vr = float(overturning_velocity(alpha, p))
+    A = np.linspace(0.02, 0.98, 60) * a
+
+    def line(zeta, mu_a, kappa_a, label):
+        kw = {"zeta": zeta, "mu": mu_a * alpha, "kappa": kappa_a / alpha, "k": k}
+        v_off = takeoff_speed(A, a, p, **kw)
+        # as the derivative filter reads the long flights (member_curves)
+        read = speed_loss(A, a, p, **kw) - FILTER_DAMPING_BIAS * (zeta + kw["kappa"] * v_off / (2.0 * p))
+        return {"x": (v_off / vr).tolist(), "y": read.tolist(), "label": label}
+
+    zeta = listed.get("zeta", 0.0)
+    fam = ", ".join(f"{q.name} = {values[q.name]:.3g}" for q in CAUSE.params)
+    return {
+        "x": "take-off speed / thetadot_r",
+        "y": "speed lost by the next impact / take-off speed (as the filter reads it)",
+        "measured": {
+            "x": (v / vr).tolist(),
+            "y": loss.tolist(),
+            "label": f"measured, flights above {LONG_FLIGHT:g} alpha",
+        },
+        "family": line(values["zeta"], values["mu_over_alpha"], values["kappa_alpha"], f"flight_loss ({fam})"),
+        "best_listed": line(zeta, 0.0, 0.0, f"best listed member: flight_damping (zeta = {zeta:.3g})"),
+    }
+
+
+CAUSE = Cause(
+    name="flight_loss",
+    law="-2 zeta p thetadot - mu p^2 sign(thetadot) - kappa thetadot |thetadot| between impacts "
+    "(viscous, dry friction at the hinge, drag)",
+    params=(flight_damping.ZETA, MU, KAPPA),
+    apply=apply,
+    signature=signature,
+    starts=starts,
+    replaces=("flight_damping",),
+    family="flight_damping",
+    closed_form=closed_form,
+    curve=curve,
+)
