@@ -79,6 +79,7 @@ def test_library_defaults_equal_the_schema(schema):
     from rocklab.diagnosis import diagnose_records
     from rocklab.dissipation.statistics import campaign_tables
     from rocklab.lab import channels, validity
+    from rocklab.lab.campaign import Campaign
     from rocklab.physics.impact import AmplitudeLaw
     from rocklab.seismic import overturning
 
@@ -86,6 +87,8 @@ def test_library_defaults_equal_the_schema(schema):
     assert d["channels"] == channels.OPTIONS
     assert d["validity"] == validity.RULES
     assert d["statistics"] == _signature_defaults(campaign_tables, "n_boot", "seed")
+    max_tests = _signature_defaults(Campaign.reduction_jobs, "max_tests")["max_tests"]
+    assert d["reduction"] == {"max_tests_per_job": max_tests}
     assert d["diagnosis"] == _signature_defaults(diagnose_records, "n_boot", "n_history", "seed")
     maps = d["maps"]
     assert (maps["alpha"], maps["R"]) == (overturning.ALPHA, overturning.R)
