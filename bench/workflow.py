@@ -14,9 +14,8 @@ memory, and per stage (a rule, or a folder of jobs of
 their job time summed, the longest and their CPU time (Snakemake's samples:
 a lower bound for jobs longer than 30 s).  The job times summed over the
 wall time tell how busy the cores were kept (at most ``--cores``); the CPU
-time the jobs do not account for is Snakemake's own (building the DAG,
-again after each checkpoint, scheduling) and the start of each job's
-process before its benchmark begins.
+time of Snakemake's own process (building the DAG, again after each
+checkpoint, scheduling, checking outputs) is measured apart.
 
 Exits 1 when the run takes longer than the target.  The numba cache of the
 checkout is kept (a fresh clone compiles once, in its first run).
@@ -61,7 +60,6 @@ def summary(run: dict, by_stage: dict, cores: int) -> dict:
         "job_cpu_s": job_cpu,
         # how many cores the jobs kept busy on average (at most `cores`)
         "job_s_over_wall": job_s / run["wall_s"],
-        "cpu_s_outside_jobs": run["cpu_s"] - job_cpu,
         "stages": by_stage,
         "target_s": TARGET_S,
         "wall_over_target": run["wall_s"] / TARGET_S,

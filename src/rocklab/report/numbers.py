@@ -596,7 +596,7 @@ def performance(results: Path) -> dict:
     )
     wf = _bench(results, "workflow")
     keys = ("cores", "wall_s", "cpu_s", "peak_rss_tree_mb", "load_avg_1min_before", "n_jobs", "job_s")
-    keys += ("job_s_over_wall", "cpu_s_outside_jobs", "target_s", "wall_over_target", "pass", "stages")
+    keys += ("job_s_over_wall", "snakemake_cpu_s", "target_s", "wall_over_target", "pass", "stages")
     out["workflow"] = {k: wf[k] for k in keys} if wf else None
     sc = _bench(results, "scale")
     out["scale"] = _scale(sc) if sc else None
