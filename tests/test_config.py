@@ -167,3 +167,17 @@ def test_the_raw_format_is_specified_in_the_repository():
     folders = ("src", "scripts", "workflow", "config", "tests", "docs")
     files = [p for f in folders for p in (ROOT / f).rglob("*") if p.suffix in {".py", ".smk", ".yaml", ".md"}]
     assert not [p for p in files if "shared/spec" in p.read_text() and p.name != "test_config.py"]
+
+
+def test_every_run_takes_the_workflow_profile(tmp_path):
+    """profiles/default is read by a plain `snakemake` in the checkout: no input
+    checksums (Snakemake would hash every input of a job once per output)."""
+    snakemake = Path(sys.executable).with_name("snakemake")
+    if not snakemake.exists():
+        pytest.skip("snakemake not installed beside this interpreter")
+    profile = yaml.safe_load((ROOT / "profiles" / "default" / "config.yaml").read_text())
+    assert profile == {"max-checksum-file-size": 0}
+    cmd = [str(snakemake), "-n", "qc_table", "--cores", "1", "--config", f"results_dir={tmp_path}"]
+    run = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "Using workflow specific profile profiles/default" in run.stdout + run.stderr
