@@ -74,6 +74,7 @@ def main(argv=None):
     ap.add_argument("--workdir", type=Path, default=None, help="where the results go (default: a temp folder)")
     args = ap.parse_args(argv)
     work = Path(args.workdir or tempfile.mkdtemp(prefix="rocklab-workflow-"))
+    work.mkdir(parents=True, exist_ok=True)
     results = work / "results"
     shutil.rmtree(results, ignore_errors=True)
     run = run_snakemake(
