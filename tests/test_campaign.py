@@ -1,6 +1,7 @@
 """The raw-format reader: every bad input names the file, the row and the problem."""
 
 import gzip
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -89,3 +90,55 @@ def test_header_test_id_must_match(tiny_campaign):
 def test_series_id():
     assert series_id("2a", "two-sided", np.nan) == "2a-2s"
     assert series_id("2a", "one-sided", 60.0) == "2a-1s-cd60"
+
+
+#: Fields of a record's data rows: numbers as the lab writes them, blanks, a
+#: number too large for a float, and what is no number (malformed, or a word
+#: pandas would read as one).
+FIELDS = ["1", "1.5", " 2", " 3 ", "\t4", "", " ", "+.5", "5.", "1E3", "-0", "0.1234567890123456789", "1e-400"]
+INFINITE = ["1e400", "-1e400"]
+FIELDS_BAD = ["1e", "1.2.3", "--1", "+", "-", ".", "e5", "1e+", "1 2", "1-", "1e5.5", "0x10", "1_000", "nan", "inf"]
+
+
+def _python_float(field):
+    """The independent parse of a field: Python's correctly rounded float(), NaN for a blank."""
+    return float(field) if field.strip() else np.nan
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_fields_read_as_python_reads_them(tmp_path, seed):
+    """Whichever of the two parsers of campaign._numbers reads a record (the
+    fast one for plain decimals, field by field otherwise), a number is
+    Python's float of its text, a blank is NaN and anything else is an
+    error naming the row and the field (the first that is no number, else
+    the first infinite one)."""
+    from rocklab.lab.campaign import _numbers
+
+    rng = np.random.default_rng(seed)
+    for _ in range(200):
+        rows = [[str(rng.choice(FIELDS + INFINITE + FIELDS_BAD[: seed * 3])) for _ in range(3)] for _ in range(4)]
+        body = "\n".join(",".join(r) for r in rows)
+        bad = [(i, j, "") for i, r in enumerate(rows) for j, f in enumerate(r) if f in FIELDS_BAD]
+        bad += [(i, j, "finite ") for i, r in enumerate(rows) for j, f in enumerate(r) if f in INFINITE]
+        if bad:
+            i, j, finite = bad[0]
+            with pytest.raises(RawFormatError, match=rf"f\.csv:{10 + i}: c{j}: .* is not a {finite}number"):
+                _numbers(body, ["c0", "c1", "c2"], "f.csv", 10)
+        else:
+            got = _numbers(body, ["c0", "c1", "c2"], "f.csv", 10)
+            expected = np.array([[_python_float(f) for f in r] for r in rows])
+            np.testing.assert_array_equal(got, expected)
+
+
+def test_embedded_records_read_as_python_reads_them():
+    """Records of the embedded campaign, some with lost samples (blank fields): every
+    value is Python's float of its text (bit for bit: the fast path is exact)."""
+    campaign = open_campaign(Path(__file__).resolve().parents[1] / "raw" / "campaign")
+    for k, test_id in enumerate(campaign.test_ids):
+        path = campaign.record_path(test_id)
+        rows = [ln.split(",") for ln in gzip.decompress(path.read_bytes()).decode().splitlines()[4:]]
+        if k % 61 and all(all(r) for r in rows):
+            continue
+        expected = np.array([[_python_float(f) for f in r] for r in rows])
+        r = read_record(path)
+        np.testing.assert_array_equal(np.column_stack([r.time, r.readings]), expected)

@@ -80,6 +80,7 @@ def test_library_defaults_equal_the_schema(schema):
     from rocklab.dissipation.covariates import campaign_effects
     from rocklab.dissipation.statistics import campaign_tables
     from rocklab.lab import channels, validity
+    from rocklab.lab.campaign import Campaign
     from rocklab.physics.impact import AmplitudeLaw
     from rocklab.seismic import overturning
 
@@ -87,6 +88,8 @@ def test_library_defaults_equal_the_schema(schema):
     assert d["channels"] == channels.OPTIONS
     assert d["validity"] == validity.RULES
     assert d["statistics"] == _signature_defaults(campaign_tables, "n_boot", "seed")
+    max_tests = _signature_defaults(Campaign.reduction_jobs, "max_tests")["max_tests"]
+    assert d["reduction"] == {"max_tests_per_job": max_tests}
     diagnosis = dict(d["diagnosis"])
     assert diagnosis.pop("campaign_margin") == _signature_defaults(campaign_effects, "margin")["margin"]
     assert diagnosis == _signature_defaults(diagnose_records, "n_boot", "n_history", "seed")
@@ -175,3 +178,17 @@ def test_the_raw_format_is_specified_in_the_repository():
     folders = ("src", "scripts", "workflow", "config", "tests", "docs")
     files = [p for f in folders for p in (ROOT / f).rglob("*") if p.suffix in {".py", ".smk", ".yaml", ".md"}]
     assert not [p for p in files if "shared/spec" in p.read_text() and p.name != "test_config.py"]
+
+
+def test_every_run_takes_the_workflow_profile(tmp_path):
+    """profiles/default is read by a plain `snakemake` in the checkout: no input
+    checksums (Snakemake would hash every input of a job once per output)."""
+    snakemake = Path(sys.executable).with_name("snakemake")
+    if not snakemake.exists():
+        pytest.skip("snakemake not installed beside this interpreter")
+    profile = yaml.safe_load((ROOT / "profiles" / "default" / "config.yaml").read_text())
+    assert profile == {"max-checksum-file-size": 0}
+    cmd = [str(snakemake), "-n", "qc_table", "--cores", "1", "--config", f"results_dir={tmp_path}"]
+    run = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "Using workflow specific profile profiles/default" in run.stdout + run.stderr

@@ -608,3 +608,23 @@ def test_a_boundary_too_small_to_extend_the_model_is_extracted(tiny_results):
     (tiny_results / "diagnosis.json").write_text(json.dumps([*_diagnosis_entries(), small]))
     one = nb.diagnosis(tiny_results)["one_sided"]
     assert one["extended"] is None and one["verdict"] == "none" and one["n_tests"] == 3
+
+
+def test_workflow_stages_are_read_from_the_bench_file(tiny_results):
+    """bench/workflow.py's results/bench/workflow.json, stage by stage, into the
+    performance page; the job times of the benchmark files through rocklab.io."""
+    from rocklab.io import benchmark_times
+
+    jobs = benchmark_times(tiny_results)
+    assert sorted(jobs.job) == ["qc_table", "reduce/1a-2s", "reduce/3a-2s"]
+    assert jobs.set_index("job").loc["reduce/3a-2s", "stage"] == "reduce" and jobs.cpu_s.isna().all()
+    assert "Not measured" in pages.performance_stages(nb.extract(tiny_results))
+    stages = {"reduce": {"jobs": 2, "job_s": 8.0, "longest_s": 5.0, "cpu_s": 6.5}}
+    run = {"cores": 2, "wall_s": 120.0, "cpu_s": 200.0, "peak_rss_tree_mb": 900.0, "load_avg_1min_before": 1.0}
+    run |= {"n_jobs": 2, "job_s": 8.0, "job_s_over_wall": 8 / 120, "snakemake_cpu_s": 15.0}
+    run |= {"target_s": 150.0, "wall_over_target": 0.8, "pass": True, "stages": stages}
+    (tiny_results / "bench" / "workflow.json").write_text(json.dumps(run))
+    n = nb.extract(tiny_results)
+    assert n["performance"]["workflow"]["stages"] == stages
+    assert "| `reduce` | 2 | 8.0 | 5.0 | 6.5 |" in pages.performance_stages(n)
+    assert pages.render("${performance.workflow.wall_over_target:.2f} ${performance.workflow.pass}", n) == "0.80 yes"

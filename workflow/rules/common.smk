@@ -1,5 +1,6 @@
 # Paths, the campaign's test list and the per-test parameters that decide
 # when a test must be reduced again.
+import functools
 import json
 import re
 from pathlib import Path
@@ -20,10 +21,10 @@ CAMPAIGN = open_campaign(RAW)
 TEST_IDS = CAMPAIGN.test_ids
 # the tests and records the config names become file names too
 check_names(config, TEST_IDS, set(read_manifest().record))
-#: The unit of one reduction job: a series, or the tests refused at the door.
-REDUCTION_GROUPS = CAMPAIGN.reduction_groups()
 #: The tests of each series, in the order of tests.csv.
-TESTS_BY_SERIES = {k: v for k, v in REDUCTION_GROUPS.items() if k != UNREADABLE}
+TESTS_BY_SERIES = {k: v for k, v in CAMPAIGN.reduction_groups().items() if k != UNREADABLE}
+#: The tests of each reduction job: a specimen (or a part of one), or the tests refused at the door.
+REDUCTION_JOBS = CAMPAIGN.reduction_jobs(config["reduction"]["max_tests_per_job"])
 
 
 def res(*parts):
@@ -62,11 +63,27 @@ def test_params(test_id):
     row = CAMPAIGN.test_row(test_id)
     # not its line: a row added above it changes nothing of this test
     out = {"row": {k: str(v) for k, v in row.items() if k != "line"}}
-    if row.specimen in set(CAMPAIGN.specimens.specimen):
-        out["specimen"] = {k: str(v) for k, v in CAMPAIGN.specimen(row.specimen).items()}
-    out["setup"] = CAMPAIGN.setup(row.setup).astype(str).to_dict("records")
+    specimen = _specimen_params(row.specimen)
+    if specimen is not None:
+        out["specimen"] = specimen
+    out["setup"] = _setup_params(row.setup)
     out["error"] = str(CAMPAIGN.log.errors.get(test_id, ""))
     return out
+
+
+# Once per specimen and setup, not per test: the params of every job are
+# evaluated each time the DAG is (at the start and after each checkpoint).
+@functools.cache
+def _specimen_params(name):
+    """The row of specimens.csv of a specimen as text, None when it has none."""
+    known = name in set(CAMPAIGN.specimens.specimen)
+    return {k: str(v) for k, v in CAMPAIGN.specimen(name).items()} if known else None
+
+
+@functools.cache
+def _setup_params(name):
+    """The rows of setups.csv of a setup as text."""
+    return CAMPAIGN.setup(name).astype(str).to_dict("records")
 
 
 #: Categories of `snakemake --report`, one per stage of the workflow; the

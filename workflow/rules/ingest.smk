@@ -3,15 +3,17 @@
 # the motion extracted from it (release, impacts, peaks), stored once for the
 # dissipation tables and the diagnosis.
 #
-# One job per series (and one for the tests refused at the door), not per test: a job spends ten times longer starting
-# Python and importing the library (1.0 s) than reducing one test (0.1 s).
+# One job per specimen (cut into parts of at most reduction.max_tests_per_job
+# tests), and one for the tests refused at the door, not one per test or per
+# series: a job spends longer starting Python and importing the library
+# (about 1.5 s of CPU) than reducing ten tests (0.1 s each).
 
-for _k, (_series, _ids) in enumerate(REDUCTION_GROUPS.items()):
+for _k, (_job, _ids) in enumerate(REDUCTION_JOBS.items()):
 
     rule:
         name:
-            # a rule name is an identifier; the index keeps "1a-2s" and "1a_2s" apart
-            f"reduce_{_k:03d}_" + re.sub(r"\W", "_", _series)
+            # a rule name is an identifier; the index keeps "1a-b" and "1a_b" apart
+            f"reduce_{_k:03d}_" + re.sub(r"\W", "_", _job)
         input:
             lambda wildcards, ids=_ids: record_inputs(ids),
         output:
@@ -22,8 +24,8 @@ for _k, (_series, _ids) in enumerate(REDUCTION_GROUPS.items()):
             raw_dir=config["raw_dir"],
             options={"channels": config["channels"], "validity": config["validity"]},
         log:
-            res("logs", "reduce", f"{_series}.log"),
+            res("logs", "reduce", f"{_job}.log"),
         benchmark:
-            res("benchmarks", "reduce", f"{_series}.tsv")
+            res("benchmarks", "reduce", f"{_job}.tsv")
         script:
             "../../scripts/reduce_tests.py"

@@ -67,6 +67,9 @@ SAFE_ID = re.compile(rf"[A-Za-z0-9][A-Za-z0-9._-]{{0,{ID_MAX_LENGTH - 1}}}")
 CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f]")
 #: The ``# units:`` of a record: time in seconds, readings in mm.
 UNITS = ("s", "mm")
+#: Most tests of one reduction job (:meth:`Campaign.reduction_jobs`; the
+#: workflow's ``reduction.max_tests_per_job``).
+TESTS_PER_JOB = 150
 #: The reduction group of the tests refused at the door (:meth:`Campaign.reduction_groups`).
 UNREADABLE = "unreadable"
 
@@ -532,6 +535,46 @@ def _decompress(path: Path) -> tuple[str, str]:
     return text, digest
 
 
+#: Text that can only hold decimal numbers and separators: no ``nan``, ``inf``, hex or word.
+PLAIN_NUMBERS = re.compile(r"[^0-9.eE+\-,\s]")
+
+
+def _numbers(body: str, columns: list, path: Path, first_data: int) -> np.ndarray:
+    """The data rows as finite floats, NaN where a field is empty.
+
+    Parsed as floats by pandas' C reader when the text holds plain decimal
+    numbers only (a record of the lab: ten times faster); anything else, or
+    a field that reader refuses or makes infinite, goes field by field
+    through ``pandas.to_numeric``, which also names the first field that is
+    not a (finite) number.  Both read a number as Python's ``float`` does
+    (tests/test_campaign.py).
+    """
+    if not PLAIN_NUMBERS.search(body):
+        try:
+            values = pd.read_csv(
+                io.StringIO(body), header=None, names=columns, dtype=float, na_values=[""], keep_default_na=False
+            )
+        except ValueError:  # a malformed number: found and named below
+            pass
+        else:
+            data = values.to_numpy(float)
+            if not np.isinf(data).any():
+                return data
+    table = pd.read_csv(io.StringIO(body), header=None, names=columns, dtype=str, keep_default_na=False)
+    fields = table.apply(lambda s: s.str.strip())
+    values = fields.apply(lambda s: pd.to_numeric(s.replace("", np.nan), errors="coerce"))
+    nonnum = (values.isna() & fields.ne("")).to_numpy()
+    if nonnum.any():
+        i, j = np.argwhere(nonnum)[0]
+        raise RawFormatError(path, first_data + int(i), f"{columns[j]}: {table.iat[i, j]!r} is not a number")
+    data = values.to_numpy(float)
+    infinite = np.isinf(data)
+    if infinite.any():
+        i, j = np.argwhere(infinite)[0]
+        raise RawFormatError(path, first_data + int(i), f"{columns[j]}: {table.iat[i, j]!r} is not a finite number")
+    return data
+
+
 def read_record(path, expected_test_id=None) -> Record:
     """Read one test record and check it against the format.
 
@@ -559,7 +602,8 @@ def read_record(path, expected_test_id=None) -> Record:
     text, digest = _decompress(path)
     # a byte-order mark and CRLF line ends are harmless
     lines = text.removeprefix("\ufeff").splitlines()
-    bad = next((n for n, ln in enumerate(lines, start=1) if CONTROL.search(ln)), None)
+    # line by line only when the text holds one (a CR of CRLF does, and ends a line)
+    bad = next((n for n, ln in enumerate(lines, start=1) if CONTROL.search(ln)), None) if CONTROL.search(text) else None
     if bad is not None:
         raise RawFormatError(path, bad, "a control character in the line")
     header, n_comment = {}, 0
@@ -610,18 +654,7 @@ def read_record(path, expected_test_id=None) -> Record:
         i = int(bad[0])
         what = "truncated row" if counts[i] < ncol - 1 else "too many fields"
         raise RawFormatError(path, first_data + i, f"{what}: {counts[i] + 1} fields, expected {ncol}")
-    table = pd.read_csv(io.StringIO("\n".join(body)), header=None, names=columns, dtype=str, keep_default_na=False)
-    fields = table.apply(lambda s: s.str.strip())
-    values = fields.apply(lambda s: pd.to_numeric(s.replace("", np.nan), errors="coerce"))
-    nonnum = (values.isna() & fields.ne("")).to_numpy()
-    if nonnum.any():
-        i, j = np.argwhere(nonnum)[0]
-        raise RawFormatError(path, first_data + int(i), f"{columns[j]}: {table.iat[i, j]!r} is not a number")
-    data = values.to_numpy(float)
-    infinite = np.isinf(data)
-    if infinite.any():
-        i, j = np.argwhere(infinite)[0]
-        raise RawFormatError(path, first_data + int(i), f"{columns[j]}: {table.iat[i, j]!r} is not a finite number")
+    data = _numbers("\n".join(body), columns, path, first_data)
     time = data[:, 0]
     if np.isnan(time).any():
         i = int(np.flatnonzero(np.isnan(time))[0])
@@ -675,6 +708,39 @@ class Campaign:
             key = UNREADABLE if test_id in self.log.errors else row_series(self.test_row(test_id))
             groups.setdefault(key, []).append(test_id)
         return groups
+
+    def reduction_jobs(self, max_tests: int = TESTS_PER_JOB) -> dict:
+        """The tests of each reduction job: those of one specimen, in the order of tests.csv.
+
+        A job spends longer starting Python and importing the library (about
+        1.5 s of CPU) than reducing ten tests, so the series of a specimen
+        share a job; a specimen of more than ``max_tests`` tests is cut into
+        that many near-equal parts (two cores stay busy on a large campaign,
+        and an edited row reduces at most ``max_tests`` tests again).  The
+        tests refused at the door are the job :data:`UNREADABLE`.
+
+        Returns
+        -------
+        dict
+            ``specimen-<name>`` (or ``specimen-<name>-part<k>`` when cut)
+            to test ids: a name no specimen, being a safe identifier, can
+            turn into :data:`UNREADABLE`.
+        """
+        if max_tests < 1:
+            raise ValueError(f"max_tests must be at least 1, got {max_tests}")
+        by_specimen = {}
+        for series, ids in self.reduction_groups().items():
+            key = UNREADABLE if series == UNREADABLE else f"specimen-{self.test_row(ids[0]).specimen}"
+            by_specimen.setdefault(key, []).extend(ids)
+        jobs = {}
+        for key, ids in by_specimen.items():
+            n_parts = -(-len(ids) // max_tests)
+            if key == UNREADABLE or n_parts == 1:
+                jobs[key] = ids
+                continue
+            for k, part in enumerate(np.array_split(np.asarray(ids, dtype=object), n_parts), start=1):
+                jobs[f"{key}-part{k}"] = list(part)
+        return jobs
 
     @cached_property
     def _first_row(self) -> dict:

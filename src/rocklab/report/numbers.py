@@ -26,6 +26,8 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from rocklab.io import benchmark_times
+
 #: Significant digits kept of every float.
 SIGNIFICANT = 6
 
@@ -574,16 +576,13 @@ def _benchmarks(results: Path) -> dict:
     """Job times of the workflow from Snakemake's benchmark files: one entry
     per single-job rule (``<rule>.tsv``) and one per folder of jobs
     (``<folder>/<job>.tsv``, keyed ``<folder>_jobs``)."""
-    root = results / "benchmarks"
     out = {}
-    for tsv in sorted(root.rglob("*.tsv")) if root.is_dir() else []:
-        parts = tsv.relative_to(root).parts
-        rule = f"{parts[0]}_jobs" if len(parts) > 1 else tsv.stem
-        s = float(pd.read_csv(tsv, sep="\t")["s"].iloc[0])
+    for job in benchmark_times(results).itertuples():
+        rule = f"{job.stage}_jobs" if "/" in job.job else job.stage
         entry = out.setdefault(rule, {"jobs": 0, "total_s": 0.0, "longest_s": 0.0})
         entry["jobs"] += 1
-        entry["total_s"] += s
-        entry["longest_s"] = max(entry["longest_s"], s)
+        entry["total_s"] += job.s
+        entry["longest_s"] = max(entry["longest_s"], job.s)
     return out
 
 
@@ -650,6 +649,10 @@ def performance(results: Path) -> dict:
         if mp
         else None
     )
+    wf = _bench(results, "workflow")
+    keys = ("cores", "wall_s", "cpu_s", "peak_rss_tree_mb", "load_avg_1min_before", "n_jobs", "job_s")
+    keys += ("job_s_over_wall", "snakemake_cpu_s", "target_s", "wall_over_target", "pass", "stages")
+    out["workflow"] = {k: wf[k] for k in keys} if wf else None
     sc = _bench(results, "scale")
     out["scale"] = _scale(sc) if sc else None
     ref = _bench(results, "maps_reference")

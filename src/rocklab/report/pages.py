@@ -368,6 +368,19 @@ def performance_jobs(n: Mapping) -> str:
     return markdown_table(["rule (or folder of jobs)", "jobs", "job time, total (s)", "longest job (s)"], rows)
 
 
+def performance_stages(n: Mapping) -> str:
+    """The main job stage by stage (``bench/workflow.py``), or that it was not measured."""
+    wf = n["performance"].get("workflow")
+    if wf is None:
+        return "Not measured: `make bench` has not run on these results (`results/bench/workflow.json`)."
+    rows = [
+        [f"`{stage}`", show(s["jobs"]), show(s["job_s"], ".1f"), show(s["longest_s"], ".1f"), show(s["cpu_s"], ".1f")]
+        for stage, s in wf["stages"].items()
+    ]
+    header = ["stage (rule or folder of jobs)", "jobs", "job time, total (s)", "longest job (s)", "CPU time (s)"]
+    return markdown_table(header, rows)
+
+
 #: What the shake-table page says where the target was not run.
 NOT_RUN = (
     "Not run: the target `shake_table` has not run on these results "
@@ -478,6 +491,7 @@ TABLES: dict[str, Callable[[Mapping], str]] = {
     "calibrated_walls": calibrated_walls,
     "maps_comparison": maps_comparison,
     "performance_jobs": performance_jobs,
+    "performance_stages": performance_stages,
     "shake_table_status": shake_table_status,
     "shake_table_scores": shake_table_scores,
     "shake_table_nominal": shake_table_nominal,
