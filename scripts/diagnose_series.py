@@ -1,4 +1,8 @@
-"""Snakemake shim: results/diagnosis/<series>.json of each series of a boundary condition ([] if there is none)."""
+"""Snakemake shim: results/diagnosis/<series>.json of each series of a boundary condition ([] if there is none).
+
+The series are read and diagnosed one at a time, so that the job's memory is
+that of its largest series, not of the boundary condition's whole campaign.
+"""
 
 import json
 from pathlib import Path
@@ -8,14 +12,13 @@ from rocklab.io import setup_logging, valid_tests
 from rocklab.lab.motion import read_motion
 
 setup_logging(snakemake.log[0])
-# a list: the tests are read twice (their motions, their records)
-tests = list(valid_tests(snakemake.input.tests))
 motions = {Path(p).stem: p for p in snakemake.input.motions}
-stored = {t.attrs["test_id"]: read_motion(motions[t.attrs["test_id"]]) for t in tests}
-records = records_by_series(tests, stored)
 for series, out in zip(snakemake.params.series, snakemake.output):
+    # a list: the tests are read twice (their motions, their records)
+    tests = list(valid_tests(snakemake.params.tests[series]))
+    stored = {t.attrs["test_id"]: read_motion(motions[t.attrs["test_id"]]) for t in tests}
     entry = diagnose_records(
-        records.get(series, []),
+        records_by_series(tests, stored).get(series, []),
         series,
         n_boot=snakemake.params.n_boot,
         n_history=snakemake.params.n_history,

@@ -4,11 +4,12 @@
 # boundary conditions summed up over the series;
 # Figs. 14-15 per series; the restitution of the UMinho limestone blocks.
 
-from rocklab.diagnosis.block_tests import TABLES
+# rocklab.data, not the diagnosis package: Snakemake parses this file at every start
+from rocklab.data import LIMESTONE
 
 DIAGNOSIS = config["diagnosis"]
 # the limestone tables ship with the library (rocklab.data): found where it is installed
-BLOCKS = Path(recorded_path(TABLES))
+BLOCKS = Path(recorded_path(LIMESTONE))
 
 
 def diagnosis_outputs():
@@ -49,6 +50,8 @@ for _boundary, _series in SERIES_BY_BOUNDARY.items():
             [res("diagnosis", f"{s}.json") for s in _series],
         params:
             series=list(_series),
+            # read series by series: the job holds one series' tests at a time
+            tests={s: [res("tests", f"{t}.nc") for t in TESTS_BY_SERIES[s]] for s in _series},
             n_boot=DIAGNOSIS["n_boot"],
             n_history=DIAGNOSIS["n_history"],
             seed=DIAGNOSIS["seed"],

@@ -44,3 +44,7 @@ def data_path(*parts) -> Path:
     if not isinstance(root, Path):
         raise RuntimeError(f"rocklab's data need rocklab installed as a folder, not imported from {root}")
     return root.joinpath(*parts)
+
+
+#: Folder of the UMinho limestone blocks' tables, with their provenance.
+LIMESTONE = data_path("uminho-limestone-free-rocking")

@@ -41,7 +41,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from rocklab.data import data_path
+from rocklab.data import LIMESTONE
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.causes import restitution_housner_loss, restitution_scale
 from rocklab.diagnosis.engine import (
@@ -62,7 +62,7 @@ N_IMPACTS = 10
 R_MAX = 1.5
 
 #: Folder of the tables, with their provenance (package data, :mod:`rocklab.data`).
-TABLES = data_path("uminho-limestone-free-rocking")
+TABLES = LIMESTONE
 
 CANDIDATES = ("restitution_scale", "restitution_amplitude", "hinge_asymmetry")
 
