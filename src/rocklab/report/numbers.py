@@ -653,6 +653,10 @@ def performance(results: Path) -> dict:
     keys = ("cores", "wall_s", "cpu_s", "peak_rss_tree_mb", "load_avg_1min_before", "n_jobs", "job_s")
     keys += ("job_s_over_wall", "snakemake_cpu_s", "target_s", "wall_over_target", "pass", "stages")
     out["workflow"] = {k: wf[k] for k in keys} if wf else None
+    fc = _bench(results, "fresh_clone")
+    keys = ("cores", "load_before", "install_s", "workflow_s", "total_s", "install_cpu_s", "workflow_cpu_s")
+    keys += ("target_total_s", "target_workflow_s", "total_over_target", "workflow_over_target")
+    out["fresh_clone"] = {k: fc[k] for k in keys} | {"load_1min": fc["load_before"][0]} if fc else None
     sc = _bench(results, "scale")
     out["scale"] = _scale(sc) if sc else None
     ref = _bench(results, "maps_reference")
