@@ -114,6 +114,17 @@ def test_readme_is_short_and_quotes_no_result():
     assert not re.search(r"\b0\.\d{3}\b", text), "a result in the README: it belongs to a generated page"
 
 
+def test_readme_states_the_measured_times():
+    """The README's times and memory are those of the performance page (issue 14)."""
+    perf = json.loads((ROOT / "docs" / "numbers.json").read_text())["performance"]
+    text = " ".join((ROOT / "README.md").read_text().split())
+    fc, sc = perf["fresh_clone"], perf["scale"]
+    assert f"{fc['total_s']:.0f} s in all, {fc['install_s']:.0f} s of install and {fc['workflow_s']:.0f} s" in text
+    assert f"({sc['large_n_tests']} tests" in text and f"{sc['large_cpu_s']:.0f} s of CPU time" in text
+    assert f"({sc['large_s']:.0f} s at a load average of {sc['large_load']:.1f})" in text
+    assert f"peak memory of {sc['large_peak_mb'] / 1000:.1f} GB" in text
+
+
 def readme_example():
     """The Python block of the README's library section."""
     return re.search(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), re.S).group(1)
