@@ -17,11 +17,12 @@ from rocklab.seismic.overturning import overturning_map
 
 numba.set_num_threads(min(snakemake.threads, numba.config.NUMBA_NUM_THREADS))
 p = snakemake.params
-diagnosis = snakemake.input.get("diagnosis")
-names = calibrated.model_names(diagnosis) if diagnosis else p.models
+# read once: every calibrated model of every record of the batch is built from it
+diagnosis = calibrated.read_diagnosis(snakemake.input.diagnosis) if "diagnosis" in snakemake.input.keys() else None
+names = calibrated.model_names(diagnosis) if diagnosis is not None else p.models
 for k, record in enumerate(p.records):
     setup_logging(snakemake.log[k])
-    if diagnosis:
+    if diagnosis is not None:
         folder = Path(snakemake.output[k])
         folder.mkdir(parents=True, exist_ok=True)
         paths = [folder / f"{record}__{name}.nc" for name in names]
