@@ -26,6 +26,14 @@ TESTS_BY_SERIES = {k: v for k, v in CAMPAIGN.reduction_groups().items() if k != 
 #: The tests of each reduction job: a specimen (or a part of one), or the tests refused at the door.
 REDUCTION_JOBS = CAMPAIGN.reduction_jobs(config["reduction"]["max_tests_per_job"])
 
+# Scheduling: on few cores Snakemake starts the selectable jobs of highest
+# priority first.  The campaign's chain (reduction, diagnosis, its
+# checkpoint, then the calibrated maps) is the longest path to the end, and
+# the paper's maps, independent of the campaign, fill the cores it leaves
+# idle; with equal priorities a map job started first could hold a core for
+# most of the reduction and leave the diagnosis to the end.
+PRIORITY = {"campaign_chain": 20, "maps": 10}
+
 
 def res(*parts):
     return str(RESULTS.joinpath(*parts))

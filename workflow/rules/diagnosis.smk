@@ -41,6 +41,7 @@ for _boundary, _series in SERIES_BY_BOUNDARY.items():
     rule:
         name:
             "diagnose_series_" + re.sub(r"\W", "_", _boundary)
+        priority: PRIORITY["campaign_chain"]
         input:
             # the tests of the boundary's series, each with its own QC verdict
             tests=[res("tests", f"{t}.nc") for t in _ids],
@@ -64,6 +65,7 @@ for _boundary, _series in SERIES_BY_BOUNDARY.items():
 
 
 checkpoint diagnosis:
+    priority: PRIORITY["campaign_chain"]
     input:
         expand(res("diagnosis", "{series}.json"), series=sorted(TESTS_BY_SERIES)),
     output:

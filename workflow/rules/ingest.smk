@@ -14,6 +14,7 @@ for _k, (_job, _ids) in enumerate(REDUCTION_JOBS.items()):
         name:
             # a rule name is an identifier; the index keeps "1a-b" and "1a_b" apart
             f"reduce_{_k:03d}_" + re.sub(r"\W", "_", _job)
+        priority: PRIORITY["campaign_chain"]
         input:
             lambda wildcards, ids=_ids: record_inputs(ids),
         output:

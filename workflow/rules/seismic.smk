@@ -70,6 +70,7 @@ for k, batch in enumerate(MAP_BATCHES, 1):
     rule:
         name:
             f"overturning_maps_{k}"
+        priority: PRIORITY["maps"]
         input:
             records=[record_path(r) for r in batch],
         output:
@@ -95,6 +96,7 @@ for k, batch in enumerate(MAP_BATCHES, 1):
     rule:
         name:
             f"calibrated_maps_{k}"
+        priority: PRIORITY["maps"]
         input:
             records=[record_path(r) for r in batch],
             diagnosis=res("diagnosis.json"),
