@@ -12,10 +12,12 @@ import math
 
 import numba
 import numpy as np
+from numba.np.unsafe.ndarray import to_fixed_tuple
 
 from rocklab.physics import flight
 
 _P_APOS, _P_ANEG, _P_P, _P_ZETA, _P_GAP, _P_ONE, _P_LIN, _P_OV, _P_VREST, _P_G, _P_SUB, _P_VR = range(12)
+_N_P = _P_VR + 1
 
 
 @numba.njit(cache=True, inline="always")
@@ -196,14 +198,14 @@ def _locate(x, v, s, ga, gb, u, prm, l1, l2, zp, h, Fh, ov, edge, target, f0, f1
 
 
 @numba.njit(cache=True)
-def run_history(ag, h, scale, n_tail, to_rest, prm, law, x, v, log_t, log_vb, log_va, log_peak):
+def run_history(ag, h, scale, n_tail, to_rest, params, law, x, v, log_t, log_vb, log_va, log_peak):
     """Event-driven integration of one wall, sample interval by sample interval.
 
     ``ag`` [m/s^2] (times ``scale``) is stepped with interval ``h`` [s] (the
     record's dt times a duration scale), then up to ``n_tail`` free steps
     follow: until the wall rests if ``to_rest``, otherwise only while it can
     still overturn (enough to decide overturning).  Linear form: exact closed form per
-    interval; exact form: ``prm[_P_SUB]`` RK4 substeps per interval.  Events
+    interval; exact form: ``params[_P_SUB]`` RK4 substeps per interval.  Events
     (impact, overturning, onset, velocity zero for the peaks) are located by
     bisection inside the step.  Impacts are logged into the ``log_*`` arrays
     up to their length.
@@ -216,6 +218,10 @@ def run_history(ag, h, scale, n_tail, to_rest, prm, law, x, v, log_t, log_vb, lo
     overturned : bool, t_overturn : float (nan), max |theta|/alpha_s : float,
     number of impacts : int
     """
+    # the helpers take the parameters as a tuple: every call that passes an
+    # array costs two atomic reference counts, in the record loop and in
+    # each trial of _locate
+    prm = to_fixed_tuple(params, _N_P)
     n_rec = ag.shape[0]
     n_steps = n_rec + n_tail
     p = prm[_P_P]
