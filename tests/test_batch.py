@@ -300,3 +300,22 @@ def test_sticking_law_in_the_engine_matches_the_reference(boundary):
             assert int(ds.n_impacts[0]) == len(ref.impacts)
         n = min(int(ds.n_impacts[0]), len(ref.impacts))
         np.testing.assert_allclose(ds.t_impact[0, :n], ref.impacts.t.to_numpy(float)[:n], atol=1e-6)
+
+
+def test_compile_kernels_covers_the_library_calls():
+    """``make venv`` compiles the kernels with compile_kernels: the calls of a
+    map job and of the batch front ends then need no other signature."""
+    from rocklab.seismic.accelerograms import load_record
+    from rocklab.seismic.overturning import overturning_map
+    from rocklab.simulation.batch import compile_kernels
+
+    compile_kernels()
+    compiled = set(engine.batch_kernel.signatures)
+    assert compiled
+    ag, dt = _record(n=300)
+    model = RockingModel(alpha=ALPHA, p=P, boundary="one-sided", gap=1e-4)
+    overturning_map(load_record("Pac164"), model="1s-eq17", n=2, polarity=-1)
+    overturning_batch(list(ag), dt, model, 1.0, [0.9, 1.1], return_max=True)
+    ground_batch(ag.astype(np.float32), dt, [model] * 2, amplitude_scale=[1.0, 2.0], max_impacts=3)
+    free_batch(model, [0.05, 0.06], law=np.ones((2, 3, 3)), e_scale=0.9, t_end=1.0)
+    assert set(engine.batch_kernel.signatures) == compiled
