@@ -17,6 +17,7 @@ from numba.np.unsafe.ndarray import to_fixed_tuple
 from rocklab.physics import flight
 
 _P_APOS, _P_ANEG, _P_P, _P_ZETA, _P_GAP, _P_ONE, _P_LIN, _P_OV, _P_VREST, _P_G, _P_SUB, _P_VR = range(12)
+#: Length of the parameter vector (:meth:`rocklab.simulation.model.RockingModel.numba_params`).
 _N_P = _P_VR + 1
 #: Samples of a record per block of :func:`_block_range`.
 _BLOCK = 16
@@ -165,8 +166,8 @@ def _lifts(a, A0p, A1p, two, A0n, A1n):
 def _block_range(ag):
     """Smallest and largest sample of each block of ``_BLOCK`` samples of ``ag``, shape (2, n_blocks).
 
-    NaN samples are left out: like the samples of a block, they never start
-    a wall at rest (:func:`_lifts` is false for them).
+    NaN samples are left out: they never start a wall at rest (:func:`_lifts`
+    is false for them), so the range of a block need not cover them.
     """
     n_blocks = (ag.shape[0] + _BLOCK - 1) // _BLOCK
     out = np.empty((2, n_blocks))
