@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from rocklab.physics import restitution, wall
+from rocklab.simulation import engine
 from rocklab.simulation.batch import free_batch, ground_batch, overturning_batch
 from rocklab.simulation.model import RockingModel
 from rocklab.simulation.reference import simulate_free, simulate_ground
@@ -179,6 +180,35 @@ def test_onset_on_the_first_sample():
     np.testing.assert_allclose(ds.t_impact[0, : len(ref.impacts)], ref.impacts.t, atol=1e-6)
 
 
+def test_onset_on_one_sample_anywhere_in_a_quiet_record():
+    """A wall at rest skips blocks of samples at once (engine._block_range):
+    a single sample past the onset threshold g alpha, either way, starts it
+    wherever it lies in a block, NaN samples before it or not.  The response
+    to a spike at sample j is the one to a spike at sample 1 delayed by
+    (j - 1) dt."""
+    model = RockingModel(alpha=ALPHA, p=P, form="linear")
+    dt, n = 0.01, 80
+    for spike in (-20.0, 20.0):
+        runs = []
+        for j in range(1, 50):
+            ag = np.zeros(n)
+            ag[j] = spike
+            ag[: max(j - 2, 0) : 3] = np.nan
+            runs.append(ground_batch(ag, dt, [model], max_impacts=5))
+        first = runs[0]
+        assert int(first.n_impacts[0]) >= 5
+        for j, ds in enumerate(runs, start=1):
+            assert int(ds.n_impacts[0]) == int(first.n_impacts[0])
+            np.testing.assert_allclose(ds.t_impact[0] - (j - 1) * dt, first.t_impact[0], atol=1e-9)
+
+
+def test_block_range_of_a_record():
+    ag = np.random.default_rng(1).normal(size=37)
+    ag[[3, 20, 21]] = np.nan
+    blocks = np.pad(ag, (0, -ag.size % engine._BLOCK), constant_values=np.nan).reshape(-1, engine._BLOCK)
+    np.testing.assert_array_equal(engine._block_range(ag), [np.nanmin(blocks, axis=1), np.nanmax(blocks, axis=1)])
+
+
 def test_excursion_inside_one_solver_step_is_an_impact():
     """Pacoima Dam at A_S/A = 0.84, D_S/D = 0.715, Housner's wall: after its 37th
     impact the wall crosses its edge and turns back inside one solver step of the
@@ -270,3 +300,22 @@ def test_sticking_law_in_the_engine_matches_the_reference(boundary):
             assert int(ds.n_impacts[0]) == len(ref.impacts)
         n = min(int(ds.n_impacts[0]), len(ref.impacts))
         np.testing.assert_allclose(ds.t_impact[0, :n], ref.impacts.t.to_numpy(float)[:n], atol=1e-6)
+
+
+def test_compile_kernels_covers_the_library_calls():
+    """``make venv`` compiles the kernels with compile_kernels: the calls of a
+    map job and of the batch front ends then need no other signature."""
+    from rocklab.seismic.accelerograms import load_record
+    from rocklab.seismic.overturning import overturning_map
+    from rocklab.simulation.batch import compile_kernels
+
+    compile_kernels()
+    compiled = set(engine.batch_kernel.signatures)
+    assert compiled
+    ag, dt = _record(n=300)
+    model = RockingModel(alpha=ALPHA, p=P, boundary="one-sided", gap=1e-4)
+    overturning_map(load_record("Pac164"), model="1s-eq17", n=2, polarity=-1)
+    overturning_batch(list(ag), dt, model, 1.0, [0.9, 1.1], return_max=True)
+    ground_batch(ag.astype(np.float32), dt, [model] * 2, amplitude_scale=[1.0, 2.0], max_impacts=3)
+    free_batch(model, [0.05, 0.06], law=np.ones((2, 3, 3)), e_scale=0.9, t_end=1.0)
+    assert set(engine.batch_kernel.signatures) == compiled

@@ -12,10 +12,15 @@ import math
 
 import numba
 import numpy as np
+from numba.np.unsafe.ndarray import to_fixed_tuple
 
 from rocklab.physics import flight
 
 _P_APOS, _P_ANEG, _P_P, _P_ZETA, _P_GAP, _P_ONE, _P_LIN, _P_OV, _P_VREST, _P_G, _P_SUB, _P_VR = range(12)
+#: Length of the parameter vector (:meth:`rocklab.simulation.model.RockingModel.numba_params`).
+_N_P = _P_VR + 1
+#: Samples of a record per block of :func:`_block_range`.
+_BLOCK = 16
 
 
 @numba.njit(cache=True, inline="always")
@@ -146,6 +151,35 @@ def _outside(x, s, prm, ov):
     return 0
 
 
+@numba.njit(cache=True, inline="always")
+def _lifts(a, A0p, A1p, two, A0n, A1n):
+    """Whether the ground acceleration ``a`` [m/s^2] starts a wall at rest.
+
+    The acceleration at rest is affine in ``a``, ``A0 + A1 a``: the wall
+    lifts onto the positive hinge when it is positive, onto the negative
+    one (if ``two`` hinges may start) when it is negative.
+    """
+    return A0p + A1p * a > 0.0 or (two and A0n + A1n * a < 0.0)
+
+
+@numba.njit(cache=True)
+def _block_range(ag):
+    """Smallest and largest sample of each block of ``_BLOCK`` samples of ``ag``, shape (2, n_blocks).
+
+    NaN samples are left out: they never start a wall at rest (:func:`_lifts`
+    is false for them), so the range of a block need not cover them.
+    """
+    n_blocks = (ag.shape[0] + _BLOCK - 1) // _BLOCK
+    out = np.empty((2, n_blocks))
+    for b in range(n_blocks):
+        lo, hi = np.inf, -np.inf
+        for a in ag[b * _BLOCK : (b + 1) * _BLOCK]:
+            lo = min(lo, a)
+            hi = max(hi, a)
+        out[0, b], out[1, b] = lo, hi
+    return out
+
+
 @numba.njit(cache=True)
 def _locate(x, v, s, ga, gb, u, prm, l1, l2, zp, h, Fh, ov, edge, target, f0, f1):
     """First root in (0, u] of theta - ``target`` (``edge``) or of thetadot.
@@ -196,14 +230,15 @@ def _locate(x, v, s, ga, gb, u, prm, l1, l2, zp, h, Fh, ov, edge, target, f0, f1
 
 
 @numba.njit(cache=True)
-def run_history(ag, h, scale, n_tail, to_rest, prm, law, x, v, log_t, log_vb, log_va, log_peak):
+def run_history(ag, ag_range, h, scale, n_tail, to_rest, params, law, x, v, log_t, log_vb, log_va, log_peak):
     """Event-driven integration of one wall, sample interval by sample interval.
 
     ``ag`` [m/s^2] (times ``scale``) is stepped with interval ``h`` [s] (the
-    record's dt times a duration scale), then up to ``n_tail`` free steps
+    record's dt times a duration scale; ``ag_range`` is its
+    :func:`_block_range`), then up to ``n_tail`` free steps
     follow: until the wall rests if ``to_rest``, otherwise only while it can
     still overturn (enough to decide overturning).  Linear form: exact closed form per
-    interval; exact form: ``prm[_P_SUB]`` RK4 substeps per interval.  Events
+    interval; exact form: ``params[_P_SUB]`` RK4 substeps per interval.  Events
     (impact, overturning, onset, velocity zero for the peaks) are located by
     bisection inside the step.  Impacts are logged into the ``log_*`` arrays
     up to their length.
@@ -216,6 +251,10 @@ def run_history(ag, h, scale, n_tail, to_rest, prm, law, x, v, log_t, log_vb, lo
     overturned : bool, t_overturn : float (nan), max |theta|/alpha_s : float,
     number of impacts : int
     """
+    # the helpers take the parameters as a tuple: every call that passes an
+    # array costs two atomic reference counts, in the record loop and in
+    # each trial of _locate
+    prm = to_fixed_tuple(params, _N_P)
     n_rec = ag.shape[0]
     n_steps = n_rec + n_tail
     p = prm[_P_P]
@@ -263,11 +302,22 @@ def run_history(ag, h, scale, n_tail, to_rest, prm, law, x, v, log_t, log_vb, lo
             # the step's own first sample too: at k = 0 (or after a hold) no
             # earlier step has tested it, and skipping the step would miss an
             # onset in its first part
-            a_now = scale * ag[k]
-            lifts = A0p + A1p * a_now > 0.0 or (two and A0n + A1n * a_now < 0.0)
+            lifts = _lifts(scale * ag[k], A0p, A1p, two, A0n, A1n)
             while not lifts and k + 1 < n_rec - 1:
-                a_next = scale * ag[k + 1]
-                if A0p + A1p * a_next > 0.0 or (two and A0n + A1n * a_next < 0.0):
+                # a whole block at once where neither its smallest nor its
+                # largest sample lifts the wall: the test is monotone in ag,
+                # in floating point too (rounding is monotone), so no sample
+                # between them does
+                b = (k + 1) // _BLOCK
+                if (
+                    (k + 1) % _BLOCK == 0
+                    and k + _BLOCK < n_rec - 1
+                    and not _lifts(scale * ag_range[0, b], A0p, A1p, two, A0n, A1n)
+                    and not _lifts(scale * ag_range[1, b], A0p, A1p, two, A0n, A1n)
+                ):
+                    k += _BLOCK
+                    continue
+                if _lifts(scale * ag[k + 1], A0p, A1p, two, A0n, A1n):
                     break
                 k += 1
         elif fast:
@@ -412,11 +462,12 @@ def run_history(ag, h, scale, n_tail, to_rest, prm, law, x, v, log_t, log_vb, lo
 
 
 @numba.njit(cache=True)
-def _row(ag, h, scale, n_tail, to_rest, prm, law, x0, v0, logs, out, i):
+def _row(ag, ag_range, h, scale, n_tail, to_rest, prm, law, x0, v0, logs, out, i):
     # called from the prange body instead of run_history itself: inlined into
     # the parallel loop, run_history runs 4-8x slower (measured, numba 0.68)
     o, t, m, k = run_history(
         ag,
+        ag_range,
         h[i],
         scale[i],
         n_tail[i],
@@ -444,6 +495,7 @@ def batch_kernel(ag, h, scale, n_tail, to_rest, prm, law, x0, v0, max_log):
     n_imp = np.zeros(n, np.int64)
     logs = np.full((4, n, max_log), np.nan)
     out = (over, t_over, max_ratio, n_imp)
+    ag_range = _block_range(ag)
     for i in numba.prange(n):
-        _row(ag, h, scale, n_tail, to_rest, prm, law, x0, v0, logs, out, i)
+        _row(ag, ag_range, h, scale, n_tail, to_rest, prm, law, x0, v0, logs, out, i)
     return over, t_over, max_ratio, n_imp, logs[0], logs[1], logs[2], logs[3]
