@@ -7,6 +7,7 @@ import pandas as pd
 
 from rocklab.dissipation.covariates import campaign_effects, series_fits
 from rocklab.io import setup_logging, write_table
+from rocklab.plots import save_png
 from rocklab.plots.covariates import covariate_figure
 
 setup_logging(snakemake.log[0])
@@ -15,4 +16,4 @@ qc = pd.read_csv(snakemake.input.qc)
 diagnosis = json.loads(Path(snakemake.input.diagnosis).read_text())
 effects = campaign_effects(tests, diagnosis, qc, margin=snakemake.params.margin)
 write_table(effects, snakemake.output.table, snakemake.params.schema)
-covariate_figure(series_fits(tests, diagnosis, qc), effects).savefig(snakemake.output.figure, dpi=90)
+save_png(covariate_figure(series_fits(tests, diagnosis, qc), effects), snakemake.output.figure, dpi=90)

@@ -1,16 +1,23 @@
 """Snakemake shim: Figs. 14-15 of each series' sample test, and of the largest series of each boundary."""
 
 import json
+import shutil
 from pathlib import Path
 
 from rocklab.io import setup_logging
+from rocklab.plots import save_png
 from rocklab.plots.diagnosis import series_figures
 
 setup_logging(snakemake.log[0])
 entries = json.loads(Path(snakemake.input.diagnosis).read_text())
 out = Path(snakemake.output.series)
 out.mkdir(parents=True, exist_ok=True)
+written = {}  # figure -> its file: Figs. 14-15 are series' figures, copied, not drawn again
 for name, fig in series_figures(entries, snakemake.input.tests, snakemake.input.motions).items():
     path = Path(snakemake.output[name]) if name in ("fig14", "fig15") else out / f"{name}.png"
     path.parent.mkdir(parents=True, exist_ok=True)  # discovered/<series>: the forms found beyond the catalogue
-    fig.savefig(path, dpi=110)
+    if fig in written:
+        shutil.copyfile(written[fig], path)
+    else:
+        save_png(fig, path, dpi=110)
+        written[fig] = path

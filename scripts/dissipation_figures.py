@@ -5,6 +5,7 @@ import xarray as xr
 
 from rocklab.io import setup_logging
 from rocklab.plots import dissipation as figures
+from rocklab.plots import save_png
 
 setup_logging(snakemake.log[0])
 sample = None
@@ -15,4 +16,4 @@ figs = figures.dissipation_figures(
     pd.read_csv(snakemake.input.tests), pd.read_csv(snakemake.input.e_by_n), pd.read_csv(snakemake.input.series), sample
 )
 for name, fig in figs.items():
-    fig.savefig(snakemake.output[name], dpi=120)
+    save_png(fig, snakemake.output[name], dpi=120)

@@ -6,11 +6,12 @@ from pathlib import Path
 from rocklab.diagnosis import jsonable
 from rocklab.diagnosis.block_tests import blocks_markdown, diagnose_blocks, read_events
 from rocklab.io import setup_logging
+from rocklab.plots import save_png
 from rocklab.plots.diagnosis import family_figure
 
 setup_logging(snakemake.log[0])
 events = read_events(snakemake.input.events)
 result = diagnose_blocks(events, n_boot=snakemake.params.n_boot, seed=snakemake.params.seed)
-family_figure(result, events).savefig(snakemake.output.figure, dpi=120)
+save_png(family_figure(result, events), snakemake.output.figure, dpi=120)
 Path(snakemake.output.json).write_text(json.dumps(jsonable(result), indent=1))
 Path(snakemake.output.md).write_text(blocks_markdown(result))

@@ -4,9 +4,10 @@ import pandas as pd
 
 from rocklab.io import load_datasets, setup_logging
 from rocklab.plots import maps as map_figures
+from rocklab.plots import save_png
 
 setup_logging(snakemake.log[0])
-map_figures.overturning_maps(list(load_datasets(snakemake.input.two_sided))).savefig(snakemake.output.fig21, dpi=120)
-map_figures.overturning_maps(list(load_datasets(snakemake.input.one_sided))).savefig(snakemake.output.fig23, dpi=120)
+save_png(map_figures.overturning_maps(list(load_datasets(snakemake.input.two_sided))), snakemake.output.fig21, dpi=120)
+save_png(map_figures.overturning_maps(list(load_datasets(snakemake.input.one_sided))), snakemake.output.fig23, dpi=120)
 summary = pd.read_csv(snakemake.input.summary)
-map_figures.map_indices_figure(summary).savefig(snakemake.output.fig22, dpi=120)
+save_png(map_figures.map_indices_figure(summary), snakemake.output.fig22, dpi=120)

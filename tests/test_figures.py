@@ -72,3 +72,22 @@ def test_every_dissipation_figure_builds_with_both_panels(one_sided):
     assert len(a.get_xticks()) == 2 and len(b.get_xticks()) == (2 if one_sided else 0)
     assert figures.fig20_sample(tests) == ("2a-1s-cd60-0" if one_sided else None)
     figures.plt.close("all")
+
+
+def test_save_png_writes_what_savefig_lays_out_at_that_dpi(tmp_path):
+    """One layout at the file's dpi, the same pixels as savefig's own two draws; the figure closed."""
+    from PIL import Image
+
+    from rocklab.plots import save_png
+
+    tests, e_n, series = tables()
+    fig = figures.dissipation_figures(tests, e_n, series)["fig16"]
+    assert fig.get_layout_engine() is not None  # laid out at every draw
+    fig.savefig(tmp_path / "savefig.png", dpi=120)
+    fig = figures.dissipation_figures(tests, e_n, series)["fig16"]
+    save_png(fig, tmp_path / "save_png.png", dpi=120)
+    assert fig.get_layout_engine() is None and not figures.plt.fignum_exists(fig.number)
+    a, b = (np.asarray(Image.open(tmp_path / f"{n}.png")) for n in ("savefig", "save_png"))
+    assert a.shape == b.shape == (int(fig.get_figheight() * 120), int(fig.get_figwidth() * 120), 4)
+    assert np.array_equal(a, b)
+    figures.plt.close("all")

@@ -59,7 +59,7 @@ def initial_rotation_by_test(tests):
             ax.legend(fontsize=6, ncol=2, loc="center left", bbox_to_anchor=(1.01, 0.5))
         ax.grid(alpha=0.3)
     axes["one-sided"].set_xlabel("time history, TH (test order within its series)")
-    fig.tight_layout()
+    fig.set_layout_engine("tight")
     return fig
 
 
@@ -96,7 +96,7 @@ def ratio_vs_impacts(e_by_n, min_tests=5):
         ax.legend(fontsize=7)
         ax.grid(alpha=0.3)
     axes["one-sided"].set_xlabel("number of impacts, n")
-    fig.tight_layout()
+    fig.set_layout_engine("tight")
     return fig
 
 
@@ -136,7 +136,7 @@ def ratio_by_series(tests, series):
         ax.set_title(f"Fig. 13{letter} - {short}")
         ax.legend(fontsize=7)
         ax.grid(alpha=0.3)
-    fig.tight_layout()
+    fig.set_layout_engine("tight")
     return fig
 
 
@@ -175,7 +175,7 @@ def series_means(series, quantity, ylabel, fig_label, references=(), lines=None)
         ax.set_title(f"{fig_label}{letter} - {short}")
         ax.legend(fontsize=7)
         ax.grid(alpha=0.3)
-    fig.tight_layout()
+    fig.set_layout_engine("tight")
     return fig
 
 
@@ -233,7 +233,7 @@ def centre_amplification(tests, ds=None, monitor=None, t_first_impact=None):
     ax2.set_title("Fig. 20b")
     if len(d):
         ax2.legend(fontsize=7)
-    fig.tight_layout()
+    fig.set_layout_engine("tight")
     return fig
 
 

@@ -47,7 +47,7 @@ def sample_record(ds, channel=3):
         ax.set_ylabel("Δl [mm]")
         ax2.set_ylabel("dΔl/dt [mm/s]")
     axes[0].set_title(f"Fig. 6 - test {ds.attrs['test_id']} ({ds.attrs['series']}); b: zoom on the motion")
-    fig.tight_layout()
+    fig.set_layout_engine("tight")
     return fig
 
 
@@ -65,7 +65,7 @@ def degrees_of_freedom(ds):
         ax.grid(alpha=0.3)
     axes[-1].set_xlabel("t [s]")
     axes[0].set_title(f"Fig. 8 - test {ds.attrs['test_id']} ({ds.attrs['series']})")
-    fig.tight_layout()
+    fig.set_layout_engine("tight")
     return fig
 
 
@@ -101,5 +101,5 @@ def eq8_and_peaks(ds, peaks):
     ax2.set_ylabel("normalised peak")
     ax2.legend(fontsize=7)
     ax2.set_title(f"Fig. 9b - specimen {peaks.attrs.get('specimen', '')}")
-    fig.tight_layout()
+    fig.set_layout_engine("tight")
     return fig

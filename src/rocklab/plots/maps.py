@@ -54,7 +54,7 @@ def overturning_maps(maps, title=None):
         f"{a0['form']} form (overturned: gray)",
         fontsize=10,
     )
-    fig.tight_layout()
+    fig.set_layout_engine("tight")
     return fig
 
 
@@ -90,5 +90,5 @@ def map_indices_figure(summary, models=("2s-housner", "2s-0.95"), order=None):
     axes[1].set_xticks(x, records, rotation=45, ha="right")
     handles, labels = axes[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="upper center", ncol=len(models), fontsize=8)
-    fig.tight_layout(rect=(0, 0, 1, 0.95))
+    fig.set_layout_engine("tight", rect=(0, 0, 1, 0.95))
     return fig
