@@ -107,7 +107,8 @@ def log_columns(tests):
 def per_test(x, like):
     """Per-test array broadcast against a (tests, impacts) array."""
     x = np.asarray(x)
-    return x[:, None] if np.ndim(like) == 2 and x.ndim == 1 else x
+    # getattr, not np.ndim: called a million times in a diagnosis, on arrays and scalars
+    return x[:, None] if x.ndim == 1 and getattr(like, "ndim", 0) == 2 else x
 
 
 def base_params(tests) -> ModelParams:
@@ -167,7 +168,7 @@ def _amplitude_factor(e, v, mp, like):
     )
 
 
-def impact_speeds(v, side, mp: ModelParams):
+def impact_speeds(v, side, mp: ModelParams, timed=True):
     """Take-off speed after an impact at speed v leaving hinge ``side``.
 
     Two-sided and gap-less one-sided walls: one impact, |e| v with e the
@@ -180,7 +181,8 @@ def impact_speeds(v, side, mp: ModelParams):
     velocity: it carries the dissipation that sets e_an,1s apart from
     e_an,2s (Sect. 3), and as the gap closes the sequence tends to Eq. 14
     with the same calibration.  The impact hooks of :class:`ModelParams`
-    act last.
+    act last.  ``timed=False`` skips the duration (returned as 0), for a
+    caller that needs the speeds only.
 
     Returns
     -------
@@ -197,7 +199,7 @@ def impact_speeds(v, side, mp: ModelParams):
     v_out = np.abs(e * _amplitude_factor(e, v, mp, side)) * v
     depth, duration, v_in, w = (np.zeros(np.shape(v_out)) for _ in range(4))
     gm = per_test(mp.gap_model, side)
-    if np.any(gm):
+    if gm.any():
         p, a_in, g = per_test(mp.p, side), per_test(mp.a_neg, side), per_test(mp.gap, side)
         e_b = per_test(restitution.two_sided(mp.alpha), side)
         e_tr = per_test(restitution.transverse(mp.alpha), side) * c_s
@@ -208,7 +210,7 @@ def impact_speeds(v, side, mp: ModelParams):
         wg = np.abs(e_tr * _amplitude_factor(e_tr, vg, mp, side)) * vg
         v2 = np.where(reach, np.sqrt(wg**2 + 2 * U), v1)
         d = np.where(reach, g, apex(0.5 * v1**2, a_in, p))
-        tau = transit_time(v1, d, a_in, p) + transit_time(v2, d, a_in, p)
+        tau = transit_time(v1, d, a_in, p) + transit_time(v2, d, a_in, p) if timed else 0.0
         v_out = np.where(gm, e_b * v2, v_out)
         depth = np.where(gm, d, 0.0)
         duration = np.where(gm, tau, 0.0)
