@@ -245,7 +245,7 @@ def next_flight(v, side, mp: ModelParams):
     return A, side, flight_angle(A, a, mp.rounding), d, tau
 
 
-def release(S, mp: ModelParams):
+def release(S, mp: ModelParams, timed=True):
     """Speed at the first impact [rad/s] and time to it [s] from the measured release.
 
     From min(theta0, (1 - delta) alpha_s) with the screw's speed v0 towards
@@ -254,12 +254,15 @@ def release(S, mp: ModelParams):
     (:func:`rocklab.physics.flight.quarter_period_linear`): most of the
     first quarter when the wall leaves the screw at its instability angle
     (:mod:`rocklab.lab.motion`, "Release and first quarter period").
-    ``S`` is a :class:`rocklab.diagnosis.evidence.TestStack`.
+    ``S`` is a :class:`rocklab.diagnosis.evidence.TestStack`; ``timed=False``
+    skips the time (returned as None), for a caller that needs the speed only.
     """
     a0 = mp.hinge(S.side0)
     th = release_rotation(S.theta0, a0)
     # the fall from the release is a flight of apex th: on its angle where the angle depends on the amplitude
     v = np.sqrt(landing_speed(th, a0, mp.p, **mp.flight_keywords()) ** 2 + S.v0**2)
+    if not timed:
+        return v, None
     a0 = mp.flight(th, S.side0)
     saved = quarter_period_linear(th / a0) - quarter_period_linear(th / a0, S.v0 / (mp.p * a0))
     return v, quarter_period(th, a0, mp.p) - saved / mp.p
