@@ -6,7 +6,9 @@ Reads the reduced tests and their motion (``<results>/tests``,
 ``<results>/motion``, as the workflow's ``diagnose_series_*`` jobs do) and
 times :func:`rocklab.diagnosis.diagnose_records` on each series with the
 workflow's settings (``config/config.yaml``, defaults from its schema):
-CPU and wall seconds, the verdict.  With the workflow's job benchmarks
+CPU and wall seconds, the verdict; then the boundary conditions summed up
+over the series (:func:`rocklab.diagnosis.with_boundaries`, the checkpoint
+job's work).  With the workflow's job benchmarks
 (``<results>/benchmarks/diagnosis/<boundary>.tsv`` and
 ``diagnosis.tsv``) it also sums the job times of the diagnosis, start-up
 and reading included.  Writes
@@ -23,7 +25,7 @@ from pathlib import Path
 import pandas as pd
 import yaml
 
-from rocklab.diagnosis import diagnose_records, records_by_series
+from rocklab.diagnosis import diagnose_records, jsonable, records_by_series, with_boundaries
 from rocklab.io import valid_tests
 from rocklab.lab.motion import read_motion
 
@@ -41,7 +43,7 @@ def main():
     datasets = list(valid_tests(sorted((args.results / "tests").glob("*.nc"))))
     motion = args.results / "motion"
     motions = {ds.attrs["test_id"]: read_motion(motion / f"{ds.attrs['test_id']}.nc") for ds in datasets}
-    series = {}
+    series, entries = {}, []
     for key, records in records_by_series(datasets, motions).items():
         t0, c0 = time.perf_counter(), time.process_time()
         entry = diagnose_records(records, key, n_boot=cfg["n_boot"], n_history=cfg["n_history"], seed=cfg["seed"])
@@ -52,7 +54,13 @@ def main():
             "unexplained": entry["unexplained"] if entry else None,
             "discovered": [f["effect"] for f in entry["findings"] if f.get("discovered")] if entry else [],
         }
+        entries += [entry] if entry else []
         print(f"{key}: {series[key]['cpu_s']:.2f} s CPU")
+    # the checkpoint reads the series' entries back from their JSON files
+    entries = json.loads(json.dumps(jsonable(entries)))
+    c0 = time.process_time()
+    with_boundaries(entries, seed=cfg["seed"])
+    boundaries_cpu_s = time.process_time() - c0
     # the workflow's jobs: one per boundary condition, then the checkpoint summing them up
     bench = args.results / "benchmarks"
     jobs = [bench / "diagnosis" / f"{b}.tsv" for b in ("two-sided", "one-sided")] + [bench / "diagnosis.tsv"]
@@ -63,6 +71,7 @@ def main():
         "cpu_s": sum(s["cpu_s"] for s in series.values()),
         "wall_s": sum(s["wall_s"] for s in series.values()),
         "longest_series_cpu_s": max(s["cpu_s"] for s in series.values()),
+        "boundaries_cpu_s": boundaries_cpu_s,
         "jobs": len(job_s),
         "job_s": sum(job_s) if job_s else None,
         "series": series,
@@ -70,7 +79,8 @@ def main():
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "diagnosis.json").write_text(json.dumps(out, indent=1))
     print(
-        f"diagnosis of {out['n_series']} series: {out['cpu_s']:.1f} s CPU, {out['wall_s']:.1f} s wall"
+        f"diagnosis of {out['n_series']} series: {out['cpu_s']:.1f} s CPU, {out['wall_s']:.1f} s wall; "
+        f"boundary conditions {boundaries_cpu_s:.1f} s CPU"
         + (f"; {len(job_s)} workflow jobs {out['job_s']:.1f} s" if job_s else "")
     )
 

@@ -329,8 +329,8 @@ def residuals(S: TestStack, mp: ModelParams, cache=None):
     # peak to peak: from the measured apex before (theta0 at rest for the first), a landing,
     # the impact, a rise
     v_land = landing_speed(S.A[:, :-1], mp.hinge(S.side[:, 1:]), p, **loss)
-    v_land = np.c_[release(S, mp)[0], v_land]
-    R["peak"] = log_ratio(apex_after(impact_speeds(v_land, S.side, mp)[0], a_ap, p, **loss), S.A, f)
+    v_land = np.c_[release(S, mp, timed=False)[0], v_land]
+    R["peak"] = log_ratio(apex_after(impact_speeds(v_land, S.side, mp, timed=False)[0], a_ap, p, **loss), S.A, f)
     key = mp.a_pos.tobytes() + mp.a_neg.tobytes() + mp.rounding.tobytes()
     if cache is not None and cache.get("stack") is S and cache.get("angles") == key:
         R["time"] = cache["time"]

@@ -107,7 +107,8 @@ def log_columns(tests):
 def per_test(x, like):
     """Per-test array broadcast against a (tests, impacts) array."""
     x = np.asarray(x)
-    return x[:, None] if np.ndim(like) == 2 and x.ndim == 1 else x
+    # getattr, not np.ndim: called a million times in a diagnosis, on arrays and scalars
+    return x[:, None] if x.ndim == 1 and getattr(like, "ndim", 0) == 2 else x
 
 
 def base_params(tests) -> ModelParams:
@@ -167,7 +168,7 @@ def _amplitude_factor(e, v, mp, like):
     )
 
 
-def impact_speeds(v, side, mp: ModelParams):
+def impact_speeds(v, side, mp: ModelParams, timed=True):
     """Take-off speed after an impact at speed v leaving hinge ``side``.
 
     Two-sided and gap-less one-sided walls: one impact, |e| v with e the
@@ -180,7 +181,8 @@ def impact_speeds(v, side, mp: ModelParams):
     velocity: it carries the dissipation that sets e_an,1s apart from
     e_an,2s (Sect. 3), and as the gap closes the sequence tends to Eq. 14
     with the same calibration.  The impact hooks of :class:`ModelParams`
-    act last.
+    act last.  ``timed=False`` skips the duration (returned as 0), for a
+    caller that needs the speeds only.
 
     Returns
     -------
@@ -197,7 +199,7 @@ def impact_speeds(v, side, mp: ModelParams):
     v_out = np.abs(e * _amplitude_factor(e, v, mp, side)) * v
     depth, duration, v_in, w = (np.zeros(np.shape(v_out)) for _ in range(4))
     gm = per_test(mp.gap_model, side)
-    if np.any(gm):
+    if gm.any():
         p, a_in, g = per_test(mp.p, side), per_test(mp.a_neg, side), per_test(mp.gap, side)
         e_b = per_test(restitution.two_sided(mp.alpha), side)
         e_tr = per_test(restitution.transverse(mp.alpha), side) * c_s
@@ -208,7 +210,7 @@ def impact_speeds(v, side, mp: ModelParams):
         wg = np.abs(e_tr * _amplitude_factor(e_tr, vg, mp, side)) * vg
         v2 = np.where(reach, np.sqrt(wg**2 + 2 * U), v1)
         d = np.where(reach, g, apex(0.5 * v1**2, a_in, p))
-        tau = transit_time(v1, d, a_in, p) + transit_time(v2, d, a_in, p)
+        tau = transit_time(v1, d, a_in, p) + transit_time(v2, d, a_in, p) if timed else 0.0
         v_out = np.where(gm, e_b * v2, v_out)
         depth = np.where(gm, d, 0.0)
         duration = np.where(gm, tau, 0.0)
@@ -243,7 +245,7 @@ def next_flight(v, side, mp: ModelParams):
     return A, side, flight_angle(A, a, mp.rounding), d, tau
 
 
-def release(S, mp: ModelParams):
+def release(S, mp: ModelParams, timed=True):
     """Speed at the first impact [rad/s] and time to it [s] from the measured release.
 
     From min(theta0, (1 - delta) alpha_s) with the screw's speed v0 towards
@@ -252,12 +254,15 @@ def release(S, mp: ModelParams):
     (:func:`rocklab.physics.flight.quarter_period_linear`): most of the
     first quarter when the wall leaves the screw at its instability angle
     (:mod:`rocklab.lab.motion`, "Release and first quarter period").
-    ``S`` is a :class:`rocklab.diagnosis.evidence.TestStack`.
+    ``S`` is a :class:`rocklab.diagnosis.evidence.TestStack`; ``timed=False``
+    skips the time (returned as None), for a caller that needs the speed only.
     """
     a0 = mp.hinge(S.side0)
     th = release_rotation(S.theta0, a0)
     # the fall from the release is a flight of apex th: on its angle where the angle depends on the amplitude
     v = np.sqrt(landing_speed(th, a0, mp.p, **mp.flight_keywords()) ** 2 + S.v0**2)
+    if not timed:
+        return v, None
     a0 = mp.flight(th, S.side0)
     saved = quarter_period_linear(th / a0) - quarter_period_linear(th / a0, S.v0 / (mp.p * a0))
     return v, quarter_period(th, a0, mp.p) - saved / mp.p

@@ -22,6 +22,12 @@ _GL24_S = 0.5 * (_GL24_X + 1.0)
 _GL24_W = 0.5 * _GL24_W
 
 
+def _some(x):
+    """Whether any of x (a scalar or an array) is nonzero: :func:`numpy.any`, at a sixth of its
+    cost on the small arrays of the diagnosis's hot path."""
+    return np.count_nonzero(x) > 0
+
+
 def potential(theta, a, p):
     """Energy per unit I_O of a wall at rest at |theta| on a hinge of angle a [rad^2/s^2].
 
@@ -68,7 +74,7 @@ def flight_angle(A, a, k=0.0):
     k : array_like
         Dependence on the amplitude [-], -1 < k < 1.
     """
-    if not np.any(k):
+    if not _some(k):
         return a
     return a - k * (a - np.minimum(A, a))
 
@@ -184,7 +190,7 @@ _NEWTON_MAX, _NEWTON_TOL = 40, 1e-12
 
 def _viscous(zeta, p, A, a):
     # first order in zeta: the loss along the undamped path
-    return 2.0 * zeta * p * (path_integral(A, a, p) if np.any(zeta) else 0.0)
+    return 2.0 * zeta * p * (path_integral(A, a, p) if _some(zeta) else 0.0)
 
 
 def landing_speed(A, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):
@@ -199,7 +205,7 @@ def landing_speed(A, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):
     act on that angle, exactly as on a rigid hinge.
     """
     a = flight_angle(A, a, k)
-    if not (np.any(mu) or np.any(kappa)):
+    if not (_some(mu) or _some(kappa)):
         E = potential(A, a, p) - _viscous(zeta, p, A, a)
         return np.sqrt(2.0 * np.maximum(E, 0.0))
     E = _work(A, a, p, mu, kappa, rise=False) - _viscous(zeta, p, A, a)
@@ -220,10 +226,10 @@ def apex_after(v, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):
     E = 0.5 * np.asarray(v, float) ** 2
 
     def rise(E):
-        return _apex_on_flight_angle(E, a, p, k) if np.any(k) else apex(E, a, p)
+        return _apex_on_flight_angle(E, a, p, k) if _some(k) else apex(E, a, p)
 
     A = rise(E)
-    if np.any(mu) or np.any(kappa):
+    if _some(mu) or _some(kappa):
         a_, p_, mu_, kappa_ = np.broadcast_arrays(a, p, mu, kappa)
         # the instability rotation rocks on the hinge's own angle whatever k (flight_angle(a, a, k) = a)
         over = E >= _work(a_, a_, p_, mu_, kappa_, rise=True) + _viscous(zeta, p, a_, a_)
@@ -242,7 +248,7 @@ def apex_after(v, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):
             if done:
                 break
         return np.where(over, a, A)
-    if np.any(zeta):
+    if _some(zeta):
         # the loss of the rise depends on the apex it reaches: a few fixed-point passes
         for _ in range(3):
             A = rise(E - 2.0 * zeta * p * path_integral(A, flight_angle(A, a, k), p))

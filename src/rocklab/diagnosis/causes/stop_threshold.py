@@ -35,6 +35,40 @@ def apply(mp, v):
     return replace(mp, stop=v["v_stop_over_vr"] * np.ones_like(mp.alpha))
 
 
+def _largest_apex_after_end(S: TestStack, mp, idx, window_s, n_max=200):
+    """Largest apex the model predicts after the end of each test ``idx`` of ``S``, apexes from
+    ``window_s`` / 10 to ``window_s`` after the end [rad] (0 if none).
+
+    From the last measured apex the flights follow by :func:`rocklab.diagnosis.model.next_flight`,
+    all tests together, each until an apex past the window or below its noise threshold
+    (:func:`end_of_motion`).
+    """
+    if not idx:
+        return np.zeros(0)
+    idx = np.asarray(idx)
+    tests = [S.tests[i] for i in idx]
+    m = mp.row(idx)
+    last = np.array([ts.n_impacts - 1 for ts in tests])
+    side = np.where(m.one_sided, S.side[idx, last], -S.side[idx, last])
+    A = np.array([ts.peaks[k] for ts, k in zip(tests, last)])
+    t = np.array([ts.t_after[k] for ts, k in zip(tests, last)])
+    end, floor = np.array([ts.t_end for ts in tests]), np.array([ts.floor for ts in tests])
+    lo, hi = end + 0.1 * window_s, end + window_s
+    a = m.flight(A, side)
+    pred, live = np.zeros(idx.size), np.ones(idx.size, bool)
+    for _ in range(n_max):
+        quarter = quarter_period(A, a, m.p)
+        t_apex = t + quarter
+        live &= ~((t_apex > hi) | (A < floor))
+        if not live.any():
+            break
+        pred = np.where(live & (t_apex > lo), np.maximum(pred, A), pred)
+        t = t_apex + quarter
+        A, side, a, _, tau = next_flight(landing_speed(A, a, m.p, **m.flight_loss()), side, m)
+        t = t + tau
+    return pred
+
+
 def end_of_motion(S: TestStack, mp, min_ratio=3.0, window_s=1.0):
     """Whether the walls stop earlier than the model can.
 
@@ -54,31 +88,18 @@ def end_of_motion(S: TestStack, mp, min_ratio=3.0, window_s=1.0):
         One statement, or none.
     """
     ratios, speeds = [], []
-    for i, ts in enumerate(S.tests):
-        if ts.t is None or ts.t[-1] - ts.t_end < 0.5 * window_s:
-            continue
-        mpi = mp.row(i)
-        k = ts.n_impacts - 1
-        side = float(S.side[i, k]) if mpi.one_sided else -float(S.side[i, k])
-        A, t, pred = ts.peaks[k], ts.t_after[k], 0.0
+    idx = [i for i, ts in enumerate(S.tests) if ts.t is not None and not ts.t[-1] - ts.t_end < 0.5 * window_s]
+    pred = _largest_apex_after_end(S, mp, idx, window_s)
+    for i, pred_i in zip(idx, pred):
+        ts = S.tests[i]
         lo, hi = ts.t_end + 0.1 * window_s, ts.t_end + window_s
-        a = mpi.flight(A, side)
-        for _ in range(200):
-            t_apex = t + quarter_period(A, a, mpi.p)
-            if t_apex > hi or A < ts.floor:
-                break
-            if t_apex > lo:
-                pred = max(pred, A)
-            t = t_apex + quarter_period(A, a, mpi.p)
-            A, side, a, _, tau = next_flight(landing_speed(A, a, mpi.p, **mpi.flight_loss()), side, mpi)
-            t = t + tau
         sel = (ts.t > lo) & (ts.t <= hi)
         win = odd_samples(0.25 / ts.dt)
         if sel.sum() < win:
             continue
         hp = ts.theta[sel] - savgol_filter(ts.theta[sel], win, 2)
         seen = float(np.percentile(np.abs(hp), 99))
-        ratios.append(pred / max(seen, ts.floor))
+        ratios.append(pred_i / max(seen, ts.floor))
         speeds.append(ts.v_before[-1] / float(overturning_velocity(ts.alpha, ts.p)))
     r = np.array(ratios)
     if r.size >= 3 and np.mean(r > min_ratio) > 0.5:
