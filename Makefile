@@ -23,7 +23,7 @@ $(STAMP): requirements.lock pyproject.toml
 	$(BIN)/python -m pip install --quiet --no-compile -r requirements.lock
 	$(BIN)/python -m compileall -q -j 0 $(VENV)/lib
 	$(BIN)/python -m pip install --quiet --no-deps --no-build-isolation -e .
-	$(BIN)/python -c "from rocklab.simulation.batch import compile_kernels; compile_kernels()"
+	$(BIN)/python -c "from rocklab.kernels import compile_kernels; compile_kernels()"
 	touch $@
 
 venv: $(STAMP)

@@ -278,7 +278,8 @@ def compile_kernels():
     with the argument types of the library's own calls.  A process that then
     runs a map loads them from the cache (a fraction of a second) instead of
     compiling them (about 12 s of CPU, once per process while the cache is
-    cold).  ``make venv`` calls it after the install.
+    cold).  ``make venv`` calls it through
+    :func:`rocklab.kernels.compile_kernels` after the install.
     """
     model = RockingModel(alpha=0.1, p=2.0, form="linear")
     ag = np.array([0.0, -5.0, 0.0, 0.0])

@@ -1,0 +1,22 @@
+"""The library's numba kernels, compiled ahead of the jobs that use them.
+
+Numba compiles a kernel at its first call in a process and keeps it in an
+on-disk cache beside its module; while that cache is cold every process
+compiles for itself (the overturning engine about 12 s of CPU, in each map
+job that starts before the cache is written).  ``make venv`` calls
+:func:`compile_kernels` once after the install.
+"""
+
+import numpy as np
+
+
+def compile_kernels():
+    """Compile every numba kernel of the library into numba's on-disk cache,
+    with the argument types of the library's own calls: the overturning
+    engine (:func:`rocklab.simulation.batch.compile_kernels`) and the
+    diagnosis's noise model (:func:`rocklab.diagnosis.engine.noise_variance`)."""
+    from rocklab.diagnosis.engine import noise_variance
+    from rocklab.simulation.batch import compile_kernels as compile_engine
+
+    compile_engine()
+    noise_variance(np.array([0.1, -0.2, 0.05, 0.3, -0.1]), np.array([0.5, 1.0, 2.0, 0.2, 0.1]))
