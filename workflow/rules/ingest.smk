@@ -3,10 +3,11 @@
 # the motion extracted from it (release, impacts, peaks), stored once for the
 # dissipation tables and the diagnosis.
 #
-# One job per specimen (cut into parts of at most reduction.max_tests_per_job
-# tests), and one for the tests refused at the door, not one per test or per
-# series: a job spends longer starting Python and importing the library
-# (about 1.5 s of CPU) than reducing ten tests (0.1 s each).
+# Whole specimens packed into jobs of at most reduction.max_tests_per_job
+# tests (a larger specimen cut into parts of its own), and one job for the
+# tests refused at the door, not one per test or per series: a job spends
+# longer starting Python and importing the library (about 1.5 s of CPU) than
+# reducing twenty tests.
 
 for _k, (_job, _ids) in enumerate(REDUCTION_JOBS.items()):
 

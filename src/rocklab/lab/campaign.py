@@ -699,9 +699,10 @@ class Campaign:
     def reduction_groups(self) -> dict:
         """The tests of :attr:`test_ids` by series, in the order of tests.csv.
 
-        The unit of one reduction job; the tests refused at the door, whose
-        specimen may not even be a safe name, go to the group ``unreadable``
-        (no series is called that: a series ends in ``-2s`` or ``-1s-cd<n>``).
+        What :meth:`reduction_jobs` packs by specimen; the tests refused at
+        the door, whose specimen may not even be a safe name, go to the group
+        ``unreadable`` (no series is called that: a series ends in ``-2s`` or
+        ``-1s-cd<n>``).
         """
         groups = {}
         for test_id in self.test_ids:
@@ -710,36 +711,54 @@ class Campaign:
         return groups
 
     def reduction_jobs(self, max_tests: int = TESTS_PER_JOB) -> dict:
-        """The tests of each reduction job: those of one specimen, in the order of tests.csv.
+        """The tests of each reduction job: whole specimens, in the order of tests.csv.
 
         A job spends longer starting Python and importing the library (about
-        1.5 s of CPU) than reducing ten tests, so the series of a specimen
-        share a job; a specimen of more than ``max_tests`` tests is cut into
-        that many near-equal parts (two cores stay busy on a large campaign,
-        and an edited row reduces at most ``max_tests`` tests again).  The
-        tests refused at the door are the job :data:`UNREADABLE`.
+        1.5 s of CPU) than reducing twenty tests, so consecutive specimens
+        share a job while it holds at most ``max_tests`` tests; a specimen of
+        more than ``max_tests`` tests is cut into that many near-equal parts
+        of its own (two cores stay busy on a large campaign, and an edited
+        row reduces at most ``max_tests`` tests again).  The tests refused
+        at the door are the job :data:`UNREADABLE`.
 
         Returns
         -------
         dict
-            ``specimen-<name>`` (or ``specimen-<name>-part<k>`` when cut)
-            to test ids: a name no specimen, being a safe identifier, can
-            turn into :data:`UNREADABLE`.
+            Job name to test ids: ``specimen-<name>`` for one specimen,
+            ``specimens-<first>+<last>`` for the specimens from ``first`` to
+            ``last`` in the order of tests.csv (``+`` is in no specimen id,
+            so no two jobs share a name), ``specimen-<name>-part<k>`` for
+            the parts of a cut one; no specimen, being a safe identifier,
+            can turn any of these into :data:`UNREADABLE`.
         """
         if max_tests < 1:
             raise ValueError(f"max_tests must be at least 1, got {max_tests}")
+        groups = self.reduction_groups()
+        refused = groups.pop(UNREADABLE, None)
         by_specimen = {}
-        for series, ids in self.reduction_groups().items():
-            key = UNREADABLE if series == UNREADABLE else f"specimen-{self.test_row(ids[0]).specimen}"
-            by_specimen.setdefault(key, []).extend(ids)
-        jobs = {}
-        for key, ids in by_specimen.items():
-            n_parts = -(-len(ids) // max_tests)
-            if key == UNREADABLE or n_parts == 1:
-                jobs[key] = ids
+        for ids in groups.values():
+            by_specimen.setdefault(self.test_row(ids[0]).specimen, []).extend(ids)
+        jobs, pack = {}, []
+
+        def close_pack():
+            if pack:
+                name = f"specimen-{pack[0]}" if len(pack) == 1 else f"specimens-{pack[0]}+{pack[-1]}"
+                jobs[name] = [t for specimen in pack for t in by_specimen[specimen]]
+                pack.clear()
+
+        for specimen, ids in by_specimen.items():
+            if len(ids) > max_tests:
+                close_pack()
+                n_parts = -(-len(ids) // max_tests)
+                for k, part in enumerate(np.array_split(np.asarray(ids, dtype=object), n_parts), start=1):
+                    jobs[f"specimen-{specimen}-part{k}"] = list(part)
                 continue
-            for k, part in enumerate(np.array_split(np.asarray(ids, dtype=object), n_parts), start=1):
-                jobs[f"{key}-part{k}"] = list(part)
+            if sum(len(by_specimen[s]) for s in pack) + len(ids) > max_tests:
+                close_pack()
+            pack.append(specimen)
+        close_pack()
+        if refused:
+            jobs[UNREADABLE] = refused
         return jobs
 
     @cached_property

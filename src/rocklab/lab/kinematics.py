@@ -373,20 +373,20 @@ def wall_motion_dataset(
         W = W * sel
     sol = solve_wall_motion(E, wall_xyz, frame_xyz, thickness, weights=W, solve_v=solve_v)
     units = {"theta": "rad", "phi": "rad", "v": "mm", "w": "mm", "residual_rms": "mm"}
-    ds = xr.Dataset(
-        {k: ("time", np.asarray(a), {"units": units[k]} if k in units else {}) for k, a in sol.items()},
-        coords={"time": ("time", np.asarray(time, float), {"units": "s"})},
-    )
+    # one Dataset of all the variables: each added one by one is a merge
+    data = {k: ("time", np.asarray(a), {"units": units[k]} if k in units else {}) for k, a in sol.items()}
+    data["time"] = ("time", np.asarray(time, float), {"units": "s"})
+    attrs = {}
     used = np.flatnonzero(W > 0) if W.ndim == 1 else None
     ch, h = simplified_channel(wall_xyz, frame_xyz, used)
     if ch >= 0:
         t8 = theta_simplified(E[:, ch], h)
-        ds["theta_eq8"] = ("time", t8, {"units": "rad", "channel": ch, "height_mm": h})
-        ds.attrs["theta_eq8_max_abs_diff"] = (
+        data["theta_eq8"] = ("time", t8, {"units": "rad", "channel": ch, "height_mm": h})
+        attrs["theta_eq8_max_abs_diff"] = (
             float(np.nanmax(np.abs(t8 - sol["theta"]))) if np.isfinite(t8 - sol["theta"]).any() else float("nan")
         )
     if alpha is not None:
         for k, val in normalised_peaks(sol["theta"], sol["phi"], sol["v"], sol["w"], alpha, thickness).items():
-            ds.attrs[f"peak_{k}"] = val
-    ds.attrs["solve_v"] = int(bool(solve_v))
-    return ds
+            attrs[f"peak_{k}"] = val
+    attrs["solve_v"] = int(bool(solve_v))
+    return xr.Dataset(data, attrs=attrs)

@@ -207,57 +207,61 @@ def reduce_test(campaign: Campaign, test_id: str, options=None) -> xr.Dataset:
     valid, reason, detail = validity.verdict(choice, ratio, residual, opt["validity"])
 
     flags = [d for d in (r.describe() for r in reports) if d] + choice.flags
-    ds = motion
-    # an identifier, but CF wants units on a numeric coordinate: a number is dimensionless
-    ds = ds.assign_coords(
-        channel=("channel", np.asarray(rec.channels, int), {"long_name": "transducer channel number", "units": "1"})
-    )
-    ds["raw"] = (("time", "channel"), rec.readings, {"units": "mm", "long_name": "transducer elongation as recorded"})
-    ds["elongation"] = (
-        ("time", "channel"),
-        repaired,
-        {"units": "mm", "long_name": "transducer elongation, spikes and short gaps repaired, frozen stretches removed"},
-    )
-    ds["channel_status"] = (
-        "channel",
-        np.array([r.status for r in reports], dtype=object),
-        {"long_name": "ok, repaired, dead, stuck, clipped or dropout"},
-    )
-    ds["channel_role"] = (
-        "channel",
-        roles.role.to_numpy().astype(object),
-        {"long_name": "out_of_plane, in_plane or monitor (from geometry)"},
-    )
-    ds["channel_used"] = (
-        "channel",
-        weights.astype(np.int8),
-        {
-            "long_name": "transducer used in the kinematics",
-            "flag_values": np.array([0, 1], np.int8),
-            "flag_meanings": "unused used",
-        },
-    )
-    ds["channel_noise"] = (
-        "channel",
-        np.array([r.noise_mm for r in reports]),
-        {"units": "mm", "long_name": "robust noise standard deviation"},
-    )
+    # the channel variables in one assign: each added one by one is a merge
+    channel_vars = {
+        # an identifier, but CF wants units on a numeric coordinate: a number is dimensionless
+        "channel": ("channel", np.asarray(rec.channels, int), {"long_name": "transducer channel number", "units": "1"}),
+        "raw": (("time", "channel"), rec.readings, {"units": "mm", "long_name": "transducer elongation as recorded"}),
+        "elongation": (
+            ("time", "channel"),
+            repaired,
+            {
+                "units": "mm",
+                "long_name": "transducer elongation, spikes and short gaps repaired, frozen stretches removed",
+            },
+        ),
+        "channel_status": (
+            "channel",
+            np.array([r.status for r in reports], dtype=object),
+            {"long_name": "ok, repaired, dead, stuck, clipped or dropout"},
+        ),
+        "channel_role": (
+            "channel",
+            roles.role.to_numpy().astype(object),
+            {"long_name": "out_of_plane, in_plane or monitor (from geometry)"},
+        ),
+        "channel_used": (
+            "channel",
+            weights.astype(np.int8),
+            {
+                "long_name": "transducer used in the kinematics",
+                "flag_values": np.array([0, 1], np.int8),
+                "flag_meanings": "unused used",
+            },
+        ),
+        "channel_noise": (
+            "channel",
+            np.array([r.noise_mm for r in reports]),
+            {"units": "mm", "long_name": "robust noise standard deviation"},
+        ),
+    }
     for axis in "xyz":
-        ds[f"wall_{axis}"] = (
+        channel_vars[f"wall_{axis}"] = (
             "channel",
             setup[f"wall_{axis}_mm"].to_numpy(float),
             {"units": "mm", "long_name": f"transducer point on the wall, {axis} (body frame)"},
         )
-        ds[f"frame_{axis}"] = (
+        channel_vars[f"frame_{axis}"] = (
             "channel",
             setup[f"frame_{axis}_mm"].to_numpy(float),
             {"units": "mm", "long_name": f"transducer point on the frame, {axis} (lab frame)"},
         )
-    ds["top_y"] = (
+    channel_vars["top_y"] = (
         ("time", "corner"),
         top,
         {"units": "mm", "long_name": "y displacement of the top corners (x = -L/2, +L/2)"},
     )
+    ds = motion.assign(channel_vars)
     ds.theta.attrs.update(long_name="rocking rotation about the active base edge (Eqs. 3-7)")
     ds.phi.attrs.update(long_name="twist about the vertical axis")
     ds.v.attrs.update(long_name="base sliding along x")
