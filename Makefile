@@ -16,14 +16,14 @@ STAMP  := $(VENV)/.installed
 # environment with PYTHONDONTWRITEBYTECODE would compile at every import.
 # The numba kernels are compiled into their on-disk cache here too: cold, each
 # map job that starts compiles them itself (about 12 s of CPU, both first map
-# jobs at once).
+# jobs at once). Numba compiles on one core: beside compileall, not after it.
 $(STAMP): requirements.lock pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet --no-compile -r requirements.lock
-	$(BIN)/python -m compileall -q -j 0 $(VENV)/lib
 	$(BIN)/python -m pip install --quiet --no-deps --no-build-isolation -e .
-	$(BIN)/python -c "from rocklab.kernels import compile_kernels; compile_kernels()"
+	$(BIN)/python -m compileall -q -j 0 $(VENV)/lib & pid=$$!; \
+	$(BIN)/python -c "from rocklab.kernels import compile_kernels; compile_kernels()" && wait $$pid
 	touch $@
 
 venv: $(STAMP)
