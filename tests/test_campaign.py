@@ -142,3 +142,26 @@ def test_embedded_records_read_as_python_reads_them():
         expected = np.array([[_python_float(f) for f in r] for r in rows])
         r = read_record(path)
         np.testing.assert_array_equal(np.column_stack([r.time, r.readings]), expected)
+
+
+@pytest.mark.parametrize("max_tests", [1, 40, 150, 10_000])
+def test_reduction_jobs_pack_whole_specimens(max_tests):
+    """Every test in exactly one job, in the order of tests.csv; a job holds whole
+    consecutive specimens up to ``max_tests`` tests, or a part of one larger specimen."""
+    campaign = open_campaign(Path(__file__).resolve().parents[1] / "raw" / "campaign")
+    jobs = campaign.reduction_jobs(max_tests)
+    flat = [t for ids in jobs.values() for t in ids]
+    assert flat == campaign.test_ids
+    specimen = {t: campaign.test_row(t).specimen for t in flat}
+    sizes = pd.Series(specimen).value_counts()
+    for name, ids in jobs.items():
+        held = list(dict.fromkeys(specimen[t] for t in ids))
+        if "-part" in name:
+            assert len(held) == 1 and sizes[held[0]] > max_tests and len(ids) <= max_tests
+            continue
+        # whole specimens, never more than max_tests of them together
+        assert all(sum(specimen[t] == s for t in ids) == sizes[s] for s in held)
+        assert len(ids) <= max_tests or len(held) == 1
+        assert name == (f"specimen-{held[0]}" if len(held) == 1 else f"specimens-{held[0]}+{held[-1]}")
+    if max_tests >= len(flat):
+        assert len(jobs) == 1
