@@ -25,6 +25,7 @@ from pathlib import Path
 import pandas as pd
 import yaml
 
+from rocklab.config import SCHEMA, schema_defaults
 from rocklab.diagnosis import diagnose_records, jsonable, records_by_series, with_boundaries
 from rocklab.io import valid_tests
 from rocklab.lab.motion import read_motion
@@ -37,8 +38,7 @@ def main():
     ap.add_argument("--out", type=Path, default=Path("results/bench"))
     ap.add_argument("--results", type=Path, default=Path("results"))
     args = ap.parse_args()
-    schema = yaml.safe_load((ROOT / "workflow" / "schemas" / "config.schema.yaml").read_text())
-    cfg = {k: v["default"] for k, v in schema["properties"]["diagnosis"]["properties"].items()}
+    cfg = schema_defaults(yaml.safe_load((ROOT / SCHEMA).read_text()))["diagnosis"]
     cfg |= (yaml.safe_load((ROOT / "config" / "config.yaml").read_text()) or {}).get("diagnosis", {})
     datasets = list(valid_tests(sorted((args.results / "tests").glob("*.nc"))))
     motion = args.results / "motion"

@@ -52,18 +52,6 @@ runpy.run_path(sys.argv[1], init_globals={"snakemake": snakemake}, run_name="__m
 """
 
 
-def schema_defaults(schema=ROOT / "workflow" / "schemas" / "config.schema.yaml") -> dict:
-    """The workflow's configuration with every default of its schema."""
-
-    def walk(node):
-        return {
-            k: walk(v) if v.get("type") == "object" and "properties" in v else v.get("default")
-            for k, v in node["properties"].items()
-        }
-
-    return walk(yaml.safe_load(schema.read_text()))
-
-
 def run_shim(script, **snakemake) -> float:
     """Run ``scripts/<script>`` in a process of its own; its CPU time [s] (user + system)."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -74,9 +62,10 @@ def run_shim(script, **snakemake) -> float:
 
 def run(campaign: Path, results: Path) -> dict:
     """Every reduction job of ``campaign`` and the tables, into ``results``; CPU times [s]."""
+    from rocklab.config import SCHEMA, schema_defaults
     from rocklab.lab.campaign import open_campaign
 
-    config = schema_defaults()
+    config = schema_defaults(yaml.safe_load((ROOT / SCHEMA).read_text()))
     jobs = open_campaign(campaign).reduction_jobs(config["reduction"]["max_tests_per_job"])
     options = {"channels": config["channels"], "validity": config["validity"]}
     cpu = {}

@@ -11,7 +11,15 @@ import jsonschema
 import pytest
 import yaml
 
-from rocklab.config import SCHEMA, ConfigError, calibrated_map_n, check_paths, recorded_path, schema_error
+from rocklab.config import (
+    SCHEMA,
+    ConfigError,
+    calibrated_map_n,
+    check_paths,
+    recorded_path,
+    schema_defaults,
+    schema_error,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
@@ -20,14 +28,6 @@ SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 @pytest.fixture(scope="module")
 def schema():
     return yaml.safe_load((ROOT / SCHEMA).read_text())
-
-
-def _defaults(schema):
-    """The configuration the schema's defaults make, nested objects included."""
-    return {
-        k: _defaults(sub) if sub.get("type") == "object" and "properties" in sub else sub["default"]
-        for k, sub in schema["properties"].items()
-    }
 
 
 def _objects(schema, where="config"):
@@ -67,12 +67,12 @@ def test_snakemake_fills_every_default(schema):
     validate = pytest.importorskip("snakemake.utils").validate
     config = {"maps": {"n": 11}}
     validate(config, str(ROOT / SCHEMA))
-    expected = _defaults(schema)
+    expected = schema_defaults(schema)
     expected["maps"]["n"] = 11
     assert config == expected
     shipped = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     validate(shipped, str(ROOT / SCHEMA))
-    assert shipped == _defaults(schema)
+    assert shipped == schema_defaults(schema)
 
 
 def test_library_defaults_equal_the_schema(schema):
@@ -84,7 +84,7 @@ def test_library_defaults_equal_the_schema(schema):
     from rocklab.physics.impact import AmplitudeLaw
     from rocklab.seismic import overturning
 
-    d = _defaults(schema)
+    d = schema_defaults(schema)
     assert d["channels"] == channels.OPTIONS
     assert d["validity"] == validity.RULES
     assert d["statistics"] == _signature_defaults(campaign_tables, "n_boot", "seed")

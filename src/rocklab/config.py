@@ -19,6 +19,15 @@ import jsonschema
 SCHEMA = "workflow/schemas/config.schema.yaml"
 
 
+def schema_defaults(schema: dict) -> dict:
+    """The configuration a parsed JSON schema's defaults make, nested objects included
+    (what Snakemake fills in where a configuration is silent)."""
+    return {
+        k: schema_defaults(sub) if sub.get("type") == "object" and "properties" in sub else sub["default"]
+        for k, sub in schema["properties"].items()
+    }
+
+
 class ConfigError(ValueError):
     """A configuration the workflow refuses; the message says why in one line."""
 
