@@ -23,15 +23,16 @@ TEST_IDS = CAMPAIGN.test_ids
 check_names(config, TEST_IDS, set(read_manifest().record))
 #: The tests of each series, in the order of tests.csv.
 TESTS_BY_SERIES = {k: v for k, v in CAMPAIGN.reduction_groups().items() if k != UNREADABLE}
-#: The tests of each reduction job: a specimen (or a part of one), or the tests refused at the door.
+#: The tests of each reduction job: whole specimens (or a part of a large one), or the tests refused at the door.
 REDUCTION_JOBS = CAMPAIGN.reduction_jobs(config["reduction"]["max_tests_per_job"])
 
 # Scheduling: on few cores Snakemake starts the selectable jobs of highest
 # priority first.  The campaign's chain (reduction, diagnosis, its
-# checkpoint, then the calibrated maps) is the longest path to the end, and
-# the paper's maps, independent of the campaign, fill the cores it leaves
-# idle; with equal priorities a map job started first could hold a core for
-# most of the reduction and leave the diagnosis to the end.
+# checkpoint) leads to the longest path to the end, through the calibrated
+# maps; the maps come next (the paper's, independent of the campaign, fill
+# the cores the chain leaves idle), figures and pages last.  With equal
+# priorities a map job started first could hold a core for most of the
+# reduction and leave the diagnosis to the end.
 PRIORITY = {"campaign_chain": 20, "maps": 10}
 
 
