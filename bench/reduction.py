@@ -75,6 +75,7 @@ def run(campaign: Path, results: Path) -> dict:
             output={
                 "tests": [str(results / "tests" / f"{t}.nc") for t in ids],
                 "motion": [str(results / "motion" / f"{t}.nc") for t in ids],
+                "rows": str(results / "reduction" / f"{job}.json"),
             },
             params={"raw_dir": str(campaign), "options": options},
             log=[str(results / "logs" / "reduce" / f"{job}.log")],
@@ -84,19 +85,26 @@ def run(campaign: Path, results: Path) -> dict:
     tables["laws"] = str(results / "amplitude_laws.csv")
     run_shim(
         "qc_table.py",
-        input={"tests": [str(results / "tests" / f"{t}.nc") for t in ids], "log": str(campaign / "tests.csv")},
+        input={
+            "rows": [str(results / "reduction" / f"{job}.json") for job in jobs],
+            "log": str(campaign / "tests.csv"),
+        },
         output={"qc": tables["qc"], "kinematics": tables["kinematics"]},
         params={"raw_dir": str(campaign), "schema": str(ROOT / "workflow" / "schemas" / "qc.schema.yaml")},
         log=[str(results / "logs" / "qc_table.log")],
     )
     run_shim(
         "dissipation_tables.py",
-        input={"qc": tables["qc"], "motions": [str(results / "motion" / f"{t}.nc") for t in ids]},
+        input={"qc": tables["qc"]},
         output={
             **{k: v for k, v in tables.items() if k not in ("qc", "kinematics")},
             "table3_md": tables["table3"][:-3] + "md",
         },
-        params={"schemas": str(ROOT / "workflow" / "schemas"), **config["statistics"]},
+        params={
+            "motions": [str(results / "motion" / f"{t}.nc") for t in ids],
+            "schemas": str(ROOT / "workflow" / "schemas"),
+            **config["statistics"],
+        },
         log=[str(results / "logs" / "dissipation_tables.log")],
     )
     return cpu

@@ -12,7 +12,7 @@ from rocklab.io import setup_logging, valid_tests
 from rocklab.lab.motion import read_motion
 
 setup_logging(snakemake.log[0])
-motions = {Path(p).stem: p for p in snakemake.input.motions}
+motions = {Path(p).stem: p for p in snakemake.params.motions}
 for series, out in zip(snakemake.params.series, snakemake.output):
     # a list: the tests are read twice (their motions, their records)
     tests = list(valid_tests(snakemake.params.tests[series]))

@@ -11,7 +11,7 @@ from rocklab.io import setup_logging, valid_tests, write_table
 setup_logging(snakemake.log[0])
 qc = pd.read_csv(snakemake.input.qc, keep_default_na=False, na_values=[""])
 tables, failed = campaign_tables(
-    valid_tests(snakemake.input.motions, snakemake.input.qc), qc, snakemake.params.n_boot, snakemake.params.seed
+    valid_tests(snakemake.params.motions, snakemake.input.qc), qc, snakemake.params.n_boot, snakemake.params.seed
 )
 for test_id, why in failed:
     logging.warning("%s: motion not analysed: %s", test_id, why)

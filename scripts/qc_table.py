@@ -1,13 +1,11 @@
-"""Snakemake shim: results/qc.csv and results/kinematics.csv from the reduced tests."""
+"""Snakemake shim: results/qc.csv and results/kinematics.csv from the reduction jobs' rows."""
 
-import pandas as pd
-
-from rocklab.io import read_attrs, setup_logging, write_table
+from rocklab.io import setup_logging, write_table
 from rocklab.lab.campaign import open_campaign
-from rocklab.lab.reduction import KINEMATICS_COLUMNS, kinematics_row, qc_table
+from rocklab.lab.reduction import kinematics_table, qc_table, read_row_attrs
 
 setup_logging(snakemake.log[0])
-reduced = read_attrs(snakemake.input.tests)
-write_table(qc_table(reduced, open_campaign(snakemake.params.raw_dir)), snakemake.output.qc, snakemake.params.schema)
-rows = [kinematics_row(r.attrs) for r in reduced if r.attrs.get("reject_reason") != "unreadable"]
-write_table(pd.DataFrame(rows, columns=KINEMATICS_COLUMNS), snakemake.output.kinematics)
+reduced = read_row_attrs(snakemake.input.rows)
+campaign = open_campaign(snakemake.params.raw_dir)
+write_table(qc_table(reduced, campaign), snakemake.output.qc, snakemake.params.schema)
+write_table(kinematics_table(reduced, campaign), snakemake.output.kinematics)

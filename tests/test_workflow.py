@@ -7,12 +7,13 @@ import re
 import subprocess
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import pandas as pd
 import pytest
 
 from rocklab.lab.campaign import open_campaign
-from rocklab.lab.reduction import qc_table, reduce_test
+from rocklab.lab.reduction import qc_table, reduce_test, reduce_tests
 
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
@@ -44,6 +45,34 @@ def test_qc_matches_the_hidden_truth(virtual_campaign):
     expected = truth.set_index("test_id").expected_reason.replace({"valid": ""})
     got = qc.reject_reason.reindex(expected.index)
     assert (got == expected).all(), pd.DataFrame({"expected": expected, "got": got})[got != expected]
+
+
+def test_the_qc_tables_from_the_jobs_rows_are_those_of_the_files(virtual_campaign, tmp_path):
+    """What a reduction job writes beside its netCDF files gives qc.csv and kinematics.csv as the files would."""
+    import netCDF4
+
+    from rocklab.io import write_netcdf
+    from rocklab.lab.reduction import kinematics_table, read_row_attrs, row_attrs, write_row_attrs
+
+    folder, truth = virtual_campaign
+    c = open_campaign(folder)
+    reduced = dict(reduce_tests(c, c.test_ids))
+    assert {ds.attrs["reject_reason"] for ds in reduced.values()} >= {"", "unreadable"}
+    files = []
+    for test_id, ds in reduced.items():
+        write_netcdf(ds, tmp_path / f"{test_id}.nc")
+        with netCDF4.Dataset(tmp_path / f"{test_id}.nc") as nc:
+            files.append(SimpleNamespace(attrs={k: nc.getncattr(k) for k in nc.ncattrs()}))
+    ids = list(reduced)
+    write_row_attrs([row_attrs(reduced[t]) for t in ids[:5]], tmp_path / "a.json")
+    write_row_attrs([row_attrs(reduced[t]) for t in ids[5:]], tmp_path / "b.json")
+    # the jobs' files in any order: the tables follow tests.csv
+    rows = read_row_attrs([tmp_path / "b.json", tmp_path / "a.json"])
+    pd.testing.assert_frame_equal(qc_table(rows, c), qc_table(files, c))
+    kinematics = kinematics_table(rows, c)
+    pd.testing.assert_frame_equal(kinematics, kinematics_table(files, c))
+    readable = [t for t in ids if reduced[t].attrs["reject_reason"] != "unreadable"]
+    assert kinematics.test_id.tolist() == readable and kinematics.peak_theta.notna().any()
 
 
 def _snakemake(target, folder, results, *options):

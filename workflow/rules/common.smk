@@ -25,6 +25,8 @@ check_names(config, TEST_IDS, set(read_manifest().record))
 TESTS_BY_SERIES = {k: v for k, v in CAMPAIGN.reduction_groups().items() if k != UNREADABLE}
 #: The tests of each reduction job: whole specimens (or a part of a large one), or the tests refused at the door.
 REDUCTION_JOBS = CAMPAIGN.reduction_jobs(config["reduction"]["max_tests_per_job"])
+#: The reduction job of each test.
+REDUCTION_JOB = {t: job for job, ids in REDUCTION_JOBS.items() for t in ids}
 
 # Scheduling: on few cores Snakemake starts the selectable jobs of highest
 # priority first.  The campaign's chain (reduction, diagnosis, its
@@ -61,6 +63,27 @@ def record_inputs(test_ids):
     """
     paths = (CAMPAIGN.record_path(t) for t in test_ids if t not in CAMPAIGN.log.errors)
     return [str(p) for p in paths if p.is_file()]
+
+
+def reduction_rows(job):
+    """The attributes of the QC rows of a reduction job's tests (rocklab.lab.reduction.row_attrs)."""
+    return res("reduction", f"{job}.json")
+
+
+def reduced_inputs(test_ids):
+    """What a rule over many reduced tests takes as input: the rows files of
+    their reduction jobs, not the tests' netCDF files (passed as params).
+
+    Each job writes its tests' files and its rows file together, so the rows
+    file is as new as any of them and stands for them all.  Snakemake stats
+    every input of every job waiting for a core at each scheduling round, and
+    on two cores it holds rounds every second or more often (each job that
+    ends starts another train of one-second reevaluations): listed file by
+    file, the 2,500 netCDF inputs of the QC, dissipation and diagnosis jobs
+    cost Snakemake's own process some 20 s of CPU of a 35 s total, beside
+    the jobs it runs.
+    """
+    return list(dict.fromkeys(reduction_rows(REDUCTION_JOB[t]) for t in test_ids))
 
 
 def test_params(test_id):

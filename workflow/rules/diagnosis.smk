@@ -43,16 +43,16 @@ for _boundary, _series in SERIES_BY_BOUNDARY.items():
             "diagnose_series_" + re.sub(r"\W", "_", _boundary)
         priority: PRIORITY["campaign_chain"]
         input:
-            # the tests of the boundary's series, each with its own QC verdict
-            tests=[res("tests", f"{t}.nc") for t in _ids],
-            # their motion, extracted once by the reduction
-            motions=[res("motion", f"{t}.nc") for t in _ids],
+            reduced_inputs(_ids),
         output:
             [res("diagnosis", f"{s}.json") for s in _series],
         params:
             series=list(_series),
-            # read series by series: the job holds one series' tests at a time
+            # the tests of each series, each with its own QC verdict, read
+            # series by series: the job holds one series' tests at a time
             tests={s: [res("tests", f"{t}.nc") for t in TESTS_BY_SERIES[s]] for s in _series},
+            # their motion, extracted once by the reduction
+            motions=[res("motion", f"{t}.nc") for t in _ids],
             n_boot=DIAGNOSIS["n_boot"],
             n_history=DIAGNOSIS["n_history"],
             seed=DIAGNOSIS["seed"],

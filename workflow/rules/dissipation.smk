@@ -23,7 +23,7 @@ def dissipation_outputs():
 checkpoint dissipation_tables:
     input:
         qc=res("qc.csv"),
-        motions=expand(res("motion", "{test_id}.nc"), test_id=TEST_IDS),
+        reduced=reduced_inputs(TEST_IDS),
     output:
         tests=res("tests.csv"),
         impacts=res("impacts.csv"),
@@ -35,6 +35,7 @@ checkpoint dissipation_tables:
         table3_md=res("table3.md"),
         summary=res("summary.csv"),
     params:
+        motions=[res("motion", f"{t}.nc") for t in TEST_IDS],
         schemas=schema_path(""),
         n_boot=config["statistics"]["n_boot"],
         seed=config["statistics"]["seed"],

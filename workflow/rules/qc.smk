@@ -8,7 +8,7 @@ def qc_outputs():
 
 checkpoint qc_table:
     input:
-        tests=expand(res("tests", "{test_id}.nc"), test_id=TEST_IDS),
+        rows=reduced_inputs(TEST_IDS),
         log=str(RAW / "tests.csv"),
     output:
         qc=res("qc.csv"),

@@ -11,6 +11,8 @@ from __future__ import annotations
 import json
 import logging
 import re
+from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
@@ -339,7 +341,10 @@ def qc_row(ds: xr.Dataset) -> dict:
 
 
 def qc_table(datasets, campaign: Campaign) -> pd.DataFrame:
-    """QC table, one row per row of ``tests.csv`` (duplicates included)."""
+    """QC table, one row per row of ``tests.csv`` (duplicates included).
+
+    ``datasets``: reduced tests, or anything with their ``attrs`` (:func:`row_attrs`).
+    """
     rows = {ds.attrs["test_id"]: qc_row(ds) for ds in datasets}
     out = []
     for key, err in campaign.log.errors.items():
@@ -383,3 +388,38 @@ KINEMATICS_COLUMNS = [
 def kinematics_row(attrs: dict) -> dict:
     """One row of ``kinematics.csv``: Fig. 9b peaks and the Eq. 8 difference (Fig. 9a)."""
     return {k: attrs.get(k, np.nan) for k in KINEMATICS_COLUMNS}
+
+
+#: Attributes of a reduced test that its rows of ``qc.csv`` and ``kinematics.csv`` are made of.
+ROW_ATTRS = tuple(dict.fromkeys(QC_COLUMNS + KINEMATICS_COLUMNS))
+
+
+def row_attrs(ds: xr.Dataset) -> dict:
+    """The :data:`ROW_ATTRS` of a reduced test, as plain Python values (JSON).
+
+    What a reduction job writes beside its netCDF files, so that the QC
+    table is made without opening them (:func:`qc_table`, :func:`kinematics_table`
+    take these as they take the datasets).
+    """
+    return {k: np.asarray(v).item() for k, v in ds.attrs.items() if k in ROW_ATTRS}
+
+
+def write_row_attrs(rows, path) -> None:
+    """Write :func:`row_attrs` of a job's tests (a list) to ``path`` (JSON; NaN as ``NaN``)."""
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    Path(path).write_text(json.dumps(list(rows), indent=0) + "\n")
+
+
+def read_row_attrs(paths) -> list:
+    """The tests of the files of :func:`write_row_attrs`, each with its ``attrs``, in order."""
+    return [SimpleNamespace(attrs=attrs) for path in paths for attrs in json.loads(Path(path).read_text())]
+
+
+def kinematics_table(datasets, campaign: Campaign) -> pd.DataFrame:
+    """``kinematics.csv``: :func:`kinematics_row` of every readable test, in the order of ``tests.csv``.
+
+    ``datasets``: reduced tests, or anything with their ``attrs`` (:func:`row_attrs`).
+    """
+    readable = {d.attrs["test_id"]: d.attrs for d in datasets if d.attrs.get("reject_reason") != "unreadable"}
+    rows = [kinematics_row(readable[t]) for t in campaign.test_ids if t in readable]
+    return pd.DataFrame(rows, columns=KINEMATICS_COLUMNS)
