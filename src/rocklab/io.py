@@ -192,7 +192,7 @@ def _write_variables(stored, attrs, tmp, path):
 def _set_attributes(obj, attrs, where):
     """Set the attributes of a netCDF4 dataset or variable as xarray would."""
     for key, value in attrs.items():
-        if not isinstance(value, ATTRIBUTE_TYPES):
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, ATTRIBUTE_TYPES):
             raise TypeError(
                 f"{where}: attribute {key!r} = {value!r}: a netCDF attribute holds a number, text or an array"
             )
@@ -289,26 +289,28 @@ def read_dataset(path, variables=None):
     KeyError
         Naming the file and the variables it lacks.
     """
+    return _read(path, variables)
+
+
+def _read(path, variables=None, keep=None):
+    """:func:`read_dataset`; None where ``keep(global attributes)`` is false."""
     import netCDF4
-
-    with netCDF4.Dataset(path) as nc:
-        return _loaded(nc, path, variables)
-
-
-def _loaded(nc, path, variables=None):
-    """:func:`read_dataset` of the open netCDF4 dataset ``nc`` of ``path``."""
     import xarray as xr
 
-    wanted = list(nc.variables) if variables is None else list(variables)
-    missing = [name for name in wanted if name not in nc.variables]
-    if missing:
-        raise KeyError(f"{path}: no variable {', '.join(missing)}")
-    dims = {dim for name in wanted for dim in nc.variables[name].dimensions}
-    names = [n for n, v in nc.variables.items() if n in wanted or (n in dims and v.dimensions == (n,))]
-    decoded = {name: _decoded_variable(nc.variables[name]) for name in names}
-    attrs = _attributes(nc)
-    if any(v is None for v in decoded.values()) or "coordinates" in attrs:
-        with xr.open_dataset(path) as ds:
+    with netCDF4.Dataset(path) as nc:
+        attrs = _attributes(nc)
+        if keep is not None and not keep(attrs):
+            return None
+        wanted = list(nc.variables) if variables is None else list(variables)
+        missing = [name for name in wanted if name not in nc.variables]
+        if missing:
+            raise KeyError(f"{path}: no variable {', '.join(missing)}")
+        dims = {dim for name in wanted for dim in nc.variables[name].dimensions}
+        names = [n for n, v in nc.variables.items() if n in wanted or (n in dims and v.dimensions == (n,))]
+        decoded = {name: _decoded_variable(nc.variables[name]) for name in names}
+        if any(v is None for v in decoded.values()) or "coordinates" in attrs:
+            # from this handle: netCDF-C can crash on a file opened twice at once
+            ds = xr.open_dataset(xr.backends.NetCDF4DataStore(nc))
             return (ds if variables is None else ds[wanted]).load()
     # xarray's order: the data variables, then the coordinates
     coords = {name: var for name, var in decoded.items() if var.dims == (name,)}
@@ -394,11 +396,8 @@ def load_datasets(paths, keep=None, variables=None):
     """Yield the netCDF files at ``paths`` loaded into memory (files closed,
     :func:`read_dataset`), those for whose global attributes ``keep(attrs)``
     is true if given."""
-    import netCDF4
-
     for path in paths:
-        with netCDF4.Dataset(path) as nc:
-            ds = _loaded(nc, path, variables) if keep is None or keep(_attributes(nc)) else None
+        ds = _read(path, variables, keep)
         if ds is not None:
             yield ds
 
