@@ -1,8 +1,10 @@
 """Input/output helpers shared by the workflow scripts (no Snakemake needed).
 
 Tables are validated against the JSON schemas of ``workflow/schemas`` before
-they are written, netCDF files are written compressed and atomically, and
-logging goes to the rule's log file.
+they are written, netCDF files are written compressed and atomically
+(:func:`write_netcdf`) and read back as xarray reads them, only the
+variables asked for (:func:`read_dataset`), both through netCDF4 directly,
+and logging goes to the rule's log file.
 
 netCDF files follow the CF conventions (:data:`CF_CONVENTIONS`, checked by
 ``cfchecker`` in ``tests/test_cf.py``): the datasets carry :func:`cf_attrs`
@@ -83,8 +85,7 @@ COMPRESSION = {"zlib": True, "complevel": 1, "shuffle": False}
 #: leaves a dataset with any of them to xarray, and :func:`read_dataset` a
 #: file with any of them beyond those :func:`write_netcdf` writes itself.
 XARRAY_CODED = frozenset(
-    {"_FillValue", "missing_value", "scale_factor", "add_offset", "_Unsigned", "dtype", "_Encoding", "calendar"}
-    | {"coordinates"}
+    "_FillValue missing_value scale_factor add_offset _Unsigned dtype _Encoding calendar coordinates".split()
 )
 #: Units by which xarray may read a variable as times (with "since") or
 #: durations (``xarray.coding.times.TIME_UNITS``).
@@ -267,8 +268,9 @@ def read_dataset(path, variables=None):
     """A netCDF file loaded into memory (closed), as
     ``xarray.open_dataset(path)[variables].load()`` gives it.
 
-    Read with netCDF4 directly (a third of xarray's time for a reduced
-    test), decoded as xarray decodes what :func:`write_netcdf` writes:
+    Read with netCDF4 directly, without xarray's machinery per variable
+    (the less so the fewer variables are asked for), decoded as xarray
+    decodes what :func:`write_netcdf` writes:
     character arrays to str (or bytes without ``_Encoding``), int8 with
     ``dtype = "bool"`` to bool, ``_FillValue`` NaN dropped from the
     attributes; numbers as stored, attributes as netCDF4 gives them (numpy
@@ -325,29 +327,32 @@ def _decoded_variable(var):
     attrs = _attributes(var)
     if not isinstance(var.dtype, np.dtype):  # variable-length strings
         return None
+    fill = attrs.pop("_FillValue", None)
+    is_bool = attrs.get("dtype") == "bool"
+    if is_bool:
+        del attrs["dtype"]
+    encoding = attrs.pop("_Encoding", None)
+    units = attrs.get("units")
+    if (
+        (fill is not None and not (var.dtype.kind == "f" and np.isnan(fill)))
+        or encoding not in (None, "utf-8")
+        or XARRAY_CODED & attrs.keys()
+        or (isinstance(units, str) and ("since" in units or units in TIME_UNITS))
+    ):
+        return None
     var.set_auto_maskandscale(False)
     var.set_auto_chartostring(False)
-    data = var[...]
+    data = var[...].astype(bool) if is_bool else var[...]
     dims = var.dimensions
-    fill = attrs.pop("_FillValue", None)
-    if fill is not None and not (data.dtype.kind == "f" and np.isnan(fill)):
-        return None
-    if attrs.get("dtype") == "bool":
-        del attrs["dtype"]
-        data = data.astype(bool)
-    encoding = attrs.pop("_Encoding", None)
     if data.dtype == "S1" and dims:
         # xarray's char_to_bytes: each row of characters one string
         n = data.shape[-1]
         data = data.view(f"S{n}").reshape(data.shape[:-1]) if n else np.zeros(data.shape[:-1], np.bytes_)
         dims = dims[:-1]
     if encoding is not None:
-        if encoding != "utf-8" or data.dtype.kind != "S":
+        if data.dtype.kind != "S":
             return None
         data = np.array([b.decode() for b in data.ravel()], dtype=object).reshape(data.shape)
-    units = attrs.get("units")
-    if XARRAY_CODED & attrs.keys() or (isinstance(units, str) and ("since" in units or units in TIME_UNITS)):
-        return None
     return xr.Variable(dims, data, attrs)
 
 
