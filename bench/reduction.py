@@ -4,15 +4,17 @@
 
 Runs every reduction job of the campaign (``Campaign.reduction_jobs`` with
 the schema's ``reduction.max_tests_per_job``) as the workflow does: the shim
-``scripts/reduce_tests.py`` in a Python process of its own per job, then
-the tables made of its outputs (``scripts/qc_table.py``,
+``scripts/reduce_tests.py`` in a Python process of its own per job, run
+from the checkout's root with the campaign named relative to it (as each
+test's ``source_file`` records it), then the tables made of its outputs (``scripts/qc_table.py``,
 ``scripts/dissipation_tables.py``), into ``DIR/results``.  The CPU time of
 each job (start-up and imports included: the kernel's count of the child
 process, robust on a shared machine) and the size of ``tests/`` and
 ``motion/`` go to ``DIR/reduction.json``.
 
 With ``--reference``, a ``DIR/results`` of the same campaign written by
-another checkout (run this file there with that checkout's sources), every
+another checkout (run this file there with that checkout's sources) or
+the ``results/`` of a workflow run (``make run``), every
 netCDF file is compared with its namesake: dimensions, variables (in
 order: dtype, dimensions, attributes, every value bit for bit, NaN where
 NaN) and global attributes (in order; the time of the ``history`` line
@@ -55,7 +57,9 @@ runpy.run_path(sys.argv[1], init_globals={"snakemake": snakemake}, run_name="__m
 def run_shim(script, **snakemake) -> float:
     """Run ``scripts/<script>`` in a process of its own; its CPU time [s] (user + system)."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    subprocess.run([sys.executable, "-c", SHIM, str(ROOT / "scripts" / script), json.dumps(snakemake)], check=True)
+    subprocess.run(
+        [sys.executable, "-c", SHIM, str(ROOT / "scripts" / script), json.dumps(snakemake)], check=True, cwd=ROOT
+    )
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
@@ -68,6 +72,8 @@ def run(campaign: Path, results: Path) -> dict:
     config = schema_defaults(yaml.safe_load((ROOT / SCHEMA).read_text()))
     jobs = open_campaign(campaign).reduction_jobs(config["reduction"]["max_tests_per_job"])
     options = {"channels": config["channels"], "validity": config["validity"]}
+    # named as the workflow names it, from the checkout (each test's `source_file`)
+    raw_dir = campaign.relative_to(ROOT) if campaign.is_relative_to(ROOT) else campaign
     cpu = {}
     for job, ids in jobs.items():
         cpu[job] = run_shim(
@@ -77,7 +83,7 @@ def run(campaign: Path, results: Path) -> dict:
                 "motion": [str(results / "motion" / f"{t}.nc") for t in ids],
                 "rows": str(results / "reduction" / f"{job}.json"),
             },
-            params={"raw_dir": str(campaign), "options": options},
+            params={"raw_dir": str(raw_dir), "options": options},
             log=[str(results / "logs" / "reduce" / f"{job}.log")],
         )
     ids = [t for part in jobs.values() for t in part]
@@ -90,7 +96,7 @@ def run(campaign: Path, results: Path) -> dict:
             "log": str(campaign / "tests.csv"),
         },
         output={"qc": tables["qc"], "kinematics": tables["kinematics"]},
-        params={"raw_dir": str(campaign), "schema": str(ROOT / "workflow" / "schemas" / "qc.schema.yaml")},
+        params={"raw_dir": str(raw_dir), "schema": str(ROOT / "workflow" / "schemas" / "qc.schema.yaml")},
         log=[str(results / "logs" / "qc_table.log")],
     )
     run_shim(

@@ -14,8 +14,9 @@ from rocklab.lab.motion import read_motion
 setup_logging(snakemake.log[0])
 motions = {Path(p).stem: p for p in snakemake.params.motions}
 for series, out in zip(snakemake.params.series, snakemake.output):
-    # a list: the tests are read twice (their motions, their records)
-    tests = list(valid_tests(snakemake.params.tests[series]))
+    # a list: the tests are read twice (their motions, their records); of
+    # their records the diagnosis needs the rotation, its time and the attributes
+    tests = list(valid_tests(snakemake.params.tests[series], variables=("theta",)))
     stored = {t.attrs["test_id"]: read_motion(motions[t.attrs["test_id"]]) for t in tests}
     entry = diagnose_records(
         records_by_series(tests, stored).get(series, []),

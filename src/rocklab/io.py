@@ -1,8 +1,10 @@
 """Input/output helpers shared by the workflow scripts (no Snakemake needed).
 
 Tables are validated against the JSON schemas of ``workflow/schemas`` before
-they are written, netCDF files are written compressed and atomically, and
-logging goes to the rule's log file.
+they are written, netCDF files are written compressed and atomically
+(:func:`write_netcdf`) and read back as xarray reads them, only the
+variables asked for (:func:`read_dataset`), both through netCDF4 directly,
+and logging goes to the rule's log file.
 
 netCDF files follow the CF conventions (:data:`CF_CONVENTIONS`, checked by
 ``cfchecker`` in ``tests/test_cf.py``): the datasets carry :func:`cf_attrs`
@@ -23,6 +25,7 @@ import logging
 import os
 import tempfile
 from datetime import UTC, datetime
+from numbers import Number
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -77,25 +80,47 @@ def cf_attrs(title, source) -> dict:
 COMPRESSION = {"zlib": True, "complevel": 1, "shuffle": False}
 
 
+#: Attributes by which xarray encodes or decodes a variable (masking,
+#: scaling, times, booleans, text, auxiliary coordinates): :func:`write_netcdf`
+#: leaves a dataset with any of them to xarray, and :func:`read_dataset` a
+#: file with any of them beyond those :func:`write_netcdf` writes itself.
+XARRAY_CODED = frozenset(
+    "_FillValue missing_value scale_factor add_offset _Unsigned dtype _Encoding calendar coordinates".split()
+)
+#: Units by which xarray may read a variable as times (with "since") or
+#: durations (``xarray.coding.times.TIME_UNITS``).
+TIME_UNITS = frozenset({"days", "hours", "minutes", "seconds", "milliseconds", "microseconds", "nanoseconds"})
+#: What a netCDF attribute may hold (xarray's check before it writes one).
+ATTRIBUTE_TYPES = (str, Number, np.ndarray, np.number, list, tuple, bytes)
+
+
 def write_netcdf(ds, path):
     """Write a dataset compressed, through a temporary file, so an interrupted
     run never leaves a truncated output that looks complete.
 
-    Text variables are written as character arrays, which every netCDF
-    tool and CF-1.8 read (cfchecker rejects the netCDF-4 string type);
-    ``xarray.open_dataset`` gives them back as str.  A line with the time
-    and the rocklab version is appended to the ``history`` attribute.
+    Numbers are compressed (:data:`COMPRESSION`), floats with ``_FillValue``
+    NaN; booleans are stored as int8 with ``dtype = "bool"``; text as
+    character arrays, which every netCDF tool and CF-1.8 read (cfchecker
+    rejects the netCDF-4 string type); ``xarray.open_dataset`` gives them
+    back as bool and str.  A line with the time and the rocklab version is
+    appended to the ``history`` attribute.  A variable's own ``encoding`` is
+    not used.
+
+    These kinds, the only ones rocklab writes, go through netCDF4 directly
+    (:func:`_stored_variable`), encoded as xarray encodes them; a dataset
+    with anything else (times, auxiliary coordinates, attributes of
+    :data:`XARRAY_CODED`) is written by ``xarray.Dataset.to_netcdf``.
+    ``tests/test_io.py`` checks that both read back the same.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    encoding = {name: dict(COMPRESSION) for name, var in ds.variables.items() if var.dtype.kind in "fiu" and var.ndim}
-    text = {name: var.astype(str) for name, var in ds.variables.items() if var.dtype.kind in "OU"}
-    encoding.update({name: {"dtype": "S1"} for name in text})
-    # one assign, a shallow copy: the caller's dataset is left as it is
-    ds = ds.assign(text)
-    ds.attrs.setdefault("Conventions", CF_CONVENTIONS)
+    attrs = dict(ds.attrs)
+    attrs.setdefault("Conventions", CF_CONVENTIONS)
     line = f"{datetime.now(UTC):%Y-%m-%dT%H:%M:%SZ} rocklab {__version__}: wrote {path.name}"
-    ds.attrs["history"] = "\n".join(filter(None, [ds.attrs.get("history", ""), line]))
+    attrs["history"] = "\n".join(filter(None, [attrs.get("history", ""), line]))
+    stored = {name: _stored_variable(var) for name, var in ds.variables.items()}
+    # auxiliary coordinates: xarray names them in a `coordinates` attribute
+    direct = all(v is not None for v in stored.values()) and set(ds.coords) <= set(ds.dims)
     # a writer killed outright (SIGKILL) leaves its temporary file: the next
     # write of the same file, the rerun, removes it
     for stale in path.parent.glob(f".{glob.escape(path.name)}.*.tmp"):
@@ -103,7 +128,10 @@ def write_netcdf(ds, path):
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
     try:
-        ds.to_netcdf(tmp, engine="netcdf4", encoding=encoding)
+        if direct:
+            _write_variables(stored, attrs, tmp, path)
+        else:
+            _write_with_xarray(ds.assign_attrs(attrs), tmp)
         # mkstemp makes the file private (0600): give it the mode of any new file
         umask = os.umask(0)
         os.umask(umask)
@@ -112,6 +140,77 @@ def write_netcdf(ds, path):
     finally:
         if os.path.exists(tmp):
             os.remove(tmp)
+
+
+def _stored_variable(var):
+    """A variable as :func:`write_netcdf` stores it, encoded as xarray would.
+
+    Returns
+    -------
+    tuple or None
+        Dimensions, data, attributes, fill value and compression
+        (``netCDF4.Dataset.createVariable``'s arguments); None for a kind
+        left to xarray.
+    """
+    attrs = dict(var.attrs)
+    if XARRAY_CODED & attrs.keys():
+        return None
+    data = np.asarray(var.values)
+    kind = data.dtype.kind
+    if kind in "OU":
+        # utf-8 bytes, one character each along a last dimension named after their count
+        encoded = np.array([s.encode() for s in data.astype(str).ravel()], dtype=bytes).reshape(data.shape)
+        chars = encoded.reshape(*data.shape, 1).view("S1")
+        return (*var.dims, f"string{chars.shape[-1]}"), chars, {**attrs, "_Encoding": "utf-8"}, None, {}
+    if kind == "b":
+        return var.dims, data.astype(np.int8), {**attrs, "dtype": "bool"}, None, {}
+    if kind in "iu" or data.dtype in (np.float32, np.float64):
+        fill = data.dtype.type(np.nan) if kind == "f" else None
+        return var.dims, data, attrs, fill, COMPRESSION if data.ndim else {}
+    return None
+
+
+def _write_variables(stored, attrs, tmp, path):
+    """Write :func:`_stored_variable`'s variables and the global ``attrs`` to ``tmp`` (for ``path``)."""
+    import netCDF4
+
+    with netCDF4.Dataset(tmp, "w", format="NETCDF4") as nc:
+        _set_attributes(nc, attrs, path)
+        for name, (dims, data, var_attrs, fill, compression) in stored.items():
+            for dim, size in zip(dims, data.shape):
+                if dim not in nc.dimensions:
+                    nc.createDimension(dim, size)
+            var = nc.createVariable(name, data.dtype, dims, fill_value=fill, **compression)
+            _set_attributes(var, var_attrs, f"{path}, variable {name}")
+        # every variable defined before any is written: a write after a
+        # definition has netCDF-C write the metadata of the whole file again
+        nc.set_auto_maskandscale(False)
+        nc.set_auto_chartostring(False)
+        for name, (_, data, *_) in stored.items():
+            nc.variables[name][...] = data
+
+
+def _set_attributes(obj, attrs, where):
+    """Set the attributes of a netCDF4 dataset or variable as xarray would."""
+    for key, value in attrs.items():
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, ATTRIBUTE_TYPES):
+            raise TypeError(
+                f"{where}: attribute {key!r} = {value!r}: a netCDF attribute holds a number, text or an array"
+            )
+        array = np.asarray(value)
+        if array.dtype.kind in "US" and array.size > 1:
+            obj.setncattr_string(key, value)
+        else:
+            obj.setncattr(key, value)
+
+
+def _write_with_xarray(ds, tmp):
+    """:func:`write_netcdf`'s encoding through ``xarray.Dataset.to_netcdf``."""
+    encoding = {name: dict(COMPRESSION) for name, var in ds.variables.items() if var.dtype.kind in "fiu" and var.ndim}
+    text = {name: var.astype(str) for name, var in ds.variables.items() if var.dtype.kind in "OU"}
+    encoding.update({name: {"dtype": "S1"} for name in text})
+    # one assign, a shallow copy: the caller's dataset is left as it is
+    ds.assign(text).to_netcdf(tmp, engine="netcdf4", encoding=encoding)
 
 
 def benchmark_times(results) -> pd.DataFrame:
@@ -156,8 +255,105 @@ def read_attrs(paths):
     out = []
     for p in paths:
         with netCDF4.Dataset(p) as nc:
-            out.append(SimpleNamespace(attrs={k: nc.getncattr(k) for k in nc.ncattrs()}, path=str(p)))
+            out.append(SimpleNamespace(attrs=_attributes(nc), path=str(p)))
     return out
+
+
+def _attributes(obj) -> dict:
+    """The attributes of a netCDF4 dataset or variable, as xarray gives them."""
+    return {k: obj.getncattr(k) for k in obj.ncattrs()}
+
+
+def read_dataset(path, variables=None):
+    """A netCDF file loaded into memory (closed), as
+    ``xarray.open_dataset(path)[variables].load()`` gives it.
+
+    Read with netCDF4 directly, without xarray's machinery per variable
+    (the less so the fewer variables are asked for), decoded as xarray
+    decodes what :func:`write_netcdf` writes:
+    character arrays to str (or bytes without ``_Encoding``), int8 with
+    ``dtype = "bool"`` to bool, ``_FillValue`` NaN dropped from the
+    attributes; numbers as stored, attributes as netCDF4 gives them (numpy
+    scalars and arrays, str).  A file with attributes that xarray decodes
+    otherwise (:data:`XARRAY_CODED`, times) is read by xarray.  The
+    variables carry no ``encoding``.
+
+    Parameters
+    ----------
+    path : path-like
+        The file.
+    variables : sequence of str, optional
+        The variables to load, with the coordinates of their dimensions
+        (``time`` for a reduced test's ``theta``); all if None.
+
+    Raises
+    ------
+    KeyError
+        Naming the file and the variables it lacks.
+    """
+    return _read(path, variables)
+
+
+def _read(path, variables=None, keep=None):
+    """:func:`read_dataset`; None where ``keep(global attributes)`` is false."""
+    import netCDF4
+    import xarray as xr
+
+    with netCDF4.Dataset(path) as nc:
+        attrs = _attributes(nc)
+        if keep is not None and not keep(attrs):
+            return None
+        wanted = list(nc.variables) if variables is None else list(variables)
+        missing = [name for name in wanted if name not in nc.variables]
+        if missing:
+            raise KeyError(f"{path}: no variable {', '.join(missing)}")
+        dims = {dim for name in wanted for dim in nc.variables[name].dimensions}
+        names = [n for n, v in nc.variables.items() if n in wanted or (n in dims and v.dimensions == (n,))]
+        decoded = {name: _decoded_variable(nc.variables[name]) for name in names}
+        if any(v is None for v in decoded.values()) or "coordinates" in attrs:
+            # from this handle: netCDF-C can crash on a file opened twice at once
+            ds = xr.open_dataset(xr.backends.NetCDF4DataStore(nc))
+            return (ds if variables is None else ds[wanted]).load()
+    # xarray's order: the data variables, then the coordinates
+    coords = {name: var for name, var in decoded.items() if var.dims == (name,)}
+    return xr.Dataset({n: v for n, v in decoded.items() if n not in coords}, coords, attrs)
+
+
+def _decoded_variable(var):
+    """A netCDF4 variable as an ``xarray.Variable`` decoded as xarray would
+    (:func:`read_dataset`); None for one that xarray decodes otherwise."""
+    import xarray as xr
+
+    attrs = _attributes(var)
+    if not isinstance(var.dtype, np.dtype):  # variable-length strings
+        return None
+    fill = attrs.pop("_FillValue", None)
+    is_bool = attrs.get("dtype") == "bool"
+    if is_bool:
+        del attrs["dtype"]
+    encoding = attrs.pop("_Encoding", None)
+    units = attrs.get("units")
+    if (
+        (fill is not None and not (var.dtype.kind == "f" and np.isnan(fill)))
+        or encoding not in (None, "utf-8")
+        or XARRAY_CODED & attrs.keys()
+        or (isinstance(units, str) and ("since" in units or units in TIME_UNITS))
+    ):
+        return None
+    var.set_auto_maskandscale(False)
+    var.set_auto_chartostring(False)
+    data = var[...].astype(bool) if is_bool else var[...]
+    dims = var.dimensions
+    if data.dtype == "S1" and dims:
+        # xarray's char_to_bytes: each row of characters one string
+        n = data.shape[-1]
+        data = data.view(f"S{n}").reshape(data.shape[:-1]) if n else np.zeros(data.shape[:-1], np.bytes_)
+        dims = dims[:-1]
+    if encoding is not None:
+        if data.dtype.kind != "S":
+            return None
+        data = np.array([b.decode() for b in data.ravel()], dtype=object).reshape(data.shape)
+    return xr.Variable(dims, data, attrs)
 
 
 def load_schema(path):
@@ -201,25 +397,25 @@ def valid_test_ids(qc_path) -> list:
     return qc.test_id[qc.valid.astype(str) == "True"].tolist()
 
 
-def load_datasets(paths, keep=None):
-    """Yield the netCDF files at ``paths`` loaded into memory (files closed),
-    those for which ``keep(dataset)`` is true if given."""
-    import xarray as xr
-
+def load_datasets(paths, keep=None, variables=None):
+    """Yield the netCDF files at ``paths`` loaded into memory (files closed,
+    :func:`read_dataset`), those for whose global attributes ``keep(attrs)``
+    is true if given."""
     for path in paths:
-        with xr.open_dataset(path) as ds:
-            if keep is None or keep(ds):
-                yield ds.load()
+        ds = _read(path, variables, keep)
+        if ds is not None:
+            yield ds
 
 
-def valid_tests(paths, qc_path=None):
+def valid_tests(paths, qc_path=None, variables=None):
     """Yield the reduced datasets of the valid tests, loaded.
 
     Valid: marked so in ``qc.csv``, or without it by the test's own verdict
     (its ``valid`` attribute, of which qc.csv is made), so that a job over
     a few tests need not depend on the QC of the whole campaign.
+    ``variables``: those to load (:func:`read_dataset`), all if None.
     """
     if qc_path is None:
-        return load_datasets(paths, lambda ds: int(ds.attrs.get("valid", 0)))
+        return load_datasets(paths, lambda attrs: int(attrs.get("valid", 0)), variables)
     valid = set(valid_test_ids(qc_path))
-    return load_datasets(p for p in paths if Path(p).stem in valid)
+    return load_datasets((p for p in paths if Path(p).stem in valid), variables=variables)

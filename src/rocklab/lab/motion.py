@@ -57,7 +57,7 @@ import pandas as pd
 import xarray as xr
 from scipy.signal import find_peaks, savgol_filter
 
-from rocklab.io import cf_attrs
+from rocklab.io import cf_attrs, read_dataset
 from rocklab.lab import kinematics
 from rocklab.lab.channels import LOST_STATUSES
 from rocklab.lab.flight_fit import local_fit, model_value, model_velocity, odd_samples, root_tau, stationary_tau
@@ -472,8 +472,7 @@ def motion_from_dataset(ds) -> Motion:
 
 def read_motion(path) -> Motion:
     """The :class:`Motion` stored at ``path`` (``results/motion/<test_id>.nc``)."""
-    with xr.open_dataset(path) as ds:
-        return motion_from_dataset(ds.load())
+    return motion_from_dataset(read_dataset(path))
 
 
 def stored_motion(ds) -> xr.Dataset:

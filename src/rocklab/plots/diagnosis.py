@@ -18,14 +18,13 @@ from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
-import xarray as xr
 
 from rocklab.diagnosis import block_tests, measured_test, records_by_series, simulate_measured
 from rocklab.diagnosis.catalogue import by_name
 from rocklab.diagnosis.causes import restitution_drift
 from rocklab.diagnosis.evidence import flight_time_alpha, in_series_order, observe
 from rocklab.diagnosis.model import impact_speeds, model_params
-from rocklab.io import valid_tests
+from rocklab.io import read_dataset, valid_tests
 from rocklab.lab.motion import read_motion
 from rocklab.physics import restitution
 from rocklab.physics.flight import quarter_period
@@ -224,8 +223,7 @@ def series_figures(entries, test_paths, motion_paths=()):
     for e in series:
         test_id = e["sample_test"]
         motion = {test_id: read_motion(motions[test_id])} if test_id in motions else None
-        with xr.open_dataset(paths[test_id]) as ds:
-            (recs,) = records_by_series([ds.load()], motion).values()
+        (recs,) = records_by_series([read_dataset(paths[test_id], ("theta",))], motion).values()
         out[e["key"]] = history_figure(measured_test(recs[0]), e)
         if any(f.get("discovered") for f in e["findings"]):
             out[f"discovered/{e['key']}"] = discovery_figure(_series_tests(e["key"], paths, motions), e)
@@ -350,7 +348,7 @@ def family_figure(result, events):
 
 def _series_tests(key, paths, motions):
     """The valid tests of series ``key`` among ``paths`` (stem -> path) as the diagnosis read them."""
-    datasets = [ds for ds in valid_tests(paths.values()) if ds.attrs.get("series") == key]
+    datasets = [ds for ds in valid_tests(paths.values(), variables=("theta",)) if ds.attrs.get("series") == key]
     ids = [ds.attrs["test_id"] for ds in datasets]
     stored = {t: read_motion(motions[t]) for t in ids if t in motions}
     (recs,) = records_by_series(datasets, stored).values()
