@@ -12,7 +12,9 @@ recorded, the least of ``--repeat`` runs.  The sum weighted by the jobs
 each script has in ``snakemake all`` (:data:`JOBS`) is the start-up CPU of
 the main job; the imports of Snakemake's preamble (the same in every job),
 those of the Snakefile and its rules (Snakemake's own process, once, before
-the first job) and a bare interpreter are measured apart.
+the first job) and a bare interpreter are measured apart.  What a job
+imports later, in the functions it calls (scipy in the reduction, say), is
+not counted: the job pays it all the same.
 
 With ``--baseline``, a checkout (or an export of its ``src``, ``scripts``,
 ``Snakefile`` and ``workflow``) of another commit is measured too, in the same sitting, run
