@@ -45,6 +45,19 @@ def cumulative_trapezoid(y, dx):
     The arithmetic of ``scipy.integrate.cumulative_trapezoid(y, dx=dx,
     initial=0)``, step for step, so bit for bit the same; numpy's own spares
     every job that reads a record the 0.4 s of importing scipy.integrate.
+
+    Parameters
+    ----------
+    y : array_like
+        Uniformly sampled values (e.g. acceleration [m/s^2]).
+    dx : float
+        Sample interval (e.g. [s]).
+
+    Returns
+    -------
+    ndarray
+        The integral at every sample, float64, in the units of ``y`` times
+        those of ``dx`` (e.g. velocity [m/s]); 0 at the first.
     """
     y = np.asarray(y, float)
     return np.concatenate(([0.0], np.cumsum(dx * (y[1:] + y[:-1]) / 2.0)))
