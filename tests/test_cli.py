@@ -138,7 +138,7 @@ def test_simulate_shipped_record_by_name(tmp_path, capsys):
 @pytest.fixture
 def nothing_computed(monkeypatch):
     """Fail the test if a simulation or a map starts: the checks come first."""
-    import rocklab.seismic.overturning as overturning
+    import rocklab.simulation.batch as batch
     import rocklab.simulation.reference as reference
 
     def forbidden(*args, **kwargs):
@@ -147,7 +147,7 @@ def nothing_computed(monkeypatch):
     for module, name in (
         (reference, "simulate_free"),
         (reference, "simulate_ground"),
-        (overturning, "overturning_batch"),
+        (batch, "overturning_batch"),
     ):
         monkeypatch.setattr(module, name, forbidden)
 

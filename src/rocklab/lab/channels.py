@@ -14,8 +14,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator
-from scipy.signal import savgol_coeffs
 
 #: Shortest run of identical readings that counts as frozen (stuck/clipped) [s].
 FLAT_RUN_S = 0.25
@@ -86,6 +84,10 @@ def noise_sigma(x, window=9):
     at 400 Hz is comparable to the noise itself; 1.4826 MAD of that residual,
     divided by the residual's exact gain for white noise, estimates sigma.
     """
+    # imported here: a job that imports the reduction for its tables only
+    # (the QC table) would pay 1 s of scipy at start-up
+    from scipy.signal import savgol_coeffs
+
     y = x[np.isfinite(x)]
     if y.size <= window:
         return float("nan")
@@ -222,6 +224,9 @@ def assess_channels(readings, fs, channels, flat_run_s=FLAT_RUN_S, max_gap_s=MAX
             if b - a <= max_gap and a > 0 and b < n:
                 fill[a:b] = True
         if fill.any():
+            # imported here, as in noise_sigma
+            from scipy.interpolate import PchipInterpolator
+
             good = np.isfinite(y)
             y[fill] = PchipInterpolator(t[good], y[good], extrapolate=False)(t[fill])
             rep.gap_samples_filled = int((fill & lost_samples).sum())

@@ -55,7 +55,6 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 import xarray as xr
-from scipy.signal import find_peaks, savgol_filter
 
 from rocklab.io import cf_attrs, read_dataset
 from rocklab.lab import kinematics
@@ -187,6 +186,10 @@ def noise_level(theta, fs):
     rocking motion (a few Hz) passes the smoother, white noise and 50 Hz hum
     do not, and the median ignores the few samples around impacts.
     """
+    # imported here and in extract_motion: the jobs that read stored motion
+    # only (the figures of the dissipation) would pay 1 s of scipy at start-up
+    from scipy.signal import savgol_filter
+
     theta = np.asarray(theta, float)
     win = odd_samples(0.1 * fs, 7)
     if theta.size <= win:
@@ -241,6 +244,8 @@ def extract_motion(t, theta, fs, boundary, p, *, k_noise=10.0, ring_guard_s=0.06
     -------
     Motion
     """
+    from scipy.signal import find_peaks, savgol_filter  # imported here: see noise_level
+
     if boundary not in BOUNDARIES:
         raise ValueError(f"boundary must be one of {BOUNDARIES}, got {boundary!r}")
     t = np.asarray(t, float)

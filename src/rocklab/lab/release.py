@@ -53,8 +53,6 @@ velocity at the release, the inputs of that closed form
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import brentq
-from scipy.signal import savgol_filter
 
 from rocklab.lab.flight_fit import (
     asymptote,
@@ -176,6 +174,11 @@ def screw_departure(t, u, p, fs, noise, smooth_win):
     The speed at the departure is the screw's creep, not a kick: see
     :func:`release_state` for that.
     """
+    # imported here: a job that imports the reduction for its tables only
+    # (the QC table) would pay 1 s of scipy at start-up
+    from scipy.optimize import brentq
+    from scipy.signal import savgol_filter
+
     us = savgol_filter(u, smooth_win, 2)
     i_max = int(np.argmax(us))
     below = np.flatnonzero(us[i_max:] < 0.5 * us[i_max])

@@ -50,7 +50,6 @@ from rocklab.io import cf_attrs
 from rocklab.physics import impact, wall
 from rocklab.physics.restitution import CALIBRATED_RATIO_ONE_SIDED, CALIBRATED_RATIO_TWO_SIDED
 from rocklab.seismic import calibrated
-from rocklab.simulation.batch import overturning_batch
 from rocklab.simulation.model import OVERTURN, RockingModel
 
 log = logging.getLogger(__name__)
@@ -245,6 +244,10 @@ def overturning_map(
         ag = np.asarray(record, float)
     if polarity not in (1, -1):
         raise ValueError(f"polarity must be 1 or -1, not {polarity!r}")
+    # imported here: numba (0.4 s) is for the map jobs, not for the jobs and
+    # the Snakefile that import this module for its tables and model names
+    from rocklab.simulation.batch import overturning_batch
+
     wall_model = named_model(model, alpha, R, form, eq17, diagnosis)
     amp, dur = scales(n, lo, hi), scales(n, lo, hi)
     over = np.zeros((amp.size, dur.size), bool)

@@ -25,7 +25,6 @@ from pathlib import Path
 import numpy as np
 import obspy
 import pandas as pd
-from scipy import signal
 
 from rocklab.physics.wall import G
 from rocklab.seismic.accelerograms import baseline_correct_array, peak_ground_acceleration
@@ -130,6 +129,10 @@ def displacement_gain(acc_g, disp_mm, dt, band=SIGN_CHECK_BAND):
         d''/g = gain * acc (least squares) and their correlation; a gain
         near -1 means the channels have opposite signs.
     """
+    # imported here and in table_velocity: the Snakefile imports this module
+    # for SPECIMENS and check_dir, and scipy.signal would cost it 1 s
+    from scipy import signal
+
     sos = signal.butter(4, band, btype="bandpass", fs=1.0 / dt, output="sos")
     a = signal.sosfiltfilt(sos, np.asarray(acc_g, float) - np.mean(acc_g))
     d = signal.sosfiltfilt(sos, np.asarray(disp_mm, float) * 1e-3)
@@ -213,6 +216,8 @@ def table_velocity(displacement) -> np.ndarray:
     the displacement, free of the drift that integrating the noisy
     accelerometer (offset, spikes) leaves.
     """
+    from scipy import signal  # imported here: see displacement_gain
+
     dt = displacement.stats.delta
     sos = signal.butter(BAND_ORDER, BAND, btype="bandpass", fs=1.0 / dt, output="sos")
     return np.gradient(signal.sosfiltfilt(sos, displacement.data), dt)

@@ -35,14 +35,37 @@ duration D5-95 between 5 % and 95 % of the Arias intensity.
 from __future__ import annotations
 
 import numpy as np
-from scipy.integrate import cumulative_trapezoid
 
 from ._text import G
 
 
+def cumulative_trapezoid(y, dx):
+    """Cumulative trapezoidal integral of ``y`` sampled every ``dx``, starting at 0.
+
+    The arithmetic of ``scipy.integrate.cumulative_trapezoid(y, dx=dx,
+    initial=0)``, step for step, so bit for bit the same; numpy's own spares
+    every job that reads a record the 0.4 s of importing scipy.integrate.
+
+    Parameters
+    ----------
+    y : array_like
+        Uniformly sampled values (e.g. acceleration [m/s^2]).
+    dx : float
+        Sample interval (e.g. [s]).
+
+    Returns
+    -------
+    ndarray
+        The integral at every sample, float64, in the units of ``y`` times
+        those of ``dx`` (e.g. velocity [m/s]); 0 at the first.
+    """
+    y = np.asarray(y, float)
+    return np.concatenate(([0.0], np.cumsum(dx * (y[1:] + y[:-1]) / 2.0)))
+
+
 def velocity(acc, dt):
     """Velocity [m/s] by cumulative trapezoid of ``acc`` [m/s^2], v(0) = 0."""
-    return cumulative_trapezoid(np.asarray(acc, float), dx=dt, initial=0.0)
+    return cumulative_trapezoid(acc, dt)
 
 
 def baseline_correct_array(acc, dt, pre_event=None, velocity_order=1, freqmin=None, freqmax=None, corners=4, taper=1.0):
@@ -134,7 +157,7 @@ def record_duration(npts, dt):
 
 def arias_intensity(acc, dt):
     """Cumulative Arias intensity [m/s]: pi / (2 g) * integral of a^2 dt."""
-    return np.pi / (2 * G) * cumulative_trapezoid(np.asarray(acc, float) ** 2, dx=dt, initial=0.0)
+    return np.pi / (2 * G) * cumulative_trapezoid(np.asarray(acc, float) ** 2, dt)
 
 
 def significant_duration(acc, dt, start=0.05, end=0.95):
