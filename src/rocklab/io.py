@@ -27,7 +27,6 @@ import tempfile
 from datetime import UTC, datetime
 from numbers import Number
 from pathlib import Path
-from types import SimpleNamespace
 
 import jsonschema
 import numpy as np
@@ -246,17 +245,6 @@ def benchmark_times(results) -> pd.DataFrame:
             }
         )
     return pd.DataFrame(rows, columns=["stage", "job", "s", "cpu_s"])
-
-
-def read_attrs(paths):
-    """The global attributes of netCDF files, without loading their data."""
-    import netCDF4
-
-    out = []
-    for p in paths:
-        with netCDF4.Dataset(p) as nc:
-            out.append(SimpleNamespace(attrs=_attributes(nc), path=str(p)))
-    return out
 
 
 def _attributes(obj) -> dict:
