@@ -110,6 +110,7 @@ def diagnosis_samples(kind):
 
 
 rule diagnosis_figures:
+    priority: PRIORITY["longest_figures"]
     input:
         diagnosis=res("diagnosis.json"),
         tests=diagnosis_samples("tests"),
