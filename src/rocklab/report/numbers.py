@@ -596,7 +596,10 @@ def _scale(bench: dict) -> dict:
     runs = {"small": bench["runs"][0], "large": bench["runs"][-1]}
     keys = {"n_tests": "n_tests", "s": "wall_s", "cpu_s": "cpu_s", "peak_mb": "peak_rss_tree_mb"}
     keys["load"] = "load_avg_1min_before"
+    keys["snakemake_cpu_s"] = "snakemake_cpu_s"
     out = {f"{size}_{k}": run.get(key) for size, run in runs.items() for k, key in keys.items()}
+    per_test = bench.get("reduce_s_per_test") or [None, None]
+    out["small_reduce_s_per_test"], out["large_reduce_s_per_test"] = per_test[0], per_test[-1]
     ten = bench.get("ten_times_embedded") or {}
     cpu_ten = ten.get("cpu_s")
     return {
