@@ -96,7 +96,10 @@ def _snakemake(target, folder, results, *options):
 
 def _planned_jobs(target, folder, results):
     """Jobs per rule that a dry run of target plans (before its checkpoints run)."""
-    stats = _snakemake(target, folder, results, "--dry-run", "--quiet", "rules").split("Job stats:")[1]
+    out = _snakemake(target, folder, results, "--dry-run", "--quiet", "rules")
+    if "Job stats:" not in out:  # nothing to be done
+        return {}
+    stats = out.split("Job stats:")[1]
     return {rule: int(n) for rule, n in re.findall(r"^(\w+)\s+(\d+)$", stats.split("\ntotal")[0], re.M)}
 
 
@@ -143,6 +146,20 @@ def test_workflow_reduces_any_campaign_and_never_writes_to_it(virtual_campaign, 
     assert _tree_hash(folder) == before
     for name in ("maps/summary.csv", "figures/fig21.png", "report/map_summary.html", "limestone_diagnosis.json"):
         assert (results / name).exists()
+
+
+@pytest.mark.skipif(not SNAKEMAKE.exists(), reason="snakemake not installed beside this interpreter")
+def test_a_changed_record_reduces_its_job_again(tmp_path):
+    """The records are params of their reduction job (their size and mtime), not inputs: still tracked."""
+    folder, results = tmp_path / "campaign", tmp_path / "results"
+    virtual_lab.write_campaign(folder, virtual_lab.default_plan(3, seed=3), seed=3)
+    _snakemake(str(results / "qc.csv"), folder, results, "--cores", "2", "--quiet")
+    assert _planned_jobs(str(results / "qc.csv"), folder, results) == {}
+    record = open_campaign(folder).record_path(open_campaign(folder).test_ids[0])
+    st = record.stat()
+    os.utime(record, ns=(st.st_atime_ns, st.st_mtime_ns + 10**9))
+    planned = _planned_jobs(str(results / "qc.csv"), folder, results)
+    assert [r for r in planned if r.startswith("reduce_")] and planned.get("qc_table") == 1, planned
 
 
 def test_a_reduction_that_fails_does_not_stop_the_series(virtual_campaign, monkeypatch):

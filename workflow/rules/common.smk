@@ -55,15 +55,28 @@ def schema_path(name):
     return repo_path("workflow", "schemas", name)
 
 
-def record_inputs(test_ids):
-    """The tests' records that exist where the log points.
+def record_stamp(test_id):
+    """The size and modification time of a test's record where the log
+    points, None when there is none (or the row was refused at the door).
 
-    A missing record is not a missing input: the test is reduced to an
-    'unreadable' entry and the rest of the campaign goes on.  A row refused
-    at the door has no input: its file may lie outside the campaign folder.
+    A param of its reduction job, not an input: the record rereduces its
+    job when it changes (Snakemake's params trigger, as its mtime would as
+    an input), and a job waiting for a core has no file to stat.  Snakemake
+    stats every input of every waiting job at each scheduling round, and
+    the rounds multiply with the jobs that have ended: the records as
+    inputs made its own CPU grow with the square of the campaign (9 s for
+    the embedded campaign, 390 s for ten times it), and its end-of-job
+    checksums of every input for every output (45,000 per job of 150 tests)
+    with it.  A missing record is not a missing input either: the test is
+    reduced to an 'unreadable' entry and the rest of the campaign goes on.
     """
-    paths = (CAMPAIGN.record_path(t) for t in test_ids if t not in CAMPAIGN.log.errors)
-    return [str(p) for p in paths if p.is_file()]
+    if test_id in CAMPAIGN.log.errors:
+        return None
+    try:
+        st = CAMPAIGN.record_path(test_id).stat()
+    except OSError:
+        return None
+    return [st.st_size, st.st_mtime_ns]
 
 
 def reduction_rows(job):
@@ -88,10 +101,11 @@ def reduced_inputs(test_ids):
 
 
 def test_params(test_id):
-    """Everything of the tables that this test's reduction depends on.
+    """Everything of the tables that this test's reduction depends on, and
+    its record's stamp (:func:`record_stamp`).
 
     Passed as params (not the table files as inputs) so that editing one row
-    of tests.csv reduces that test's series again, not the whole campaign.
+    of tests.csv reduces that test's job again, not the whole campaign.
     """
     row = CAMPAIGN.test_row(test_id)
     # not its line: a row added above it changes nothing of this test
@@ -101,6 +115,7 @@ def test_params(test_id):
         out["specimen"] = specimen
     out["setup"] = _setup_params(row.setup)
     out["error"] = str(CAMPAIGN.log.errors.get(test_id, ""))
+    out["record"] = record_stamp(test_id)
     return out
 
 

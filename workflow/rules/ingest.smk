@@ -18,8 +18,6 @@ for _k, (_job, _ids) in enumerate(REDUCTION_JOBS.items()):
             # a rule name is an identifier; the index keeps "1a-b" and "1a_b" apart
             f"reduce_{_k:03d}_" + re.sub(r"\W", "_", _job)
         priority: PRIORITY["campaign_chain"]
-        input:
-            lambda wildcards, ids=_ids: record_inputs(ids),
         output:
             tests=[res("tests", f"{t}.nc") for t in _ids],
             motion=[res("motion", f"{t}.nc") for t in _ids],
