@@ -39,6 +39,20 @@ REDUCTION_JOB = {t: job for job, ids in REDUCTION_JOBS.items() for t in ids}
 PRIORITY = {"campaign_chain": 20, "maps": 10, "longest_figures": 5}
 
 
+onstart:
+    # No job-rate limit on a local run.  With one (Snakemake's default, 100
+    # jobs a second) every scheduling round that leaves a job waiting for a
+    # core starts a one-second timer for another round, and each job that
+    # ends starts one more such chain: 1,344 rounds for the 31 jobs of the
+    # embedded campaign, each re-reading the params and input sizes of every
+    # waiting job, in Snakemake's own process, which competes with the jobs
+    # for the two cores.  Without it Snakemake schedules when a job ends.
+    # The limiter only exists once the run starts (it is not a setting a
+    # Snakefile reaches); a remote executor keeps it.
+    if workflow.local_exec and getattr(getattr(workflow, "scheduler", None), "job_rate_limiter", None) is not None:
+        workflow.scheduler.job_rate_limiter = None
+
+
 def res(*parts):
     return str(RESULTS.joinpath(*parts))
 

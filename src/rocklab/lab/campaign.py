@@ -69,7 +69,7 @@ CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f]")
 UNITS = ("s", "mm")
 #: Most tests of one reduction job (:meth:`Campaign.reduction_jobs`; the
 #: workflow's ``reduction.max_tests_per_job``).
-TESTS_PER_JOB = 150
+TESTS_PER_JOB = 250
 #: The reduction group of the tests refused at the door (:meth:`Campaign.reduction_groups`).
 UNREADABLE = "unreadable"
 
