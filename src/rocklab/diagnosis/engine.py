@@ -26,7 +26,11 @@ from typing import NamedTuple
 
 import numba
 import numpy as np
-from scipy import optimize, stats
+
+from rocklab._imports import lazy_module
+
+optimize = lazy_module("scipy.optimize")
+stats = lazy_module("scipy.stats")
 
 log = logging.getLogger(__name__)
 

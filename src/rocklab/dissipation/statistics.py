@@ -34,10 +34,12 @@ import logging
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
+from rocklab._imports import lazy_module
 from rocklab.dissipation.analysis import amplitude_law_fit
 from rocklab.physics.restitution import CALIBRATED_RATIO_ONE_SIDED
+
+stats = lazy_module("scipy.stats")
 
 log = logging.getLogger(__name__)
 

@@ -12,10 +12,12 @@ import math
 
 import numpy as np
 import pandas as pd
-from scipy.integrate import solve_ivp
-from scipy.optimize import brentq
 
+from rocklab._imports import lazy_module
 from rocklab.simulation.model import OVERTURN, REST_TOL, RockingHistory
+
+integrate = lazy_module("scipy.integrate")
+optimize = lazy_module("scipy.optimize")
 
 
 class _Record:
@@ -85,7 +87,7 @@ def _missed_edge(dense, t0, t1, s):
     tt = t0 + (t1 - t0) * np.concatenate([[0.0], np.geomspace(1e-9, 1.0, 256)])
     f = s * dense(tt)[0]
     k = int(np.flatnonzero(f < 0.0)[0])
-    return brentq(lambda u: s * dense(u)[0], tt[k - 1], tt[k], xtol=1e-15, rtol=4 * np.finfo(float).eps)
+    return optimize.brentq(lambda u: s * dense(u)[0], tt[k - 1], tt[k], xtol=1e-15, rtol=4 * np.finfo(float).eps)
 
 
 def _reference(model, rec, theta0, thetadot0, t_end, fs, overturn, rest_tol, rtol, atol, max_step, tail):
@@ -179,7 +181,7 @@ def _reference(model, rec, theta0, thetadot0, t_end, fs, overturn, rest_tol, rto
             seg_step = min(max_step, 0.05 * math.sqrt(2.0 * model.gap / (model.p**2 * model.alpha_minus)))
         else:
             seg_step = max_step
-        sol = solve_ivp(
+        sol = integrate.solve_ivp(
             rhs,
             (t, t_seg),
             [th, thd],

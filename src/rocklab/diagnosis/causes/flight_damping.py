@@ -6,10 +6,12 @@ import math
 from dataclasses import replace
 
 import numpy as np
-from scipy import stats
 
+from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import Cause
 from rocklab.diagnosis.engine import Param
+
+stats = lazy_module("scipy.stats")
 
 ZETA = Param("zeta", 0.0, 0.2, 0.0, practical=2e-4)
 

@@ -23,12 +23,14 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from scipy import stats
 
+from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import Cause, flight_damping
 from rocklab.diagnosis.engine import Param
 from rocklab.physics.flight import speed_loss, takeoff_speed
 from rocklab.physics.wall import overturning_velocity
+
+stats = lazy_module("scipy.stats")
 
 MU = Param("mu_over_alpha", 0.0, 0.2, 0.0, practical=5e-4)
 KAPPA = Param("kappa_alpha", 0.0, 2.0, 0.0, practical=1e-3)

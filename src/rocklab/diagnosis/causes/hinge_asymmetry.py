@@ -7,10 +7,12 @@ import math
 from dataclasses import replace
 
 import numpy as np
-from scipy import stats
 
+from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import Cause
 from rocklab.diagnosis.engine import Param
+
+stats = lazy_module("scipy.stats")
 
 S_ALPHA = Param("s_alpha", -0.5, 0.5, 0.0, practical=0.005)
 S_E = Param("s_e", -0.5, 0.5, 0.0, practical=0.003)

@@ -5,10 +5,12 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from scipy import stats
 
+from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import Cause
 from rocklab.diagnosis.engine import Param
+
+stats = lazy_module("scipy.stats")
 
 #: ``a`` of Eq. 17 has no null of its own: it is the scale.
 A = Param("a", 0.2, 2.5, 1.0)

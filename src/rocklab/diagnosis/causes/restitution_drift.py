@@ -17,10 +17,12 @@ from dataclasses import replace
 from functools import lru_cache
 
 import numpy as np
-from scipy import stats
 
+from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import Cause, restitution_scale
 from rocklab.diagnosis.engine import Param
+
+stats = lazy_module("scipy.stats")
 
 D = Param("drift", -1.0, 1.0, 0.0, practical=0.005)
 NAME = "restitution_drift"

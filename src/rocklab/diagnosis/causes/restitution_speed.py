@@ -17,12 +17,14 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from scipy import stats
 
+from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import Cause
 from rocklab.diagnosis.engine import Param
 from rocklab.diagnosis.model import per_test
 from rocklab.physics.wall import overturning_velocity
+
+stats = lazy_module("scipy.stats")
 
 #: Knots of g in thetadot^- / thetadot_r [-].
 KNOTS = np.array([0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0])

@@ -14,8 +14,8 @@ import math
 from dataclasses import replace
 
 import numpy as np
-from scipy.signal import savgol_filter
 
+from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import BOTH, Cause
 from rocklab.diagnosis.engine import Param
 from rocklab.diagnosis.errors import engineering_rows
@@ -25,6 +25,8 @@ from rocklab.dissipation.statistics import MIN_BOOTSTRAP, interval_note
 from rocklab.lab.motion import odd_samples
 from rocklab.physics.flight import landing_speed, quarter_period
 from rocklab.physics.wall import overturning_velocity
+
+signal = lazy_module("scipy.signal")
 
 NAME = "stop_threshold"
 V_STOP = Param("v_stop_over_vr", 0.0, 1.0, 0.0)
@@ -97,7 +99,7 @@ def end_of_motion(S: TestStack, mp, min_ratio=3.0, window_s=1.0):
         win = odd_samples(0.25 / ts.dt)
         if sel.sum() < win:
             continue
-        hp = ts.theta[sel] - savgol_filter(ts.theta[sel], win, 2)
+        hp = ts.theta[sel] - signal.savgol_filter(ts.theta[sel], win, 2)
         seen = float(np.percentile(np.abs(hp), 99))
         ratios.append(pred_i / max(seen, ts.floor))
         speeds.append(ts.v_before[-1] / float(overturning_velocity(ts.alpha, ts.p)))
