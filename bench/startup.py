@@ -36,10 +36,10 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 #: Jobs of each script in ``snakemake all`` on the embedded campaign: the
-#: reduction packed into 6 jobs, 2 diagnosis series kinds, 2 batches of
+#: reduction packed into 3 jobs, 2 diagnosis series kinds, 2 batches of
 #: paper maps and 2 of calibrated maps, 7 report pages.
 JOBS = {
-    "reduce_tests.py": 6,
+    "reduce_tests.py": 3,
     "qc_table.py": 1,
     "dissipation_tables.py": 1,
     "kinematics_figures.py": 1,

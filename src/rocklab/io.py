@@ -28,12 +28,15 @@ from datetime import UTC, datetime
 from numbers import Number
 from pathlib import Path
 
-import jsonschema
 import numpy as np
-import pandas as pd
 import yaml
 
 from rocklab import __version__
+from rocklab._imports import lazy_module
+
+# bound lazily: a job that writes report pages needs neither
+jsonschema = lazy_module("jsonschema")
+pd = lazy_module("pandas")
 
 #: The version of the CF conventions that rocklab's netCDF files follow.
 CF_CONVENTIONS = "CF-1.8"
