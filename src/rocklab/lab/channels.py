@@ -11,6 +11,7 @@ Readings are in mm, one column per channel.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -76,6 +77,20 @@ def _runs(mask):
     return np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
 
 
+@functools.cache
+def _residual_filter(window):
+    """Weights of the residual from a local cubic over ``window`` samples, and their gain
+    for white noise (read-only: shared by every call of :func:`noise_sigma`)."""
+    # imported here: a job that imports the reduction for its tables only
+    # (the QC table) would pay 1 s of scipy at start-up
+    from scipy.signal import savgol_coeffs
+
+    c = savgol_coeffs(window, 3)
+    c[window // 2] -= 1.0
+    c.flags.writeable = False
+    return c, np.sqrt(np.sum(c**2))
+
+
 def noise_sigma(x, window=9):
     """Robust noise standard deviation [mm] of a channel.
 
@@ -84,17 +99,12 @@ def noise_sigma(x, window=9):
     at 400 Hz is comparable to the noise itself; 1.4826 MAD of that residual,
     divided by the residual's exact gain for white noise, estimates sigma.
     """
-    # imported here: a job that imports the reduction for its tables only
-    # (the QC table) would pay 1 s of scipy at start-up
-    from scipy.signal import savgol_coeffs
-
     y = x[np.isfinite(x)]
     if y.size <= window:
         return float("nan")
-    c = savgol_coeffs(window, 3)
-    c[window // 2] -= 1.0
+    c, gain = _residual_filter(window)
     r = np.convolve(y, c, mode="valid")
-    return float(1.4826 * np.median(np.abs(r - np.median(r))) / np.sqrt(np.sum(c**2)))
+    return float(1.4826 * np.median(np.abs(r - np.median(r))) / gain)
 
 
 def flat_runs(x, min_len):
