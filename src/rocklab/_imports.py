@@ -22,7 +22,8 @@ def lazy_module(name: str) -> ModuleType:
     An already imported module is returned as it is.  Parents are imported
     now (``scipy`` for ``scipy.stats``: light); the module itself is put in
     ``sys.modules``, so a later ``import`` of it finds the same object
-    (``importlib.util.LazyLoader``).
+    (``importlib.util.LazyLoader``; before Python 3.12 its first load is
+    not thread-safe: rocklab starts no Python threads).
 
     Raises
     ------
