@@ -22,8 +22,8 @@ def lazy_module(name: str) -> ModuleType:
     An already imported module is returned as it is.  Parents are imported
     now (``scipy`` for ``scipy.stats``: light); the module itself is put in
     ``sys.modules``, so a later ``import`` of it finds the same object
-    (``importlib.util.LazyLoader``; before Python 3.12 its first load is
-    not thread-safe: rocklab starts no Python threads).
+    (``importlib.util.LazyLoader``, whose first load is not thread-safe in
+    Python 3.11, python/cpython#114763: rocklab starts no Python threads).
 
     Raises
     ------
