@@ -8,8 +8,8 @@
 # Whole specimens packed into jobs of at most reduction.max_tests_per_job
 # tests (a larger specimen cut into parts of its own), and one job for the
 # tests refused at the door, not one per test or per series: a job spends
-# longer starting Python and importing the library (about 1.5 s of CPU) than
-# reducing twenty tests.
+# longer starting Python and importing the library (about 2 s of CPU) than
+# reducing thirty tests.
 
 for _k, (_job, _ids) in enumerate(REDUCTION_JOBS.items()):
 

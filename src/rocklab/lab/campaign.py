@@ -714,7 +714,7 @@ class Campaign:
         """The tests of each reduction job: whole specimens, in the order of tests.csv.
 
         A job spends longer starting Python and importing the library (about
-        1.5 s of CPU) than reducing twenty tests, so consecutive specimens
+        2 s of CPU) than reducing thirty tests, so consecutive specimens
         share a job while it holds at most ``max_tests`` tests; a specimen of
         more than ``max_tests`` tests is cut into that many near-equal parts
         of its own (two cores stay busy on a large campaign, and an edited
