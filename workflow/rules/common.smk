@@ -77,11 +77,11 @@ def record_stamp(test_id):
     job when it changes (Snakemake's params trigger, as its mtime would as
     an input), and a job waiting for a core has no file to stat.  Snakemake
     stats every input of every waiting job at each scheduling round, and
-    the rounds multiply with the jobs that have ended: the records as
-    inputs made its own CPU grow with the square of the campaign (9 s for
-    the embedded campaign, 390 s for ten times it), and its end-of-job
-    checksums of every input for every output (45,000 per job of 150 tests)
-    with it.  A missing record is not a missing input either: the test is
+    checksums every input for every output at a job's end (45,000 per job
+    of 150 tests): with the records as inputs (and the rounds of its
+    default job-rate limit, see the onstart handler above) its own CPU grew
+    with the square of the campaign, 9 s for the embedded campaign, 390 s
+    for ten times it.  A missing record is not a missing input either: the test is
     reduced to an 'unreadable' entry and the rest of the campaign goes on.
     """
     if test_id in CAMPAIGN.log.errors:
@@ -104,12 +104,11 @@ def reduced_inputs(test_ids):
 
     Each job writes its tests' files and its rows file together, so the rows
     file is as new as any of them and stands for them all.  Snakemake stats
-    every input of every job waiting for a core at each scheduling round, and
-    on two cores it holds rounds every second or more often (each job that
-    ends starts another train of one-second reevaluations): listed file by
-    file, the 2,500 netCDF inputs of the QC, dissipation and diagnosis jobs
-    cost Snakemake's own process some 20 s of CPU of a 35 s total, beside
-    the jobs it runs.
+    every input of every job waiting for a core at each scheduling round:
+    listed file by file, the 2,500 netCDF inputs of the QC, dissipation and
+    diagnosis jobs cost Snakemake's own process some 20 s of CPU of a 35 s
+    total (with the rounds of its default job-rate limit, several a second,
+    which the onstart handler above drops), beside the jobs it runs.
     """
     return list(dict.fromkeys(reduction_rows(REDUCTION_JOB[t]) for t in test_ids))
 
