@@ -17,8 +17,8 @@ from test_diagnosis import virtual_series
 from rocklab import diagnosis as D
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.causes import Cause
-from rocklab.diagnosis.engine import Param
 from rocklab.diagnosis.model import impact_speeds, per_test
+from rocklab.diagnosis.parameters import Param
 from rocklab.physics import impact as I
 from rocklab.physics import restitution, wall
 

@@ -5,7 +5,8 @@ import pytest
 from scipy import optimize
 
 from rocklab.diagnosis import engine
-from rocklab.diagnosis.engine import Param, Problem
+from rocklab.diagnosis.engine import Problem
+from rocklab.diagnosis.parameters import Param
 
 
 class _Cause:

@@ -3,7 +3,7 @@
 Independent of what is fitted: a :class:`Problem` hands the engine its
 tests, its residual groups (log ratios, model over measured), the noise
 covariate of each residual and its candidate causes (objects with ``name``,
-``params`` (:class:`Param`) and ``replaces``).  The engine fits a
+``params`` (:class:`rocklab.diagnosis.parameters.Param`) and ``replaces``).  The engine fits a
 combination of causes by maximum likelihood with a noise model per group
 (:func:`fit`), scores it on tests left out (:func:`heldout`), resamples
 tests for parameter intervals (:func:`parameter_intervals`), selects causes
@@ -22,7 +22,6 @@ import logging
 import math
 import time
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -42,19 +41,6 @@ STRUCTURE_MIN = 0.01
 
 #: Significance of residual structure (cluster-robust t-test over tests).
 STRUCTURE_P = 1e-3
-
-
-class Param(NamedTuple):
-    """A parameter of a cause: bounds of the fit, null value (the cause absent),
-    and the smallest departure from the null worth naming the cause for (a
-    parameter whose 95 % interval stays closer to the null than this is no
-    cause; None: the parameter alone never names it)."""
-
-    name: str
-    lower: float
-    upper: float
-    null: float
-    practical: float | None = None
 
 
 def finite_mean(x):
@@ -113,7 +99,7 @@ class Problem:
         return float(np.median(x))
 
     def params(self, ext):
-        """Parameters (:class:`Param`) of the causes ``ext`` this problem's data can see, in catalogue order."""
+        """The :class:`~rocklab.diagnosis.parameters.Param` of the causes ``ext`` this problem can see, in order."""
         return [q for c in self.causes if c.name in ext for q in c.params]
 
     def combine(self, current, eff):

@@ -9,7 +9,7 @@ on the hinge being left.  The table acceleration along +x is the model's
 ``ag`` (positive towards +theta).
 
 The causes of the diagnosis catalogue change the block as they change a
-wall (their parameters are the catalogue's :class:`~rocklab.diagnosis.engine.Param`):
+wall (their parameters are the catalogue's :class:`~rocklab.diagnosis.parameters.Param`):
 
 - ``instability_angle``: both hinges at r times their footprint angle (the
   rounded base rocks on a smaller contact than the 3 mm footprint);

@@ -35,7 +35,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import optimize
 
-from rocklab.diagnosis.engine import Param
+from rocklab.diagnosis.parameters import Param
 from rocklab.shake_table.block import PARAMS
 
 #: Log-scatter of the instability angle from test to test [-] (ln units).

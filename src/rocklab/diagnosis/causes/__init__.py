@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from rocklab.diagnosis.engine import Param
+from rocklab.diagnosis.parameters import Param
 
 BOTH = ("two-sided", "one-sided")
 

@@ -11,7 +11,7 @@ from dataclasses import replace
 import numpy as np
 
 from rocklab.diagnosis.causes import Cause
-from rocklab.diagnosis.engine import Param
+from rocklab.diagnosis.parameters import Param
 from rocklab.physics import restitution
 
 GAMMA = Param("gap_over_alpha", 0.0, 0.3, 0.0, practical=0.002)

@@ -9,7 +9,7 @@ import numpy as np
 
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import Cause
-from rocklab.diagnosis.engine import Param
+from rocklab.diagnosis.parameters import Param
 
 stats = lazy_module("scipy.stats")
 

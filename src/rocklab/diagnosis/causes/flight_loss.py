@@ -26,7 +26,7 @@ import numpy as np
 
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import Cause, flight_damping
-from rocklab.diagnosis.engine import Param
+from rocklab.diagnosis.parameters import Param
 from rocklab.physics.flight import speed_loss, takeoff_speed
 from rocklab.physics.wall import overturning_velocity
 

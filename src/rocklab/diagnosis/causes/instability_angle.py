@@ -10,7 +10,7 @@ from dataclasses import replace
 import numpy as np
 
 from rocklab.diagnosis.causes import Cause
-from rocklab.diagnosis.engine import Param
+from rocklab.diagnosis.parameters import Param
 
 R = Param("alpha_r_over_alpha", 0.3, 1.2, 1.0, practical=0.005)
 

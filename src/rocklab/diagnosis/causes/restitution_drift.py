@@ -20,7 +20,7 @@ import numpy as np
 
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import Cause, restitution_scale
-from rocklab.diagnosis.engine import Param
+from rocklab.diagnosis.parameters import Param
 
 stats = lazy_module("scipy.stats")
 

@@ -15,7 +15,7 @@ from dataclasses import replace
 import numpy as np
 
 from rocklab.diagnosis.causes import Cause
-from rocklab.diagnosis.engine import Param
+from rocklab.diagnosis.parameters import Param
 
 LAMBDA = Param("loss_fraction", 0.0, 3.0, 1.0, practical=0.01)
 DELTA = Param("loss_constant", -0.2, 0.2, 0.0, practical=0.002)

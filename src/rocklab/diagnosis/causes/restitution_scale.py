@@ -7,8 +7,8 @@ from dataclasses import replace
 import numpy as np
 
 from rocklab.diagnosis.causes import Cause
-from rocklab.diagnosis.engine import Param
 from rocklab.diagnosis.evidence import series_level
+from rocklab.diagnosis.parameters import Param
 
 C = Param("c", 0.2, 2.0, 1.0, practical=0.005)
 

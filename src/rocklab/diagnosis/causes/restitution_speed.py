@@ -20,8 +20,8 @@ import numpy as np
 
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import Cause
-from rocklab.diagnosis.engine import Param
 from rocklab.diagnosis.model import per_test
+from rocklab.diagnosis.parameters import Param
 from rocklab.physics.wall import overturning_velocity
 
 stats = lazy_module("scipy.stats")

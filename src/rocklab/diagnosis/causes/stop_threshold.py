@@ -17,10 +17,10 @@ import numpy as np
 
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import BOTH, Cause
-from rocklab.diagnosis.engine import Param
 from rocklab.diagnosis.errors import engineering_rows
 from rocklab.diagnosis.evidence import TestStack
 from rocklab.diagnosis.model import model_params, next_flight
+from rocklab.diagnosis.parameters import Param
 from rocklab.dissipation.statistics import MIN_BOOTSTRAP, interval_note
 from rocklab.lab.motion import odd_samples
 from rocklab.physics.flight import landing_speed, quarter_period
