@@ -4,7 +4,8 @@ Both refit by one Gauss-Newton step from the fit of all tests, over the
 linearisation of :func:`rocklab.diagnosis.estimation.fitting.linearised`: the
 K folds of :func:`heldout` and the resamples of whole tests of
 :func:`parameter_intervals`.  The paired per-test comparison of two models'
-held-out deviances is :func:`paired_gain`.
+held-out deviances is :func:`paired_gain`, and a per-test measure is summed
+up over the tests by :func:`finite_mean`.
 """
 
 import logging
@@ -45,11 +46,11 @@ def heldout(problem: Problem, ext, fitted: Fit | None = None):
     linearisation of the bootstrap, :func:`parameter_intervals`); its noise
     model (:func:`~rocklab.diagnosis.estimation.noise.noise_variance`) is
     then that of the training tests' residuals at the step's parameters.
-    A fold leaves out a fifth of the tests (one, up to six): its fit differs from the full one by
-    about its standard errors, where the residuals are linear in the
-    parameters, so the step lands on the refit of the fold's tests (the
-    engine's former held-out fits, at ten times the cost:
-    tests/test_diagnosis_engine.py).
+    A fold leaves out a fifth of the tests (one, up to six): its fit
+    differs from the full one by about its standard errors, where the
+    residuals are linear in the parameters, so the step lands on the refit
+    of the fold's tests (the engine's former held-out fits, at ten times the
+    cost: tests/test_diagnosis_engine.py).
 
     Returns
     -------
