@@ -7,7 +7,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rocklab.lab.campaign import RawFormatError, open_campaign, read_record, series_id
+from rocklab.lab.campaign import open_campaign, series_id
+from rocklab.lab.raw_format import RawFormatError
+from rocklab.lab.records import read_record
 
 
 def _rewrite(path, edit):
@@ -107,12 +109,12 @@ def _python_float(field):
 
 @pytest.mark.parametrize("seed", range(5))
 def test_fields_read_as_python_reads_them(tmp_path, seed):
-    """Whichever of the two parsers of campaign._numbers reads a record (the
+    """Whichever of the two parsers of records._numbers reads a record (the
     fast one for plain decimals, field by field otherwise), a number is
     Python's float of its text, a blank is NaN and anything else is an
     error naming the row and the field (the first that is no number, else
     the first infinite one)."""
-    from rocklab.lab.campaign import _numbers
+    from rocklab.lab.records import _numbers
 
     rng = np.random.default_rng(seed)
     for _ in range(200):

@@ -16,6 +16,8 @@ import xarray as xr
 
 import rocklab
 from rocklab import cli
+from rocklab.cli.arguments import HelpFormatter
+from rocklab.cli.map import ProgressBar
 from rocklab.simulation.model import RockingModel
 from rocklab.simulation.reference import simulate_ground
 
@@ -291,7 +293,7 @@ def test_help_gives_every_default_and_unit(command, capsys):
     for action in _subparsers()[command]._actions:
         if action.dest in ("help", "quiet", "all_models"):
             continue
-        text = " ".join(cli.HelpFormatter("rocklab")._get_help_string(action).split())
+        text = " ".join(HelpFormatter("rocklab")._get_help_string(action).split())
         text = text % {"default": action.default}
         assert text in flat, text
         # a number carries its unit ([m], [rad], [-]...), a count (metavar N) is one; every default is shown
@@ -371,7 +373,7 @@ class _Terminal(io.StringIO):
 def test_progress_bar_redraws_on_a_terminal_and_logs_every_10_percent_elsewhere():
     tty, log = _Terminal(), io.StringIO()
     for stream in (tty, log):
-        bar = cli.ProgressBar("40EIC180 2s-housner", stream=stream, width=10)
+        bar = ProgressBar("40EIC180 2s-housner", stream=stream, width=10)
         for done in range(101):
             bar(done, 100)
     assert tty.getvalue().count("\r") == 101 and tty.getvalue().endswith("40EIC180 2s-housner\n")

@@ -12,15 +12,17 @@ from scipy import stats
 from rocklab.dissipation.covariates import (
     COLUMNS,
     PAPER_CLAIMS,
+    Claim,
     campaign_effects,
     fit_series,
-    ols,
+    read_claims,
     series_fits,
     series_values,
     verdict,
     with_test_order,
     within_series_row,
 )
+from rocklab.dissipation.regression import ols
 from rocklab.io import validate_table
 from rocklab.lab.campaign import order_in_series
 
@@ -94,6 +96,38 @@ def test_ols_is_the_textbook_simple_regression():
     assert coef[1] == pytest.approx(ref.slope)
     assert np.sqrt(cov[1, 1]) == pytest.approx(ref.stderr)
     assert df == 10
+
+
+def test_the_paper_claims_are_data_read_and_checked(tmp_path):
+    """The paper's statements come from rocklab/data/paper_claims.csv; a file with a kind, a value
+    or a key the tests cannot take is refused with its line."""
+    assert read_claims() == PAPER_CLAIMS and len(PAPER_CLAIMS) == 15
+    assert PAPER_CLAIMS[2] == Claim(
+        "ratio_2s_mean",
+        "two-sided",
+        "e_ratio",
+        "mean",
+        "near",
+        0.93,
+        "Sect. 3: if all series are considered, the ratio e_exp/e_an,2s is on average 0.93",
+    )
+    head = "key,boundary,response,covariate,kind,value,paper\n"
+    good = "a,one-sided,e_ratio,order,zero,0,Sect. 3\n"
+    for body, message in (
+        (good + "b,one-sided,e_ratio,order,above,0,x\n", "line 3: kind 'above'"),
+        (good + "b,one-sided,e_ratio,order,near,one,x\n", "line 3: value 'one' is no finite number"),
+        (good + "b,one-sided,e_ratio,height,zero,0,x\n", "line 3: covariate 'height'"),
+        (good + good, "line 3: key 'a' repeated"),
+    ):
+        path = tmp_path / "claims.csv"
+        path.write_text(head + body)
+        with pytest.raises(ValueError, match=message):
+            read_claims(path)
+    path.write_text("key,boundary\n")
+    with pytest.raises(ValueError, match="columns"):
+        read_claims(path)
+    path.write_text(head + good)
+    assert read_claims(path) == (Claim("a", "one-sided", "e_ratio", "order", "zero", 0.0, "Sect. 3"),)
 
 
 def test_order_in_series_runs_from_zero_to_one_in_the_order_of_the_ids():

@@ -14,8 +14,8 @@ def compile_kernels():
     """Compile every numba kernel of the library into numba's on-disk cache,
     with the argument types of the library's own calls: the overturning
     engine (:func:`rocklab.simulation.batch.compile_kernels`) and the
-    diagnosis's noise model (:func:`rocklab.diagnosis.engine.noise_variance`)."""
-    from rocklab.diagnosis.engine import noise_variance
+    diagnosis's noise model (:func:`rocklab.diagnosis.estimation.noise.noise_variance`)."""
+    from rocklab.diagnosis.estimation.noise import noise_variance
     from rocklab.simulation.batch import compile_kernels as compile_engine
 
     compile_engine()

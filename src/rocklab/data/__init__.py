@@ -9,6 +9,11 @@
     (Colombo et al., CC BY 4.0: cite DOI 10.60756/uminho-jh25), with
     ``README.md`` and ``SOURCE.md`` (provenance, checks); read by
     :mod:`rocklab.diagnosis.block_tests` (:func:`~rocklab.diagnosis.block_tests.read_events`).
+``paper_claims.csv``
+    The paper's campaign-wide statements (Sects. 2-4, Figs. 10 and 13,
+    Tables 2-3) that the campaign tests, each with where the paper says it;
+    read by :mod:`rocklab.dissipation.covariates`
+    (:func:`~rocklab.dissipation.covariates.read_claims`).
 
 The files are found through :mod:`importlib.resources`, so they are where the
 package is: the checkout's ``src/rocklab/data/`` or an installed

@@ -12,7 +12,8 @@ module             holds
 ``model``          the extended rocking model: parameters, impacts, free run
 ``causes/``        one module per candidate cause (parameters, signature, effect)
 ``catalogue``      the ordered list of causes, their signatures and starts
-``engine``         fits, held-out deviance, bootstrap intervals, selection
+``estimation/``    the engine: noise model, fits, held-out deviance, bootstrap, selection
+``discovery``      whether a finding's form was discovered (a family) rather than listed
 ``problem``        the tests of a series as a problem of the engine
 ``errors``         engineering errors of a model's free run, in words
 ``series``         diagnosis of a series, a boundary condition, a campaign
@@ -22,8 +23,8 @@ module             holds
 """
 
 from rocklab.diagnosis.catalogue import CAUSES, signatures
-from rocklab.diagnosis.engine import Problem, finite_mean, parameter_intervals, select_effects
 from rocklab.diagnosis.errors import engineering_errors, engineering_rows, what_is_wrong
+from rocklab.diagnosis.estimation import Problem, finite_mean, parameter_intervals, select_effects
 from rocklab.diagnosis.evidence import MeasuredTest, TestStack, measured_test, records_by_series, residuals
 from rocklab.diagnosis.model import free_run, model_params, rocking_model, simulate_measured
 from rocklab.diagnosis.report import diagnosis_markdown, jsonable, write_diagnosis

@@ -3,7 +3,7 @@
 The restitution part of :mod:`rocklab.diagnosis` on data that hold only
 the ratio r_k = thetadot^+_k / thetadot^-_k of every impact k of every trial
 (the same causes of :mod:`rocklab.diagnosis.catalogue` and the same engine,
-:mod:`rocklab.diagnosis.engine`):
+:mod:`rocklab.diagnosis.estimation`):
 the UMinho limestone blocks (Colombo et al., DOI 10.60756/uminho-jh25, CC BY
 4.0; shipped in ``rocklab/data/uminho-limestone-free-rocking``), 134 trials on 12
 slendernesses H/B = 4-15.  Base model: Housner's e_an = 1 - 3/2 sin^2 alpha
@@ -30,7 +30,7 @@ measured ratios before it (a rigid block lands at the speed it took off
 with).  Velocity ratios above 1 or below 0 and late impacts are artefacts of
 the processing at small amplitudes (SOURCE.md): the diagnosis uses the first
 :data:`N_IMPACTS` impacts with 0 < r < :data:`R_MAX`, and a noise that grows
-as the impact speed falls (:func:`rocklab.diagnosis.engine.noise_variance`).
+as the impact speed falls (:func:`rocklab.diagnosis.estimation.noise.noise_variance`).
 """
 
 from __future__ import annotations
@@ -44,14 +44,8 @@ from scipy import stats
 from rocklab.data import LIMESTONE
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.causes import restitution_housner_loss, restitution_scale
-from rocklab.diagnosis.engine import (
-    Problem,
-    beyond_the_catalogue,
-    discovery,
-    family_against_listed,
-    finite_mean,
-    select_effects,
-)
+from rocklab.diagnosis.discovery import discovery, family_against_listed
+from rocklab.diagnosis.estimation import Problem, beyond_the_catalogue, finite_mean, select_effects
 from rocklab.diagnosis.evidence import series_level
 from rocklab.physics import restitution
 
@@ -127,7 +121,7 @@ def group_trials(events):
 
 
 class BlockProblem(Problem):
-    """The trials of one block group as a :class:`rocklab.diagnosis.engine.Problem` (impact group only)."""
+    """The trials of one block group as a :class:`rocklab.diagnosis.estimation.problem.Problem` (impact group only)."""
 
     def __init__(self, trials: _Trials):
         self.T = trials

@@ -13,7 +13,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from rocklab.diagnosis.engine import finite_mean
+from rocklab.diagnosis.estimation import finite_mean
 from rocklab.diagnosis.evidence import MeasuredTest, TestStack, log_ratio, residuals
 from rocklab.diagnosis.model import free_run, model_params, simulate_measured
 from rocklab.physics import restitution

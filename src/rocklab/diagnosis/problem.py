@@ -1,11 +1,11 @@
-"""Free-rocking tests of one series as a :class:`rocklab.diagnosis.engine.Problem`."""
+"""Free-rocking tests of one series as a :class:`rocklab.diagnosis.estimation.problem.Problem`."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from rocklab.diagnosis import catalogue
-from rocklab.diagnosis.engine import Problem
+from rocklab.diagnosis.estimation import Problem
 from rocklab.diagnosis.evidence import TestStack, covariates, log_ratio, noise_covariates, residuals
 from rocklab.diagnosis.model import base_params, free_run, log_columns, model_params
 

@@ -2,7 +2,7 @@
 
 :func:`diagnose_series` compares the base model with the tests of one
 series (:mod:`rocklab.diagnosis.errors`), selects the causes the data
-carry (:func:`rocklab.diagnosis.engine.select_effects` on a
+carry (:func:`rocklab.diagnosis.estimation.selection.select_effects` on a
 :class:`rocklab.diagnosis.problem.WallProblem`), runs the causes estimated
 after selection and states the gain; :func:`diagnose_boundary` sums the
 series of a boundary condition up.  Method: docs/diagnosis-method.md.
@@ -23,8 +23,9 @@ import time
 import numpy as np
 
 from rocklab.diagnosis import catalogue
-from rocklab.diagnosis.engine import beyond_the_catalogue, discovery, finite_mean, select_effects
+from rocklab.diagnosis.discovery import discovery
 from rocklab.diagnosis.errors import engineering_errors, what_is_wrong
+from rocklab.diagnosis.estimation import beyond_the_catalogue, finite_mean, select_effects
 from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_test
 from rocklab.diagnosis.model import model_params
 from rocklab.diagnosis.problem import WallProblem

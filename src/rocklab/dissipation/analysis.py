@@ -35,6 +35,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from rocklab.dissipation.regression import ols
 from rocklab.lab.motion import extract_motion, motion_from_dataset, stored_motion
 from rocklab.physics import restitution
 from rocklab.physics.flight import quarter_period_linear
@@ -227,18 +228,17 @@ def motion_tables(m, boundary, alpha, p, direction, *, alpha_ind=None):
     return summary, impacts, e_n
 
 
-def _ols(x, y):
-    """y = a - b x by least squares: a, b, R^2, standard errors, n."""
+def _amplitude_line(x, y):
+    """y = a - b x by least squares (:func:`~rocklab.dissipation.regression.ols`): a, b, R^2, standard errors, n."""
     ok = np.isfinite(x) & np.isfinite(y)
     x, y = x[ok], y[ok]
     n = x.size
     if n < 3 or np.ptp(x) == 0:
         return dict(a=np.nan, b=np.nan, r2=np.nan, a_se=np.nan, b_se=np.nan, n=n)
     X = np.column_stack([np.ones(n), -x])
-    coef, *_ = np.linalg.lstsq(X, y, rcond=None)
+    coef, cov, _ = ols(y, X)
     res = y - X @ coef
     ss_res, ss_tot = res @ res, ((y - y.mean()) ** 2).sum()
-    cov = ss_res / (n - 2) * np.linalg.inv(X.T @ X)
     return dict(
         a=coef[0],
         b=coef[1],
@@ -287,7 +287,14 @@ def amplitude_law_fit(impacts_df, tests_df, by=("series",), law="peak"):
         counts = {"n_tests": used.test_id.nunique()}
         if "series" in used:
             counts["n_series"] = used.series.nunique()
-        rows.append({**dict(zip(by, key)), "law": law, **_ols(g.x.to_numpy(float), g.ratio.to_numpy(float)), **counts})
+        rows.append(
+            {
+                **dict(zip(by, key)),
+                "law": law,
+                **_amplitude_line(g.x.to_numpy(float), g.ratio.to_numpy(float)),
+                **counts,
+            }
+        )
     return pd.DataFrame(rows)
 
 

@@ -1,6 +1,7 @@
 """Reduction of one test: raw record to wall motion and validity, as netCDF.
 
-Composes :mod:`rocklab.lab.campaign` (reader), :mod:`rocklab.lab.channels` (health),
+Composes :mod:`rocklab.lab.campaign` and :mod:`rocklab.lab.records`
+(readers), :mod:`rocklab.lab.channels` (health),
 :mod:`rocklab.lab.kinematics` (four degrees of freedom) and
 :mod:`rocklab.lab.validity` (the lab's rules) into one ``xarray.Dataset`` per
 test with CF-style attributes, and turns a set of them into the QC table.
@@ -21,7 +22,9 @@ import xarray as xr
 from rocklab.io import cf_attrs
 from rocklab.lab import channels as health
 from rocklab.lab import kinematics, release, validity
-from rocklab.lab.campaign import TEST_COLUMNS, Campaign, RawFormatError, read_record, row_series
+from rocklab.lab.campaign import TEST_COLUMNS, Campaign, row_series
+from rocklab.lab.raw_format import RawFormatError
+from rocklab.lab.records import read_record
 from rocklab.physics import wall
 
 log = logging.getLogger(__name__)

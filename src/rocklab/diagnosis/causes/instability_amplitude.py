@@ -16,7 +16,7 @@ from dataclasses import replace
 import numpy as np
 
 from rocklab.diagnosis.causes import Cause, instability_angle
-from rocklab.diagnosis.engine import within_slope
+from rocklab.diagnosis.estimation.structure import within_slope
 from rocklab.diagnosis.parameters import Param
 
 K = Param("rounding", -0.6, 0.8, 0.0, practical=0.02)

@@ -1,0 +1,181 @@
+"""Maximum-likelihood fit of a combination of causes, and its linearisation.
+
+The fit (:func:`fit`) is iteratively reweighted least squares with the
+noise model of each residual group (:mod:`rocklab.diagnosis.estimation.noise`);
+its linearisation at the optimum, test by test (:func:`linearised`), is what
+the held-out folds and the bootstrap resamples step from
+(:mod:`rocklab.diagnosis.estimation.resampling`).
+"""
+
+import logging
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from rocklab._imports import lazy_module
+from rocklab.diagnosis.estimation.noise import VAR_FLOOR, deviance, finite_residuals, group_variances
+from rocklab.diagnosis.estimation.problem import Problem
+
+optimize = lazy_module("scipy.optimize")
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class Fit:
+    """A fitted model: parameter values, group noise models, -2 log L, observations,
+    and the reweighting passes of its best start and whether they converged."""
+
+    ext: tuple
+    values: dict
+    var: dict
+    m2ll: float
+    n_obs: int
+    passes: int = 0
+    converged: bool = True
+
+    @property
+    def bic(self):
+        return self.m2ll + len(self.values) * math.log(max(self.n_obs, 2))
+
+
+def fit(problem: Problem, idx, ext, x0=None, n_irls=None) -> Fit:
+    """Maximum-likelihood fit of ``ext`` on the tests ``idx``, noise model per group.
+
+    Iteratively reweighted least squares: with the weights of the noise
+    model (:func:`~rocklab.diagnosis.estimation.noise.noise_variance`) of
+    the previous pass, a bounded least-squares fit, then the noise model
+    again; its fixed point is the maximum of the likelihood.  The first
+    pass searches; the weights of the next ones move the optimum by little,
+    and each is one Gauss-Newton step with the derivatives at the first
+    pass's optimum, reweighted.  Non-convex parameters start both at their
+    null and at the value the data suggest (:meth:`Problem.starts`); the
+    better end wins.  ``x0`` (a previous fit) gives a single warm start, and
+    two passes (``n_irls``, default 5 cold, 2 warm) then suffice.
+    """
+    sub = problem.subset(idx)
+    X = problem.noise(sub)
+    plist = problem.params(ext)
+    if not plist:
+        R = problem.residuals(sub, ext, {})
+        var = group_variances(R, X)
+        return Fit(tuple(ext), {}, var, deviance(R, X, var), sum(r.size for r, _ in finite_residuals(R, X).values()))
+    names = [q.name for q in plist]
+    lo = np.array([q.lower for q in plist], float)
+    hi = np.array([q.upper for q in plist], float)
+    nulls = np.array([q.null for q in plist], float)
+    inside = lambda x: np.clip(x, lo + 1e-6 * (hi - lo), hi - 1e-6 * (hi - lo))  # noqa: E731
+    n_irls = n_irls or (2 if x0 is not None else 5)
+    if x0 is not None:
+        starts = [inside(np.array([x0[n] for n in names], float))]
+    else:
+        guess = problem.starts(ext)
+        starts = [inside(nulls)]
+        if any(n in guess for n in names):
+            starts.append(inside(np.array([guess.get(n, nu) for n, nu in zip(names, nulls)], float)))
+    R0 = problem.residuals(sub, ext, dict(zip(names, starts[0])))
+    masks = {g: np.isfinite(r) & np.isfinite(X[g]) for g, r in R0.items()}
+    masks = {g: m for g, m in masks.items() if m.sum() >= 2}
+    xm = {g: X[g][m] for g, m in masks.items()}
+    best = None
+    for x in starts:
+        R = problem.residuals(sub, ext, dict(zip(names, x)))
+        var = group_variances({g: R[g] for g in masks}, X)
+        passes, converged, jac, m2 = 0, False, None, np.inf
+        for _ in range(n_irls):
+            passes += 1
+            w = {g: 1.0 / np.sqrt(var[g][0] + var[g][1] * xm[g] ** 2 + VAR_FLOOR) for g in masks}
+
+            def stacked(R, w=w):
+                return np.concatenate(
+                    [np.nan_to_num(R[g][m], nan=1.0, posinf=1.0, neginf=-1.0) * w[g] for g, m in masks.items()]
+                )
+
+            def res(xx):
+                return stacked(problem.residuals(sub, ext, dict(zip(names, xx))))
+
+            wv = np.concatenate([w[g] for g in masks])
+            if jac is None:
+                sol = optimize.least_squares(
+                    res, x, bounds=(lo, hi), x_scale="jac", diff_step=1e-5, xtol=1e-9, ftol=1e-9
+                )
+                step, jac = sol.x - x, sol.jac / wv[:, None]
+            else:
+                # the weights moved the optimum by little: one Gauss-Newton step from the last pass's
+                # optimum, with its derivatives (at that point) reweighted, instead of a new search
+                step = optimize.lsq_linear(jac * wv[:, None], -stacked(R), bounds=(lo - x, hi - x)).x
+            moved = np.max(np.abs(step) / (hi - lo))
+            x_new = np.clip(x + step, lo, hi)
+            R_new = problem.residuals(sub, ext, dict(zip(names, x_new)))
+            var_new = group_variances({g: np.where(m, R_new[g], np.nan) for g, m in masks.items()}, X)
+            m2_new = deviance({g: np.where(m, R_new[g], np.nan) for g, m in masks.items()}, X, var_new)
+            if m2_new > m2 + 1e-6 * abs(m2):
+                # a step along a direction the data barely fix (causes nearly confounded, as the members
+                # of a family) can overshoot: the likelihood, not the step, has the last word
+                converged = True
+                break
+            x, R, var, m2 = x_new, R_new, var_new, m2_new
+            if moved < 1e-6:
+                converged = True
+                break
+        R = {g: np.where(m, R[g], np.nan) for g, m in masks.items()}
+        m2ll = deviance(R, X, var)
+        if best is None or m2ll < best.m2ll:
+            n_obs = int(sum(m.sum() for m in masks.values()))
+            best = Fit(tuple(ext), dict(zip(names, map(float, x))), var, m2ll, n_obs, passes, converged)
+    log.debug("fit %s on %d tests: %s, %d passes", ext, len(idx), best.values, best.passes)
+    return best
+
+
+def _jacobian(problem: Problem, sub, ext, values):
+    """Residuals at ``values`` and their derivatives by each parameter (forward differences).
+
+    Returns (R, J): group -> residual array, group -> list of derivative
+    arrays (one per parameter of ``ext``, like the residuals).
+    """
+    R = problem.residuals(sub, ext, values)
+    J = {g: [] for g in R}
+    for q in problem.params(ext):
+        # the step least_squares takes (diff_step 1e-5, relative), away from the nearer bound
+        h = 1e-5 * max(abs(values[q.name]), 1.0)
+        h = -h if values[q.name] + h > q.upper else h
+        Rq = problem.residuals(sub, ext, {**values, q.name: values[q.name] + h})
+        for g in R:
+            J[g].append((Rq[g] - R[g]) / h)
+    return R, J
+
+
+def linearised(problem: Problem, sub, fitted: Fit):
+    """The least-squares problem of ``fitted`` linearised at its parameters, test by test.
+
+    Returns
+    -------
+    names : list of str
+    x0, lo, hi : ndarray
+        The fitted parameters, and their bounds less x0.
+    A, y : list of ndarray
+        Per test of ``sub``: the derivatives of its finite residuals (every
+        group), weighted by the fit's noise model, and minus those residuals
+        weighted alike: the step of a set of tests is the least-squares
+        solution of their stacked A dx = y.
+    """
+    names = list(fitted.values)
+    X = problem.noise(sub)
+    R, J = _jacobian(problem, sub, fitted.ext, fitted.values)
+    x0 = np.array([fitted.values[k] for k in names], float)
+    plist = problem.params(fitted.ext)
+    lo = np.array([q.lower for q in plist], float) - x0
+    hi = np.array([q.upper for q in plist], float) - x0
+    tests = range(len(next(iter(R.values()))))
+    A, y = [[] for _ in tests], [[] for _ in tests]
+    for g, r in R.items():
+        if g not in fitted.var:
+            continue
+        d = np.stack(J[g], axis=-1)
+        ok = np.isfinite(r) & np.isfinite(X[g]) & np.all(np.isfinite(d), axis=-1)
+        w = 1.0 / np.sqrt(fitted.var[g][0] + fitted.var[g][1] * np.where(ok, X[g], 0.0) ** 2 + VAR_FLOOR)
+        for i in tests:
+            A[i].append(d[i][ok[i]] * w[i][ok[i], None])
+            y[i].append(-r[i][ok[i]] * w[i][ok[i]])
+    return names, x0, lo, hi, [np.concatenate(a) for a in A], [np.concatenate(b) for b in y]

@@ -1,0 +1,140 @@
+"""Tests left out and tests resampled: held-out deviance and bootstrap intervals.
+
+Both refit by one Gauss-Newton step from the fit of all tests, over the
+linearisation of :func:`rocklab.diagnosis.estimation.fitting.linearised`: the
+K folds of :func:`heldout` and the resamples of whole tests of
+:func:`parameter_intervals`.  The paired per-test comparison of two models'
+held-out deviances is :func:`paired_gain`, and a per-test measure is summed
+up over the tests by :func:`finite_mean`.
+"""
+
+import logging
+import math
+import time
+
+import numpy as np
+
+from rocklab._imports import lazy_module
+from rocklab.diagnosis.estimation.fitting import Fit, fit, linearised
+from rocklab.diagnosis.estimation.noise import deviance, finite_residuals, group_variances
+from rocklab.diagnosis.estimation.problem import Problem
+
+optimize = lazy_module("scipy.optimize")
+
+log = logging.getLogger(__name__)
+
+
+def finite_mean(x):
+    """Mean of the finite values of x, None if there are none."""
+    x = np.asarray(x, float)
+    return float(np.nanmean(x)) if np.isfinite(x).any() else None
+
+
+def _folds(n, k_max=5):
+    k = n if n <= 6 else k_max
+    idx = np.arange(n)
+    return [idx[idx % k == j] for j in range(k)] if n > 1 else [idx]
+
+
+def heldout(problem: Problem, ext, fitted: Fit | None = None):
+    """Per-test held-out deviance of ``ext`` fitted on the other tests (K-fold), and measures.
+
+    The fit of each fold's training tests is one Gauss-Newton step from the
+    fit of all tests (``fitted``; made here when None), over the training
+    tests' weighted residuals and derivatives at it
+    (:func:`~rocklab.diagnosis.estimation.fitting.linearised`, the
+    linearisation of the bootstrap, :func:`parameter_intervals`); its noise
+    model (:func:`~rocklab.diagnosis.estimation.noise.noise_variance`) is
+    then that of the training tests' residuals at the step's parameters.
+    A fold leaves out a fifth of the tests (one, up to six): its fit
+    differs from the full one by about its standard errors, where the
+    residuals are linear in the parameters, so the step lands on the refit
+    of the fold's tests (the engine's former held-out fits, at ten times the
+    cost: tests/test_diagnosis_engine.py).
+
+    Returns
+    -------
+    dict
+        ``deviance`` (per test, -2 log L per observation of the held-out test
+        under the training fit) and the per-test arrays of
+        :meth:`Problem.heldout_measures`.
+    """
+    n = problem.n_tests
+    every = problem.subset(np.arange(n))
+    X = problem.noise(every)
+    if problem.params(ext):
+        fitted = fitted or fit(problem, np.arange(n), ext)
+        names, x0, lo, hi, A, y = linearised(problem, every, fitted)
+    dev = np.full(n, np.nan)
+    meas = {}
+    for held in _folds(n):
+        train = np.setdiff1d(np.arange(n), held) if n > 1 else held
+        values = {}
+        if problem.params(ext):
+            step = optimize.lsq_linear(
+                np.concatenate([A[i] for i in train]), np.concatenate([y[i] for i in train]), bounds=(lo, hi)
+            )
+            values = dict(zip(names, map(float, x0 + step.x)))
+        R = problem.residuals(every, ext, values)
+        var = group_variances({g: r[train] for g, r in R.items()}, {g: x[train] for g, x in X.items()})
+        for i in held:
+            Ri = {g: r[i : i + 1] for g, r in R.items() if g in var}
+            Xi = {g: X[g][i : i + 1] for g in Ri}
+            nobs = sum(r.size for r, _ in finite_residuals(Ri, Xi).values())
+            dev[i] = deviance(Ri, Xi, var) / nobs if nobs else np.nan
+        for name, x in problem.heldout_measures(problem.subset(held), ext, values).items():
+            meas.setdefault(name, np.full(n, np.nan))[held] = x
+    return {"deviance": dev, **meas}
+
+
+def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
+    """Percentile 95 % intervals of the parameters, whole tests resampled (bootstrap over tests).
+
+    Each resample is fitted by one Gauss-Newton step from the full fit
+    (the estimating-function bootstrap of Hu & Kalbfleisch 2000, within the
+    bounds): the residuals of every test and their derivatives are computed
+    once, at the full fit, with the weights of its noise model
+    (:func:`~rocklab.diagnosis.estimation.fitting.linearised`), and a
+    resample weighs each test by the times it was drawn.  The resamples
+    differ from the full fit by a few times its standard errors, where the
+    residuals are linear in the parameters to well below those errors (the refit of every resample with its own noise
+    model, the engine's former bootstrap, gives the same intervals to a few
+    per cent of their width at twenty times the cost:
+    tests/test_diagnosis_engine.py).
+    """
+    t0 = time.perf_counter()
+    rng = np.random.default_rng(seed)
+    if not fitted.values:
+        return {}
+    names, x0, lo, hi, A, y = linearised(problem, problem.subset(np.arange(problem.n_tests)), fitted)
+    draws = []
+    for _ in range(n_boot):
+        counts = np.bincount(rng.integers(0, problem.n_tests, problem.n_tests), minlength=problem.n_tests)
+        drawn = np.flatnonzero(counts)
+        root = np.sqrt(counts[drawn])
+        Ab = np.concatenate([A[i] * c for i, c in zip(drawn, root)])
+        yb = np.concatenate([y[i] * c for i, c in zip(drawn, root)])
+        draws.append(x0 + optimize.lsq_linear(Ab, yb, bounds=(lo, hi)).x)
+    d = np.array(draws).reshape(len(draws), len(names))
+    ci = {k: [float(np.percentile(d[:, i], 2.5)), float(np.percentile(d[:, i], 97.5))] for i, k in enumerate(names)}
+    log.info(
+        "bootstrap of %s: %d resamples of %d tests in %.1f s: %s",
+        "+".join(fitted.ext),
+        n_boot,
+        problem.n_tests,
+        time.perf_counter() - t0,
+        ", ".join(f"{k} [{lo:.4g}, {hi:.4g}]" for k, (lo, hi) in ci.items()),
+    )
+    return ci
+
+
+def paired_difference(d):
+    """Mean of the finite paired per-test differences ``d`` and its standard error."""
+    d = d[np.isfinite(d)]
+    se = float(np.std(d, ddof=1) / math.sqrt(d.size)) if d.size > 1 else np.inf
+    return float(np.mean(d)) if d.size else 0.0, se
+
+
+def paired_gain(before, after):
+    """Mean per-test held-out deviance gain of ``after`` over ``before`` and its standard error."""
+    return paired_difference(np.asarray(before, float) - np.asarray(after, float))

@@ -1,0 +1,248 @@
+"""Which causes the data carry: greedy forward selection with removal tests.
+
+A candidate enters on the information criterion, the paired held-out
+deviance (:mod:`rocklab.diagnosis.estimation.resampling`) and a bootstrap
+interval clear of its null (:func:`select_effects`); where the listed causes
+leave structure (:mod:`rocklab.diagnosis.estimation.structure`) the
+selection is run again with the generalised families
+(:func:`beyond_the_catalogue`).
+"""
+
+import logging
+import time
+
+import numpy as np
+
+from rocklab.diagnosis.estimation.fitting import fit
+from rocklab.diagnosis.estimation.problem import Problem
+from rocklab.diagnosis.estimation.resampling import heldout, paired_difference, parameter_intervals
+from rocklab.diagnosis.estimation.structure import structure
+
+log = logging.getLogger(__name__)
+
+
+def _improves(d):
+    """Whether paired per-test improvements ``d`` are beyond the noise.
+
+    The mean exceeds twice its standard error, or every one of at least five
+    tests improved (one-sided sign test, p <= 1/32): with few tests that
+    differ in how much they gain, the standard error alone is too strict.
+    """
+    d = d[np.isfinite(d)]
+    gain, se = paired_difference(d)
+    return gain > 2 * se or (d.size >= 5 and bool(np.all(d > 0)))
+
+
+def _null_excluded(problem, effect, ci):
+    """Whether some parameter of ``effect`` stays clear of its null by a practical margin."""
+    for q in problem.params((effect,)):
+        if q.practical is not None and q.name in ci:
+            lo, hi = ci[q.name]
+            if lo > q.null + q.practical or hi < q.null - q.practical:
+                return True
+    return False
+
+
+def select_effects(
+    problem: Problem, *, signature=None, n_boot=40, max_effects=4, seed=0, bic_margin=10.0, families=False, fits=None
+):
+    """Greedy forward selection of the causes the data carry, with removal tests.
+
+    Parameters
+    ----------
+    problem : Problem
+    signature : dict, optional
+        effect -> {"supports": bool, ...}; an effect whose signature does not
+        support it is never named.
+    n_boot : int
+        Bootstrap resamples for the 95 % intervals.
+    bic_margin : float
+        BIC must drop by more than this (strong evidence, Kass & Raftery 1995).
+    families : bool
+        Candidates include the generalised families of the problem's causes
+        (those with a ``family``): the search beyond the catalogue.
+    fits : dict, optional
+        Fits by causes, shared with an earlier selection on the same problem.
+
+    Returns
+    -------
+    dict
+        ``effects`` (chosen, in order of entry), ``fit`` (:class:`~rocklab.diagnosis.estimation.fitting.Fit`),
+        ``ci`` (parameter intervals), ``base``/``final`` held-out results,
+        ``steps`` (the held-out result after each entry), ``rejected``
+        (effect -> reason), ``structure`` (what the chosen model leaves) and
+        ``weak`` (candidates turned down that would remove all of it).
+    """
+    all_idx = np.arange(problem.n_tests)
+    signature = signature or {}
+    fits = {} if fits is None else fits
+
+    def fit_of(ext):
+        # a fit is deterministic: the rounds, the removals and the weak-evidence
+        # pass meet the same models again
+        if ext not in fits:
+            t0 = time.perf_counter()
+            f = fits[ext] = fit(problem, all_idx, ext)
+            log.info(
+                "fit %s: %s; -2 log L %.1f, BIC %.1f on %d observations; %d passes, %s in %.1f s",
+                "+".join(ext) or "base model",
+                ", ".join(f"{k} = {v:.4g}" for k, v in f.values.items()) or "no parameter",
+                f.m2ll,
+                f.bic,
+                f.n_obs,
+                f.passes,
+                "converged" if f.converged else "not converged",
+                time.perf_counter() - t0,
+            )
+        return fits[ext]
+
+    candidates = problem.candidates(families)
+    log.info("selection over %d tests, candidates %s", problem.n_tests, ", ".join(candidates))
+    current = ()
+    cur_fit = fit_of(current)
+    cur_ho = heldout(problem, current)
+    base_ho = cur_ho
+    steps, rejected, ci = {}, {}, {}
+    for stage in range(1, max_effects + 1):
+        # candidates in the order of their information criterion; the held-out test and the
+        # bootstrap, the costly steps, only until one passes
+        cands = []
+        for eff in candidates:
+            ext = problem.combine(current, eff) if eff not in current else None
+            if ext is None or ext == current or rejected.get(eff, "").startswith("95%"):
+                continue
+            if not signature.get(eff, {}).get("supports", True):
+                # never named without it: its fit, the costliest of all for a loss in flight, is not needed
+                rejected[eff] = "its signature in the data is absent"
+                log.info("stage %d: %s rejected: %s", stage, eff, rejected[eff])
+                continue
+            f = fit_of(ext)
+            dbic = f.bic - cur_fit.bic
+            if dbic > -bic_margin:
+                rejected[eff] = f"BIC {dbic:+.1f}"
+            else:
+                cands.append((dbic, eff, ext, f))
+                continue
+            log.info("stage %d: %s rejected: %s", stage, eff, rejected[eff])
+        cands.sort(key=lambda c: c[0])
+        if cands:
+            log.info(
+                "stage %d: held-out test in the order of BIC until one passes: %s",
+                stage,
+                ", ".join(f"{eff} ({dbic:+.1f})" for dbic, eff, *_ in cands),
+            )
+        accepted = False
+        for dbic, eff, ext, f in cands:
+            ho = heldout(problem, ext, f)
+            d = cur_ho["deviance"] - ho["deviance"]
+            gain, se = paired_difference(d)
+            if not _improves(d):
+                rejected[eff] = f"held-out deviance gain {gain:.3g} within the noise (standard error {se:.2g})"
+                log.info("stage %d: %s (BIC %+.1f) rejected: %s", stage, eff, dbic, rejected[eff])
+                continue
+            c = parameter_intervals(problem, f, n_boot=n_boot, seed=seed)
+            if not _null_excluded(problem, eff, c):
+                rejected[eff] = "95% interval within the smallest effect worth naming of its null value"
+                log.info(
+                    "stage %d: %s (BIC %+.1f, held-out gain %.3g) rejected: %s", stage, eff, dbic, gain, rejected[eff]
+                )
+                continue
+            rejected.pop(eff, None)
+            current, cur_fit, cur_ho, ci = ext, f, ho, c
+            steps[eff] = {"heldout": ho, "gain": gain, "se": se, "dbic": dbic}
+            log.info(
+                "stage %d: %s accepted: BIC %+.1f, held-out deviance gain %.3g (standard error %.2g)",
+                stage,
+                eff,
+                dbic,
+                gain,
+                se,
+            )
+            accepted = True
+            break
+        if not accepted:
+            log.info(
+                "stage %d: no candidate accepted; selection stops at %s", stage, "+".join(current) or "the base model"
+            )
+            break
+        # removal: a cause that entered earlier may be carried by the new one
+        for old in [e for e in current if e != eff and e in steps]:
+            ext = tuple(e for e in current if e != old)
+            f = fit_of(ext)
+            ho = heldout(problem, ext, f)
+            loss, se = paired_difference(ho["deviance"] - cur_ho["deviance"])
+            if not _improves(ho["deviance"] - cur_ho["deviance"]) or f.bic - cur_fit.bic < bic_margin:
+                rejected[old] = f"carried by {eff} (removing it costs {loss:.3g} +- {se:.2g} held out)"
+                log.info("stage %d: %s removed: %s", stage, old, rejected[old])
+                steps.pop(old)
+                current, cur_fit, cur_ho = ext, f, ho
+                ci = parameter_intervals(problem, f, n_boot=n_boot, seed=seed) if ext else {}
+    found = structure(problem, all_idx, current, cur_fit.values)
+    # structure that a candidate turned down by the held-out test or the bootstrap would remove
+    # is weak evidence for it, not something outside the catalogue
+    weak = {}
+    if found:
+        for eff in candidates:
+            ext = problem.combine(current, eff) if eff not in current else None
+            if ext is not None and ext != current and signature.get(eff, {}).get("supports", True):
+                f = fit_of(ext)
+                if not structure(problem, all_idx, ext, f.values):
+                    weak[eff] = {"params": f.values, "reason": rejected.get(eff, "")}
+    log.info(
+        "chosen: %s; structure left: %s; weak evidence for: %s",
+        "+".join(current) or "the base model",
+        "; ".join(found) or "none",
+        ", ".join(weak) or "none",
+    )
+    return {
+        "effects": list(current),
+        "fit": cur_fit,
+        "ci": ci,
+        "base": base_ho,
+        "final": cur_ho,
+        "steps": steps,
+        "rejected": rejected,
+        "structure": found,
+        "weak": weak,
+    }
+
+
+def beyond_the_catalogue(problem: Problem, sel, *, signature, n_boot=40, seed=0, fits=None):
+    """The selection with the generalised families, where the listed causes leave structure (issue 12).
+
+    Where ``sel`` (a selection of the listed causes,
+    :func:`select_effects`) leaves structure in the residual groups (not
+    only what the stage after selection addresses, :meth:`Problem.extra_structure`)
+    that no candidate turned down by the held-out test or the bootstrap would remove (one turned
+    down by the information criterion removes it only with a worse fit), the selection is run again with the
+    families of the problem's causes among the candidates (the same engine:
+    information criterion, signature, held-out deviance, bootstrap).  When
+    it names a family, it replaces ``sel``, with ``catalogue`` (the
+    selection of the listed causes) kept beside it; otherwise ``sel`` stands,
+    with the families that would remove the structure but fall short of the
+    evidence to be named added to its weak evidence.
+    """
+    # weak evidence for a listed cause that the held-out test or the bootstrap turned down stands; one the
+    # information criterion turned down removes the structure only with a worse fit: a form it lacks
+    if any(not w["reason"].startswith("BIC") for w in sel["weak"].values()):
+        return sel
+    if problem.candidates(True) == problem.candidates():
+        return sel
+    # structure of the residual groups: what the stage after selection addresses (a stop) is not the families'
+    every = problem.subset(np.arange(problem.n_tests))
+    after = problem.extra_structure(every, tuple(sel["effects"]), sel["fit"].values)
+    if not [st for st in sel["structure"] if st not in after]:
+        return sel
+    log.info("structure left by the listed causes: the generalised families are searched")
+    wide = select_effects(problem, signature=signature, n_boot=n_boot, seed=seed, families=True, fits=fits)
+    families = set(problem.candidates(True)) - set(problem.candidates())
+    named = [e for e in wide["effects"] if e in families]
+    if not named:
+        weak = {k: v for k, v in wide["weak"].items() if k in families}
+        log.info(
+            "no family named: %s",
+            f"weak evidence for {', '.join(weak)}" if weak else "the structure stays unexplained",
+        )
+        return {**sel, "weak": {**sel["weak"], **weak}}
+    log.info("discovered: %s", ", ".join(named))
+    return {**wide, "catalogue": sel}
