@@ -123,7 +123,9 @@ SOURCE = "laboratory free-rocking test, displacement transducers"
 
 def _unreadable(meta: dict, error: Exception) -> xr.Dataset:
     ds = xr.Dataset(attrs={**_cf_attrs(meta["test_id"]), **{k: v for k, v in meta.items() if v is not None}})
-    ds.attrs.update(valid=0, reject_reason="unreadable", reject_detail=str(error), flags="", channels_used="")
+    ds.attrs.update(
+        valid=0, reject_reason=validity.Verdict.UNREADABLE, reject_detail=str(error), flags="", channels_used=""
+    )
     return ds
 
 
@@ -355,7 +357,7 @@ def qc_table(datasets, campaign: Campaign) -> pd.DataFrame:
                     "test_id": tid,
                     "series": "",
                     "valid": False,
-                    "reject_reason": "unreadable",
+                    "reject_reason": validity.Verdict.UNREADABLE,
                     "reject_detail": str(err),
                     "residual_top_mm": np.nan,
                     "release_velocity_ratio": np.nan,
@@ -420,6 +422,8 @@ def kinematics_table(datasets, campaign: Campaign) -> pd.DataFrame:
 
     ``datasets``: reduced tests, or anything with their ``attrs`` (:func:`row_attrs`).
     """
-    readable = {d.attrs["test_id"]: d.attrs for d in datasets if d.attrs.get("reject_reason") != "unreadable"}
+    readable = {
+        d.attrs["test_id"]: d.attrs for d in datasets if d.attrs.get("reject_reason") != validity.Verdict.UNREADABLE
+    }
     rows = [kinematics_row(readable[t]) for t in campaign.test_ids if t in readable]
     return pd.DataFrame(rows, columns=KINEMATICS_COLUMNS)

@@ -18,6 +18,7 @@ Channel roles are read from the transducer geometry, never assumed.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from enum import StrEnum
 
 import numpy as np
 import pandas as pd
@@ -37,8 +38,27 @@ RULES = {
     "release_velocity_ratio": RELEASE_VELOCITY_RATIO,
     "max_lost_out_of_plane": MAX_LOST_OUT_OF_PLANE,
 }
-#: Reject reasons, in the order they are reported when several apply.
-REASONS = ("unreadable", "instrument_malfunction", "disturbed_initial_conditions", "residual_out_of_plumb")
+
+
+class Verdict(StrEnum):
+    """The verdict of a test: valid, or the rule it breaks (``reject_reason`` of ``qc.csv``).
+
+    The one vocabulary of verdicts: ``qc.csv``'s schema
+    (``workflow/schemas/qc.schema.yaml``), the QC summary and the virtual
+    lab's expected verdicts use it. The rejections are listed in the order
+    they are reported when several apply (:meth:`rejections`).
+    """
+
+    VALID = "valid"
+    UNREADABLE = "unreadable"
+    INSTRUMENT_MALFUNCTION = "instrument_malfunction"
+    DISTURBED_INITIAL_CONDITIONS = "disturbed_initial_conditions"
+    RESIDUAL_OUT_OF_PLUMB = "residual_out_of_plumb"
+
+    @classmethod
+    def rejections(cls) -> tuple[Verdict, ...]:
+        """The reject reasons, first the one reported when several apply."""
+        return tuple(v for v in cls if v is not cls.VALID)
 
 
 def channel_roles(setup: pd.DataFrame, thickness_mm: float) -> pd.DataFrame:
@@ -180,20 +200,20 @@ def verdict(choice: ChannelChoice, release_ratio, residual_top_mm, rules=RULES) 
         ``residual_top_mm``, ``release_velocity_ratio`` (config ``validity``).
     """
     if choice.malfunction:
-        return False, "instrument_malfunction", choice.malfunction
+        return False, Verdict.INSTRUMENT_MALFUNCTION, choice.malfunction
     if not np.isfinite(release_ratio):
-        return False, "disturbed_initial_conditions", "no undisturbed fall from the held rotation found"
+        return False, Verdict.DISTURBED_INITIAL_CONDITIONS, "no undisturbed fall from the held rotation found"
     if release_ratio > rules["release_velocity_ratio"]:
         return (
             False,
-            "disturbed_initial_conditions",
+            Verdict.DISTURBED_INITIAL_CONDITIONS,
             f"release velocity {release_ratio:.1%} of the overturning velocity"
             f" (limit {rules['release_velocity_ratio']:.0%})",
         )
     if not np.isfinite(residual_top_mm) or residual_top_mm > rules["residual_top_mm"]:
         return (
             False,
-            "residual_out_of_plumb",
+            Verdict.RESIDUAL_OUT_OF_PLUMB,
             f"top residual {residual_top_mm:.2f} mm (limit {rules['residual_top_mm']} mm)",
         )
     return True, "", ""
