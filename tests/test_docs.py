@@ -16,6 +16,7 @@ from rocklab import summaries
 from rocklab.diagnosis.summary import diagnosis_summary, limestone_summary
 from rocklab.dissipation.summary import dissipation_summary
 from rocklab.lab.summary import quality_control_summary
+from rocklab.lab.validity import FAULT_COLUMNS
 from rocklab.report import pages, tables
 from rocklab.seismic.overturning import record_comparison
 from rocklab.seismic.summary import FLIPPED_FRACTION, maps_summary
@@ -214,16 +215,25 @@ def _diagnosis_entries():
 def tiny_results(tmp_path):
     """A results folder of a few rows: two-sided series 1a-2s and 3a-2s (apart), one-sided 1b-1s-cd60."""
     r = tmp_path / "results"
+    none = {c: "" for c in FAULT_COLUMNS} | {"in_plane_lost": False}
     qc = [
-        ("T1", "1a-2s", True, None, 0.2, 0.005, ""),
-        ("T2", "1a-2s", True, None, 1.1, 0.019, "ch1 3 spike(s) repaired"),
-        ("T3", "3a-2s", True, None, 0.4, 0.010, "ch4 dead; in-plane channel lost: v = 0"),
-        ("T4", "1b-1s-cd60", False, "instrument_malfunction", None, None, "ch0 dead; ch2 stuck from 1.00 s"),
-        ("T5", "1b-1s-cd60", False, "disturbed_initial_conditions", 0.3, 0.2, ""),
-        ("T6", "1b-1s-cd60", False, "residual_out_of_plumb", 1.9, 0.01, "ch0 dropout from 2.00 s; backup ch2 used"),
+        ("T1", "1a-2s", True, None, 0.2, 0.005, none),
+        ("T2", "1a-2s", True, None, 1.1, 0.019, none | {"channels_spikes_repaired": "ch1"}),
+        ("T3", "3a-2s", True, None, 0.4, 0.010, none | {"channels_dead": "ch4", "in_plane_lost": True}),
+        ("T4", "1b-1s-cd60", False, "instrument_malfunction", None, None, none | {"channels_dead": "ch0 ch1"}),
+        ("T5", "1b-1s-cd60", False, "disturbed_initial_conditions", 0.3, 0.2, none | {"channels_stuck": "ch2"}),
+        (
+            "T6",
+            "1b-1s-cd60",
+            False,
+            "residual_out_of_plumb",
+            1.9,
+            0.01,
+            none | {"channels_dropout": "ch0", "channels_backup_used": "ch2"},
+        ),
     ]
-    columns = ("test_id", "series", "valid", "reject_reason", "residual_top_mm", "release_velocity_ratio", "flags")
-    _write(r / "qc.csv", [dict(zip(columns, row, strict=True)) for row in qc])
+    columns = ("test_id", "series", "valid", "reject_reason", "residual_top_mm", "release_velocity_ratio")
+    _write(r / "qc.csv", [dict(zip(columns, row[:-1], strict=True)) | row[-1] for row in qc])
     series = [
         ("1a-2s", "two-sided", 2, 0, 0.95, 0.5, False, 0),
         ("3a-2s", "two-sided", 1, 0, 0.86, -9.0, True, 0),

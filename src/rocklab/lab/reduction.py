@@ -39,6 +39,7 @@ QC_COLUMNS = [
     "release_velocity_ratio",
     "channels_used",
     "flags",
+    *validity.FAULT_COLUMNS,
 ]
 
 
@@ -124,7 +125,12 @@ SOURCE = "laboratory free-rocking test, displacement transducers"
 def _unreadable(meta: dict, error: Exception) -> xr.Dataset:
     ds = xr.Dataset(attrs={**_cf_attrs(meta["test_id"]), **{k: v for k, v in meta.items() if v is not None}})
     ds.attrs.update(
-        valid=0, reject_reason=validity.Verdict.UNREADABLE, reject_detail=str(error), flags="", channels_used=""
+        valid=0,
+        reject_reason=validity.Verdict.UNREADABLE,
+        reject_detail=str(error),
+        flags="",
+        channels_used="",
+        **validity.NO_FAULTS,
     )
     return ds
 
@@ -295,6 +301,7 @@ def reduce_test(campaign: Campaign, test_id: str, options=None) -> xr.Dataset:
         alpha_fit_release=state["alpha_fit"],
         channels_used=" ".join(f"ch{c}" for c in choice.used),
         flags="; ".join(flags),
+        **validity.channel_faults(reports, choice),
         channel_reports=json.dumps([r.__dict__ for r in reports], default=float),
         residual_rms_median_mm=float(np.nanmedian(ds.residual_rms.values))
         if np.isfinite(ds.residual_rms.values).any()
@@ -339,6 +346,8 @@ def qc_row(ds: xr.Dataset) -> dict:
         "release_velocity_ratio": a.get("release_velocity_ratio", np.nan),
         "channels_used": a.get("channels_used", ""),
         "flags": a.get("flags", ""),
+        **{c: a.get(c, validity.NO_FAULTS[c]) for c in validity.FAULT_COLUMNS},
+        "in_plane_lost": bool(a.get("in_plane_lost", 0)),
     }
 
 
@@ -363,6 +372,8 @@ def qc_table(datasets, campaign: Campaign) -> pd.DataFrame:
                     "release_velocity_ratio": np.nan,
                     "channels_used": "",
                     "flags": "",
+                    **validity.NO_FAULTS,
+                    "in_plane_lost": False,
                 }
             )
     seen = set()

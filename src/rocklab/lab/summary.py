@@ -10,16 +10,15 @@ import pandas as pd
 
 from rocklab.lab.validity import Verdict
 
-#: Channel faults as the flags of ``qc.csv`` name them (:meth:`rocklab.lab.channels.ChannelReport.describe`,
-#: :func:`rocklab.lab.validity.choose_channels`).
-CHANNEL_FLAGS = {
-    "spikes_repaired": "spike(s) repaired",
-    "dead": " dead",
-    "stuck": " stuck from",
-    "clipped": " clipped from",
-    "dropout": " dropout from",
-    "backup_used": "backup ch",
-    "in_plane_lost": "in-plane channel lost",
+#: The channel faults the docs count, each by its column of ``qc.csv``
+#: (:data:`rocklab.lab.validity.FAULT_COLUMNS`: the channels that had it).
+CHANNEL_FAULTS = {
+    "spikes_repaired": "channels_spikes_repaired",
+    "dead": "channels_dead",
+    "stuck": "channels_stuck",
+    "clipped": "channels_clipped",
+    "dropout": "channels_dropout",
+    "backup_used": "channels_backup_used",
 }
 
 
@@ -43,11 +42,10 @@ def quality_control_summary(qc: pd.DataFrame) -> dict:
         where none), ``release_velocity_pct`` (span of the release velocity over
         Eq. 16 [%] of the valid and the disturbed tests), ``residual_top_mm``
         (largest residual of a valid test, smallest of an out-of-plumb one
-        [mm]), ``channel_faults`` (tests flagged with each fault) and
+        [mm]), ``channel_faults`` (tests with each fault on some channel, v left unsolved) and
         ``series`` (valid, rejected and each rejection per series, in name order).
     """
     verdict = qc["reject_reason"].fillna("").replace("", Verdict.VALID.value)
-    flags = qc["flags"].fillna("")
     counts = pd.crosstab(qc["series"], verdict).reindex(columns=[v.value for v in Verdict], fill_value=0)
     return {
         "n_tests": len(qc),
@@ -61,7 +59,10 @@ def quality_control_summary(qc: pd.DataFrame) -> dict:
             "valid_max": _span(qc.loc[verdict == Verdict.VALID, "residual_top_mm"])["max"],
             "out_of_plumb_min": _span(qc.loc[verdict == Verdict.RESIDUAL_OUT_OF_PLUMB, "residual_top_mm"])["min"],
         },
-        "channel_faults": {k: int(flags.str.contains(v, regex=False).sum()) for k, v in CHANNEL_FLAGS.items()},
+        "channel_faults": {
+            **{k: int((qc[c].fillna("") != "").sum()) for k, c in CHANNEL_FAULTS.items()},
+            "in_plane_lost": int(qc["in_plane_lost"].astype(bool).sum()),
+        },
         "series": [
             {
                 "series": series,

@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 
 from rocklab.lab import kinematics
-from rocklab.lab.channels import BACKUP_CHANNELS, CHANNEL_POLICY
+from rocklab.lab.channels import BACKUP_CHANNELS, CHANNEL_POLICY, LOST_STATUSES
 
 #: Largest residual out-of-plumb of the wall top after the motion [mm].
 RESIDUAL_TOP_MM = 1.5
@@ -94,6 +94,7 @@ class ChannelChoice:
     lost_out_of_plane: list
     flags: list = field(default_factory=list)
     malfunction: str | None = None
+    backups_used: list = field(default_factory=list)
 
 
 def choose_channels(
@@ -131,7 +132,7 @@ def choose_channels(
     primary = [c for c in oop if c not in backup]
     spare = [c for c in oop if c in backup and c not in lost]
     if policy == "all":
-        used = [c for c in oop if c not in lost]
+        used, stand_in = [c for c in oop if c not in lost], []
     else:
         used = [c for c in primary if c not in lost]
         need = len(primary) - len(used)
@@ -152,7 +153,54 @@ def choose_channels(
     if not solve_v:
         flags.append("in-plane channel lost: v = 0")
     flags += [names[c] for c in inp if c in absent]
-    return ChannelChoice(sorted(used + good_inp[:1]), solve_v, lost_oop, flags, malfunction)
+    return ChannelChoice(sorted(used + good_inp[:1]), solve_v, lost_oop, flags, malfunction, stand_in)
+
+
+#: The channel faults of ``qc.csv``, one column each (:func:`channel_faults`).
+FAULT_COLUMNS = (
+    "channels_dead",
+    "channels_stuck",
+    "channels_clipped",
+    "channels_dropout",
+    "channels_spikes_repaired",
+    "channels_backup_used",
+    "in_plane_lost",
+)
+
+
+def channel_faults(reports, choice: ChannelChoice) -> dict:
+    """The channel faults of a test, as the columns :data:`FAULT_COLUMNS` of ``qc.csv``.
+
+    Parameters
+    ----------
+    reports : list of rocklab.lab.channels.ChannelReport
+        What :func:`rocklab.lab.channels.assess_channels` found on each channel.
+    choice : ChannelChoice
+        The channels chosen for the kinematics.
+
+    Returns
+    -------
+    dict
+        ``channels_<status>`` for each status that loses a channel, the channels
+        found so (``ch<n>`` separated by spaces, empty for none); the same for
+        the channels whose spikes were repaired and the backups that stood in;
+        ``in_plane_lost``: 1 when no in-plane channel was left (v = 0), else 0
+        (a netCDF attribute holds no boolean).
+    """
+
+    def named(channels) -> str:
+        return " ".join(f"ch{c}" for c in channels)
+
+    return {
+        **{f"channels_{s}": named(r.channel for r in reports if r.status == s) for s in LOST_STATUSES},
+        "channels_spikes_repaired": named(r.channel for r in reports if r.spikes),
+        "channels_backup_used": named(choice.backups_used),
+        "in_plane_lost": int(not choice.solve_v),
+    }
+
+
+#: The columns of :data:`FAULT_COLUMNS` of a test whose record could not be read.
+NO_FAULTS = {**{c: "" for c in FAULT_COLUMNS[:-1]}, "in_plane_lost": 0}
 
 
 def top_displacement(theta, phi, v, w, length_mm, height_mm, thickness_mm):
