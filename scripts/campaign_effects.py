@@ -6,9 +6,11 @@ from pathlib import Path
 import pandas as pd
 
 from rocklab.dissipation.covariates import campaign_effects, series_fits
+from rocklab.dissipation.summary import campaign_level_summary
 from rocklab.io import setup_logging, write_table
 from rocklab.plots import save_png
 from rocklab.plots.covariates import covariate_figure
+from rocklab.summaries import write_summary
 
 setup_logging(snakemake.log[0])
 tests = pd.read_csv(snakemake.input.tests)
@@ -16,4 +18,5 @@ qc = pd.read_csv(snakemake.input.qc)
 diagnosis = json.loads(Path(snakemake.input.diagnosis).read_text())
 effects = campaign_effects(tests, diagnosis, qc, margin=snakemake.params.margin)
 write_table(effects, snakemake.output.table, snakemake.params.schema)
+write_summary(campaign_level_summary(snakemake.output.table), snakemake.output.docs_summary)
 save_png(covariate_figure(series_fits(tests, diagnosis, qc), effects), snakemake.output.figure, dpi=90)

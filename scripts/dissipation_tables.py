@@ -6,7 +6,9 @@ from pathlib import Path
 import pandas as pd
 
 from rocklab.dissipation.statistics import campaign_tables, table3_markdown
+from rocklab.dissipation.summary import dissipation_summary
 from rocklab.io import setup_logging, valid_tests, write_table
+from rocklab.summaries import write_summary
 
 setup_logging(snakemake.log[0])
 qc = pd.read_csv(snakemake.input.qc, keep_default_na=False, na_values=[""])
@@ -20,3 +22,4 @@ for name in ("tests", "impacts", "e_by_n", "series", "laws", "effects", "table3"
     schema = schemas / f"{name}.schema.yaml"
     write_table(tables[name], snakemake.output[name], schema if schema.exists() else None)
 Path(snakemake.output.table3_md).write_text(table3_markdown(tables["table3"]) + "\n")
+write_summary(dissipation_summary(snakemake.output), snakemake.output.docs_summary)

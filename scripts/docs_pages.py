@@ -1,4 +1,4 @@
-"""Snakemake shim: results/docs/numbers.json and the pages of docs/templates, from the results."""
+"""Snakemake shim: results/docs/numbers.json (the stages' summaries, the job times) and the docs pages."""
 
 import logging
 from pathlib import Path

@@ -5,9 +5,11 @@ from pathlib import Path
 
 from rocklab.diagnosis import jsonable
 from rocklab.diagnosis.block_tests import blocks_markdown, diagnose_blocks, read_events
+from rocklab.diagnosis.summary import limestone_summary
 from rocklab.io import setup_logging
 from rocklab.plots import save_png
 from rocklab.plots.diagnosis import family_figure
+from rocklab.summaries import write_summary
 
 setup_logging(snakemake.log[0])
 events = read_events(snakemake.input.events)
@@ -15,3 +17,4 @@ result = diagnose_blocks(events, n_boot=snakemake.params.n_boot, seed=snakemake.
 save_png(family_figure(result, events), snakemake.output.figure, dpi=120)
 Path(snakemake.output.json).write_text(json.dumps(jsonable(result), indent=1))
 Path(snakemake.output.md).write_text(blocks_markdown(result))
+write_summary(limestone_summary(snakemake.output.json), snakemake.output.docs_summary)

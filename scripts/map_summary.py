@@ -3,6 +3,8 @@
 from rocklab.io import load_datasets, setup_logging, write_table
 from rocklab.seismic.accelerograms import table4_agreement
 from rocklab.seismic.overturning import TABLE4_SUBSET, record_comparison, reductions, summary_table
+from rocklab.seismic.summary import maps_summary
+from rocklab.summaries import write_summary
 
 setup_logging(snakemake.log[0])
 summary = summary_table(load_datasets(snakemake.input.maps))
@@ -15,3 +17,5 @@ write_table(
     snakemake.params.reductions_schema,
 )
 write_table(record_comparison(summary, agreement), snakemake.output.comparison, snakemake.params.comparison_schema)
+out = snakemake.output
+write_summary(maps_summary(out.summary, out.reductions, out.comparison), out.docs_summary)

@@ -7,6 +7,8 @@ from rocklab.io import setup_logging, write_table
 from rocklab.shake_table.block import specimen_block
 from rocklab.shake_table.evaluation import calibration_tables
 from rocklab.shake_table.records import read_geometry, read_tests
+from rocklab.shake_table.summary import shake_table_summary
+from rocklab.summaries import write_summary
 
 setup_logging(snakemake.log[0])
 p = snakemake.params
@@ -23,3 +25,4 @@ tables = calibration_tables(
 )
 for name, df in tables.items():
     write_table(df, snakemake.output[name], p.schemas[name])
+write_summary(shake_table_summary(snakemake.output, snakemake.input.outcomes), snakemake.output.docs_summary)

@@ -286,24 +286,24 @@ def test_diagnosis_parameters_are_modelled_per_series():
 
 
 def test_the_docs_numbers_and_tables_of_the_campaign_level(tmp_path):
+    from rocklab.dissipation.summary import campaign_level_summary
     from rocklab.io import write_table
-    from rocklab.report import numbers as nb
-    from rocklab.report import pages
+    from rocklab.report import tables
+    from rocklab.summaries import rounded
 
-    assert nb.campaign_level(tmp_path) is None
     table = campaign_effects(synthetic_tests(seed=13, slope_hb=-0.01))
     write_table(table, tmp_path / "diagnosis" / "campaign_effects.csv", SCHEMA)
-    c = nb.campaign_level(tmp_path)
+    c = campaign_level_summary(tmp_path / "diagnosis" / "campaign_effects.csv")
     assert c["order"] == [k.key for k in PAPER_CLAIMS]
     assert c["margin_relative"] == pytest.approx(0.1)
     assert c["statements"]["ratio_2s_aspect"]["verdict"] == "contradicted"
     assert c["n_statements"] == len(PAPER_CLAIMS)
     assert c["n_effects"] == c["n_judged"] + c["n_not_testable"]
-    numbers = {"campaign_level": nb._tree(c)}
-    text = pages.campaign_statements(numbers)
+    numbers = {"campaign_level": rounded(c)}
+    text = tables.campaign_statements(numbers)
     assert text.count("\n") == len(PAPER_CLAIMS) + 1 and "**contradicted**" in text
-    assert pages.campaign_found({"campaign_level": {"found": []}}) == "None."
-    assert pages.campaign_statements({"campaign_level": None}) == "not measured."
+    assert tables.campaign_found({"campaign_level": {"found": []}}) == "None."
+    assert tables.campaign_statements({"campaign_level": None}) == "not measured."
 
 
 def test_the_figure_draws_every_fitted_parameter_and_a_campaign_too_small_for_any():

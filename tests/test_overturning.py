@@ -461,8 +461,9 @@ def test_calibrated_table_ranks_the_findings(tmp_path):
     """N_O and the scatter of the calibrated wall against e alone, and the
     finding whose removal moves N_O the most ranked first (made-up indices);
     the docs' numbers and table read it."""
-    from rocklab.report import numbers, pages
+    from rocklab.report import tables
     from rocklab.seismic.calibrated import TABLE_COLUMNS, calibrated_table
+    from rocklab.seismic.summary import calibrated_summary
 
     n_o = {
         "2s-0.95": (0.4, 0.2),
@@ -502,12 +503,13 @@ def test_calibrated_table_ranks_the_findings(tmp_path):
     nothing = [{"scope": "boundary", "boundary": b, "verdict": [], "findings": []} for b in ("two-sided", "one-sided")]
     empty = calibrated_table(pd.DataFrame([]), nothing)
     assert list(empty.columns) == TABLE_COLUMNS and empty.empty
-    assert numbers.calibrated(tmp_path) is None
-    (tmp_path / "maps").mkdir()
-    table.to_csv(tmp_path / "maps" / "calibrated.csv", index=False)
-    n = numbers.calibrated(tmp_path)
+    empty.to_csv(tmp_path / "empty.csv", index=False)
+    assert calibrated_summary(tmp_path / "empty.csv", 11) is None
+    table.to_csv(tmp_path / "calibrated.csv", index=False)
+    n = calibrated_summary(tmp_path / "calibrated.csv", 11)
     assert n["2s"]["matters_most"] == "instability_angle" and n["1s"]["matters_most"] == "instability_angle"
     assert n["2s"]["calibrated"]["N_O_change_pct"] == pytest.approx(37.5)
     assert n["1s"]["findings"]["contact_gap"]["rank"] == 2
-    md = pages.calibrated_walls({"calibrated": n})
+    assert n["grid_n"] == 11
+    md = tables.calibrated_walls({"calibrated": n})
     assert len(md.splitlines()) == 2 + 11 and "`2s-calibrated-no-alpha` (no instability_angle)" in md

@@ -249,7 +249,8 @@ def test_markdown_page_renders_what_the_reports_write():
         "**Verdict: none** — x < 1\n\n| effect | 95% CI |\n|---|---|\n| scale | [0.9, 1.0] |\n\n"
         "- first item\n- second **item**\n"
     )
-    page = markdown_html(text, "diagnosis.md")
+    # markdown-it puts a line break between block tags: the assertions read the page without them
+    page = re.sub(r">\n<", "><", markdown_html(text, "diagnosis.md"))
     assert "<title>Model diagnosis</title>" in page
     assert "<h1>Model diagnosis</h1>" in page and "<h2>series 1a-2s (two-sided, 2 tests)</h2>" in page
     assert "<p>Method: <code>rocklab.diagnosis</code>, a <em>note</em>.</p>" in page

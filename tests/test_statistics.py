@@ -151,6 +151,11 @@ def test_series_table_counts_and_law():
     assert np.allclose(t.law_a, 1.17) and np.allclose(t.law_b, 0.453)
     for c in ("e_ratio_mean", "e_ratio_sd", "e_ratio_ci_low", "theta0_over_alpha_ci_high"):
         assert t[c].notna().all()
+    # a reason no test of the campaign was rejected for is a column of zeros
+    assert (t["rejected_instrument_malfunction"] == 0).all()
+    clean = series_table(df, df[["series"]].assign(valid=True, reason=""), imp).set_index("series")
+    assert {f"rejected_{v}" for v in ("instrument_malfunction", "residual_out_of_plumb")} <= set(clean.columns)
+    assert (clean.n_rejected == 0).all() and (clean.filter(like="rejected_") == 0).all().all()
 
 
 def test_cluster_bootstrap_sees_the_scatter_between_series():

@@ -1,11 +1,15 @@
 """The lab's validity rules, against closed forms and hand-built cases."""
 
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
 import pytest
+import yaml
 
 from rocklab.lab.release import release_state
 from rocklab.lab.validity import (
+    Verdict,
     channel_roles,
     choose_channels,
     residual_out_of_plumb,
@@ -90,3 +94,13 @@ def test_verdict_order():
     assert verdict(choose_channels(roles, set()), 0.2, 3.0, rules)[1] == "disturbed_initial_conditions"
     assert verdict(choose_channels(roles, set()), 0.02, 1.6, rules)[1] == "residual_out_of_plumb"
     assert verdict(choose_channels(roles, {0, 1}), 0.2, 3.0, rules)[1] == "instrument_malfunction"
+
+
+def test_the_qc_schema_allows_the_verdicts_and_no_other_word():
+    """One vocabulary: qc.csv's reject_reason is empty (valid) or a rejection of Verdict."""
+    schema = yaml.safe_load(
+        (Path(__file__).resolve().parents[1] / "workflow" / "schemas" / "qc.schema.yaml").read_text()
+    )
+    allowed = set(schema["properties"]["reject_reason"]["enum"]) - {"", None}
+    assert allowed == {v.value for v in Verdict.rejections()}
+    assert Verdict.VALID not in Verdict.rejections() and Verdict.rejections()[0] == Verdict.UNREADABLE

@@ -207,3 +207,46 @@ def test_valid_tests_by_qc_table_or_by_their_own_verdict(tmp_path):
     qc = tmp_path / "qc.csv"
     pd.DataFrame({"test_id": ["T1", "T2", "T3"], "valid": [False, True, True]}).to_csv(qc, index=False)
     assert [ds.attrs["test_id"] for ds in valid_tests(paths, qc)] == ["T2", "T3"]
+
+
+#: Campaigns unlike the embedded one, on which every target must complete (issue 28):
+#: one series of clean tests (no rejection, one boundary condition, a single series;
+#: too few tests for the diagnosis to name a cause, so no calibrated wall either), and
+#: a one-sided campaign of two series, no test rejected.
+UNLIKE_THE_EMBEDDED = {
+    "single_clean_series": [
+        virtual_lab.VirtualTest(test_id=f"V{k + 1:04d}", specimen="1a", residual_top_mm=0.0, theta0_ratio=0.995)
+        for k in range(3)
+    ],
+    "one_sided_only": [
+        virtual_lab.VirtualTest(
+            test_id=f"V{k + 1:04d}",
+            specimen=("1a", "2a")[k % 2],
+            boundary="one-sided",
+            contact_depth_mm=120.0,
+            residual_top_mm=0.0,
+            theta0_ratio=0.995,
+        )
+        for k in range(4)
+    ],
+}
+
+
+@pytest.mark.skipif(not SNAKEMAKE.exists(), reason="snakemake not installed beside this interpreter")
+@pytest.mark.parametrize("name", sorted(UNLIKE_THE_EMBEDDED))
+def test_every_target_completes_on_a_campaign_unlike_the_embedded_one(name, tmp_path):
+    """`all` (the campaign, the maps of one record, the limestone blocks and the
+    docs) on a campaign without some of the embedded campaign's categories: what
+    it lacks is zero or "not measured", never an error."""
+    folder, results = tmp_path / "campaign", tmp_path / "results"
+    truth = virtual_lab.write_campaign(folder, UNLIKE_THE_EMBEDDED[name], seed=5)
+    assert (truth.expected_reason == "valid").all()
+    _snakemake("all", folder, results, "--cores", "2", "--quiet")
+    numbers = json.loads((results / "docs" / "numbers.json").read_text())
+    qc = numbers["quality_control"]
+    assert qc["verdicts"]["valid"] == len(truth) and qc["verdicts"]["instrument_malfunction"] == 0
+    assert all(s["n_rejected"] == 0 for s in qc["series"])
+    absent = "two_sided" if name == "one_sided_only" else "one_sided"
+    assert numbers["dissipation"][absent]["stands_apart"] == []
+    page = (results / "docs" / "quality-control.md").read_text()
+    assert "{{" not in page and f"| {qc['series'][0]['series']} | {len(truth) // len(qc['series'])} | 0 |" in page

@@ -71,6 +71,7 @@ checkpoint diagnosis:
     output:
         json=report_item(res("diagnosis.json"), "diagnosis_json", "diagnosis", "diagnosis.json, for programs", "Summary"),
         md=res("diagnosis.md"),
+        docs_summary=res("summaries", "diagnosis.json"),
     params:
         seed=DIAGNOSIS["seed"],
     log:
@@ -138,6 +139,7 @@ rule limestone_diagnosis:
         md=res("limestone_diagnosis.md"),
         figure=report_item(res("figures", "limestone_family.png"), "limestone_family", "limestone",
                            "the impact law across slendernesses: data, Housner, listed causes, families"),
+        docs_summary=res("summaries", "limestone.json"),
     params:
         n_boot=DIAGNOSIS["n_boot"],
         seed=DIAGNOSIS["seed"],
@@ -175,6 +177,7 @@ rule campaign_effects:
         table=res("diagnosis", "campaign_effects.csv"),
         figure=report_item(res("figures", "campaign_covariates.png"), "campaign_covariates", "diagnosis",
                            "the parameters against h/b and contact depth", "Summary"),
+        docs_summary=res("summaries", "campaign_level.json"),
     params:
         margin=DIAGNOSIS["campaign_margin"],
         schema=schema_path("campaign_effects.schema.yaml"),

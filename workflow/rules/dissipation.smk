@@ -34,6 +34,7 @@ checkpoint dissipation_tables:
         table3=res("table3.csv"),
         table3_md=res("table3.md"),
         summary=res("summary.csv"),
+        docs_summary=res("summaries", "dissipation.json"),
     params:
         motions=[res("motion", f"{t}.nc") for t in TEST_IDS],
         schemas=schema_path(""),

@@ -1,6 +1,7 @@
-# Stage 7: the documentation pages of docs/, every number read from the
-# results (rocklab.report). `make docs` runs this rule and copies its
-# outputs into docs/; tests/test_docs.py checks the committed pages.
+# Stage 7: the documentation pages of docs/, every number from the summaries
+# that the stages publish (results/summaries, rocklab.summaries) and the job
+# times. `make docs` runs this rule and copies its outputs into docs/;
+# tests/test_docs.py checks the committed pages.
 
 #: One page per template; a new template is a new page.
 DOC_PAGES = sorted(p.name for p in Path(workflow.basedir, "docs", "templates").glob("*.md"))
@@ -14,7 +15,15 @@ rule docs:
     input:
         # Every stage has run, so every job's benchmark file exists.
         results=all_outputs(),
-        tables=[res(name) for name in ("tests.csv", "amplitude_laws.csv", "effects.csv")],
+        summaries=[
+            rules.qc_table.output.docs_summary,
+            rules.dissipation_tables.output.docs_summary,
+            rules.diagnosis.output.docs_summary,
+            rules.campaign_effects.output.docs_summary,
+            rules.limestone_diagnosis.output.docs_summary,
+            rules.map_summary.output.docs_summary,
+            rules.map_calibrated.output.docs_summary,
+        ],
         templates=[repo_path("docs", "templates", page) for page in DOC_PAGES],
     output:
         numbers=res("docs", "numbers.json"),

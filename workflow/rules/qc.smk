@@ -13,6 +13,7 @@ checkpoint qc_table:
     output:
         qc=res("qc.csv"),
         kinematics=res("kinematics.csv"),
+        docs_summary=res("summaries", "quality_control.json"),
     params:
         raw_dir=config["raw_dir"],
         schema=schema_path("qc.schema.yaml"),

@@ -125,6 +125,7 @@ rule map_summary:
         summary=res("maps", "summary.csv"),
         reductions=res("maps", "reductions.csv"),
         comparison=res("maps", "comparison.csv"),
+        docs_summary=res("summaries", "maps.json"),
     params:
         summary_schema=schema_path("map_summary.schema.yaml"),
         reductions_schema=schema_path("map_reductions.schema.yaml"),
@@ -187,7 +188,8 @@ rule map_calibrated:
         maps=calibrated_map_inputs,
         diagnosis=res("diagnosis.json"),
     output:
-        res("maps", "calibrated.csv"),
+        table=res("maps", "calibrated.csv"),
+        docs_summary=res("summaries", "calibrated.json"),
     params:
         schema=schema_path("map_calibrated.schema.yaml"),
         n=CALIBRATED_N,

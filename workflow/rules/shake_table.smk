@@ -72,6 +72,7 @@ rule shake_table_calibration:
         outcomes=[res("shake_table", f"outcomes_{s}.nc") for s in SPECIMENS],
     output:
         **{name: res("shake_table", f"{name}.csv") for name in ST_TABLES},
+        docs_summary=res("summaries", "shake_table.json"),
     params:
         folder=ST_DIR,
         folds=ST["folds"],

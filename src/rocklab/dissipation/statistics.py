@@ -37,6 +37,7 @@ import pandas as pd
 
 from rocklab._imports import lazy_module
 from rocklab.dissipation.analysis import amplitude_law_fit
+from rocklab.lab.validity import Verdict
 from rocklab.physics.restitution import CALIBRATED_RATIO_ONE_SIDED
 
 stats = lazy_module("scipy.stats")
@@ -417,9 +418,10 @@ def series_table(tests_df, qc_df, impacts_df=None, by="series", n_boot=4000, see
     base = counts.groupby(by).valid.agg(n_valid="sum", n_tests="size").reset_index()
     base["n_rejected"] = base.n_tests - base.n_valid
     rej = counts[~counts.valid]
-    if len(rej):
-        rc = pd.crosstab(rej[by], rej.reason).add_prefix("rejected_").reset_index()
-        base = base.merge(rc, on=by, how="left")
+    # every reason a series' test can be rejected for has its column, 0 where none was
+    reasons = sorted({v.value for v in Verdict.rejections() if v is not Verdict.UNREADABLE} | set(rej.reason))
+    rc = pd.crosstab(rej[by], rej.reason).reindex(columns=reasons, fill_value=0)
+    base = base.merge(rc.add_prefix("rejected_").reset_index(), on=by, how="left")
     st = series_stats(tests_df, SERIES_COLUMNS, by, n_boot, seed)
     out = base.merge(st.drop(columns="n"), on=by, how="left")
     if impacts_df is not None:

@@ -42,6 +42,7 @@ QC_COLUMNS = [
     "release_velocity_ratio",
     "channels_used",
     "flags",
+    *validity.FAULT_COLUMNS,
 ]
 
 
@@ -126,7 +127,14 @@ SOURCE = "laboratory free-rocking test, displacement transducers"
 
 def _unreadable(meta: dict, error: Exception) -> xr.Dataset:
     ds = xr.Dataset(attrs={**_cf_attrs(meta["test_id"]), **{k: v for k, v in meta.items() if v is not None}})
-    ds.attrs.update(valid=0, reject_reason="unreadable", reject_detail=str(error), flags="", channels_used="")
+    ds.attrs.update(
+        valid=0,
+        reject_reason=validity.Verdict.UNREADABLE,
+        reject_detail=str(error),
+        flags="",
+        channels_used="",
+        **validity.NO_FAULTS,
+    )
     return ds
 
 
@@ -296,6 +304,7 @@ def reduce_test(campaign: Campaign, test_id: str, options=None) -> xr.Dataset:
         alpha_fit_release=state["alpha_fit"],
         channels_used=" ".join(f"ch{c}" for c in choice.used),
         flags="; ".join(flags),
+        **validity.channel_faults(reports, choice),
         channel_reports=json.dumps([r.__dict__ for r in reports], default=float),
         residual_rms_median_mm=float(np.nanmedian(ds.residual_rms.values))
         if np.isfinite(ds.residual_rms.values).any()
@@ -340,6 +349,8 @@ def qc_row(ds: xr.Dataset) -> dict:
         "release_velocity_ratio": a.get("release_velocity_ratio", np.nan),
         "channels_used": a.get("channels_used", ""),
         "flags": a.get("flags", ""),
+        **{c: a.get(c, validity.NO_FAULTS[c]) for c in validity.FAULT_COLUMNS},
+        "in_plane_lost": bool(a.get("in_plane_lost", 0)),
     }
 
 
@@ -358,12 +369,14 @@ def qc_table(datasets, campaign: Campaign) -> pd.DataFrame:
                     "test_id": tid,
                     "series": "",
                     "valid": False,
-                    "reject_reason": "unreadable",
+                    "reject_reason": validity.Verdict.UNREADABLE,
                     "reject_detail": str(err),
                     "residual_top_mm": np.nan,
                     "release_velocity_ratio": np.nan,
                     "channels_used": "",
                     "flags": "",
+                    **validity.NO_FAULTS,
+                    "in_plane_lost": False,
                 }
             )
     seen = set()
@@ -423,6 +436,8 @@ def kinematics_table(datasets, campaign: Campaign) -> pd.DataFrame:
 
     ``datasets``: reduced tests, or anything with their ``attrs`` (:func:`row_attrs`).
     """
-    readable = {d.attrs["test_id"]: d.attrs for d in datasets if d.attrs.get("reject_reason") != "unreadable"}
+    readable = {
+        d.attrs["test_id"]: d.attrs for d in datasets if d.attrs.get("reject_reason") != validity.Verdict.UNREADABLE
+    }
     rows = [kinematics_row(readable[t]) for t in campaign.test_ids if t in readable]
     return pd.DataFrame(rows, columns=KINEMATICS_COLUMNS)

@@ -18,12 +18,13 @@ Channel roles are read from the transducer geometry, never assumed.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from enum import StrEnum
 
 import numpy as np
 import pandas as pd
 
 from rocklab.lab import kinematics
-from rocklab.lab.channels import BACKUP_CHANNELS, CHANNEL_POLICY
+from rocklab.lab.channels import BACKUP_CHANNELS, CHANNEL_POLICY, LOST_STATUSES
 
 #: Largest residual out-of-plumb of the wall top after the motion [mm].
 RESIDUAL_TOP_MM = 1.5
@@ -37,8 +38,27 @@ RULES = {
     "release_velocity_ratio": RELEASE_VELOCITY_RATIO,
     "max_lost_out_of_plane": MAX_LOST_OUT_OF_PLANE,
 }
-#: Reject reasons, in the order they are reported when several apply.
-REASONS = ("unreadable", "instrument_malfunction", "disturbed_initial_conditions", "residual_out_of_plumb")
+
+
+class Verdict(StrEnum):
+    """The verdict of a test: valid, or the rule it breaks (``reject_reason`` of ``qc.csv``).
+
+    The one vocabulary of verdicts: ``qc.csv``'s schema
+    (``workflow/schemas/qc.schema.yaml``), the QC summary and the virtual
+    lab's expected verdicts use it. The rejections are listed in the order
+    they are reported when several apply (:meth:`rejections`).
+    """
+
+    VALID = "valid"
+    UNREADABLE = "unreadable"
+    INSTRUMENT_MALFUNCTION = "instrument_malfunction"
+    DISTURBED_INITIAL_CONDITIONS = "disturbed_initial_conditions"
+    RESIDUAL_OUT_OF_PLUMB = "residual_out_of_plumb"
+
+    @classmethod
+    def rejections(cls) -> tuple[Verdict, ...]:
+        """The reject reasons, first the one reported when several apply."""
+        return tuple(v for v in cls if v is not cls.VALID)
 
 
 def channel_roles(setup: pd.DataFrame, thickness_mm: float) -> pd.DataFrame:
@@ -74,6 +94,7 @@ class ChannelChoice:
     lost_out_of_plane: list
     flags: list = field(default_factory=list)
     malfunction: str | None = None
+    backups_used: list = field(default_factory=list)
 
 
 def choose_channels(
@@ -111,7 +132,7 @@ def choose_channels(
     primary = [c for c in oop if c not in backup]
     spare = [c for c in oop if c in backup and c not in lost]
     if policy == "all":
-        used = [c for c in oop if c not in lost]
+        used, stand_in = [c for c in oop if c not in lost], []
     else:
         used = [c for c in primary if c not in lost]
         need = len(primary) - len(used)
@@ -132,7 +153,54 @@ def choose_channels(
     if not solve_v:
         flags.append("in-plane channel lost: v = 0")
     flags += [names[c] for c in inp if c in absent]
-    return ChannelChoice(sorted(used + good_inp[:1]), solve_v, lost_oop, flags, malfunction)
+    return ChannelChoice(sorted(used + good_inp[:1]), solve_v, lost_oop, flags, malfunction, stand_in)
+
+
+#: The channel faults of ``qc.csv``, one column each (:func:`channel_faults`).
+FAULT_COLUMNS = (
+    "channels_dead",
+    "channels_stuck",
+    "channels_clipped",
+    "channels_dropout",
+    "channels_spikes_repaired",
+    "channels_backup_used",
+    "in_plane_lost",
+)
+
+
+def channel_faults(reports, choice: ChannelChoice) -> dict:
+    """The channel faults of a test, as the columns :data:`FAULT_COLUMNS` of ``qc.csv``.
+
+    Parameters
+    ----------
+    reports : list of rocklab.lab.channels.ChannelReport
+        What :func:`rocklab.lab.channels.assess_channels` found on each channel.
+    choice : ChannelChoice
+        The channels chosen for the kinematics.
+
+    Returns
+    -------
+    dict
+        ``channels_<status>`` for each status that loses a channel, the channels
+        found so (``ch<n>`` separated by spaces, empty for none); the same for
+        the channels whose spikes were repaired and the backups that stood in;
+        ``in_plane_lost``: 1 when no in-plane channel was left (v = 0), else 0
+        (a netCDF attribute holds no boolean).
+    """
+
+    def named(channels) -> str:
+        return " ".join(f"ch{c}" for c in channels)
+
+    return {
+        **{f"channels_{s}": named(r.channel for r in reports if r.status == s) for s in LOST_STATUSES},
+        "channels_spikes_repaired": named(r.channel for r in reports if r.spikes),
+        "channels_backup_used": named(choice.backups_used),
+        "in_plane_lost": int(not choice.solve_v),
+    }
+
+
+#: The columns of :data:`FAULT_COLUMNS` of a test whose record could not be read.
+NO_FAULTS = {**{c: "" for c in FAULT_COLUMNS[:-1]}, "in_plane_lost": 0}
 
 
 def top_displacement(theta, phi, v, w, length_mm, height_mm, thickness_mm):
@@ -180,20 +248,20 @@ def verdict(choice: ChannelChoice, release_ratio, residual_top_mm, rules=RULES) 
         ``residual_top_mm``, ``release_velocity_ratio`` (config ``validity``).
     """
     if choice.malfunction:
-        return False, "instrument_malfunction", choice.malfunction
+        return False, Verdict.INSTRUMENT_MALFUNCTION, choice.malfunction
     if not np.isfinite(release_ratio):
-        return False, "disturbed_initial_conditions", "no undisturbed fall from the held rotation found"
+        return False, Verdict.DISTURBED_INITIAL_CONDITIONS, "no undisturbed fall from the held rotation found"
     if release_ratio > rules["release_velocity_ratio"]:
         return (
             False,
-            "disturbed_initial_conditions",
+            Verdict.DISTURBED_INITIAL_CONDITIONS,
             f"release velocity {release_ratio:.1%} of the overturning velocity"
             f" (limit {rules['release_velocity_ratio']:.0%})",
         )
     if not np.isfinite(residual_top_mm) or residual_top_mm > rules["residual_top_mm"]:
         return (
             False,
-            "residual_out_of_plumb",
+            Verdict.RESIDUAL_OUT_OF_PLUMB,
             f"top residual {residual_top_mm:.2f} mm (limit {rules['residual_top_mm']} mm)",
         )
     return True, "", ""

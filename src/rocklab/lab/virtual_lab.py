@@ -35,7 +35,7 @@ import numpy as np
 import pandas as pd
 
 from rocklab.lab import kinematics
-from rocklab.lab.validity import MAX_LOST_OUT_OF_PLANE, RELEASE_VELOCITY_RATIO, RESIDUAL_TOP_MM
+from rocklab.lab.validity import MAX_LOST_OUT_OF_PLANE, RELEASE_VELOCITY_RATIO, RESIDUAL_TOP_MM, Verdict
 from rocklab.physics import restitution, wall
 
 #: Faults that lose a channel, and those that are repaired.
@@ -521,12 +521,12 @@ def expected_verdict(faults, layout, thickness_mm, release_ratio, residual_top_m
 
     Returns
     -------
-    (str, str)
-        Reason (``valid`` or one of :data:`rocklab.lab.validity.REASONS`, the first that applies)
+    (Verdict, str)
+        The verdict (valid, or the first of :meth:`Verdict.rejections` that applies)
         and its explanation.
     """
     if any(f.kind == "unreadable" for f in faults):
-        return "unreadable", "file truncated"
+        return Verdict.UNREADABLE, "file truncated"
     X, F = _geometry(layout)
     d = F - X
     oop = set(
@@ -534,12 +534,12 @@ def expected_verdict(faults, layout, thickness_mm, release_ratio, residual_top_m
     )
     lost = sorted({f.channel for f in faults if f.kind in LOSING_FAULTS} & oop)
     if len(lost) > MAX_LOST_OUT_OF_PLANE:
-        return "instrument_malfunction", f"{len(lost)} out-of-plane channels lost ({lost})"
+        return Verdict.INSTRUMENT_MALFUNCTION, f"{len(lost)} out-of-plane channels lost ({lost})"
     if release_ratio > RELEASE_VELOCITY_RATIO:
-        return "disturbed_initial_conditions", f"release velocity {release_ratio:.0%} of Eq. 16"
+        return Verdict.DISTURBED_INITIAL_CONDITIONS, f"release velocity {release_ratio:.0%} of Eq. 16"
     if abs(residual_top_mm) > RESIDUAL_TOP_MM:
-        return "residual_out_of_plumb", f"top residual {abs(residual_top_mm):.2f} mm"
-    return "valid", ""
+        return Verdict.RESIDUAL_OUT_OF_PLUMB, f"top residual {abs(residual_top_mm):.2f} mm"
+    return Verdict.VALID, ""
 
 
 def _law_name(law):

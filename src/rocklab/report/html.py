@@ -14,9 +14,10 @@ from __future__ import annotations
 import base64
 import csv
 import html
-import re
 from io import StringIO
 from pathlib import Path
+
+from markdown_it import MarkdownIt
 
 from rocklab.io import load_schema
 
@@ -159,30 +160,13 @@ def table_html(csv_text: str, name: str, schema: dict | None = None) -> str:
     return _page(name, page, _SCRIPT)
 
 
-def _inline(text: str) -> str:
-    """Markdown's inline marks (code, bold, italics) of escaped text."""
-    text = html.escape(text, quote=False)
-    text = re.sub(r"`([^`]+)`", r"<code>\1</code>", text)
-    text = re.sub(r"\*\*(.+?)\*\*", r"<strong>\1</strong>", text)
-    return re.sub(r"(?<![\w*])\*(?!\s)(.+?)(?<!\s)\*(?![\w*])", r"<em>\1</em>", text)
-
-
-#: A list item's mark.
-_ITEM = r"\s*[-*]\s+"
-
-
-def _cells(line: str) -> list[str]:
-    return [c.strip() for c in line.strip().strip("|").split("|")]
-
-
 def markdown_html(text: str, name: str) -> str:
     """An HTML page of a markdown report of the workflow (``diagnosis.md``...).
 
     Parameters
     ----------
     text : str
-        Markdown as the library writes it: ``#`` headings, paragraphs, ``- ``
-        lists, pipe tables, inline code, bold and italics.
+        Markdown (CommonMark with pipe tables, rendered by markdown-it-py).
     name : str
         File name of the report (the page's title when it has no ``#`` heading).
 
@@ -191,41 +175,11 @@ def markdown_html(text: str, name: str) -> str:
     str
         The HTML document.
     """
-    out, lines, k = [], text.splitlines(), 0
-    title = name
-    while k < len(lines):
-        line = lines[k]
-        if not line.strip():
-            k += 1
-        elif m := re.match(r"(#{1,6})\s+(.*)", line):
-            level = len(m.group(1))
-            title = m.group(2) if level == 1 and title == name else title
-            out.append(f"<h{level}>{_inline(m.group(2))}</h{level}>")
-            k += 1
-        elif line.lstrip().startswith("|"):
-            block = []
-            while k < len(lines) and lines[k].lstrip().startswith("|"):
-                block.append(_cells(lines[k]))
-                k += 1
-            rule = len(block) > 1 and all(re.fullmatch(r":?-+:?", c) for c in block[1])
-            header, rows = (block[0], block[2:]) if rule else ([], block)
-            head = "".join(f"<th>{_inline(c)}</th>" for c in header)
-            body = "".join("<tr>" + "".join(f"<td>{_inline(c)}</td>" for c in r) + "</tr>" for r in rows)
-            out.append(f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>")
-        elif re.match(_ITEM, line):
-            items = []
-            while k < len(lines) and re.match(_ITEM, lines[k]):
-                item = re.sub("^" + _ITEM, "", lines[k])
-                items.append(f"<li>{_inline(item)}</li>")
-                k += 1
-            out.append(f"<ul>{''.join(items)}</ul>")
-        else:
-            para = []
-            while k < len(lines) and lines[k].strip() and not re.match(rf"#|\s*\||{_ITEM}", lines[k]):
-                para.append(lines[k].strip())
-                k += 1
-            out.append(f"<p>{_inline(' '.join(para))}</p>")
-    return _page(title, "\n".join(out))
+    md = MarkdownIt("commonmark").enable("table")
+    tokens = md.parse(text)
+    heading = next((k for k, t in enumerate(tokens) if t.type == "heading_open" and t.tag == "h1"), None)
+    title = tokens[heading + 1].content if heading is not None else name
+    return _page(title, md.renderer.render(tokens, md.options, {}))
 
 
 def report_page(source, schema=None, name=None) -> str:

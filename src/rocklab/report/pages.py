@@ -1,525 +1,135 @@
-"""The documentation pages: templates filled with the numbers file.
+"""The documentation pages: Jinja2 templates filled with every stage's summary.
 
-A template is a markdown page whose numbers are placeholders:
+Each stage publishes its summary as it writes its tables
+(``results/summaries/<section>.json``, :mod:`rocklab.summaries`); the docs
+rule gathers them, with the workflow's timings
+(:func:`rocklab.benchmarks.performance_summary`), into one numbers file
+(:func:`docs_numbers`), one section per stage, and renders the page
+templates of ``docs/templates`` with it (:func:`render`):
 
-- ``${section.key.subkey}`` or ``${section.key:.3f}``: a value of the
-  numbers file (:mod:`rocklab.report.numbers`) by its dotted path, with an
-  optional format specification (Python's format mini-language). A key
-  holding a dot (``2s-0.95``) is found too: each step takes the longest key
-  that matches. ``None`` reads "not measured", a list its items joined by
-  commas, a boolean "yes" or "no".
-- ``${table:name}``: a markdown table built by :data:`TABLES` from the
-  numbers file.
+- ``{{ section.key.subkey }}``, ``{{ maps.by_record.A["2s-0.95"].N_O | fmt(".3f") }}``:
+  a value and, with the filter ``fmt``, its format (Python's format
+  mini-language). Every value goes through :func:`rocklab.report.format.show`:
+  ``None`` reads "not measured", a list its items joined by commas, a
+  boolean "yes" or "no". A ``None`` section met on the way (a stage that did
+  not run) is the value.
+- ``{{ table("name") }}``: a markdown table of :data:`rocklab.report.tables.TABLES`.
 
-No template engine is needed. Rendered strictly (the check of the committed
-pages), a path that the numbers file does not hold is an error, so a
-template cannot quote a number that was not generated.
+Rendered strictly (the check of the committed pages), a value that the
+numbers file does not hold is an error (``StrictUndefined``), so a page
+cannot quote a number that was not generated; otherwise it reads "not
+measured" (the pages of a campaign unlike the embedded one).
 """
 
 from __future__ import annotations
 
-import re
-from collections.abc import Callable, Mapping
+import json
+from collections.abc import Mapping
 from pathlib import Path
 
-from rocklab.report import numbers as _numbers
-
-#: A placeholder: ${path} or ${path:format} or ${table:name}.
-PLACEHOLDER = re.compile(r"\$\{([A-Za-z0-9_.\-]+)(?::([^}]*))?\}")
-
-#: What a page says for a quantity the results do not hold.
-NOT_MEASURED = "not measured"
-
-
-def lookup(tree: Mapping, path: str):
-    """The value at a dotted ``path`` of ``tree``; keys may hold dots.
-
-    Raises KeyError when ``tree`` does not hold ``path``; a ``None`` met on
-    the way is the value (a section that was not measured).
-    """
-    parts = path.split(".")
-    node, i = tree, 0
-    while i < len(parts):
-        if node is None:
-            return None
-        for j in range(len(parts), i, -1):
-            key = ".".join(parts[i:j])
-            if isinstance(node, Mapping) and key in node:
-                node, i = node[key], j
-                break
-        else:
-            raise KeyError(f"the numbers file has no {path!r} (missing {parts[i]!r})")
-    return node
-
-
-def show(value, spec: str = "") -> str:
-    """One value as a page prints it."""
-    if value is None:
-        return NOT_MEASURED
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    if isinstance(value, list):
-        return ", ".join(show(v, spec) for v in value) or "none"
-    if isinstance(value, str):
-        return value
-    return format(value, spec) if spec else format(value, "g")
-
-
-def _row(cells) -> str:
-    return "| " + " | ".join(cells) + " |"
-
-
-def markdown_table(header, rows) -> str:
-    """A markdown table of strings."""
-    return "\n".join([_row(header), _row(["---"] * len(header)), *(_row(r) for r in rows)])
-
-
-def _interval(stats: Mapping, spec: str) -> str:
-    return f"{show(stats.get('mean'), spec)} [{show(stats.get('ci_low'), spec)}, {show(stats.get('ci_high'), spec)}]"
-
-
-def qc_series(n: Mapping) -> str:
-    """Verdicts of every series (``series.csv``)."""
-    rows = [
-        [
-            s["series"],
-            show(s["n_valid"]),
-            show(s["n_rejected"]),
-            show(s["instrument_malfunction"]),
-            show(s["residual_out_of_plumb"]),
-            show(s["disturbed_initial_conditions"]),
-        ]
-        for s in n["quality_control"]["series"]
-    ]
-    header = ["series", "valid", "rejected", "instrument_malfunction", "residual_out_of_plumb", "disturbed"]
-    return markdown_table(header, rows)
-
-
-def table3(n: Mapping) -> str:
-    """Table 3 of the paper: e_exp/e_an by window, both boundary conditions and the paper."""
-    columns = ["e_ratio_complete", "e_ratio_without_first_half_cycle", "e_ratio_first_half_cycle"]
-    header = [
-        "boundary",
-        "tests (series)",
-        "whole history",
-        "disregarding the first half cycle",
-        "first half cycle only",
-    ]
-    rows, paper = [], None
-    for key, name in (("one_sided", "one-sided"), ("two_sided", "two-sided")):
-        t3 = n["dissipation"][key]["table3"]
-        if not t3:
-            continue
-        first = t3.get(columns[0], {})
-        rows.append(
-            [name, f"{show(first.get('n_tests'))} ({show(first.get('n_series'))})"]
-            + [_interval(t3.get(c, {}), ".3f") for c in columns]
-        )
-        if all(t3.get(c, {}).get("paper") is not None for c in columns):
-            paper = [f"{name}, paper", ""] + [show(t3[c]["paper"]) for c in columns]
-    return markdown_table(header, rows + ([paper] if paper else []))
-
-
-def stands_apart(n: Mapping) -> str:
-    """Series whose mean e_exp/e_an stands apart within their boundary condition."""
-    rows = [
-        [name, s["series"], show(s["e_ratio_mean"], ".3f"), show(s["modified_z"], ".1f")]
-        for key, name in (("two_sided", "two-sided"), ("one_sided", "one-sided"))
-        for s in n["dissipation"][key]["stands_apart"]
-    ]
-    return markdown_table(["boundary", "series", "e_exp/e_an", "modified z"], rows) if rows else "None."
-
-
-def effects(n: Mapping) -> str:
-    """Kruskal-Wallis tests of the series means by factor (``effects.csv``)."""
-    rows = [
-        [
-            name,
-            test.split("__")[0],
-            test.split("__")[1],
-            ", ".join(f"{level}: {show(mean, '.6g')}" for level, mean in e["levels"]),
-            show(e["p"], ".2f"),
-        ]
-        for key, name in (("two_sided", "two-sided"), ("one_sided", "one-sided"))
-        for test, e in n["dissipation"]["effects"]["kruskal"].get(key, {}).items()
-    ]
-    return markdown_table(["boundary", "factor", "quantity", "series means by level", "p"], rows)
-
-
-def push_pull(n: Mapping) -> str:
-    """Pushed against pulled tests of the series released both ways."""
-    rows = [
-        [
-            series,
-            quantity,
-            f"{show(e['n_push'], '.0f')} / {show(e['n_pull'], '.0f')}",
-            show(e["relative_change_pct"], ".3g"),
-            show(e["welch_p"], ".2g"),
-        ]
-        for series, by in n["dissipation"]["effects"]["push_pull"].items()
-        for quantity, e in by.items()
-    ]
-    header = ["series", "quantity", "tests pushed / pulled", "change by pulling (%)", "Welch p"]
-    return markdown_table(header, rows) if rows else "No series was released both ways."
-
-
-def findings(n: Mapping, boundary: str) -> str:
-    """The causes named for one boundary condition, with their parameters."""
-    d = n["diagnosis"][boundary]
-    if d is None:
-        return NOT_MEASURED + "."
-    rows = []
-    for effect, f in d["findings"].items():
-        for param, value in f["params"].items():
-            ci = f["ci95"].get(param) or [None, None]
-            span = f["range"].get(param) or [None, None]
-            rows.append(
-                [
-                    f"`{effect}`",
-                    param,
-                    f"{show(value, '.4g')} [{show(ci[0], '.4g')}, {show(ci[1], '.4g')}]",
-                    f"{show(span[0], '.4g')}-{show(span[1], '.4g')}",
-                    f"{show(f['n_series'])} of {show(d['n_series'])}",
-                ]
-            )
-    return markdown_table(["cause", "parameter", "value [95 % CI]", "range over series", "named in"], rows)
-
-
-def minority(n: Mapping, boundary: str) -> str:
-    """Causes named in fewer than half of the series of a boundary condition."""
-    if n["diagnosis"][boundary] is None:
-        return NOT_MEASURED + "."
-    rows = [
-        [f"`{m['effect']}`", m["series"], "; ".join(f"{k} = {show(v, '.4g')}" for k, v in m["params"].items())]
-        for m in n["diagnosis"][boundary]["minority"]
-    ]
-    return markdown_table(["cause", "series", "parameters"], rows) if rows else "None."
-
-
-def diagnosis_series(n: Mapping) -> str:
-    """The verdict of every series."""
-    rows = [
-        [s["series"], s["boundary"], show(s["n_tests"]), s["verdict"], show(s["unexplained"])]
-        for s in n["diagnosis"]["series"]
-    ]
-    return markdown_table(["series", "boundary", "tests", "causes named", "unexplained"], rows)
-
-
-def _effect_cell(e: Mapping, spec: str = ".3g") -> str:
-    """ "estimate [low, high]" of a campaign-level row, or "-" where it was not testable."""
-    if e.get("estimate") is None:
-        return "-"
-    return f"{show(e['estimate'], spec)} [{show(e['ci_low'], spec)}, {show(e['ci_high'], spec)}]"
-
-
-def campaign_statements(n: Mapping) -> str:
-    """The paper's campaign-wide statements tested (``diagnosis/campaign_effects.csv``)."""
-    c = n.get("campaign_level")
-    if c is None:
-        return NOT_MEASURED + "."
-    rows = [
-        [
-            e["paper"],
-            f"{e['boundary']}: {e['response']}, {e['covariate'] if e['covariate'] != 'mean' else 'its mean'}",
-            e["claim"],
-            f"{e['term']}: {_effect_cell(e)}" if e["term"] else _effect_cell(e),
-            show(e["p"], ".2g"),
-            f"{show(e['n_series'])} ({show(e['n_tests'])})",
-            f"**{e['verdict']}**",
-        ]
-        for e in (c["statements"][key] for key in c["order"])
-    ]
-    header = ["the paper", "parameter, covariate", "claim", "effect [95 % CI]", "p", "series (tests)", "verdict"]
-    return markdown_table(header, rows)
-
-
-def campaign_found(n: Mapping) -> str:
-    """The effects the exploratory checks found (Holm-adjusted), beyond the paper's statements."""
-    c = n.get("campaign_level")
-    if c is None:
-        return NOT_MEASURED + "."
-    rows = [
-        [
-            f"{e['boundary']}: {e['response']}",
-            e["covariate"],
-            f"{e['term']}: {_effect_cell(e)}",
-            show(e["p_holm"], ".2g"),
-            show(e["n_series"]),
-        ]
-        for e in c["found"]
-    ]
-    header = ["parameter", "covariate", "effect [95 % CI]", "Holm p", "series"]
-    return markdown_table(header, rows) if rows else "None."
-
-
-def limestone_groups(n: Mapping) -> str:
-    """The limestone blocks by slenderness."""
-    rows = [
-        [
-            show(g["h_over_b"]),
-            show(g["n_tests"]),
-            show(g["e_an"], ".3f"),
-            show(g["measured_median_ratio"], ".3f"),
-            g["verdict"] + (f" (weak: {g['weak']})" if g["weak"] else ""),
-            f"{show(g['ratio_rms_base'], '.4f')} → {show(g['ratio_rms_model'], '.4f')}",
-        ]
-        for g in n["limestone"]["groups"]
-    ]
-    header = ["H/B", "trials", "e_an (Eq. 2)", "measured ratio (median)", "causes named", "held-out rms of the ratio"]
-    return markdown_table(header, rows)
-
-
-def _reduction(base, new) -> str:
-    if base in (None, 0) or new is None:
-        return "-"
-    return f"{100 * (1 - new / base):.0f}"
-
-
-def maps_records(n: Mapping) -> str:
-    """N_O of every record and model, and the reductions from 2s-housner to 2s-0.95."""
-    m = n["maps"]
-    header = ["record", *(f"N_O `{model}`" for model in m["models"])]
-    two_sided = {"2s-housner", "2s-0.95"} <= set(m["models"])
-    if two_sided:
-        header += ["N_O red. %", "scatter `2s-housner` → `2s-0.95`", "scatter red. %"]
-    rows = []
-    for record in m["records"]:
-        r = m["by_record"][record]
-        row = [record, *(show(r.get(model, {}).get("N_O"), ".3f") for model in m["models"])]
-        if two_sided:
-            base, new = r.get("2s-housner", {}), r.get("2s-0.95", {})
-            sb, sn = base.get("scatter"), new.get("scatter")
-            row += [
-                _reduction(base.get("N_O"), new.get("N_O")),
-                f"{show(sb, '.3f') if sb is not None else '-'} → {show(sn, '.3f') if sn is not None else '-'}",
-                _reduction(sb, sn),
-            ]
-        rows.append(row)
-    return markdown_table(header, rows)
-
-
-def calibrated_walls(n: Mapping) -> str:
-    """The calibrated walls against e alone, and each finding switched off (issue 13, item 4)."""
-    rows = []
-    walls = n.get("calibrated") or {}
-    for c in (walls[prefix] for prefix in ("2s", "1s") if prefix in walls):
-        e, full = c["e_alone"], c["calibrated"]
-        rows.append([f"`{e['model']}` (e alone)", show(e["N_O"], ".3f"), show(e["scatter"], ".3f"), "", ""])
-        rows.append(
-            [
-                f"`{full['model']}`",
-                show(full["N_O"], ".3f"),
-                show(full["scatter"], ".3f"),
-                f"{show(full['N_O_change_pct'], '+.0f')} / {show(full['scatter_change_pct'], '+.0f')}",
-                "",
-            ]
-        )
-        for finding, f in sorted(c["findings"].items(), key=lambda item: item[1]["rank"]):
-            rows.append(
-                [
-                    f"`{f['model']}` (no {finding})",
-                    show(f["N_O"], ".3f"),
-                    show(f["scatter"], ".3f"),
-                    "",
-                    f"{show(f['N_O_shift'], '+.3f')} (rank {show(f['rank'])})",
-                ]
-            )
-    header = ["model", "mean N_O", "mean scatter", "N_O / scatter vs e alone (%)", "N_O shift without it"]
-    return markdown_table(header, rows)
-
-
-def maps_comparison(n: Mapping) -> str:
-    """Record by record, N_O from 2s-housner to 2s-0.95 against Table 4 and the paper's range."""
-    comparison = n["maps"]["comparison"]["by_comparison"].get("2s-housner__2s-0.95", {"records": []})
-    paper = n["maps"]["reductions"].get("2s-housner__2s-0.95", {}).get("N_O", {})
-    rows = [
-        [
-            show(r["row"]) if r["row"] is not None else "-",
-            r["record"],
-            "not a Table 4 record" if r["table4_match"] is None else r["table4_differences"] or "as Table 4",
-            f"{show(r['N_O_baseline'], '.3f')} → {show(r['N_O_model'], '.3f')}",
-            show(r["N_O_reduction_pct"], ".1f") if r["N_O_reduction_pct"] is not None else "-",
-            show(r["in_paper_range"]) if r["in_paper_range"] is not None else "-",
-            show(r["scatter_reduction_pct"], ".0f") if r["scatter_reduction_pct"] is not None else "-",
-            r["reason"] or "",
-        ]
-        for r in comparison["records"]
-    ]
-    header = [
-        "T4 row",
-        "record",
-        "record against Table 4",
-        "N_O `2s-housner` → `2s-0.95`",
-        "N_O red. %",
-        f"in the paper's {show(paper.get('paper_min'))}-{show(paper.get('paper_max'))} %",
-        "scatter red. %",
-        "where it differs, why",
-    ]
-    return markdown_table(header, rows)
-
-
-def performance_jobs(n: Mapping) -> str:
-    """Job times of the workflow by rule."""
-    jobs = n["performance"]["jobs"]
-    rows = [
-        [f"`{rule}`", show(j["jobs"]), show(j["total_s"], ".0f"), show(j["longest_s"], ".1f")]
-        for rule, j in jobs.items()
-    ]
-    return markdown_table(["rule (or folder of jobs)", "jobs", "job time, total (s)", "longest job (s)"], rows)
-
-
-def performance_stages(n: Mapping) -> str:
-    """The main job stage by stage (``bench/workflow.py``), or that it was not measured."""
-    wf = n["performance"].get("workflow")
-    if wf is None:
-        return "Not measured: `make bench` has not run on these results (`results/bench/workflow.json`)."
-    rows = [
-        [f"`{stage}`", show(s["jobs"]), show(s["job_s"], ".1f"), show(s["longest_s"], ".1f"), show(s["cpu_s"], ".1f")]
-        for stage, s in wf["stages"].items()
-    ]
-    header = ["stage (rule or folder of jobs)", "jobs", "job time, total (s)", "longest job (s)", "CPU time (s)"]
-    return markdown_table(header, rows)
-
-
-#: What the shake-table page says where the target was not run.
-NOT_RUN = (
-    "Not run: the target `shake_table` has not run on these results "
-    "(`snakemake shake_table`, see its config key `shake_table_dir`)."
-)
-
-
-def _shake_table(table: Callable[[Mapping], str]) -> Callable[[Mapping], str]:
-    """``table`` of the numbers file's shake_table section, :data:`NOT_RUN` where the target did not run."""
-
-    def wrapped(n: Mapping) -> str:
-        st = n.get("shake_table")
-        return NOT_RUN if st is None else table(st)
-
-    wrapped.__doc__ = table.__doc__
-    return wrapped
-
-
-@_shake_table
-def shake_table_status(st: Mapping) -> str:
-    """Whether the shake-table target ran, and on how many tests."""
-    parts = [
-        f"{s}: {show(st[s]['n_tests'])} tests of {show(st[s]['n_ground_motions'])} ground motions"
-        for s in st["specimens"]
-    ]
-    return "Results of the target `shake_table` (" + "; ".join(parts) + ")."
-
-
-@_shake_table
-def shake_table_scores(st: Mapping) -> str:
-    """Held-out accuracy, Brier score and log loss of every model and specimen."""
-    rows = [
-        [
-            s,
-            f"`{m}`",
-            show(v["accuracy"], ".3f"),
-            show(v["brier"], ".3f"),
-            show(v["log_loss"], ".3f"),
-            show(v["n_tests"]),
-        ]
-        for s in st["specimens"]
-        for m, v in st[s]["scores"].items()
-    ]
-    return markdown_table(["specimen", "model", "accuracy", "Brier score", "log loss", "tests"], rows)
-
-
-@_shake_table
-def shake_table_nominal(st: Mapping) -> str:
-    """What the nominal block gets wrong, per specimen."""
-    rows = [
-        [
-            s,
-            show(st[s]["observed_overturns"]),
-            show(st[s]["nominal_overturns"]),
-            show(st[s]["nominal_missed"]),
-            show(st[s]["nominal_false_alarms"]),
-            show(st[s]["min_pga_overturned_g"], ".3f"),
-            f"{show(st[s]['neither_edge_overturns'])} of {show(st[s]['neither_edge_tests'])}",
-        ]
-        for s in st["specimens"]
-    ]
-    header = [
-        "specimen",
-        "overturns observed",
-        "predicted by the nominal block",
-        "missed",
-        "false alarms",
-        "lowest PGA overturned (g)",
-        "overturned where no edge can start rocking",
-    ]
-    return markdown_table(header, rows)
-
-
-@_shake_table
-def shake_table_parameters(st: Mapping) -> str:
-    """The fitted parameters with their 95 % intervals and whether each names its cause."""
-    rows = [
-        [
-            s,
-            f"`{q['cause']}`",
-            name,
-            f"{show(q['value'], '.3g')} [{show(q['ci_low'], '.3g')}, {show(q['ci_high'], '.3g')}]",
-            show(q["null"], ".3g"),
-            show(q["named"]) if q["cause"] != "hinge angle (derived)" else "-",
-        ]
-        for s in st["specimens"]
-        for name, q in st[s]["parameters"].items()
-    ]
-    return markdown_table(["specimen", "cause", "parameter", "value [95 % CI]", "nominal", "named"], rows)
-
-
-#: The tables a template may place with ${table:name}.
-TABLES: dict[str, Callable[[Mapping], str]] = {
-    "qc_series": qc_series,
-    "table3": table3,
-    "stands_apart": stands_apart,
-    "effects": effects,
-    "push_pull": push_pull,
-    "findings_two_sided": lambda n: findings(n, "two_sided"),
-    "findings_one_sided": lambda n: findings(n, "one_sided"),
-    "minority_two_sided": lambda n: minority(n, "two_sided"),
-    "minority_one_sided": lambda n: minority(n, "one_sided"),
-    "diagnosis_series": diagnosis_series,
-    "campaign_statements": campaign_statements,
-    "campaign_found": campaign_found,
-    "limestone_groups": limestone_groups,
-    "maps_records": maps_records,
-    "calibrated_walls": calibrated_walls,
-    "maps_comparison": maps_comparison,
-    "performance_jobs": performance_jobs,
-    "performance_stages": performance_stages,
-    "shake_table_status": shake_table_status,
-    "shake_table_scores": shake_table_scores,
-    "shake_table_nominal": shake_table_nominal,
-    "shake_table_parameters": shake_table_parameters,
+from jinja2 import ChainableUndefined, Environment, StrictUndefined
+
+from rocklab import summaries
+from rocklab.benchmarks import performance_summary
+from rocklab.diagnosis.summary import TOLERANCES as FIT_TOLERANCES
+from rocklab.dissipation.summary import CAMPAIGN_LEVEL_TOLERANCES
+from rocklab.report.format import NOT_MEASURED, show
+from rocklab.report.tables import TABLES
+from rocklab.seismic.summary import TOLERANCES as MAP_TOLERANCES
+
+#: The sections of the numbers file that stages publish (``summaries/<section>.json``),
+#: each with the tolerances its stage declares (:func:`rocklab.summaries.differences`).
+SECTIONS = {
+    "quality_control": {},
+    "dissipation": {},
+    "campaign_level": CAMPAIGN_LEVEL_TOLERANCES,
+    "diagnosis": FIT_TOLERANCES,
+    "limestone": FIT_TOLERANCES,
+    "maps": MAP_TOLERANCES,
+    "calibrated": MAP_TOLERANCES,
+    "shake_table": {},
 }
+
+#: Sections left out of the comparison of two numbers files: those whose values
+#: change from run to run (timings) and those of targets outside ``all``
+#: (``shake_table``: its data live outside the repository), which the results
+#: of ``make run`` do not hold.
+VOLATILE = ("performance", "shake_table")
+
+
+def summary_paths(results_dir) -> dict[str, Path]:
+    """Where each stage of a results folder writes its summary: {section: path}."""
+    return {name: Path(results_dir) / "summaries" / f"{name}.json" for name in SECTIONS}
+
+
+def docs_numbers(results_dir) -> dict:
+    """The numbers file of a results folder: every stage's summary and the timings.
+
+    A stage that did not run (no summary file) is ``None``: its pages say "not measured".
+    """
+    numbers = {name: summaries.read_summary(path) for name, path in summary_paths(results_dir).items()}
+    numbers["performance"] = summaries.rounded(performance_summary(results_dir))
+    return {"volatile": list(VOLATILE), **numbers}
+
+
+def stable(numbers: Mapping) -> dict:
+    """``numbers`` without its volatile sections: what two runs must agree on."""
+    return {k: v for k, v in numbers.items() if k not in VOLATILE and k != "volatile"}
+
+
+def differences(new: Mapping, old: Mapping) -> list[str]:
+    """Where two numbers files disagree beyond the tolerance of each quantity,
+    the volatile sections left out (dotted paths, section first)."""
+    new, old = stable(new), stable(old)
+    return [
+        f"{name}.{d}" if d[0] != ":" else f"{name}{d}"
+        for name in sorted(set(new) | set(old))
+        for d in summaries.differences(new.get(name), old.get(name), SECTIONS.get(name, {}))
+    ]
+
+
+def write_numbers(numbers: Mapping, path) -> None:
+    Path(path).write_text(summaries.dumps(numbers))
+
+
+def read_numbers(path) -> dict:
+    return json.loads(Path(path).read_text())
+
+
+class _NotMeasured(ChainableUndefined):
+    """A value the numbers file does not hold, on a page not rendered strictly."""
+
+    def __str__(self) -> str:
+        return NOT_MEASURED
+
+
+class _Environment(Environment):
+    """Jinja's environment, in which a ``None`` section's keys are ``None``:
+    a stage that did not run is "not measured" all the way down."""
+
+    def getitem(self, obj, argument):
+        return None if obj is None else super().getitem(obj, argument)
+
+    def getattr(self, obj, attribute):
+        return None if obj is None else super().getattr(obj, attribute)
+
+
+def environment(strict: bool = True) -> Environment:
+    """The Jinja2 environment of the pages: every value printed by :func:`show`,
+    ``fmt(spec)`` its format, undefined values an error when ``strict``."""
+    env = _Environment(
+        undefined=StrictUndefined if strict else _NotMeasured,
+        finalize=show,
+        keep_trailing_newline=True,
+        autoescape=False,
+    )
+    env.filters["fmt"] = show
+    return env
 
 
 def render(template: str, numbers: Mapping, strict: bool = True) -> str:
-    """``template`` with every placeholder replaced from ``numbers``.
-
-    ``strict``: a path that ``numbers`` does not hold is an error (the check
-    of the committed pages: a template cannot quote what was not
-    generated); otherwise it reads "not measured" (the pages of a campaign
-    that lacks some of the embedded campaign's series or records).
-    """
-
-    def fill(match):
-        path, spec = match.group(1), match.group(2) or ""
-        if path == "table":
-            return TABLES[spec](numbers)
-        try:
-            return show(lookup(numbers, path), spec)
-        except (KeyError, ValueError):
-            if strict:
-                raise
-            return NOT_MEASURED
-
-    return PLACEHOLDER.sub(fill, template)
+    """``template`` (Jinja2) rendered with the sections of ``numbers`` and ``table(name)``."""
+    return environment(strict).from_string(template).render(**numbers, table=lambda name: TABLES[name](numbers))
 
 
 def render_pages(template_dir, numbers: Mapping, strict: bool = True) -> dict[str, str]:
@@ -539,10 +149,10 @@ def write_docs(results_dir, template_dir, out_dir, strict: bool = False) -> list
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     written = [out / "numbers.json"]
-    _numbers.write_numbers(_numbers.extract(results_dir), written[0])
+    write_numbers(docs_numbers(results_dir), written[0])
     # The pages are filled from the file as written (its key order), so that
     # they are a function of the numbers file alone.
-    numbers = _numbers.read_numbers(written[0])
+    numbers = read_numbers(written[0])
     for name, text in render_pages(template_dir, numbers, strict).items():
         (out / name).write_text(text)
         written.append(out / name)

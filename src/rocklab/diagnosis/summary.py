@@ -1,0 +1,192 @@
+"""What the diagnosis stages publish for the docs: the campaign's and the limestone blocks' diagnoses.
+
+Written by the diagnosis jobs beside ``diagnosis.json`` and
+``limestone_diagnosis.json`` (``results/summaries/diagnosis.json``,
+``results/summaries/limestone.json``, :mod:`rocklab.summaries`); the page
+``docs/diagnosis.md`` quotes them.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from rocklab.summaries import Tolerance
+
+#: How far two machines may take the diagnoses' numbers apart. A fit stops
+#: when a step moves the parameters by less than 1e-6 of their range, or the
+#: deviance by less than 1e-6 of itself (:mod:`rocklab.diagnosis.engine`),
+#: so a parameter that the data barely fix (near its null, or confounded with
+#: another) stops a little elsewhere with the floating point of the machine
+#: (s_e of series 2b-2s: -0.000118036 on one machine, -0.000117894 on
+#: another), and so do the intervals and errors made from the fits. Every
+#: measured number is held to a thousandth of itself, or 1e-6 for one near
+#: zero; counts, verdicts and names stay exact (:func:`rocklab.summaries.differences`).
+TOLERANCES = {"*": Tolerance(abs=1e-6, rel=1e-3)}
+
+#: The two boundary conditions and their keys in the summary.
+BOUNDARIES = {"two-sided": "two_sided", "one-sided": "one_sided"}
+
+
+def _finding(f: dict) -> dict:
+    return {
+        "params": f["params"],
+        "ci95": f["ci95"],
+        "range": f.get("evidence", {}).get("range", {}),
+        "n_series": f.get("n_series"),
+    }
+
+
+def _stop_gain(series_entries: list[dict]) -> dict | None:
+    """Held-out errors of the free run with and without the stop threshold,
+    pooled over the series that name it: the root of the test-weighted mean
+    of each series' squared rms error."""
+    rows = []
+    for s in series_entries:
+        for f in s["findings"]:
+            if f["effect"] == "stop_threshold":
+                err, gain = f["error_heldout"], f["gain"]
+                rows.append(
+                    (
+                        s["n_tests"],
+                        err["n_impacts_rms"] + gain["n_impacts_rms"],
+                        err["n_impacts_rms"],
+                        err["duration_pct_rms"] + gain["duration_pct_rms"],
+                        err["duration_pct_rms"],
+                    )
+                )
+    if not rows:
+        return None
+    n, *cols = np.asarray(rows, dtype=float).T
+
+    def pooled(x):
+        return math.sqrt(np.sum(n * x**2) / np.sum(n))
+
+    return {
+        "n_impacts_rms": {"base": pooled(cols[0]), "model": pooled(cols[1])},
+        "duration_pct_rms": {"base": pooled(cols[2]), "model": pooled(cols[3])},
+    }
+
+
+def diagnosis_summary(path) -> dict:
+    """The model diagnosis of the campaign by boundary condition and series.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        ``diagnosis.json`` as written by :func:`rocklab.diagnosis.write_diagnosis`:
+        the one place of the docs that reads its keys.
+
+    Returns
+    -------
+    dict
+        ``series`` (the verdict of each), ``n_series``, ``n_unexplained`` and per
+        boundary (``two_sided``, ``one_sided``; ``None`` where the campaign has
+        none) the base model's errors, the causes named with their intervals, the
+        held-out errors, the stop threshold's gain and the minority causes.
+    """
+    entries = json.loads(Path(path).read_text())
+    series = [e for e in entries if e["scope"] == "series"]
+    out = {"series": [], "n_series": len(series), "n_unexplained": sum(bool(s["unexplained"]) for s in series)}
+    out.update({key: None for key in BOUNDARIES.values()})
+    for s in series:
+        out["series"].append(
+            {
+                "series": s["key"],
+                "boundary": s["boundary"],
+                "n_tests": s["n_tests"],
+                "verdict": ", ".join(s["verdict"]) or "none",
+                "unexplained": bool(s["unexplained"]),
+            }
+        )
+    for e in entries:
+        if e["scope"] != "boundary":
+            continue
+        mine = [s for s in series if s["boundary"] == e["boundary"]]
+        out[BOUNDARIES[e["boundary"]]] = {
+            "n_tests": e["n_tests"],
+            "n_series": e["n_series"],
+            "n_impacts": e["n_impacts"],
+            "base_model": e["base"]["model"],
+            "base": e["base"]["errors"],
+            "what_is_wrong": e["what_is_wrong"],
+            "verdict": ", ".join(e["verdict"]) or "none",
+            "unexplained": bool(e["unexplained"]),
+            "findings": {f["effect"]: _finding(f) for f in e["findings"]},
+            "heldout": e["heldout"],
+            # absent where no series was large enough to extend the model
+            "extended": e.get("extended", {}).get("statement"),
+            "stop_heldout": _stop_gain(mine),
+            "no_stop": [s["key"] for s in mine if "stop_threshold" not in s["verdict"]],
+            "minority": [
+                {"series": s["key"], "effect": f["effect"], "params": f["params"]}
+                for s in mine
+                for f in s["findings"]
+                if f["effect"] not in e["verdict"]
+            ],
+        }
+    return out
+
+
+def _family(families: list[dict]) -> dict | None:
+    """The first generalised family of the limestone blocks (issue 12): form, parameters, intervals, gains."""
+    if not families:
+        return None
+    f = families[0]
+    return {
+        "effect": f["effect"],
+        "form": f["form"],
+        "params": f["params"],
+        "ci95": {k: list(v) for k, v in f["ci95"].items()},
+        "reduces_to": f["reduces_to"],
+        "discovered": f["discovered"],
+        "best_listed": f["best_listed"],
+        "dbic_vs_base": f["dbic_vs_base"],
+        "heldout_gain": f["heldout_gain"],
+    }
+
+
+def limestone_summary(path) -> dict:
+    """The restitution diagnosis of the UMinho limestone blocks.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        ``limestone_diagnosis.json`` as written by the rule ``limestone_diagnosis``.
+    """
+    d = json.loads(Path(path).read_text())
+    a = d["all"]
+    return {
+        "source": d["source"],
+        "n_tests": a["n_tests"],
+        "n_impacts": a["n_impacts"],
+        "n_groups": len(d["groups"]),
+        "h_over_b": {"min": min(g["h_over_b"] for g in d["groups"]), "max": max(g["h_over_b"] for g in d["groups"])},
+        "e_an": a["base"]["e_an"],
+        "measured_median_ratio": a["base"]["measured_median_ratio"],
+        "what_is_wrong": a["what_is_wrong"],
+        "verdict": ", ".join(a["verdict"]) or "none",
+        "unexplained": bool(a["unexplained"]),
+        "residual_structure": "; ".join(a["residual_structure"]) or "none",
+        "rejected": a["rejected"],
+        "signatures": a["signatures"],
+        "heldout_ratio_rms": {"base": a["heldout"]["base"]["ratio_rms"], "model": a["heldout"]["model"]["ratio_rms"]},
+        "slenderness": d["slenderness"],
+        "family": _family(a.get("families") or []),
+        "groups": [
+            {
+                "h_over_b": round(g["h_over_b"]),
+                "n_tests": g["n_tests"],
+                "e_an": g["base"]["e_an"],
+                "measured_median_ratio": g["base"]["measured_median_ratio"],
+                "verdict": ", ".join(g["verdict"]) or "none",
+                "weak": ", ".join(g["weak_evidence"]) or "",
+                "ratio_rms_base": g["heldout"]["base"]["ratio_rms"],
+                "ratio_rms_model": g["heldout"]["model"]["ratio_rms"],
+            }
+            for g in d["groups"]
+        ],
+    }

@@ -1,0 +1,113 @@
+"""What each stage publishes for the documentation: its summary file.
+
+Each stage of the workflow writes, beside its tables, the numbers the docs
+quote of them (``results/summaries/<stage>.json``): a nested dictionary made
+by the stage's own summary function (``rocklab.lab.summary``,
+``rocklab.dissipation.summary``, ``rocklab.diagnosis.summary``,
+``rocklab.seismic.summary``, ``rocklab.shake_table.summary``,
+``rocklab.benchmarks``). A quantity that the stage does not hold is ``None``
+(the pages say "not measured").
+
+Floats are kept to :data:`SIGNIFICANT` significant digits, enough for any
+number a page prints, so that a file reads well and two files compare.
+Two summaries of the same stage agree when every number is equal, or within
+the tolerance that the stage declares for it (:func:`differences`): a
+chaotic computation, such as the overturning maps, declares how far two
+machines may take it apart, beside the function that makes it.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping
+from fnmatch import fnmatchcase
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+#: Significant digits kept of every float.
+SIGNIFICANT = 6
+
+
+def number(x):
+    """A float kept to :data:`SIGNIFICANT` digits, an int as is, NaN as ``None``."""
+    if x is None:
+        return None
+    if isinstance(x, (bool, np.bool_)):
+        return bool(x)
+    if isinstance(x, (int, np.integer)):
+        return int(x)
+    x = float(x)
+    if not math.isfinite(x):
+        return None
+    return float(f"{x:.{SIGNIFICANT}g}")
+
+
+def rounded(x):
+    """``x`` with every number passed through :func:`number`, mappings with text keys."""
+    if isinstance(x, Mapping):
+        return {str(k): rounded(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [rounded(v) for v in x]
+    if isinstance(x, str):
+        return x
+    return number(x)
+
+
+def dumps(tree) -> str:
+    """A summary's text: sorted keys, so that a change shows as a diff."""
+    return json.dumps(tree, indent=1, sort_keys=True, ensure_ascii=False) + "\n"
+
+
+def write_summary(summary, path) -> None:
+    """Write a stage's summary (:func:`rounded`) as JSON at ``path``."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(dumps(rounded(summary)))
+
+
+def read_summary(path):
+    """A summary file, or ``None`` where the stage did not run (no file)."""
+    path = Path(path)
+    return json.loads(path.read_text()) if path.is_file() else None
+
+
+class Tolerance(NamedTuple):
+    """How far two runs may take a quantity apart: ``|new - old| <= abs + rel * |old|``."""
+
+    abs: float = 0.0
+    rel: float = 0.0
+
+    def admits(self, new: float, old: float) -> bool:
+        return abs(new - old) <= self.abs + self.rel * abs(old)
+
+
+#: A quantity no stage declared a tolerance for: the same digits on every machine.
+EXACT = Tolerance()
+
+
+def tolerance(path: str, tolerances: Mapping[str, Tolerance]) -> Tolerance:
+    """The tolerance of the quantity at the dotted ``path`` of a summary: that of
+    the first pattern of ``tolerances`` (:func:`fnmatch.fnmatchcase`, ``*``
+    spans dots) that matches it, :data:`EXACT` where none does."""
+    return next((tol for pattern, tol in tolerances.items() if fnmatchcase(path, pattern)), EXACT)
+
+
+def differences(a, b, tolerances: Mapping[str, Tolerance] = {}, path: str = "") -> list[str]:
+    """Dotted paths where the summaries ``a`` (new) and ``b`` (old) differ
+    beyond the tolerance of the quantity (:func:`tolerance`). A count (an
+    integer) and a text are exact whatever the tolerances say."""
+    if isinstance(a, Mapping) and isinstance(b, Mapping):
+        return [d for k in sorted(set(a) | set(b)) for d in differences(a.get(k), b.get(k), tolerances, f"{path}.{k}")]
+    if isinstance(a, list) and isinstance(b, list) and len(a) == len(b):
+        return [
+            d for k, (x, y) in enumerate(zip(a, b, strict=True)) for d in differences(x, y, tolerances, f"{path}.{k}")
+        ]
+    key = path.lstrip(".")
+    measured = isinstance(a, float) or isinstance(b, float)
+    numeric = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (a, b))
+    if a == b or (measured and numeric and tolerance(key, tolerances).admits(a, b)):
+        return []
+    return [f"{key}: {b!r} committed, {a!r} from the results"]
