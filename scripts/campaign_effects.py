@@ -1,10 +1,8 @@
 """Snakemake shim: the campaign-level effects (campaign_effects.csv) and their figure."""
 
-import json
-from pathlib import Path
-
 import pandas as pd
 
+from rocklab.diagnosis import CampaignDiagnosis
 from rocklab.dissipation.covariates import campaign_effects, series_fits
 from rocklab.io import setup_logging, write_table
 from rocklab.plots import save_png
@@ -13,7 +11,7 @@ from rocklab.plots.covariates import covariate_figure
 setup_logging(snakemake.log[0])
 tests = pd.read_csv(snakemake.input.tests)
 qc = pd.read_csv(snakemake.input.qc)
-diagnosis = json.loads(Path(snakemake.input.diagnosis).read_text())
+diagnosis = CampaignDiagnosis.from_json(snakemake.input.diagnosis)
 effects = campaign_effects(tests, diagnosis, qc, margin=snakemake.params.margin)
 write_table(effects, snakemake.output.table, snakemake.params.schema)
 save_png(covariate_figure(series_fits(tests, diagnosis, qc), effects), snakemake.output.figure, dpi=90)
