@@ -584,7 +584,7 @@ def test_boundary_entries_json_and_markdown(diagnosed, tmp_path):
     diagnosis = D.CampaignDiagnosis.from_json(tmp_path / "diagnosis.json")
     assert [type(e).__name__ for e in diagnosis.entries] == ["SeriesDiagnosis"] * len(diagnosed) + ["BoundaryDiagnosis"]
     assert diagnosis.boundary("two-sided").verdict == ["instability_angle"] and diagnosis.boundary("one-sided") is None
-    assert [f.effect for f in diagnosis.boundary("two-sided").named()] == ["instability_angle"]
+    assert [f.effect for f in diagnosis.boundary("two-sided").named] == ["instability_angle"]
     diagnosis.to_json(tmp_path / "again.json")
     assert (tmp_path / "again.json").read_bytes() == (tmp_path / "diagnosis.json").read_bytes()
     assert D.diagnosis_markdown(diagnosis) == (tmp_path / "diagnosis.md").read_text()

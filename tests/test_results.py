@@ -75,7 +75,7 @@ def test_the_embedded_campaign_diagnosis_reads_and_writes_back_byte_for_byte(tmp
     assert diagnosis.entries == diagnosis.series + diagnosis.boundaries
     for b in diagnosis.boundaries:
         assert all(isinstance(f, R.PooledFinding) for f in b.findings)
-        assert [f.effect for f in b.named()] == [f.effect for f in b.findings if f.effect in b.verdict]
+        assert [f.effect for f in b.named] == [f.effect for f in b.findings if f.effect in b.verdict]
     assert diagnosis.sample_tests == {e.sample_test for e in diagnosis.series}
     diagnosis.to_json(tmp_path / "diagnosis.json")
     assert (tmp_path / "diagnosis.json").read_bytes() == path.read_bytes()
@@ -113,12 +113,25 @@ def test_keys_written_in_some_cases_only_are_left_out_where_they_are_none(tmp_pa
     assert list(entry.to_dict()) == list(SERIES)
     assert entry.too_small is None and entry.extended is None and entry.findings[0].ci_note is None
     assert entry.finding("restitution_scale").params == {"c": 0.95} and entry.finding("contact_gap") is None
-    assert entry.named() == entry.findings and entry.discovered == []
+    assert entry.named == entry.findings and entry.discovered == []
     R.CampaignDiagnosis([entry]).to_json(tmp_path / "d.json")
     assert json.loads((tmp_path / "d.json").read_text()) == [SERIES]
     # a boundary condition without a series large enough: its heldout is written, as null
     b = R.BoundaryDiagnosis(scope="boundary", key="one-sided", boundary="one-sided", heldout=None, too_small="why")
     assert b.to_dict()["heldout"] is None and "extended" not in b.to_dict()
+
+
+def test_the_findings_a_boundary_condition_leaves_to_its_series():
+    other = {**SERIES, "key": "1b-2s", "unexplained": True, "verdict": [], "findings": []}
+    boundary = R.BoundaryDiagnosis(scope="boundary", key="two-sided", boundary="two-sided", verdict=[])
+    diagnosis = R.CampaignDiagnosis.from_dict([SERIES, other, boundary])
+    assert [e.key for e in diagnosis.unexplained] == ["1b-2s"]
+    ((entry, finding),) = diagnosis.minority("two-sided")
+    assert entry.key == "1a-2s" and finding.effect == "restitution_scale"
+    boundary.verdict = ["restitution_scale"]
+    assert diagnosis.minority("two-sided") == [] and diagnosis.minority("one-sided") == []
+    # a campaign without the boundary's entry: every finding of its series
+    assert len(R.CampaignDiagnosis(diagnosis.series).minority("two-sided")) == 1
 
 
 def test_a_file_that_breaks_the_schema_is_refused_naming_the_key(tmp_path):

@@ -247,6 +247,7 @@ class BaseRun(_Record):
 class _Entry(_Record):
     """What every entry of results/diagnosis.json has (see the subclasses)."""
 
+    @property
     def named(self) -> list:
         """The findings that name a cause (those of the verdict), in the entry's order."""
         return [f for f in self.findings if f.effect in self.verdict]
@@ -405,6 +406,24 @@ class CampaignDiagnosis(_Document):
     def sample_tests(self) -> set[str]:
         """The sample test of every series (the test its figure draws)."""
         return {e.sample_test for e in self.series}
+
+    @property
+    def unexplained(self) -> list[SeriesDiagnosis]:
+        """The series that leave structure no candidate explains."""
+        return [e for e in self.series if e.unexplained]
+
+    def minority(self, boundary) -> list[tuple[SeriesDiagnosis, Finding]]:
+        """The findings of the series of a boundary condition that its verdict lacks (named in too few series).
+
+        Returns
+        -------
+        list of (SeriesDiagnosis, Finding)
+            In the order of the series and of their findings; every finding
+            of its series where the boundary condition has no entry.
+        """
+        entry = self.boundary(boundary)
+        verdict = entry.verdict if entry is not None else []
+        return [(e, f) for e in self.series_of(boundary) for f in e.findings if f.effect not in verdict]
 
 
 @dataclass

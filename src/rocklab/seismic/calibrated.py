@@ -123,13 +123,13 @@ def boundary_findings(diagnosis, boundary):
     if entry is None:
         from rocklab.diagnosis.series import diagnose_boundary
 
-        pooled = diagnose_boundary(diagnosis.to_dict(), boundary)
+        pooled = diagnose_boundary(diagnosis, boundary)
         entry = None if pooled is None else BoundaryDiagnosis.from_dict(pooled)
     if entry is None:
         return {}
     # a finding also reports statistics of its parameters (spread_log): only the cause's own parameters
     out = {}
-    for f in entry.named():
+    for f in entry.named:
         cause = f.effect
         if cause in ON_THE_MAPS:
             member, why = ON_THE_MAPS[cause]
