@@ -98,6 +98,19 @@ def test_each_series_file_is_its_entry_of_the_campaign_and_writes_back(tmp_path)
     assert R.CampaignDiagnosis.joined(parts).entries == whole.series
 
 
+def test_the_campaign_diagnosis_is_made_again_from_its_series_files(tmp_path):
+    """What the diagnosis checkpoint does (scripts/diagnosis.py): the same bytes as `make run` wrote."""
+    from rocklab.diagnosis import with_boundaries, write_diagnosis
+
+    campaign, md = embedded("diagnosis.json", "diagnosis.md")
+    config = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    seed = (config.get("diagnosis") or {}).get("seed", 0)
+    series = R.CampaignDiagnosis.joined(R.CampaignDiagnosis.from_json(p) for p in series_files())
+    write_diagnosis(with_boundaries(series.to_dict(), seed=seed), tmp_path / "d.json", tmp_path / "d.md")
+    assert (tmp_path / "d.json").read_bytes() == campaign.read_bytes()
+    assert (tmp_path / "d.md").read_bytes() == md.read_bytes()
+
+
 def test_the_limestone_result_reads_and_writes_back_byte_for_byte(tmp_path):
     (path,) = embedded("limestone_diagnosis.json")
     limestone = R.LimestoneDiagnosis.from_json(path)
