@@ -1,10 +1,8 @@
 """Snakemake shim: the campaign-level effects (campaign_effects.csv) and their figure."""
 
-import json
-from pathlib import Path
-
 import pandas as pd
 
+from rocklab.diagnosis import CampaignDiagnosis
 from rocklab.dissipation.covariates import campaign_effects, series_fits
 from rocklab.dissipation.summary import campaign_level_summary
 from rocklab.io import setup_logging, write_table
@@ -15,7 +13,7 @@ from rocklab.summaries import write_summary
 setup_logging(snakemake.log[0])
 tests = pd.read_csv(snakemake.input.tests)
 qc = pd.read_csv(snakemake.input.qc)
-diagnosis = json.loads(Path(snakemake.input.diagnosis).read_text())
+diagnosis = CampaignDiagnosis.from_json(snakemake.input.diagnosis)
 effects = campaign_effects(tests, diagnosis, qc, margin=snakemake.params.margin)
 write_table(effects, snakemake.output.table, snakemake.params.schema)
 write_summary(campaign_level_summary(snakemake.output.table), snakemake.output.docs_summary)

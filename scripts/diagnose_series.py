@@ -4,10 +4,9 @@ The series are read and diagnosed one at a time, so that the job's memory is
 that of its largest series, not of the boundary condition's whole campaign.
 """
 
-import json
 from pathlib import Path
 
-from rocklab.diagnosis import diagnose_records, jsonable, records_by_series
+from rocklab.diagnosis import CampaignDiagnosis, diagnose_records, records_by_series
 from rocklab.io import setup_logging, valid_tests
 from rocklab.lab.motion import read_motion
 
@@ -25,4 +24,4 @@ for series, out in zip(snakemake.params.series, snakemake.output):
         n_history=snakemake.params.n_history,
         seed=snakemake.params.seed,
     )
-    Path(out).write_text(json.dumps(jsonable([entry] if entry else []), indent=1))
+    CampaignDiagnosis.from_dict([entry] if entry else []).to_json(out)

@@ -1,19 +1,19 @@
 """Snakemake shim: Figs. 14-15 of each series' sample test, and of the largest series of each boundary."""
 
-import json
 import shutil
 from pathlib import Path
 
+from rocklab.diagnosis import CampaignDiagnosis
 from rocklab.io import setup_logging
 from rocklab.plots import save_png
 from rocklab.plots.diagnosis import series_figures
 
 setup_logging(snakemake.log[0])
-entries = json.loads(Path(snakemake.input.diagnosis).read_text())
+diagnosis = CampaignDiagnosis.from_json(snakemake.input.diagnosis)
 out = Path(snakemake.output.series)
 out.mkdir(parents=True, exist_ok=True)
 written = {}  # figure -> its file: Figs. 14-15 are series' figures, copied, not drawn again
-for name, fig in series_figures(entries, snakemake.input.tests, snakemake.input.motions).items():
+for name, fig in series_figures(diagnosis, snakemake.input.tests, snakemake.input.motions).items():
     path = Path(snakemake.output[name]) if name in ("fig14", "fig15") else out / f"{name}.png"
     path.parent.mkdir(parents=True, exist_ok=True)  # discovered/<series>: the forms found beyond the catalogue
     if fig in written:

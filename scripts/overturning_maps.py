@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numba
 
+from rocklab.diagnosis.result import CampaignDiagnosis
 from rocklab.io import setup_logging, write_netcdf
 from rocklab.seismic import calibrated
 from rocklab.seismic.accelerograms import load_record
@@ -18,7 +19,7 @@ from rocklab.seismic.overturning import overturning_map
 numba.set_num_threads(min(snakemake.threads, numba.config.NUMBA_NUM_THREADS))
 p = snakemake.params
 # read once: every calibrated model of every record of the batch is built from it
-diagnosis = calibrated.read_diagnosis(snakemake.input.diagnosis) if "diagnosis" in snakemake.input.keys() else None
+diagnosis = CampaignDiagnosis.from_json(snakemake.input.diagnosis) if "diagnosis" in snakemake.input.keys() else None
 names = calibrated.model_names(diagnosis) if diagnosis is not None else p.models
 for k, record in enumerate(p.records):
     setup_logging(snakemake.log[k])

@@ -9,6 +9,7 @@ import pandas as pd
 import pytest
 from scipy import stats
 
+from rocklab.diagnosis.result import CampaignDiagnosis
 from rocklab.dissipation.covariates import (
     COLUMNS,
     PAPER_CLAIMS,
@@ -271,10 +272,12 @@ def test_diagnosis_parameters_are_modelled_per_series():
     tests = synthetic_tests(seed=12)
     names = sorted(tests.series.unique())
     finding = "instability_angle"
-    entries = [
-        {"scope": "series", "key": s, "findings": [{"effect": finding, "params": {"alpha_r_over_alpha": a}}]}
-        for s, a in zip(names, np.linspace(0.7, 0.9, len(names)))
-    ]
+    entries = CampaignDiagnosis.from_dict(
+        [
+            {"scope": "series", "key": s, "findings": [{"effect": finding, "params": {"alpha_r_over_alpha": a}}]}
+            for s, a in zip(names, np.linspace(0.7, 0.9, len(names)))
+        ]
+    )
     values = series_values(tests, entries)
     assert set(values.response) == {"e_ratio", "theta0_over_alpha", "instability_angle.alpha_r_over_alpha"}
     table = campaign_effects(tests, entries)

@@ -358,7 +358,8 @@ def test_a_discovery_is_drawn_against_the_data_and_the_best_listed(diagnosed, na
 
     boundary, model, kw, _ = SCENARIOS[name]
     recs = virtual_series(name, boundary, model, seed=list(SCENARIOS).index(name), **kw)
-    fig = discovery_figure(in_series_order([D.measured_test(r) for r in recs]), diagnosed[name])
+    entry = D.SeriesDiagnosis.from_dict(diagnosed[name])
+    fig = discovery_figure(in_series_order([D.measured_test(r) for r in recs]), entry)
     data, found, listed = fig.axes[0].lines
     assert "(discovered)" in found.get_label() and listed.get_label().startswith("best listed")
     # the discovered curve runs through the data, the best listed one does not
@@ -370,7 +371,7 @@ def test_a_discovery_is_drawn_against_the_data_and_the_best_listed(diagnosed, na
 
     # the impact ratios' noise is of the size of the difference between the affine law and Eq. 17
     assert misfit(found) < (0.2 if name.startswith("rounding") else 1.0) * misfit(listed)
-    assert discovery_figure([], {"findings": []}) is None
+    assert discovery_figure([], D.SeriesDiagnosis(scope="series")) is None
 
 
 def test_an_impact_law_of_the_speed_is_discovered_with_its_closed_form(diagnosed):
@@ -579,5 +580,13 @@ def test_boundary_entries_json_and_markdown(diagnosed, tmp_path):
             assert {"effect", "params", "ci95", "evidence", "error_heldout", "gain"} <= set(f)
     D.write_diagnosis(entries, tmp_path / "diagnosis.json", tmp_path / "diagnosis.md")
     assert len(json.loads((tmp_path / "diagnosis.json").read_text())) == len(entries)
+    # the file reads back as the objects it was written from, and writes the same bytes again
+    diagnosis = D.CampaignDiagnosis.from_json(tmp_path / "diagnosis.json")
+    assert [type(e).__name__ for e in diagnosis.entries] == ["SeriesDiagnosis"] * len(diagnosed) + ["BoundaryDiagnosis"]
+    assert diagnosis.boundary("two-sided").verdict == ["instability_angle"] and diagnosis.boundary("one-sided") is None
+    assert [f.effect for f in diagnosis.boundary("two-sided").named] == ["instability_angle"]
+    diagnosis.to_json(tmp_path / "again.json")
+    assert (tmp_path / "again.json").read_bytes() == (tmp_path / "diagnosis.json").read_bytes()
+    assert D.diagnosis_markdown(diagnosis) == (tmp_path / "diagnosis.md").read_text()
     md = (tmp_path / "diagnosis.md").read_text()
     assert md.startswith("# Model diagnosis") and "## boundary condition two-sided" in md

@@ -90,6 +90,7 @@ import obspy
 
 import rocklab
 from rocklab.diagnosis.block_tests import read_events
+from rocklab.diagnosis.result import DIAGNOSIS_SCHEMA, LIMESTONE_SCHEMA
 from rocklab.seismic.accelerograms import accelerogram_dir, load_record
 
 record = load_record("40EIC180")
@@ -108,6 +109,7 @@ print(json.dumps({
     "format": stream[0].stats._format,
     "new_formats": [slammer.stats._format, slammer.stats.delta, csv.stats._format],
     "trials": int(events.source_id.nunique()),
+    "schemas": [str(p) for p in (DIAGNOSIS_SCHEMA, LIMESTONE_SCHEMA) if p.is_file()],
 }))
 """
 
@@ -123,6 +125,8 @@ def test_wheel_holds_the_library_its_data_and_licence(installed):
     assert out["format"] == "PEER_LEGACY_AT2"
     assert out["new_formats"] == ["SLAMMER", 0.01, "CSV_TWO_COLUMN"]
     assert out["trials"] == 134  # 135 trials, one duplicate left out (README of the tables)
+    # the schemas that the results are written and read by (rocklab.diagnosis.result)
+    assert len(out["schemas"]) == 2 and all(Path(p).is_relative_to(venv) for p in out["schemas"]), out["schemas"]
 
 
 def test_readme_example_runs_from_the_wheel(installed):

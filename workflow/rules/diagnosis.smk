@@ -101,10 +101,12 @@ def diagnosis_samples(kind):
     and every test of a series with a form discovered beyond the catalogue (drawn against them all)."""
 
     def inputs(wildcards):
-        with open(checkpoints.diagnosis.get().output.json) as f:
-            entries = [e for e in json.load(f) if e["scope"] == "series"]
-        ids = {e["sample_test"] for e in entries}
-        ids |= {t for e in entries if any(f.get("discovered") for f in e["findings"]) for t in TESTS_BY_SERIES[e["key"]]}
+        # here, not at the top: the diagnosis package is read once the checkpoint has run, not at every start
+        from rocklab.diagnosis.result import CampaignDiagnosis
+
+        diagnosis = CampaignDiagnosis.from_json(checkpoints.diagnosis.get().output.json)
+        ids = diagnosis.sample_tests
+        ids |= {t for e in diagnosis.series if e.discovered for t in TESTS_BY_SERIES[e.key]}
         return sorted(res(kind, f"{t}.nc") for t in ids)
 
     return inputs

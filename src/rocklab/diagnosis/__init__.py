@@ -17,6 +17,7 @@ module             holds
 ``problem``        the tests of a series as a problem of the engine
 ``errors``         engineering errors of a model's free run, in words
 ``series``         diagnosis of a series, a boundary condition, a campaign
+``result``         the results as typed objects: diagnosis.json, limestone_diagnosis.json
 ``report``         results/diagnosis.json and diagnosis.md
 ``block_tests``    the same causes and engine on the limestone block tables
 =================  ==============================================================
@@ -27,7 +28,16 @@ from rocklab.diagnosis.errors import engineering_errors, engineering_rows, what_
 from rocklab.diagnosis.estimation import Problem, finite_mean, parameter_intervals, select_effects
 from rocklab.diagnosis.evidence import MeasuredTest, TestStack, measured_test, records_by_series, residuals
 from rocklab.diagnosis.model import free_run, model_params, rocking_model, simulate_measured
-from rocklab.diagnosis.report import diagnosis_markdown, jsonable, write_diagnosis
+from rocklab.diagnosis.report import diagnosis_markdown, write_diagnosis
+from rocklab.diagnosis.result import (
+    BoundaryDiagnosis,
+    CampaignDiagnosis,
+    Finding,
+    LimestoneDiagnosis,
+    PooledFinding,
+    SeriesDiagnosis,
+    jsonable,
+)
 from rocklab.diagnosis.series import (
     diagnose_boundary,
     diagnose_campaign,
@@ -37,6 +47,12 @@ from rocklab.diagnosis.series import (
 )
 
 __all__ = [
+    "BoundaryDiagnosis",
+    "CampaignDiagnosis",
+    "Finding",
+    "LimestoneDiagnosis",
+    "PooledFinding",
+    "SeriesDiagnosis",
     "CAUSES",
     "MeasuredTest",
     "Problem",

@@ -2,57 +2,59 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
-import numpy as np
-
+from rocklab.diagnosis.result import BoundaryDiagnosis, CampaignDiagnosis
 from rocklab.dissipation.statistics import MIN_BOOTSTRAP, counted, note_lines, note_mark
 
 
-def jsonable(x):
-    """``x`` with NumPy scalars as Python numbers and non-finite floats as None (JSON)."""
-    if isinstance(x, dict):
-        return {str(k): jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [jsonable(v) for v in x]
-    if isinstance(x, (np.floating, float)):
-        return None if not np.isfinite(x) else float(x)
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    if isinstance(x, np.bool_):
-        return bool(x)
-    return x
+def write_diagnosis(diagnosis, json_path, md_path=None):
+    """Write results/diagnosis.json (and diagnosis.md).
 
-
-def write_diagnosis(entries, json_path, md_path=None):
-    """Write results/diagnosis.json (and diagnosis.md) from :func:`diagnose_campaign` entries."""
-    Path(json_path).write_text(json.dumps(jsonable(entries), indent=1))
+    Parameters
+    ----------
+    diagnosis : CampaignDiagnosis or list of dict
+        The diagnosis, or the entries :func:`~rocklab.diagnosis.series.diagnose_campaign` computes.
+    json_path, md_path : path-like
+        The files (no diagnosis.md where ``md_path`` is None).
+    """
+    diagnosis = CampaignDiagnosis.of(diagnosis)
+    diagnosis.to_json(json_path)
     if md_path is not None:
-        Path(md_path).write_text(diagnosis_markdown(entries))
+        Path(md_path).write_text(diagnosis_markdown(diagnosis))
 
 
 def _fmt_params(f):
-    return ", ".join(f"{k} = {v:.4g}" for k, v in f["params"].items())
+    return ", ".join(f"{k} = {v:.4g}" for k, v in f.params.items())
 
 
 def _rests_on(f):
     """What a finding's interval rests on: "(154 tests, 10 series)", "(21 tests)"."""
-    parts = [counted(f[k], noun) for k, noun in (("n_tests", "test"), ("n_series", "series")) if f.get(k) is not None]
+    parts = [
+        counted(getattr(f, k), noun)
+        for k, noun in (("n_tests", "test"), ("n_series", "series"))
+        if getattr(f, k, None) is not None
+    ]
     return f" ({', '.join(parts)})" if parts else ""
 
 
 def _fmt_ci(f, notes):
     """The 95 % interval cell of a finding, or the mark of the reason it has none (:func:`note_mark`)."""
-    if f["ci95"]:
-        return ", ".join(f"[{a:.4g}, {b:.4g}]" for a, b in f["ci95"].values()) + _rests_on(f)
-    if f.get("ci_note"):
-        return f"none{note_mark(notes, f['ci_note'])}{_rests_on(f)}"
+    if f.ci95:
+        return ", ".join(f"[{a:.4g}, {b:.4g}]" for a, b in f.ci95.values()) + _rests_on(f)
+    if f.ci_note:
+        return f"none{note_mark(notes, f.ci_note)}{_rests_on(f)}"
     return "none"
 
 
-def diagnosis_markdown(entries) -> str:
-    """Readable report (results/diagnosis.md) of :func:`diagnose_campaign` entries."""
+def diagnosis_markdown(diagnosis) -> str:
+    """Readable report (results/diagnosis.md) of a diagnosis.
+
+    Parameters
+    ----------
+    diagnosis : CampaignDiagnosis or list of dict
+        The diagnosis, or the entries :func:`~rocklab.diagnosis.series.diagnose_campaign` computes.
+    """
     out = [
         "# Model diagnosis",
         "",
@@ -64,63 +66,64 @@ def diagnosis_markdown(entries) -> str:
         f"cause); none is given from fewer than {MIN_BOOTSTRAP}, and a series of fewer tests names no cause.",
         "",
     ]
-    order = sorted(entries, key=lambda e: (e["scope"] != "boundary", e["key"]))
-    for e in order:
-        title = f"{'boundary condition' if e['scope'] == 'boundary' else 'series'} {e['key']}"
-        size = counted(e["n_tests"], "test") + (f", {counted(e['n_series'], 'series')}" if "n_series" in e else "")
+    diagnosis = CampaignDiagnosis.of(diagnosis)
+    for e in [*sorted(diagnosis.boundaries, key=lambda e: e.key), *sorted(diagnosis.series, key=lambda e: e.key)]:
+        pooled = isinstance(e, BoundaryDiagnosis)
+        title = f"{'boundary condition' if pooled else 'series'} {e.key}"
+        size = counted(e.n_tests, "test") + (f", {counted(e.n_series, 'series')}" if pooled else "")
         out += [
-            f"## {title} ({e['boundary']}, {size})",
+            f"## {title} ({e.boundary}, {size})",
             "",
-            f"Base model: {e['base']['model']}.",
+            f"Base model: {e.base.model}.",
             "",
-            f"What it gets wrong: {e['what_is_wrong']}",
+            f"What it gets wrong: {e.what_is_wrong}",
             "",
         ]
-        v = ", ".join(e["verdict"]) if e["verdict"] else "none"
+        v = ", ".join(e.verdict) if e.verdict else "none"
         line = f"**Verdict: {v}**"
-        if e.get("too_small"):
-            line = f"**Verdict: too small to name a cause** — {e['too_small']}"
-        elif e["unexplained"]:
-            line += " — **unexplained** structure remains: " + "; ".join(e.get("residual_structure", []))
-        elif e.get("weak_evidence"):
+        weak = None if pooled else e.weak_evidence
+        if e.too_small:
+            line = f"**Verdict: too small to name a cause** — {e.too_small}"
+        elif e.unexplained:
+            line += " — **unexplained** structure remains: " + "; ".join(e.residual_structure)
+        elif weak:
             line += (
                 " — structure remains ("
-                + "; ".join(e["residual_structure"])
+                + "; ".join(e.residual_structure)
                 + ") that "
-                + " or ".join(e["weak_evidence"])
+                + " or ".join(weak)
                 + " would remove, short of the evidence to name it: "
-                + "; ".join(e["weak_evidence"].values())
+                + "; ".join(weak.values())
             )
         out += [line, ""]
-        if e["findings"]:
+        if e.findings:
             out += [
                 "| effect | parameters | 95% CI | held-out deviance/obs "
                 "| gain (deviance/obs; free-run log-peak rms) | evidence |",
                 "|---|---|---|---|---|---|",
             ]
             notes = {}
-            for f in e["findings"]:
-                g = f["gain"]
+            for f in e.findings:
+                g = f.gain
                 fr = g.get("free_run_log_peak_rms")
-                ev = f["evidence"].get("signature") or f["evidence"].get("series", "")
+                ev = f.evidence.get("signature") or f.evidence.get("series", "")
                 out.append(
-                    f"| {f['effect']} | {_fmt_params(f)} | {_fmt_ci(f, notes)} | "
-                    f"{_f(f['error_heldout']['deviance_per_obs'], '.3g')} | "
+                    f"| {f.effect} | {_fmt_params(f)} | {_fmt_ci(f, notes)} | "
+                    f"{_f(f.error_heldout['deviance_per_obs'], '.3g')} | "
                     f"{_f(g['deviance_per_obs'], '.3g')}; {'' if fr is None else f'{fr:.3f}'} | {ev} "
-                    f"{f['evidence'].get('fit', '') if f['effect'] == 'stop_threshold' else ''} |"
+                    f"{f.evidence.get('fit', '') if f.effect == 'stop_threshold' else ''} |"
                 )
             out += ["", *(line for note in note_lines(notes) for line in (note, ""))]
-        for f in e["findings"]:
-            if f.get("discovered"):
-                g = f["heldout_gain"]
-                out += [
-                    f"Discovered beyond the catalogue: {f['effect']}, {f['family']}; {f['reduces_to']}; held-out "
-                    f"deviance gain per observation {g['vs_base']:.3g} (standard error {g['vs_base_se']:.2g}) against "
-                    f"the base model, {g['vs_best_listed']:.3g} ({g['vs_best_listed_se']:.2g}) against the listed "
-                    f"causes alone ({', '.join(f['best_listed']) or 'none'}).",
-                    "",
-                ]
-        h = e.get("heldout")
+        for f in e.discovered:
+            g = f.heldout_gain
+            out += [
+                f"Discovered beyond the catalogue: {f.effect}, {f.family}; {f.reduces_to}; held-out "
+                f"deviance gain per observation {g['vs_base']:.3g} (standard error {g['vs_base_se']:.2g}) against "
+                f"the base model, {g['vs_best_listed']:.3g} ({g['vs_best_listed_se']:.2g}) against the listed "
+                f"causes alone ({', '.join(f.best_listed) or 'none'}).",
+                "",
+            ]
+        h = e.heldout
         if h and h["base"].get("free_run_log_peak_rms") is not None:
             hb, hm = h["base"], h["model"]
             out += [
@@ -130,21 +133,20 @@ def diagnosis_markdown(entries) -> str:
                 f"{_f(hb.get('time_rms'))} → {_f(hm.get('time_rms'))}.",
                 "",
             ]
-        if e.get("extended"):
-            out += [f"Extended model: {e['extended']['statement']}", ""]
-        if e.get("series_verdicts"):
-            small = set(e.get("too_small_series", []))
+        if e.extended:
+            out += [f"Extended model: {e.extended['statement']}", ""]
+        if pooled and e.series_verdicts:
+            small = set(e.too_small_series)
             out += [
                 "Series verdicts: "
                 + "; ".join(
                     f"{k}: {'too small to name a cause' if k in small else ', '.join(v) or 'none'}"
-                    for k, v in e["series_verdicts"].items()
+                    for k, v in e.series_verdicts.items()
                 ),
                 "",
             ]
-        alt = e["base"].get("alternatives")
-        if alt:
-            for name, er in alt.items():
+        if e.base.alternatives:
+            for name, er in e.base.alternatives.items():
                 out.append(
                     f"- literature alternative {name}: {er['n_impacts']['model']:.0f} impacts, "
                     f"{er['duration_s']['model']:.2f} s, free-run log-peak rms {er['log_peak_rms']:.3f}"

@@ -29,6 +29,7 @@ from rocklab.diagnosis.estimation import beyond_the_catalogue, finite_mean, sele
 from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_test
 from rocklab.diagnosis.model import model_params
 from rocklab.diagnosis.problem import WallProblem
+from rocklab.diagnosis.result import CampaignDiagnosis
 from rocklab.dissipation.statistics import MIN_BOOTSTRAP, interval_note
 
 log = logging.getLogger(__name__)
@@ -258,6 +259,8 @@ def _merge_errors(errors, w):
 def diagnose_boundary(entries, boundary, *, n_boot=2000, seed=0):
     """One boundary condition from the diagnoses of its series.
 
+    ``entries``: a :class:`~rocklab.diagnosis.result.CampaignDiagnosis` or
+    its entries (those of other boundary conditions are passed over).
     The series are different walls and set-ups, so their parameters are not
     pooled into one fit: a cause is in the verdict when it is named in at
     least half of the series large enough to name one (not ``too_small``),
@@ -267,29 +270,29 @@ def diagnose_boundary(entries, boundary, *, n_boot=2000, seed=0):
     series (``ci_note`` says so); each finding gives the ``n_series`` and
     ``n_tests`` it rests on.  Errors are test-weighted means over all series.
     """
-    ser = [e for e in entries if e["scope"] == "series" and e["boundary"] == boundary]
+    ser = CampaignDiagnosis.of(entries).series_of(boundary)
     if not ser:
         return None
-    usable = [e for e in ser if not e.get("too_small")]
-    small = [e["key"] for e in ser if e.get("too_small")]
+    usable = [e for e in ser if not e.too_small]
+    small = [e.key for e in ser if e.too_small]
     rng = np.random.default_rng(seed)
-    w_all = np.array([e["n_tests"] for e in ser], float)
+    w_all = np.array([e.n_tests for e in ser], float)
     n_tests = int(w_all.sum())
-    base_err = _merge_errors([e["base"]["errors"] for e in ser], w_all)
+    base_err = _merge_errors([e.base.errors for e in ser], w_all)
     counts = {}
     for e in usable:
-        for f in e["findings"]:
-            counts.setdefault(f["effect"], []).append((e, f))
+        for f in e.findings:
+            counts.setdefault(f.effect, []).append((e, f))
     of_series = f"{len(usable)} series" + (f" large enough to name a cause (of {len(ser)})" if small else "")
     findings = []
     for eff, lst in counts.items():
         if len(lst) < 0.5 * len(usable):
             continue
-        w = np.array([e["n_tests"] for e, _ in lst], float)
+        w = np.array([e.n_tests for e, _ in lst], float)
         note = interval_note(len(lst), "series")
         params, ci = {}, {}
-        for name in lst[0][1]["params"]:
-            x = np.array([f["params"][name] for _, f in lst])
+        for name in lst[0][1].params:
+            x = np.array([f.params[name] for _, f in lst])
             params[name] = _wmean(x, w)
             if not note:
                 boots = [_wmean(x[i], w[i]) for i in (rng.integers(0, x.size, x.size) for _ in range(n_boot))]
@@ -302,40 +305,38 @@ def diagnose_boundary(entries, boundary, *, n_boot=2000, seed=0):
                 "evidence": {
                     "series": f"named in {len(lst)} of {of_series}",
                     "range": {
-                        n: [float(min(f["params"][n] for _, f in lst)), float(max(f["params"][n] for _, f in lst))]
+                        n: [float(min(f.params[n] for _, f in lst)), float(max(f.params[n] for _, f in lst))]
                         for n in params
                     },
                 },
-                "error_heldout": {
-                    "deviance_per_obs": _wmean([f["error_heldout"]["deviance_per_obs"] for _, f in lst], w)
-                },
-                "gain": {k: _wmean([f["gain"].get(k) for _, f in lst], w) for k in lst[0][1]["gain"]},
+                "error_heldout": {"deviance_per_obs": _wmean([f.error_heldout["deviance_per_obs"] for _, f in lst], w)},
+                "gain": {k: _wmean([f.gain.get(k) for _, f in lst], w) for k in lst[0][1].gain},
                 "n_series": len(lst),
                 "n_tests": int(w.sum()),
                 **({"ci_note": note} if note else {}),
             }
         )
     findings.sort(key=lambda f: (-f["n_series"], -(f["gain"]["deviance_per_obs"] or 0)))
-    flagged = [e["key"] for e in usable if e["unexplained"]]
+    flagged = [e.key for e in usable if e.unexplained]
     kinds = {}
     for e in usable:
-        for k in {st.split(":")[0] for st in e["residual_structure"]}:
+        for k in {st.split(":")[0] for st in e.residual_structure}:
             kinds[k] = kinds.get(k, 0) + 1
-    w_used = [e["n_tests"] for e in usable]
+    w_used = [e.n_tests for e in usable]
     ho = (
         {
-            m: {k: _wmean([e["heldout"][m][k] for e in usable], w_used) for k in usable[0]["heldout"][m]}
+            m: {k: _wmean([e.heldout[m][k] for e in usable], w_used) for k in usable[0].heldout[m]}
             for m in ("base", "model")
         }
         if usable
         else None
     )
     statement, off = what_is_wrong(base_err, "the simulation")
-    verdicts = {e["key"]: e["verdict"] for e in ser}
-    extended = [e for e in ser if e.get("extended")]
+    verdicts = {e.key: e.verdict for e in ser}
+    extended = [e for e in ser if e.extended]
     ext_statement = None
     if extended:
-        ext_err = _merge_errors([e["extended"]["errors"] for e in extended], [e["n_tests"] for e in extended])
+        ext_err = _merge_errors([e.extended["errors"] for e in extended], [e.n_tests for e in extended])
         ext_statement = what_is_wrong(ext_err, "the extended model")[0]
     if usable and not findings and not flagged and not off:
         statement = "the base model explains the data within the noise: " + statement
@@ -347,7 +348,7 @@ def diagnose_boundary(entries, boundary, *, n_boot=2000, seed=0):
         "n_series": len(ser),
         "n_series_diagnosed": len(usable),
         "too_small_series": small,
-        "n_impacts": int(sum(e["n_impacts"] for e in ser)),
+        "n_impacts": int(sum(e.n_impacts for e in ser)),
         "base": {"model": base_name(boundary), "errors": base_err},
         "what_is_wrong": statement,
         "verdict": [f["effect"] for f in findings],

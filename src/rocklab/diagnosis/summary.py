@@ -8,12 +8,11 @@ Written by the diagnosis jobs beside ``diagnosis.json`` and
 
 from __future__ import annotations
 
-import json
 import math
-from pathlib import Path
 
 import numpy as np
 
+from rocklab.diagnosis.result import CampaignDiagnosis, LimestoneDiagnosis
 from rocklab.summaries import Tolerance
 
 #: How far two machines may take the diagnoses' numbers apart. A fit stops
@@ -31,33 +30,33 @@ TOLERANCES = {"*": Tolerance(abs=1e-6, rel=1e-3)}
 BOUNDARIES = {"two-sided": "two_sided", "one-sided": "one_sided"}
 
 
-def _finding(f: dict) -> dict:
+def _finding(f) -> dict:
     return {
-        "params": f["params"],
-        "ci95": f["ci95"],
-        "range": f.get("evidence", {}).get("range", {}),
-        "n_series": f.get("n_series"),
+        "params": f.params,
+        "ci95": f.ci95,
+        "range": f.evidence.get("range", {}),
+        "n_series": f.n_series,
     }
 
 
-def _stop_gain(series_entries: list[dict]) -> dict | None:
+def _stop_gain(series_entries) -> dict | None:
     """Held-out errors of the free run with and without the stop threshold,
     pooled over the series that name it: the root of the test-weighted mean
     of each series' squared rms error."""
     rows = []
     for s in series_entries:
-        for f in s["findings"]:
-            if f["effect"] == "stop_threshold":
-                err, gain = f["error_heldout"], f["gain"]
-                rows.append(
-                    (
-                        s["n_tests"],
-                        err["n_impacts_rms"] + gain["n_impacts_rms"],
-                        err["n_impacts_rms"],
-                        err["duration_pct_rms"] + gain["duration_pct_rms"],
-                        err["duration_pct_rms"],
-                    )
+        f = s.finding("stop_threshold")
+        if f is not None:
+            err, gain = f.error_heldout, f.gain
+            rows.append(
+                (
+                    s.n_tests,
+                    err["n_impacts_rms"] + gain["n_impacts_rms"],
+                    err["n_impacts_rms"],
+                    err["duration_pct_rms"] + gain["duration_pct_rms"],
+                    err["duration_pct_rms"],
                 )
+            )
     if not rows:
         return None
     n, *cols = np.asarray(rows, dtype=float).T
@@ -88,64 +87,57 @@ def diagnosis_summary(path) -> dict:
         none) the base model's errors, the causes named with their intervals, the
         held-out errors, the stop threshold's gain and the minority causes.
     """
-    entries = json.loads(Path(path).read_text())
-    series = [e for e in entries if e["scope"] == "series"]
-    out = {"series": [], "n_series": len(series), "n_unexplained": sum(bool(s["unexplained"]) for s in series)}
+    d = CampaignDiagnosis.from_json(path)
+    series = d.series
+    out = {"series": [], "n_series": len(series), "n_unexplained": len(d.unexplained)}
     out.update({key: None for key in BOUNDARIES.values()})
     for s in series:
         out["series"].append(
             {
-                "series": s["key"],
-                "boundary": s["boundary"],
-                "n_tests": s["n_tests"],
-                "verdict": ", ".join(s["verdict"]) or "none",
-                "unexplained": bool(s["unexplained"]),
+                "series": s.key,
+                "boundary": s.boundary,
+                "n_tests": s.n_tests,
+                "verdict": ", ".join(s.verdict) or "none",
+                "unexplained": bool(s.unexplained),
             }
         )
-    for e in entries:
-        if e["scope"] != "boundary":
-            continue
-        mine = [s for s in series if s["boundary"] == e["boundary"]]
-        out[BOUNDARIES[e["boundary"]]] = {
-            "n_tests": e["n_tests"],
-            "n_series": e["n_series"],
-            "n_impacts": e["n_impacts"],
-            "base_model": e["base"]["model"],
-            "base": e["base"]["errors"],
-            "what_is_wrong": e["what_is_wrong"],
-            "verdict": ", ".join(e["verdict"]) or "none",
-            "unexplained": bool(e["unexplained"]),
-            "findings": {f["effect"]: _finding(f) for f in e["findings"]},
-            "heldout": e["heldout"],
+    for e in d.boundaries:
+        mine = d.series_of(e.boundary)
+        out[BOUNDARIES[e.boundary]] = {
+            "n_tests": e.n_tests,
+            "n_series": e.n_series,
+            "n_impacts": e.n_impacts,
+            "base_model": e.base.model,
+            "base": e.base.errors,
+            "what_is_wrong": e.what_is_wrong,
+            "verdict": ", ".join(e.verdict) or "none",
+            "unexplained": bool(e.unexplained),
+            "findings": {f.effect: _finding(f) for f in e.findings},
+            "heldout": e.heldout,
             # absent where no series was large enough to extend the model
-            "extended": e.get("extended", {}).get("statement"),
+            "extended": (e.extended or {}).get("statement"),
             "stop_heldout": _stop_gain(mine),
-            "no_stop": [s["key"] for s in mine if "stop_threshold" not in s["verdict"]],
-            "minority": [
-                {"series": s["key"], "effect": f["effect"], "params": f["params"]}
-                for s in mine
-                for f in s["findings"]
-                if f["effect"] not in e["verdict"]
-            ],
+            "no_stop": [s.key for s in mine if "stop_threshold" not in s.verdict],
+            "minority": [{"series": s.key, "effect": f.effect, "params": f.params} for s, f in d.minority(e.boundary)],
         }
     return out
 
 
-def _family(families: list[dict]) -> dict | None:
+def _family(families) -> dict | None:
     """The first generalised family of the limestone blocks (issue 12): form, parameters, intervals, gains."""
     if not families:
         return None
     f = families[0]
     return {
-        "effect": f["effect"],
-        "form": f["form"],
-        "params": f["params"],
-        "ci95": {k: list(v) for k, v in f["ci95"].items()},
-        "reduces_to": f["reduces_to"],
-        "discovered": f["discovered"],
-        "best_listed": f["best_listed"],
-        "dbic_vs_base": f["dbic_vs_base"],
-        "heldout_gain": f["heldout_gain"],
+        "effect": f.effect,
+        "form": f.form,
+        "params": f.params,
+        "ci95": {k: list(v) for k, v in f.ci95.items()},
+        "reduces_to": f.reduces_to,
+        "discovered": f.discovered,
+        "best_listed": f.best_listed,
+        "dbic_vs_base": f.dbic_vs_base,
+        "heldout_gain": f.heldout_gain,
     }
 
 
@@ -157,36 +149,36 @@ def limestone_summary(path) -> dict:
     path : str or pathlib.Path
         ``limestone_diagnosis.json`` as written by the rule ``limestone_diagnosis``.
     """
-    d = json.loads(Path(path).read_text())
-    a = d["all"]
+    d = LimestoneDiagnosis.from_json(path)
+    a = d.all
     return {
-        "source": d["source"],
-        "n_tests": a["n_tests"],
-        "n_impacts": a["n_impacts"],
-        "n_groups": len(d["groups"]),
-        "h_over_b": {"min": min(g["h_over_b"] for g in d["groups"]), "max": max(g["h_over_b"] for g in d["groups"])},
-        "e_an": a["base"]["e_an"],
-        "measured_median_ratio": a["base"]["measured_median_ratio"],
-        "what_is_wrong": a["what_is_wrong"],
-        "verdict": ", ".join(a["verdict"]) or "none",
-        "unexplained": bool(a["unexplained"]),
-        "residual_structure": "; ".join(a["residual_structure"]) or "none",
-        "rejected": a["rejected"],
-        "signatures": a["signatures"],
-        "heldout_ratio_rms": {"base": a["heldout"]["base"]["ratio_rms"], "model": a["heldout"]["model"]["ratio_rms"]},
-        "slenderness": d["slenderness"],
-        "family": _family(a.get("families") or []),
+        "source": d.source,
+        "n_tests": a.n_tests,
+        "n_impacts": a.n_impacts,
+        "n_groups": len(d.groups),
+        "h_over_b": {"min": min(g.h_over_b for g in d.groups), "max": max(g.h_over_b for g in d.groups)},
+        "e_an": a.base["e_an"],
+        "measured_median_ratio": a.base["measured_median_ratio"],
+        "what_is_wrong": a.what_is_wrong,
+        "verdict": ", ".join(a.verdict) or "none",
+        "unexplained": bool(a.unexplained),
+        "residual_structure": "; ".join(a.residual_structure) or "none",
+        "rejected": a.rejected,
+        "signatures": a.signatures,
+        "heldout_ratio_rms": {"base": a.heldout["base"]["ratio_rms"], "model": a.heldout["model"]["ratio_rms"]},
+        "slenderness": d.slenderness,
+        "family": _family(a.families),
         "groups": [
             {
-                "h_over_b": round(g["h_over_b"]),
-                "n_tests": g["n_tests"],
-                "e_an": g["base"]["e_an"],
-                "measured_median_ratio": g["base"]["measured_median_ratio"],
-                "verdict": ", ".join(g["verdict"]) or "none",
-                "weak": ", ".join(g["weak_evidence"]) or "",
-                "ratio_rms_base": g["heldout"]["base"]["ratio_rms"],
-                "ratio_rms_model": g["heldout"]["model"]["ratio_rms"],
+                "h_over_b": round(g.h_over_b),
+                "n_tests": g.n_tests,
+                "e_an": g.base["e_an"],
+                "measured_median_ratio": g.base["measured_median_ratio"],
+                "verdict": ", ".join(g.verdict) or "none",
+                "weak": ", ".join(g.weak_evidence) or "",
+                "ratio_rms_base": g.heldout["base"]["ratio_rms"],
+                "ratio_rms_model": g.heldout["model"]["ratio_rms"],
             }
-            for g in d["groups"]
+            for g in d.groups
         ],
     }

@@ -196,15 +196,15 @@ def with_test_order(tests, qc=None):
     return tests.assign(order=tests.test_id.astype(str).map(order))
 
 
-def series_values(tests, diagnosis=()):
+def series_values(tests, diagnosis=None):
     """One value per series and response: the mean of its tests, or the diagnosis' estimate.
 
     Parameters
     ----------
     tests : pandas.DataFrame
         results/tests.csv (series, boundary, specimen and the covariates).
-    diagnosis : iterable of dict
-        Entries of results/diagnosis.json; those of scope 'series' give
+    diagnosis : rocklab.diagnosis.result.CampaignDiagnosis, optional
+        results/diagnosis.json; its series entries give
         ``<cause>.<parameter>`` for the causes named in each series.
 
     Returns
@@ -225,13 +225,12 @@ def series_values(tests, diagnosis=()):
         if r in tests
         for s, v in tests.groupby("series")[r].mean().items()
     ]
-    for e in diagnosis:
-        if e.get("scope") != "series" or e["key"] not in meta.index:
+    for e in diagnosis.series if diagnosis is not None else ():
+        if e.key not in meta.index:
             continue
-        for f in e["findings"]:
-            for name, v in f["params"].items():
-                response = f"{f['effect']}.{name}"
-                rows.append({"series": e["key"], "source": "diagnosis", "response": response, "value": v})
+        for f in e.findings:
+            for name, v in f.params.items():
+                rows.append({"series": e.key, "source": "diagnosis", "response": f"{f.effect}.{name}", "value": v})
     values = pd.DataFrame(rows, columns=["series", "source", "response", "value"]).dropna(subset=["value"])
     return meta.reset_index().merge(values, on="series")
 
@@ -510,14 +509,14 @@ COLUMNS = (
 )  # fmt: skip
 
 
-def campaign_effects(tests, diagnosis=(), qc=None, margin=MARGIN, claims=PAPER_CLAIMS):
+def campaign_effects(tests, diagnosis=None, qc=None, margin=MARGIN, claims=PAPER_CLAIMS):
     """Every parameter of the campaign against every covariate, and the paper's statements judged.
 
     Parameters
     ----------
     tests : pandas.DataFrame
         results/tests.csv.
-    diagnosis : iterable of dict
+    diagnosis : rocklab.diagnosis.result.CampaignDiagnosis, optional
         results/diagnosis.json (its series entries).
     qc : pandas.DataFrame, optional
         results/qc.csv, for the test's place among all the tests of its series.
@@ -567,7 +566,7 @@ def campaign_effects(tests, diagnosis=(), qc=None, margin=MARGIN, claims=PAPER_C
     return table[list(COLUMNS)].reset_index(drop=True)
 
 
-def series_fits(tests, diagnosis=(), qc=None):
+def series_fits(tests, diagnosis=None, qc=None):
     """The between-series fits of every (boundary, response) for the figures.
 
     Returns

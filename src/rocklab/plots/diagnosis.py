@@ -24,6 +24,7 @@ from rocklab.diagnosis.catalogue import by_name
 from rocklab.diagnosis.causes import restitution_drift
 from rocklab.diagnosis.evidence import flight_time_alpha, in_series_order, observe
 from rocklab.diagnosis.model import impact_speeds, model_params
+from rocklab.diagnosis.result import CampaignDiagnosis
 from rocklab.io import read_dataset, valid_tests
 from rocklab.lab.motion import read_motion
 from rocklab.physics import restitution
@@ -53,7 +54,7 @@ def history_figure(test, entry):
     ----------
     test : rocklab.diagnosis.MeasuredTest
         With its record (``t``, ``theta``).
-    entry : dict
+    entry : rocklab.diagnosis.result.SeriesDiagnosis
         The series' entry of results/diagnosis.json.
 
     Returns
@@ -67,7 +68,7 @@ def history_figure(test, entry):
     for (label, base), style in zip(LITERATURE[test.boundary].items(), ("-", "--", ":")):
         t, th = simulate_measured(test, base=base, t_end=t_end)
         _plot(axes[0], t, th, test, ls=style, lw=0.9, label=label)
-    ext = entry.get("extended")
+    ext = entry.extended
     if ext:
         t, th = simulate_measured(test, ext["effects"], ext["params"], t_end=t_end)
         params = ", ".join(f"{k} = {v:.3g}" for k, v in ext["params"].items())
@@ -75,7 +76,7 @@ def history_figure(test, entry):
     else:
         axes[1].text(0.5, 0.5, "no extension carried by the data", transform=axes[1].transAxes, ha="center")
     n = "14" if test.boundary == "two-sided" else "15"
-    axes[0].set_title(f"Fig. {n} - series {entry['key']} ({test.boundary}): a, literature models")
+    axes[0].set_title(f"Fig. {n} - series {entry.key} ({test.boundary}): a, literature models")
     axes[1].set_title("b, the model extended by the causes the diagnosis found")
     for ax in axes:
         ax.set_ylabel("theta / alpha")
@@ -124,30 +125,30 @@ def discovery_figure(tests, entry):
     ----------
     tests : list of rocklab.diagnosis.MeasuredTest
         Tests of the series, in series order (:func:`rocklab.diagnosis.evidence.in_series_order`).
-    entry : dict
+    entry : rocklab.diagnosis.result.SeriesDiagnosis
 
     Returns
     -------
     matplotlib.figure.Figure or None
         None when nothing was discovered.
     """
-    found = [f for f in entry["findings"] if f.get("discovered")]
+    found = entry.discovered
     if not found:
         return None
     ob = observe(tests)
-    listed, listed_values = entry.get("listed_verdict", []), entry.get("listed_params", {})
-    values = {k: v for f in entry["findings"] for k, v in f["params"].items()}
+    listed, listed_values = entry.listed_verdict or [], entry.listed_params or {}
+    values = {k: v for f in entry.findings for k, v in f.params.items()}
     # the stop acts on the free run's end, not on the laws drawn here
-    chosen = [f["effect"] for f in entry["findings"] if f["effect"] != "stop_threshold"]
+    chosen = [f.effect for f in entry.findings if f.effect != "stop_threshold"]
     fig, axes = plt.subplots(1, len(found), figsize=(7 * len(found), 4.5), squeeze=False)
     for ax, f in zip(axes[0], found):
-        fam = by_name(f["effect"]).family
-        pars = ", ".join(f"{k} = {v:.3g}" for k, v in f["params"].items())
-        lab = f"{f['effect']} (discovered): {pars}\n{f['reduces_to']}"
+        fam = by_name(f.effect).family
+        pars = ", ".join(f"{k} = {v:.3g}" for k, v in f.params.items())
+        lab = f"{f.effect} (discovered): {pars}\n{f.reduces_to}"
         lab_listed = f"best listed: {' + '.join(listed) or 'the base model'}"
-        if "curve" in f:
+        if f.curve is not None:
             # a family with a curve of its own (the losses in flight against the flight's speed)
-            family_curve_figure(f, entry["key"], ax)
+            family_curve_figure(f, entry.key, ax)
         elif fam == "instability_angle":
             x = ob.S.A[:, :-1] / ob.alpha
             ax.plot(x.ravel(), ob.a_T.ravel(), ".", color="0.3", ms=3, zorder=3, label="measured flights")
@@ -158,8 +159,8 @@ def discovery_figure(tests, entry):
                 ax.plot(A[0] / ob.alpha[0, 0], y[0], style, lw=1.5, label=label)
             ax.set_xlabel("apex of the flight / alpha")
             ax.set_ylabel("alpha_r / alpha from the flight time (Housner)")
-        elif f["effect"].startswith(restitution_drift.NAME):
-            column = restitution_drift.column_of(f["effect"])
+        elif f.effect.startswith(restitution_drift.NAME):
+            column = restitution_drift.column_of(f.effect)
             n = np.array([t.order if column is None else t.log.get(column, np.nan) for t in tests])
             med = np.array([np.median(ob.ratio[i][ob.ok[i]]) if ob.ok[i].any() else np.nan for i in range(len(tests))])
             ax.plot(n, med, "ko", ms=4, label="measured, per test (median over its impacts)")
@@ -180,9 +181,9 @@ def discovery_figure(tests, entry):
                 ax.plot(x, _impact_law(tests, ext, v, x)[0], style, lw=1.5, label=label)
             ax.set_xlabel("impact speed / thetadot_r")
             ax.set_ylabel("e / e_an")
-        gain = f["heldout_gain"]
+        gain = f.heldout_gain
         ax.set_title(
-            f"{entry['key']}: held-out gain {gain['vs_best_listed']:.3g} +- {gain['vs_best_listed_se']:.2g} "
+            f"{entry.key}: held-out gain {gain['vs_best_listed']:.3g} +- {gain['vs_best_listed_se']:.2g} "
             "over the best listed model",
             fontsize=9,
         )
@@ -191,12 +192,12 @@ def discovery_figure(tests, entry):
     return fig
 
 
-def series_figures(entries, test_paths, motion_paths=()):
+def series_figures(diagnosis, test_paths, motion_paths=()):
     """Figs. 14-15 for the sample test of every series of results/diagnosis.json.
 
     Parameters
     ----------
-    entries : list of dict
+    diagnosis : rocklab.diagnosis.result.CampaignDiagnosis or path
         results/diagnosis.json.
     test_paths : sequence of path
         Reduced tests (``results/tests/<test_id>.nc``): at least the sample
@@ -218,18 +219,18 @@ def series_figures(entries, test_paths, motion_paths=()):
     """
     paths = {Path(p).stem: p for p in test_paths}
     motions = {Path(p).stem: p for p in motion_paths}
-    series = [e for e in entries if e["scope"] == "series"]
+    diagnosis = CampaignDiagnosis.of(diagnosis)
     out = {}
-    for e in series:
-        test_id = e["sample_test"]
+    for e in diagnosis.series:
+        test_id = e.sample_test
         motion = {test_id: read_motion(motions[test_id])} if test_id in motions else None
         (recs,) = records_by_series([read_dataset(paths[test_id], ("theta",))], motion).values()
-        out[e["key"]] = history_figure(measured_test(recs[0]), e)
-        if any(f.get("discovered") for f in e["findings"]):
-            out[f"discovered/{e['key']}"] = discovery_figure(_series_tests(e["key"], paths, motions), e)
+        out[e.key] = history_figure(measured_test(recs[0]), e)
+        if e.discovered:
+            out[f"discovered/{e.key}"] = discovery_figure(_series_tests(e.key, paths, motions), e)
     for name, boundary in (("fig14", "two-sided"), ("fig15", "one-sided")):
-        own = [e for e in series if e["boundary"] == boundary]
-        out[name] = out[max(own, key=lambda e: e["n_tests"])["key"]] if own else _empty(boundary)
+        own = diagnosis.series_of(boundary)
+        out[name] = out[max(own, key=lambda e: e.n_tests).key] if own else _empty(boundary)
     return out
 
 
@@ -244,7 +245,7 @@ def family_curve_figure(finding, key, ax=None):
 
     Parameters
     ----------
-    finding : dict
+    finding : rocklab.diagnosis.result.Finding
         A finding of results/diagnosis.json with a ``curve``
         (:attr:`rocklab.diagnosis.causes.Cause.curve`).
     key : str
@@ -257,24 +258,24 @@ def family_curve_figure(finding, key, ax=None):
     -------
     matplotlib.figure.Figure
     """
-    c = finding["curve"]
+    c = finding.curve
     if ax is None:
         ax = plt.subplots(figsize=(8, 5))[1]
     ax.plot(c["measured"]["x"], c["measured"]["y"], "o", color="0.5", ms=3, label=c["measured"]["label"])
     ax.plot(c["best_listed"]["x"], c["best_listed"]["y"], "--", color="C1", label=c["best_listed"]["label"])
-    gain = finding["heldout_gain"]
+    gain = finding.heldout_gain
     ax.plot(
         c["family"]["x"],
         c["family"]["y"],
         color="C3",
         lw=1.5,
-        label=f"{c['family']['label']}, discovered: {finding['reduces_to']}\n"
+        label=f"{c['family']['label']}, discovered: {finding.reduces_to}\n"
         f"held-out gain {gain['vs_best_listed']:.3g} +- {gain['vs_best_listed_se']:.2g} over the listed causes, "
         f"{gain['vs_base']:.3g} +- {gain['vs_base_se']:.2g} over the base model",
     )
     ax.set_xlabel(c["x"])
     ax.set_ylabel(c["y"])
-    ax.set_title(f"Series {key}: {finding['effect']}, the curve found against the data")
+    ax.set_title(f"Series {key}: {finding.effect}, the curve found against the data")
     ax.legend(fontsize=7, loc="best")
     ax.figure.set_layout_engine("tight")
     return ax.figure
@@ -292,8 +293,8 @@ def family_figure(result, events):
 
     Parameters
     ----------
-    result : dict
-        :func:`rocklab.diagnosis.block_tests.diagnose_blocks` (results/limestone_diagnosis.json).
+    result : rocklab.diagnosis.result.LimestoneDiagnosis
+        results/limestone_diagnosis.json (:func:`rocklab.diagnosis.block_tests.diagnose_blocks`).
     events : pandas.DataFrame
         The per-impact table it was computed from (:func:`rocklab.diagnosis.block_tests.read_events`).
 
@@ -320,27 +321,27 @@ def family_figure(result, events):
     ax.plot(x, measured, "o", color="0.6", ms=3, label="measured, per trial (median over its impacts)")
     ax.plot(xs, by_group(measured), "ks", ms=6, label="measured, mean of each block group")
     ax.axhline(1.0, color="C0", lw=1.0, label="Housner's e (Eq. 2)")
-    for i, fam in enumerate(result["all"].get("families", [])):
+    for i, fam in enumerate(result.all.families):
         if i == 0:
-            best = per_trial(problem.model_e(trials, fam["best_listed_params"]) / e_an)
-            pars = ", ".join(f"{k} = {v:.3g}" for k, v in fam["best_listed_params"].items())
-            ax.plot(xs, by_group(best), "--", color="C1", label=f"best listed: {fam['best_listed']} ({pars})")
-        model = per_trial(problem.model_e(trials, fam["params"]) / e_an)
-        pars = ", ".join(f"{k} = {v:.3g}" for k, v in fam["params"].items())
-        gain = fam["heldout_gain"]
+            best = per_trial(problem.model_e(trials, fam.best_listed_params) / e_an)
+            pars = ", ".join(f"{k} = {v:.3g}" for k, v in fam.best_listed_params.items())
+            ax.plot(xs, by_group(best), "--", color="C1", label=f"best listed: {fam.best_listed} ({pars})")
+        model = per_trial(problem.model_e(trials, fam.params) / e_an)
+        pars = ", ".join(f"{k} = {v:.3g}" for k, v in fam.params.items())
+        gain = fam.heldout_gain
         ax.plot(
             xs,
             by_group(model),
             color=f"C{3 + i}",
             lw=1.5,
-            label=f"{fam['effect']}{' (discovered)' if fam['discovered'] else ''}: {pars}\n"
+            label=f"{fam.effect}{' (discovered)' if fam.discovered else ''}: {pars}\n"
             f"held-out gain {gain['vs_base']:.3g} +- {gain['vs_base_se']:.2g} over Housner, "
             f"{gain['vs_best_listed']:.3g} +- {gain['vs_best_listed_se']:.2g} over the best listed; "
-            f"{fam['reduces_to']}",
+            f"{fam.reduces_to}",
         )
     ax.set_xlabel("(B/H)^2")
     ax.set_ylabel("e / e_an (Housner, Eq. 2)")
-    ax.set_title(f"Limestone blocks: impact law across slendernesses ({result['all']['n_tests']} trials)")
+    ax.set_title(f"Limestone blocks: impact law across slendernesses ({result.all.n_tests} trials)")
     ax.legend(fontsize=7, loc="best")
     fig.set_layout_engine("tight")
     return fig

@@ -31,11 +31,9 @@ Models
 
 from __future__ import annotations
 
-import json
 import logging
 import re
 from dataclasses import dataclass, replace
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -99,29 +97,14 @@ class MapWall:
     order: float = 0.5
 
 
-def read_diagnosis(diagnosis):
-    """The entries of ``results/diagnosis.json`` from a path or the list itself."""
-    if isinstance(diagnosis, (str, Path)):
-        path = Path(diagnosis)
-        try:
-            entries = json.loads(path.read_text())
-        except (OSError, json.JSONDecodeError) as err:
-            raise ValueError(f"{path}: not a readable diagnosis ({err})") from err
-        if not isinstance(entries, list):
-            raise ValueError(f"{path}: a diagnosis is a list of entries, not {type(entries).__name__}")
-        return entries
-    return list(diagnosis)
-
-
 def boundary_findings(diagnosis, boundary):
     """The pooled findings of one boundary condition, in the diagnosis' order.
 
     Parameters
     ----------
-    diagnosis : list of dict or path
-        The entries of ``results/diagnosis.json``; without an entry of scope
-        ``"boundary"`` for ``boundary``, its series are pooled here
-        (:func:`rocklab.diagnosis.series.diagnose_boundary`).
+    diagnosis : rocklab.diagnosis.result.CampaignDiagnosis, its entries or path
+        ``results/diagnosis.json``; without an entry for ``boundary``, its
+        series are pooled here (:func:`rocklab.diagnosis.series.diagnose_boundary`).
     boundary : {"two-sided", "one-sided"}
 
     Returns
@@ -132,27 +115,27 @@ def boundary_findings(diagnosis, boundary):
         carried by the member of its family the maps' wall can hold, or left
         off, with a warning in the log.
     """
-    entries = read_diagnosis(diagnosis)
-    entry = next((e for e in entries if e.get("scope") == "boundary" and e.get("boundary") == boundary), None)
+    from rocklab.diagnosis.catalogue import by_name
+    from rocklab.diagnosis.result import BoundaryDiagnosis, CampaignDiagnosis
+
+    diagnosis = CampaignDiagnosis.of(diagnosis)
+    entry = diagnosis.boundary(boundary)
     if entry is None:
         from rocklab.diagnosis.series import diagnose_boundary
 
-        entry = diagnose_boundary(entries, boundary)
+        pooled = diagnose_boundary(diagnosis, boundary)
+        entry = None if pooled is None else BoundaryDiagnosis.from_dict(pooled)
     if entry is None:
         return {}
-    from rocklab.diagnosis.catalogue import by_name
-
     # a finding also reports statistics of its parameters (spread_log): only the cause's own parameters
     out = {}
-    for f in entry["findings"]:
-        cause = f["effect"]
-        if cause not in entry["verdict"]:
-            continue
+    for f in entry.named:
+        cause = f.effect
         if cause in ON_THE_MAPS:
             member, why = ON_THE_MAPS[cause]
-            found = ", ".join(f"{k} = {float(v):.3g}" for k, v in f["params"].items())
+            found = ", ".join(f"{k} = {float(v):.3g}" for k, v in f.params.items())
             # a member at its null carries nothing: a model switching it off would be the same wall
-            if member is None or all(float(f["params"][q.name]) == q.null for q in by_name(member).params):
+            if member is None or all(float(f.params[q.name]) == q.null for q in by_name(member).params):
                 why = why if member is None else f"its member {member} is at its null; {why}"
                 log.warning("%s walls: %s is left off the maps' wall: %s (found: %s)", boundary, cause, why, found)
                 continue
@@ -160,7 +143,7 @@ def boundary_findings(diagnosis, boundary):
                 "%s walls: %s is carried on the maps' wall by %s, %s (found: %s)", boundary, cause, member, why, found
             )
             cause = member
-        out[cause] = {q.name: float(f["params"][q.name]) for q in by_name(cause).params}
+        out[cause] = {q.name: float(f.params[q.name]) for q in by_name(cause).params}
     return out
 
 
@@ -213,8 +196,8 @@ def calibrated_model(diagnosis, name, alpha, R, form="linear"):
 
     Parameters
     ----------
-    diagnosis : list of dict or path
-        ``results/diagnosis.json`` (entries or its path).
+    diagnosis : rocklab.diagnosis.result.CampaignDiagnosis, its entries or path
+        ``results/diagnosis.json``.
     name : str
         ``2s-calibrated``, ``1s-calibrated-no-stop``, ... (:func:`model_names`).
     alpha : float
@@ -300,7 +283,7 @@ def calibrated_table(summary, diagnosis):
     summary : pandas.DataFrame
         :func:`rocklab.seismic.overturning.summary_table` of the maps of the
         e-alone and calibrated models (other models are ignored).
-    diagnosis : list of dict or path
+    diagnosis : rocklab.diagnosis.result.CampaignDiagnosis, its entries or path
         ``results/diagnosis.json``, which names the models.
 
     Returns

@@ -1,0 +1,485 @@
+"""The diagnosis' results as typed objects: results/diagnosis.json, diagnosis/<series>.json, limestone_diagnosis.json.
+
+The JSON files are the diagnosis' interface with the rest of the workflow
+(the calibrated walls of the maps, the campaign's covariates, the figures,
+the docs): every writer and reader goes through the objects here, which
+hold exactly the keys of the files, in their order, and are checked against
+their JSON schemas on the way in and out (:data:`DIAGNOSIS_SCHEMA`,
+:data:`LIMESTONE_SCHEMA`, whose descriptions say what each key means).
+
+==========================  =========================================================
+object                      file
+==========================  =========================================================
+:class:`CampaignDiagnosis`  results/diagnosis.json: the series, then the boundary
+                            conditions; results/diagnosis/<series>.json holds one
+                            series (none where it has no test of two impacts)
+:class:`SeriesDiagnosis`    an entry of one series (:func:`~rocklab.diagnosis.series.diagnose_series`)
+:class:`BoundaryDiagnosis`  an entry of one boundary condition, its series summed up
+                            (:func:`~rocklab.diagnosis.series.diagnose_boundary`)
+:class:`Finding`            a cause a series (or a limestone block group) names
+:class:`PooledFinding`      a cause named in enough series of a boundary condition
+:class:`LimestoneDiagnosis` results/limestone_diagnosis.json
+                            (:func:`~rocklab.diagnosis.block_tests.diagnose_blocks`)
+==========================  =========================================================
+
+The diagnosis computes plain dicts (the ``to_dict`` form); ``from_dict``
+makes the object of one, refusing a key it does not know.  A key that the
+diagnosis writes only in some cases is None here where the file lacks it.
+Every field but the one that says what a record is (an entry's ``scope``,
+a finding's ``effect``) has an empty default, so that a program may hold
+part of a result (the maps need only the findings of a boundary
+condition); the schema checks a whole file, on its way out and in.  The
+numbers in the file are those of :func:`jsonable`: non-finite floats are
+null.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field, fields
+from functools import cache
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+
+from rocklab._imports import lazy_module
+from rocklab.data import data_path
+
+jsonschema = lazy_module("jsonschema")
+yaml = lazy_module("yaml")
+
+#: JSON schema of results/diagnosis.json and results/diagnosis/<series>.json
+#: (shipped with the package, linked from ``workflow/schemas/``).
+DIAGNOSIS_SCHEMA = data_path("schemas", "diagnosis.schema.yaml")
+#: JSON schema of results/limestone_diagnosis.json.
+LIMESTONE_SCHEMA = data_path("schemas", "limestone_diagnosis.schema.yaml")
+
+
+def jsonable(x):
+    """``x`` with NumPy scalars as Python numbers and non-finite floats as None (JSON)."""
+    if isinstance(x, dict):
+        return {str(k): jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [jsonable(v) for v in x]
+    if isinstance(x, (np.floating, float)):
+        return None if not np.isfinite(x) else float(x)
+    if isinstance(x, (np.integer,)):
+        return int(x)
+    if isinstance(x, np.bool_):
+        return bool(x)
+    return x
+
+
+@cache
+def _validator(schema):
+    """A validator of the schema at ``schema`` (read once per process)."""
+    return jsonschema.Draft202012Validator(yaml.safe_load(Path(schema).read_text()))
+
+
+def validate(document, schema, what):
+    """Check a JSON document against a schema.
+
+    Raises
+    ------
+    ValueError
+        Naming ``what`` (a file, an object), the key at fault and what the
+        schema asks of it.
+    """
+    err = jsonschema.exceptions.best_match(_validator(schema).iter_errors(document))
+    if err is not None:
+        where = "/".join(str(x) for x in err.absolute_path) or "(top level)"
+        raise ValueError(f"{what}: {where}: {err.message} (see {Path(schema).name})")
+
+
+class _Record:
+    """A JSON object as a dataclass: its fields are the keys, in the file's order.
+
+    ``_optional`` names the fields written only where they are not None (the
+    keys the diagnosis writes in some cases only); ``_nested`` the fields
+    that hold records (a class) or lists of records (a one-element list).
+    """
+
+    _optional: ClassVar[frozenset] = frozenset()
+    _nested: ClassVar[dict] = {}
+
+    def to_dict(self) -> dict:
+        """The JSON object, keys in the file's order."""
+        out = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if value is None and f.name in self._optional:
+                continue
+            if isinstance(value, _Record):
+                value = value.to_dict()
+            elif isinstance(value, list) and f.name in self._nested:
+                value = [v.to_dict() for v in value]
+            out[f.name] = value
+        return out
+
+    @classmethod
+    def from_dict(cls, d: dict):
+        """The record of a JSON object (or of a dict the diagnosis computed).
+
+        Raises
+        ------
+        ValueError
+            For a key the record does not hold.
+        """
+        names = [f.name for f in fields(cls)]
+        unknown = [k for k in d if k not in names]
+        if unknown:
+            raise ValueError(f"{cls.__name__}: unknown key(s) {', '.join(unknown)} (the keys: {', '.join(names)})")
+        kwargs = {}
+        for k, v in d.items():
+            kind = cls._nested.get(k)
+            if kind is None or v is None:
+                kwargs[k] = v
+            elif isinstance(kind, list):
+                kwargs[k] = [x if isinstance(x, kind[0]) else kind[0].from_dict(x) for x in v]
+            else:
+                kwargs[k] = v if isinstance(v, kind) else kind.from_dict(v)
+        return cls(**kwargs)
+
+
+class _Document:
+    """A whole JSON file: ``to_json``/``from_json`` through :meth:`to_dict`/``from_dict``, validated."""
+
+    schema: ClassVar[Path]
+    #: What the file holds, in words (for the errors).
+    title: ClassVar[str]
+
+    def to_json(self, path) -> None:
+        """Write the file as the diagnosis always has: ``json.dumps(..., indent=1)``, no final newline.
+
+        Raises
+        ------
+        ValueError
+            Where the content does not follow :attr:`schema` (nothing is written).
+        """
+        document = jsonable(self.to_dict())
+        validate(document, self.schema, f"{type(self).__name__} for {path}")
+        Path(path).write_text(json.dumps(document, indent=1))
+
+    @classmethod
+    def from_json(cls, path):
+        """The object of a file written by :meth:`to_json`.
+
+        Raises
+        ------
+        ValueError
+            For a file that is no JSON or does not follow :attr:`schema`.
+        """
+        path = Path(path)
+        try:
+            document = json.loads(path.read_text())
+        except json.JSONDecodeError as err:
+            raise ValueError(f"{path}: not a readable {cls.title} ({err})") from err
+        validate(document, cls.schema, str(path))
+        return cls.from_dict(document)
+
+
+@dataclass
+class Finding(_Record):
+    """A cause named by the data of one series (or of the limestone blocks).
+
+    Parameters of the cause with their bootstrap 95 % intervals, the tests
+    they rest on, the evidence in words, the held-out errors of the model
+    with the cause and their gain over the base model; a form discovered
+    beyond the catalogue (a family) also says what it reduces to and its
+    gain against the listed causes.
+    """
+
+    _optional = frozenset({"ci_note", "discovered", "family", "reduces_to", "best_listed", "heldout_gain", "curve"})
+
+    effect: str
+    params: dict[str, float | None] = field(default_factory=dict)
+    ci95: dict[str, list] = field(default_factory=dict)
+    n_tests: int | None = None
+    ci_note: str | None = None
+    evidence: dict[str, str] = field(default_factory=dict)
+    error_heldout: dict[str, float | None] = field(default_factory=dict)
+    gain: dict[str, float | None] = field(default_factory=dict)
+    discovered: bool | None = None
+    family: str | None = None
+    reduces_to: str | None = None
+    best_listed: list[str] | None = None
+    heldout_gain: dict[str, float | None] | None = None
+    curve: dict[str, Any] | None = None
+
+
+@dataclass
+class PooledFinding(_Record):
+    """A cause named in at least half of the series of a boundary condition that can name one.
+
+    The test-weighted means of its parameters over those series, the
+    bootstrap (over series) interval of the mean, the range over the series,
+    and the weighted means of their held-out errors and gains.
+    """
+
+    _optional = frozenset({"ci_note"})
+
+    effect: str
+    params: dict[str, float | None] = field(default_factory=dict)
+    ci95: dict[str, list] = field(default_factory=dict)
+    evidence: dict[str, Any] = field(default_factory=dict)
+    error_heldout: dict[str, float | None] = field(default_factory=dict)
+    gain: dict[str, float | None] = field(default_factory=dict)
+    n_series: int | None = None
+    n_tests: int | None = None
+    ci_note: str | None = None
+
+
+@dataclass
+class BaseRun(_Record):
+    """The base (literature) model of an entry and its engineering errors
+    (:func:`rocklab.diagnosis.errors.engineering_errors`); for one-sided walls
+    also those of the literature alternatives."""
+
+    _optional = frozenset({"alternatives"})
+
+    model: str | None = None
+    errors: dict[str, Any] = field(default_factory=dict)
+    alternatives: dict[str, dict] | None = None
+
+
+@dataclass
+class _Entry(_Record):
+    """What every entry of results/diagnosis.json has (see the subclasses)."""
+
+    @property
+    def named(self) -> list:
+        """The findings that name a cause (those of the verdict), in the entry's order."""
+        return [f for f in self.findings if f.effect in self.verdict]
+
+    def finding(self, effect):
+        """The finding of a cause, None where the entry has none."""
+        return next((f for f in self.findings if f.effect == effect), None)
+
+    @property
+    def discovered(self) -> list:
+        """The findings of a form discovered beyond the catalogue."""
+        return [f for f in self.findings if getattr(f, "discovered", None)]
+
+
+@dataclass
+class SeriesDiagnosis(_Entry):
+    """The diagnosis of one series (results/diagnosis/<series>.json, an entry of diagnosis.json).
+
+    A series too small to name a cause (``too_small`` says why) has no
+    ``signatures``, ``heldout`` nor ``extended``; ``listed_verdict`` and
+    ``listed_params`` are the causes of the catalogue alone where a form
+    beyond it was tried.
+    """
+
+    _optional = frozenset({"too_small", "listed_verdict", "listed_params", "signatures", "heldout", "extended"})
+    _nested = {"base": BaseRun, "findings": [Finding]}
+
+    scope: str
+    key: str | None = None
+    boundary: str | None = None
+    n_tests: int | None = None
+    n_impacts: int | None = None
+    base: BaseRun | None = None
+    what_is_wrong: str | None = None
+    too_small: str | None = None
+    verdict: list[str] = field(default_factory=list)
+    unexplained: bool = False
+    residual_structure: list[str] = field(default_factory=list)
+    findings: list[Finding] = field(default_factory=list)
+    listed_verdict: list[str] | None = None
+    listed_params: dict[str, float | None] | None = None
+    weak_evidence: dict[str, str] = field(default_factory=dict)
+    rejected: dict[str, str] = field(default_factory=dict)
+    signatures: dict[str, str] | None = None
+    heldout: dict[str, dict] | None = None
+    extended: dict[str, Any] | None = None
+    sample_test: str | None = None
+
+
+@dataclass
+class BoundaryDiagnosis(_Entry):
+    """The diagnosis of one boundary condition from those of its series.
+
+    ``heldout`` is None (null) where no series is large enough to name a
+    cause, and ``too_small`` then says so; ``extended`` sums up the
+    extended models of the series that have one.
+    """
+
+    _optional = frozenset({"extended", "too_small"})
+    _nested = {"base": BaseRun, "findings": [PooledFinding]}
+
+    scope: str
+    key: str | None = None
+    boundary: str | None = None
+    n_tests: int | None = None
+    n_series: int | None = None
+    n_series_diagnosed: int | None = None
+    too_small_series: list[str] = field(default_factory=list)
+    n_impacts: int | None = None
+    base: BaseRun | None = None
+    what_is_wrong: str | None = None
+    verdict: list[str] = field(default_factory=list)
+    unexplained: bool = False
+    residual_structure: list[str] = field(default_factory=list)
+    unexplained_series: list[str] = field(default_factory=list)
+    findings: list[PooledFinding] = field(default_factory=list)
+    heldout: dict[str, dict] | None = None
+    series_verdicts: dict[str, list[str]] = field(default_factory=dict)
+    extended: dict[str, Any] | None = None
+    too_small: str | None = None
+
+
+def entry_of(d):
+    """The :class:`SeriesDiagnosis` or :class:`BoundaryDiagnosis` of an entry (by its ``scope``)."""
+    if isinstance(d, _Entry):
+        return d
+    return (BoundaryDiagnosis if d.get("scope") == "boundary" else SeriesDiagnosis).from_dict(d)
+
+
+@dataclass
+class CampaignDiagnosis(_Document):
+    """The entries of a diagnosis: results/diagnosis.json, or one series' results/diagnosis/<series>.json.
+
+    ``entries`` are the series then the boundary conditions, as
+    :func:`~rocklab.diagnosis.series.diagnose_campaign` gives them.
+    """
+
+    schema: ClassVar[Path] = DIAGNOSIS_SCHEMA
+    title: ClassVar[str] = "diagnosis"
+
+    entries: list = field(default_factory=list)
+
+    def to_dict(self) -> list:
+        """The JSON document: a list of entries."""
+        return [e.to_dict() for e in self.entries]
+
+    @classmethod
+    def from_dict(cls, entries):
+        """The diagnosis of a list of entries (dicts or entry objects)."""
+        if isinstance(entries, dict):
+            raise ValueError("a diagnosis is a list of entries, not an object")
+        return cls([entry_of(e) for e in entries])
+
+    @classmethod
+    def of(cls, diagnosis):
+        """A diagnosis from what a caller may hold: the object, its entries or the path of its JSON file.
+
+        Raises
+        ------
+        ValueError
+            For a path that is not a readable diagnosis.
+        """
+        if isinstance(diagnosis, cls):
+            return diagnosis
+        if isinstance(diagnosis, (str, Path)):
+            try:
+                return cls.from_json(diagnosis)
+            except OSError as err:
+                raise ValueError(f"{diagnosis}: not a readable {cls.title} ({err})") from err
+        return cls.from_dict(list(diagnosis))
+
+    @classmethod
+    def joined(cls, parts):
+        """One diagnosis of the entries of several, in their order (the series' files of a campaign)."""
+        return cls([e for part in parts for e in part.entries])
+
+    @property
+    def series(self) -> list[SeriesDiagnosis]:
+        """The entries of the series, in the file's order."""
+        return [e for e in self.entries if isinstance(e, SeriesDiagnosis)]
+
+    @property
+    def boundaries(self) -> list[BoundaryDiagnosis]:
+        """The entries of the boundary conditions, in the file's order."""
+        return [e for e in self.entries if isinstance(e, BoundaryDiagnosis)]
+
+    def boundary(self, boundary) -> BoundaryDiagnosis | None:
+        """The entry of a boundary condition ("two-sided", "one-sided"), None where there is none."""
+        return next((e for e in self.boundaries if e.boundary == boundary), None)
+
+    def series_of(self, boundary) -> list[SeriesDiagnosis]:
+        """The series entries of one boundary condition."""
+        return [e for e in self.series if e.boundary == boundary]
+
+    @property
+    def sample_tests(self) -> set[str]:
+        """The sample test of every series (the test its figure draws)."""
+        return {e.sample_test for e in self.series}
+
+    @property
+    def unexplained(self) -> list[SeriesDiagnosis]:
+        """The series that leave structure no candidate explains."""
+        return [e for e in self.series if e.unexplained]
+
+    def minority(self, boundary) -> list[tuple[SeriesDiagnosis, Finding]]:
+        """The findings of the series of a boundary condition that its verdict lacks (named in too few series).
+
+        Returns
+        -------
+        list of (SeriesDiagnosis, Finding)
+            In the order of the series and of their findings; every finding
+            of its series where the boundary condition has no entry.
+        """
+        entry = self.boundary(boundary)
+        verdict = entry.verdict if entry is not None else []
+        return [(e, f) for e in self.series_of(boundary) for f in e.findings if f.effect not in verdict]
+
+
+@dataclass
+class FamilyComparison(_Record):
+    """A family of the impact law fitted on the limestone trials, named or not,
+    against the base model and the best listed cause
+    (:func:`rocklab.diagnosis.engine.family_against_listed`)."""
+
+    effect: str
+    form: str | None = None
+    params: dict[str, float | None] = field(default_factory=dict)
+    ci95: dict[str, list] = field(default_factory=dict)
+    reduces_to: str | None = None
+    discovered: bool | None = None
+    best_listed: str | None = None
+    best_listed_params: dict[str, float | None] = field(default_factory=dict)
+    dbic_vs_base: float | None = None
+    dbic_vs_best_listed: float | None = None
+    heldout_gain: dict[str, float | None] = field(default_factory=dict)
+
+
+@dataclass
+class BlockDiagnosis(_Entry):
+    """The diagnosis of one group of limestone trials (one H/B) or of all of them."""
+
+    _optional = frozenset({"listed_verdict"})
+    _nested = {"findings": [Finding], "families": [FamilyComparison]}
+
+    scope: str
+    key: str | None = None
+    h_over_b: float | None = None
+    n_tests: int | None = None
+    n_impacts: int | None = None
+    base: dict[str, Any] = field(default_factory=dict)
+    what_is_wrong: str | None = None
+    verdict: list[str] = field(default_factory=list)
+    listed_verdict: list[str] | None = None
+    unexplained: bool = False
+    residual_structure: list[str] = field(default_factory=list)
+    findings: list[Finding] = field(default_factory=list)
+    weak_evidence: dict[str, dict] = field(default_factory=dict)
+    rejected: dict[str, str] = field(default_factory=dict)
+    signatures: dict[str, str] = field(default_factory=dict)
+    heldout: dict[str, dict] = field(default_factory=dict)
+    families: list[FamilyComparison] = field(default_factory=list)
+
+
+@dataclass
+class LimestoneDiagnosis(_Record, _Document):
+    """results/limestone_diagnosis.json: all trials, each block group, the trend with slenderness."""
+
+    schema: ClassVar[Path] = LIMESTONE_SCHEMA
+    title: ClassVar[str] = "limestone diagnosis"
+    _nested = {"all": BlockDiagnosis, "groups": [BlockDiagnosis]}
+
+    all: BlockDiagnosis
+    groups: list[BlockDiagnosis]
+    slenderness: dict[str, Any] = field(default_factory=dict)
+    source: str | None = None

@@ -1,0 +1,215 @@
+"""The diagnosis' results as objects (rocklab.diagnosis.result): the files of the embedded campaign
+validate against their schemas and are written back byte for byte; a file that breaks its schema,
+or a key the objects do not know, is refused; the schemas ship with the library."""
+
+from __future__ import annotations
+
+import copy
+import json
+from pathlib import Path
+
+import pytest
+import yaml
+
+from rocklab.diagnosis import result as R
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def results_dir() -> Path:
+    """The results of `make run` (config.yaml's results_dir)."""
+    return ROOT / yaml.safe_load((ROOT / "config" / "config.yaml").read_text())["results_dir"]
+
+
+def embedded(*names):
+    """Paths of files of the embedded campaign's results; the test is skipped without them."""
+    paths = [results_dir() / name for name in names]
+    missing = [p.name for p in paths if not p.is_file()]
+    if missing:
+        pytest.skip(f"no {', '.join(missing)} from `make run` here (CI has none)")
+    return paths
+
+
+def series_files():
+    folder = results_dir() / "diagnosis"
+    return sorted(folder.glob("*.json")) if folder.is_dir() else []
+
+
+#: A series entry with every key a full diagnosis writes (numbers made up), as a JSON document.
+SERIES = {
+    "scope": "series",
+    "key": "1a-2s",
+    "boundary": "two-sided",
+    "n_tests": 6,
+    "n_impacts": 120,
+    "base": {"model": "Housner", "errors": {"n_impacts": {"measured": 20.0, "model": 60.0}, "log_peak_rms": None}},
+    "what_is_wrong": "the simulation keeps rocking",
+    "verdict": ["restitution_scale"],
+    "unexplained": False,
+    "residual_structure": [],
+    "findings": [
+        {
+            "effect": "restitution_scale",
+            "params": {"c": 0.95},
+            "ci95": {"c": [0.94, 0.96]},
+            "n_tests": 6,
+            "evidence": {"signature": "e/e_an = 0.95", "fit": "lowered by 4"},
+            "error_heldout": {"deviance_per_obs": -10.0},
+            "gain": {"deviance_per_obs": 4.0},
+            "discovered": False,
+        }
+    ],
+    "weak_evidence": {},
+    "rejected": {"hinge_asymmetry": "its signature in the data is absent"},
+    "signatures": {"restitution_scale": "e/e_an = 0.95"},
+    "heldout": {"base": {"deviance_per_obs": -6.0}, "model": {"deviance_per_obs": -10.0}},
+    "sample_test": "T0001",
+}
+
+
+def test_the_embedded_campaign_diagnosis_reads_and_writes_back_byte_for_byte(tmp_path):
+    (path,) = embedded("diagnosis.json")
+    diagnosis = R.CampaignDiagnosis.from_json(path)
+    assert diagnosis.series and all(isinstance(e, R.SeriesDiagnosis) for e in diagnosis.series)
+    assert {e.boundary for e in diagnosis.boundaries} == {"two-sided", "one-sided"}
+    assert diagnosis.entries == diagnosis.series + diagnosis.boundaries
+    for b in diagnosis.boundaries:
+        assert all(isinstance(f, R.PooledFinding) for f in b.findings)
+        assert [f.effect for f in b.named] == [f.effect for f in b.findings if f.effect in b.verdict]
+    assert diagnosis.sample_tests == {e.sample_test for e in diagnosis.series}
+    diagnosis.to_json(tmp_path / "diagnosis.json")
+    assert (tmp_path / "diagnosis.json").read_bytes() == path.read_bytes()
+    # the dict form is the JSON itself
+    assert diagnosis.to_dict() == json.loads(path.read_text())
+
+
+def test_each_series_file_is_its_entry_of_the_campaign_and_writes_back(tmp_path):
+    (campaign,) = embedded("diagnosis.json")
+    paths = series_files()
+    if not paths:
+        pytest.skip("no results/diagnosis/<series>.json here")
+    whole = R.CampaignDiagnosis.from_json(campaign)
+    parts = [R.CampaignDiagnosis.from_json(p) for p in paths]
+    for path, part in zip(paths, parts):
+        assert len(part.entries) <= 1 and not part.boundaries
+        part.to_json(tmp_path / path.name)
+        assert (tmp_path / path.name).read_bytes() == path.read_bytes(), path.name
+    # the campaign's series are those of the files, in the files' order (as the workflow joins them)
+    assert R.CampaignDiagnosis.joined(parts).entries == whole.series
+
+
+def test_the_campaign_diagnosis_is_made_again_from_its_series_files(tmp_path):
+    """What the diagnosis checkpoint does (scripts/diagnosis.py): the same bytes as `make run` wrote."""
+    from rocklab.diagnosis import with_boundaries, write_diagnosis
+
+    campaign, md = embedded("diagnosis.json", "diagnosis.md")
+    config = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    seed = (config.get("diagnosis") or {}).get("seed", 0)
+    series = R.CampaignDiagnosis.joined(R.CampaignDiagnosis.from_json(p) for p in series_files())
+    write_diagnosis(with_boundaries(series.to_dict(), seed=seed), tmp_path / "d.json", tmp_path / "d.md")
+    assert (tmp_path / "d.json").read_bytes() == campaign.read_bytes()
+    assert (tmp_path / "d.md").read_bytes() == md.read_bytes()
+
+
+def test_the_limestone_result_reads_and_writes_back_byte_for_byte(tmp_path):
+    (path,) = embedded("limestone_diagnosis.json")
+    limestone = R.LimestoneDiagnosis.from_json(path)
+    assert limestone.all.scope == "all blocks" and limestone.all.h_over_b is None
+    assert [g.scope for g in limestone.groups] == ["block group"] * len(limestone.groups)
+    assert all(isinstance(f, R.FamilyComparison) for f in limestone.all.families)
+    limestone.to_json(tmp_path / "limestone.json")
+    assert (tmp_path / "limestone.json").read_bytes() == path.read_bytes()
+
+
+def test_keys_written_in_some_cases_only_are_left_out_where_they_are_none(tmp_path):
+    entry = R.SeriesDiagnosis.from_dict(SERIES)
+    assert list(entry.to_dict()) == list(SERIES)
+    assert entry.too_small is None and entry.extended is None and entry.findings[0].ci_note is None
+    assert entry.finding("restitution_scale").params == {"c": 0.95} and entry.finding("contact_gap") is None
+    assert entry.named == entry.findings and entry.discovered == []
+    R.CampaignDiagnosis([entry]).to_json(tmp_path / "d.json")
+    assert json.loads((tmp_path / "d.json").read_text()) == [SERIES]
+    # a boundary condition without a series large enough: its heldout is written, as null
+    b = R.BoundaryDiagnosis(scope="boundary", key="one-sided", boundary="one-sided", heldout=None, too_small="why")
+    assert b.to_dict()["heldout"] is None and "extended" not in b.to_dict()
+
+
+def test_the_findings_a_boundary_condition_leaves_to_its_series():
+    other = {**SERIES, "key": "1b-2s", "unexplained": True, "verdict": [], "findings": []}
+    boundary = R.BoundaryDiagnosis(scope="boundary", key="two-sided", boundary="two-sided", verdict=[])
+    diagnosis = R.CampaignDiagnosis.from_dict([SERIES, other, boundary])
+    assert [e.key for e in diagnosis.unexplained] == ["1b-2s"]
+    ((entry, finding),) = diagnosis.minority("two-sided")
+    assert entry.key == "1a-2s" and finding.effect == "restitution_scale"
+    boundary.verdict = ["restitution_scale"]
+    assert diagnosis.minority("two-sided") == [] and diagnosis.minority("one-sided") == []
+    # a campaign without the boundary's entry: every finding of its series
+    assert len(R.CampaignDiagnosis(diagnosis.series).minority("two-sided")) == 1
+
+
+def test_a_file_that_breaks_the_schema_is_refused_naming_the_key(tmp_path):
+    bad = copy.deepcopy(SERIES)
+    bad["findings"][0]["n_tests"] = "six"
+    with pytest.raises(ValueError, match=r"0/findings/0/n_tests: 'six' is not of type 'integer'"):
+        R.CampaignDiagnosis.from_dict([bad]).to_json(tmp_path / "d.json")
+    assert not (tmp_path / "d.json").exists()
+    missing = {k: v for k, v in SERIES.items() if k != "sample_test"}
+    (tmp_path / "d.json").write_text(json.dumps([missing]))
+    with pytest.raises(ValueError, match="d.json: 0"):
+        R.CampaignDiagnosis.from_json(tmp_path / "d.json")
+    (tmp_path / "d.json").write_text("{not json")
+    with pytest.raises(ValueError, match="d.json: not a readable diagnosis"):
+        R.CampaignDiagnosis.of(tmp_path / "d.json")
+    with pytest.raises(ValueError, match="not a readable diagnosis"):
+        R.CampaignDiagnosis.of(tmp_path / "none.json")
+
+
+def test_a_key_the_objects_do_not_know_is_refused():
+    with pytest.raises(ValueError, match="SeriesDiagnosis: unknown key.s. colour"):
+        R.SeriesDiagnosis.from_dict({**SERIES, "colour": "red"})
+    with pytest.raises(ValueError, match="Finding: unknown key"):
+        R.CampaignDiagnosis.from_dict([{**SERIES, "findings": [{"effect": "x", "weight": 1}]}])
+    with pytest.raises(ValueError, match="a list of entries"):
+        R.CampaignDiagnosis.from_dict(SERIES)
+
+
+def test_non_finite_numbers_are_written_as_null(tmp_path):
+    import numpy as np
+
+    entry = copy.deepcopy(SERIES)
+    entry["findings"][0]["params"] = {"c": np.float64("nan")}
+    entry["n_impacts"] = np.int64(120)
+    R.CampaignDiagnosis.from_dict([entry]).to_json(tmp_path / "d.json")
+    (written,) = json.loads((tmp_path / "d.json").read_text())
+    assert written["findings"][0]["params"] == {"c": None} and written["n_impacts"] == 120
+
+
+@pytest.mark.parametrize("schema", [R.DIAGNOSIS_SCHEMA, R.LIMESTONE_SCHEMA], ids=lambda p: p.name)
+def test_the_schemas_ship_with_the_library_and_the_workflow_links_them(schema):
+    assert schema.is_file() and schema.is_relative_to(Path(R.__file__).parents[1] / "data")
+    assert (ROOT / "workflow" / "schemas" / schema.name).resolve() == schema.resolve()
+
+
+@pytest.mark.parametrize("schema", [R.DIAGNOSIS_SCHEMA, R.LIMESTONE_SCHEMA], ids=lambda p: p.name)
+def test_every_key_of_the_schemas_is_described(schema):
+    """Every property of every object of a schema has a description (its own or its definition's)."""
+    doc = yaml.safe_load(schema.read_text())
+    defs = doc.get("$defs", {})
+
+    def described(spec):
+        ref = spec.get("$ref", "")
+        return bool(spec.get("description")) or bool(defs.get(ref.rsplit("/", 1)[-1], {}).get("description"))
+
+    def undescribed(spec, where):
+        """The keys below ``spec`` without a description (the items of its lists and maps searched too)."""
+        out = []
+        for name, sub in spec.get("properties", {}).items():
+            out += ([] if described(sub) else [f"{where}.{name}"]) + undescribed(sub, f"{where}.{name}")
+        for key in ("items", "additionalProperties"):
+            if isinstance(spec.get(key), dict):
+                out += undescribed(spec[key], f"{where}[]")
+        return out
+
+    missing = [w for name, spec in [("(top)", doc), *defs.items()] for w in undescribed(spec, name)]
+    missing += [name for name, spec in defs.items() if not described(spec)]
+    assert not missing, missing
