@@ -175,6 +175,8 @@ def _diagnosis_entries():
             "effect": "stop_threshold",
             "params": {"v_stop_over_vr": 0.1},
             "ci95": {"v_stop_over_vr": [0.09, 0.11]},
+            "n_tests": 10,
+            "evidence": {},
             "error_heldout": {"n_impacts_rms": error, "duration_pct_rms": error},
             "gain": {"n_impacts_rms": gain, "duration_pct_rms": gain},
         }
@@ -185,9 +187,16 @@ def _diagnosis_entries():
             "key": key,
             "boundary": "two-sided",
             "n_tests": n_tests,
+            "n_impacts": 20 * n_tests,
+            "base": {"model": "Housner", "errors": {}},
+            "what_is_wrong": "it rocks too long.",
             "verdict": [f["effect"] for f in findings],
             "unexplained": False,
+            "residual_structure": [],
             "findings": findings,
+            "weak_evidence": {},
+            "rejected": {},
+            "sample_test": f"T-{key}",
         }
 
     heldout = {"free_run_log_peak_rms": 2.0, "impact_rms": 0.05, "time_rms": 0.06}
@@ -197,16 +206,29 @@ def _diagnosis_entries():
         "boundary": "two-sided",
         "n_tests": 45,
         "n_series": 3,
+        "n_series_diagnosed": 3,
+        "too_small_series": [],
         "n_impacts": 900,
         "base": {"model": "Housner", "errors": {"lag_s": 16.0}},
         "what_is_wrong": "it rocks too long.",
         "verdict": ["stop_threshold"],
         "unexplained": False,
+        "residual_structure": [],
+        "unexplained_series": [],
         "findings": [{**stop(None, None), "evidence": {"range": {"v_stop_over_vr": [0.09, 0.12]}}, "n_series": 2}],
+        "series_verdicts": {},
         "heldout": {"base": heldout, "model": heldout},
         "extended": {"statement": "the extended model rocks as long as the wall."},
     }
-    asym = {"effect": "hinge_asymmetry", "params": {"s_alpha": 0.03}, "ci95": {}}
+    asym = {
+        "effect": "hinge_asymmetry",
+        "params": {"s_alpha": 0.03},
+        "ci95": {},
+        "n_tests": 30,
+        "evidence": {},
+        "error_heldout": {},
+        "gain": {},
+    }
     return [
         series("1a-2s", 10, [stop(2.0, 8.0)]),
         series("2b-2s", 30, [stop(4.0, 16.0), asym]),
@@ -384,13 +406,32 @@ def tiny_results(tmp_path):
         ],
     )
     (r / "diagnosis.json").write_text(json.dumps(_diagnosis_entries()))
+
+    def base(e_an, ratio):
+        return {
+            "model": "Housner",
+            "e_an": e_an,
+            "measured_median_ratio": ratio,
+            "measured_geometric_mean_ratio": ratio,
+        }
+
     group = {
+        "scope": "block group",
+        "key": "all",
+        "h_over_b": None,
         "n_tests": 2,
         "n_impacts": 20,
-        "base": {"e_an": 0.9},
+        "base": base(0.9, 1.0),
+        "what_is_wrong": "",
         "verdict": [],
+        "unexplained": False,
+        "residual_structure": [],
+        "findings": [],
         "weak_evidence": {},
+        "rejected": {},
+        "signatures": {},
         "heldout": {"base": {"ratio_rms": 0.05}, "model": {"ratio_rms": 0.05}},
+        "families": [],
     }
     (r / "limestone_diagnosis.json").write_text(
         json.dumps(
@@ -398,7 +439,8 @@ def tiny_results(tmp_path):
                 "source": "blocks",
                 "all": {
                     **group,
-                    "base": {"e_an": 0.985, "measured_median_ratio": 0.97},
+                    "scope": "all blocks",
+                    "base": base(0.985, 0.97),
                     "what_is_wrong": "e too high",
                     "unexplained": True,
                     "residual_structure": ["impact: bias +0.011"],
@@ -406,10 +448,16 @@ def tiny_results(tmp_path):
                     "signatures": {},
                 },
                 "groups": [
-                    {**group, "h_over_b": 3.9999999, "base": {"e_an": 0.91, "measured_median_ratio": 0.93}},
-                    {**group, "h_over_b": 15.0, "base": {"e_an": 0.99, "measured_median_ratio": 0.97}},
+                    {**group, "key": "4", "h_over_b": 3.9999999, "base": base(0.91, 0.93)},
+                    {**group, "key": "15", "h_over_b": 15.0, "base": base(0.99, 0.97)},
                 ],
-                "slenderness": {"intercept": 0.98, "slope": 0.6, "levels": {"4": 1.02, "15": 0.97}},
+                "slenderness": {
+                    "intercept": 0.98,
+                    "slope": 0.6,
+                    "slope_se": 0.1,
+                    "p": 0.01,
+                    "levels": {"4": 1.02, "15": 0.97},
+                },
             }
         )
     )
@@ -652,12 +700,17 @@ def test_a_boundary_too_small_to_extend_the_model_is_extracted(tiny_results):
         "boundary": "one-sided",
         "n_tests": 3,
         "n_series": 1,
+        "n_series_diagnosed": 0,
+        "too_small_series": ["1b-1s"],
         "n_impacts": 6,
         "base": {"model": "Eq. 14", "errors": {}},
         "what_is_wrong": "it stops early.",
         "verdict": [],
         "unexplained": False,
+        "residual_structure": [],
+        "unexplained_series": [],
         "findings": [],
+        "series_verdicts": {},
         "heldout": None,
         "too_small": "none of its 1 series has the 5 tests of two impacts or more a series needs to name one",
     }
