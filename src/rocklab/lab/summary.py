@@ -60,7 +60,8 @@ def quality_control_summary(qc: pd.DataFrame) -> dict:
             "out_of_plumb_min": _span(qc.loc[verdict == Verdict.RESIDUAL_OUT_OF_PLUMB, "residual_top_mm"])["min"],
         },
         "channel_faults": {
-            **{k: int((qc[c].fillna("") != "").sum()) for k, c in CHANNEL_FAULTS.items()},
+            # a column without a single fault reads back as all-NaN floats
+            **{k: int(qc[c].astype("string").fillna("").ne("").sum()) for k, c in CHANNEL_FAULTS.items()},
             "in_plane_lost": int(qc["in_plane_lost"].astype(bool).sum()),
         },
         "series": [
