@@ -54,6 +54,7 @@ from rocklab.diagnosis.engine import (
 )
 from rocklab.diagnosis.evidence import series_level
 from rocklab.physics import restitution
+from rocklab.physics.law import Amplitude, HousnerLoss, Restitution
 
 #: Impacts per trial used (later ones are dominated by the processing noise).
 N_IMPACTS = 10
@@ -64,7 +65,21 @@ R_MAX = 1.5
 #: Folder of the tables, with their provenance (package data, :mod:`rocklab.data`).
 TABLES = LIMESTONE
 
-CANDIDATES = ("restitution_scale", "restitution_amplitude", "hinge_asymmetry")
+#: The laws the ratios of the impacts tell: the listed causes that act through them alone are the
+#: candidates (:func:`candidates`); the rotations, which the tables lack, are not modelled.
+IMPACT_LAWS = (HousnerLoss, Restitution, Amplitude)
+
+
+def candidates():
+    """The listed causes of two-sided walls whose laws change e (:data:`IMPACT_LAWS`), in catalogue
+    order: each changes the ratios of the impacts; a law of the rotations they also have (an angle)
+    is not fitted."""
+    null = catalogue.null_values()
+    return tuple(
+        c
+        for c in catalogue.for_boundary("two-sided")
+        if any(isinstance(law, IMPACT_LAWS) for law in c.laws(c.values(null)))
+    )
 
 
 def read_events(path=TABLES / "limestone-rocking-events.csv"):
@@ -132,7 +147,9 @@ class BlockProblem(Problem):
     def __init__(self, trials: _Trials):
         self.T = trials
         self.n_tests = len(trials.ids)
-        self.causes = tuple(c for c in catalogue.CAUSES if c.name in CANDIDATES)
+        self.causes = candidates()
+        # the base e of Housner's loss acts at its null where it is no candidate
+        self._acting = (restitution_housner_loss.CAUSE, *self.causes)
         if np.ptp(trials.alpha) > 0:
             # Housner's loss and a constant loss are told apart only across slendernesses
             self.causes += (restitution_housner_loss.CAUSE,)
@@ -141,11 +158,23 @@ class BlockProblem(Problem):
         return self.T.subset(np.asarray(idx))
 
     def model_e(self, sub, values):
+        """e of every impact: the laws of the causes (at their null where not in ``values``) on
+        Housner's e, the base e first, then the factors on the edge being left (odd impacts leave
+        the release edge), then Eq. 17 in the speed relative to the first impact's."""
         v = catalogue.null_values()
         v.update(values)
-        e_an = restitution_housner_loss.restitution(restitution.two_sided(sub.alpha)[:, None], v)
-        e = e_an * v["c"] * np.exp(np.where(sub.odd, 0.5, -0.5) * v["s_e"])
-        return e * np.clip(v["a"] - v["b"] * sub.u, 0.0, 1.0 / e)
+        laws = [law for c in self._acting for law in c.laws(c.values(v))]
+        e = restitution.two_sided(sub.alpha)[:, None]
+        for law in laws:
+            if isinstance(law, HousnerLoss):
+                e = law.restitution(e)
+        for law in laws:
+            if isinstance(law, Restitution):
+                e = e * law.on_impacts(sub.odd)
+        for law in laws:
+            if isinstance(law, Amplitude):
+                e = e * np.clip(law.a - law.b * sub.u, 0.0, 1.0 / e)
+        return e
 
     def residuals(self, sub, ext, values):
         with np.errstate(invalid="ignore", divide="ignore"):

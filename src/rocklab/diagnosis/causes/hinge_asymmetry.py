@@ -3,14 +3,12 @@ on the hinge being left."""
 
 from __future__ import annotations
 
-import math
-from dataclasses import replace
-
 import numpy as np
 
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import Cause
 from rocklab.diagnosis.parameters import Param
+from rocklab.physics.law import Hinge, Restitution
 
 stats = lazy_module("scipy.stats")
 
@@ -18,15 +16,8 @@ S_ALPHA = Param("s_alpha", -0.5, 0.5, 0.0, practical=0.005)
 S_E = Param("s_e", -0.5, 0.5, 0.0, practical=0.003)
 
 
-def apply(mp, v):
-    ha, he = v["s_alpha"] / 2, v["s_e"] / 2
-    return replace(
-        mp,
-        c_pos=mp.c_pos * math.exp(he),
-        c_neg=mp.c_neg * math.exp(-he),
-        a_pos=mp.a_pos * math.exp(ha),
-        a_neg=mp.a_neg * math.exp(-ha),
-    )
+def laws(v):
+    return (Restitution(asymmetry=v["s_e"]), Hinge(asymmetry=v["s_alpha"]))
 
 
 def signature(ob):
@@ -75,8 +66,9 @@ CAUSE = Cause(
     name="hinge_asymmetry",
     law="alpha_+- = alpha_r exp(+-s_alpha/2), e_+- = e exp(+-s_e/2) on the hinge being left",
     params=(S_ALPHA, S_E),
-    apply=apply,
+    laws=laws,
     boundaries=("two-sided",),
     signature=signature,
     starts=starts,
+    short="asym",
 )

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import Cause
 from rocklab.diagnosis.parameters import Param
+from rocklab.physics.law import Amplitude
 
 stats = lazy_module("scipy.stats")
 
@@ -17,8 +16,8 @@ A = Param("a", 0.2, 2.5, 1.0)
 B = Param("b", -3.0, 3.0, 0.0, practical=0.01)
 
 
-def apply(mp, v):
-    return replace(mp, amp_a=v["a"] * mp.amp_a, amp_b=v["b"] * np.ones_like(mp.alpha))
+def laws(v):
+    return (Amplitude(v["a"], v["b"]),)
 
 
 def signature(ob):
@@ -42,8 +41,9 @@ CAUSE = Cause(
     name="restitution_amplitude",
     law="e/e_an = a - b (thetadot^-/thetadot_r)^2 (Eq. 17)",
     params=(A, B),
-    apply=apply,
+    laws=laws,
     signature=signature,
     starts=starts,
     replaces=("restitution_scale",),
+    short="eamp",
 )

@@ -10,24 +10,16 @@ a series (no boundary condition).
 
 from __future__ import annotations
 
-from dataclasses import replace
-
-import numpy as np
-
 from rocklab.diagnosis.causes import Cause
 from rocklab.diagnosis.parameters import Param
+from rocklab.physics.law import HousnerLoss
 
 LAMBDA = Param("loss_fraction", 0.0, 3.0, 1.0, practical=0.01)
 DELTA = Param("loss_constant", -0.2, 0.2, 0.0, practical=0.002)
 
 
-def restitution(e_an, v):
-    """e = 1 - lambda (1 - |e_an|) - delta, with the sign of e_an."""
-    return np.sign(e_an) * (1.0 - v["loss_fraction"] * (1.0 - np.abs(e_an)) - v["loss_constant"])
-
-
-def apply(mp, v):
-    return replace(mp, e0=restitution(mp.e0, v))
+def laws(v):
+    return (HousnerLoss(v["loss_fraction"], v["loss_constant"]),)
 
 
 def closed_form(values, ci):
@@ -45,8 +37,9 @@ CAUSE = Cause(
     name="restitution_housner_loss",
     law="e = 1 - lambda (1 - e_an) - delta across walls of different slenderness",
     params=(LAMBDA, DELTA),
-    apply=apply,
+    laws=laws,
     boundaries=(),
     family="restitution_scale",
     closed_form=closed_form,
+    short="hloss",
 )

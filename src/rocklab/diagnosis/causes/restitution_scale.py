@@ -2,19 +2,18 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from rocklab.diagnosis.causes import Cause
 from rocklab.diagnosis.evidence import series_level
 from rocklab.diagnosis.parameters import Param
+from rocklab.physics.law import Restitution
 
 C = Param("c", 0.2, 2.0, 1.0, practical=0.005)
 
 
-def apply(mp, v):
-    return replace(mp, c_pos=v["c"] * mp.c_pos, c_neg=v["c"] * mp.c_neg)
+def laws(v):
+    return (Restitution(v["c"]),)
 
 
 def signature(ob):
@@ -40,7 +39,8 @@ CAUSE = Cause(
     name="restitution_scale",
     law="e = c e_an",
     params=(C,),
-    apply=apply,
+    laws=laws,
     signature=signature,
     starts=starts,
+    short="escale",
 )
