@@ -61,7 +61,9 @@ def in_order(columns=()):
     families = list(FAMILIES)
     i = families.index(restitution_drift.CAUSE) + 1
     families[i:i] = restitution_drift.along_log(tuple(columns))
-    return [*CAUSES[:-1], *families, CAUSES[-1]]
+    # the causes estimated after selection act last, on the chosen model as it is
+    later = [c for c in CAUSES if c.stage != "selection"]
+    return [*(c for c in CAUSES if c not in later), *families, *later]
 
 
 def by_name(name):

@@ -111,5 +111,5 @@ CAUSE = Cause(
     replaces=("restitution_scale", "restitution_amplitude"),
     family="restitution_amplitude",
     closed_form=closed_form,
-    on_the_maps=(None, "an impact law of the diagnosis' closed forms (a hook) that the simulators lack"),
+    on_the_maps=(None, "an impact law of the diagnosis' closed forms that the simulators lack"),
 )
