@@ -372,10 +372,8 @@ def simulator(mp: ModelParams, base="analytic") -> RockingModel:
         law = _impact.Zero()
     elif base == "two-sided-e" and one:
         law = _impact.Constant(-restitution.two_sided(float(mp.alpha)))
-    elif one and not mp.gap_model:
-        law = _impact.OneSided()
     else:
-        law = _impact.HousnerTwoSided()
+        law = _impact.analytic("one-sided" if one else "two-sided", mp.gap_model)
     calibrated = _impact.calibrated(
         _impact.Transverse() if mp.gap_model else law, mp.c_pos, mp.c_neg, mp.amp_a, mp.amp_b
     )

@@ -213,6 +213,12 @@ class Custom(ImpactLaw):
         return self.func(thetadot_before, side, alpha, p)
 
 
+def analytic(boundary, gap=False) -> ImpactLaw:
+    """The analytic law of the base impacts of a wall: Eq. 14 for a one-sided wall without a gap
+    (a rebound), Eq. 2 otherwise (two-sided, or a one-sided wall swinging through a gap, Fig. 12)."""
+    return OneSided() if boundary == "one-sided" and not gap else HousnerTwoSided()
+
+
 def calibrated(law: ImpactLaw, c_pos=1.0, c_neg=1.0, a=1.0, b=0.0) -> ImpactLaw:
     """``law`` times c_pos on leaving hinge +1, c_neg on leaving hinge -1, and Eq. 17's bracket
     a - b (thetadot^-/thetadot_r)^2: the one composition of a calibrated impact law.

@@ -101,17 +101,17 @@ def block_laws(r=1.0, s_alpha=0.0, c=1.0):
 
 
 def _under(block, laws):
-    """alpha_+, alpha_- [rad] and e_+, e_- (on the edge being left) of the block under ``laws``."""
-    a_pos, a_neg, e_pos, e_neg = block["alpha_plus"], block["alpha_minus"], block["e_plus"], block["e_minus"]
+    """alpha_+, alpha_- [rad] of the block under ``laws`` and the factors of e on leaving each edge."""
+    a_pos, a_neg, c_pos, c_neg = block["alpha_plus"], block["alpha_minus"], 1.0, 1.0
     for law in laws:
         if isinstance(law, Hinge):
             a_pos, a_neg = law.angles(a_pos, a_neg)
         elif isinstance(law, Restitution):
             pos, neg = law.factors()
-            e_pos, e_neg = pos * e_pos, neg * e_neg
+            c_pos, c_neg = pos * c_pos, neg * c_neg
         else:
             raise NotImplementedError(f"the shake-table block has no {type(law).__name__}")
-    return a_pos, a_neg, e_pos, e_neg
+    return a_pos, a_neg, c_pos, c_neg
 
 
 def hinge_angles(block, r=1.0, s_alpha=0.0):
@@ -121,8 +121,9 @@ def hinge_angles(block, r=1.0, s_alpha=0.0):
 
 def block_model(block: dict, alpha_r_over_alpha=1.0, s_alpha=0.0, c=1.0) -> RockingModel:
     """The specimen's :class:`RockingModel` with the causes' parameters (null: the nominal block)."""
-    a_pos, a_neg, e_pos, e_neg = (float(x) for x in _under(block, block_laws(alpha_r_over_alpha, s_alpha, c)))
-    law = impact.Sided(impact.Constant(e_pos), impact.Constant(e_neg))
+    a_pos, a_neg, c_pos, c_neg = (float(x) for x in _under(block, block_laws(alpha_r_over_alpha, s_alpha, c)))
+    housner = impact.Sided(impact.Constant(block["e_plus"]), impact.Constant(block["e_minus"]))
+    law = impact.calibrated(housner, c_pos, c_neg)
     # alpha sets the rest threshold (REST_TOL thetadot_r): that of the weaker hinge.
     return RockingModel(alpha=min(a_pos, a_neg), p=block["p"], alpha_rock=a_pos, alpha_neg=a_neg, impact=law)
 

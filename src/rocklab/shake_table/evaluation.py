@@ -40,12 +40,10 @@ MODELS = ("block-nominal", "block-calibrated", "pgv-threshold", "dem")
 PGA_BINS = (0.0, 0.1, 0.2, 0.3, 0.5, 0.8, np.inf)
 PGV_BINS = (0.0, 0.05, 0.1, 0.15, 0.2, 0.3, np.inf)
 
-#: Cause of each fitted parameter: the block's causes, and the calibration's own two.
-CAUSE_OF = {
-    **{q.name: c.name for c in CAUSES for q in c.params},
-    cal.SIGMA.name: "instability_angle (scatter)",
-    cal.LAPSE.name: "lapse",
-}
+#: Cause of each fitted parameter: the block's causes (:data:`rocklab.shake_table.block.CAUSES`), the
+#: scatter of the first one's (:data:`rocklab.shake_table.calibration.SIGMA`) and the lapse.
+CAUSE_OF = {q.name: c.name for c in CAUSES for q in c.params if q.name in {p.name for p in PARAMS}}
+CAUSE_OF |= {cal.SIGMA.name: f"{CAUSE_OF[PARAMS[0].name]} (scatter)", cal.LAPSE.name: "lapse"}
 
 
 def _col(model):

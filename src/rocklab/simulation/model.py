@@ -182,11 +182,7 @@ class RockingModel:
 
     @property
     def base_law(self) -> _impact.ImpactLaw:
-        if self.impact is not None:
-            return self.impact
-        if self.one_sided and self.gap == 0:
-            return _impact.OneSided()
-        return _impact.HousnerTwoSided()
+        return _impact.analytic(self.boundary, self.gap > 0) if self.impact is None else self.impact
 
     @property
     def transverse_law(self) -> _impact.ImpactLaw:
