@@ -81,6 +81,13 @@ class Cause:
         (``values``, ``listed``: the parameters of the chosen and of the
         listed model), for the figure of
         :func:`rocklab.plots.diagnosis.family_curve_figure`.
+    on_ratios : callable, optional
+        ``on_ratios(trials) -> dict or None``: its signature in the ratios of
+        the impacts alone, r = thetadot^+/thetadot^- of every impact of
+        trials without rotations (the limestone blocks of
+        :mod:`rocklab.diagnosis.block_tests`: ``trials.ratio`` r/e_an,
+        ``u`` (thetadot^-_k/thetadot^-_1)^2, ``odd`` the impacts leaving the
+        release edge, ``alpha``), as :attr:`signature`.
     short : str, optional
         Its name in the calibrated walls' model names, ``<2s|1s>-calibrated-no-<short>``
         (:mod:`rocklab.seismic.calibrated`); None for a cause the maps do not carry as found.
@@ -104,6 +111,7 @@ class Cause:
     family: str | None = None
     closed_form: Callable | None = None
     curve: Callable | None = None
+    on_ratios: Callable | None = None
     short: str | None = None
     on_the_maps: tuple[str | None, str] | None = None
 

@@ -58,6 +58,22 @@ def signature(ob):
     }
 
 
+def on_ratios(trials):
+    """r/e_an on odd and even impacts: the two base edges in turn."""
+    ratio = trials.ratio
+    ok = np.isfinite(ratio)
+    odd, even = ratio[ok & trials.odd], ratio[ok & ~trials.odd]
+    mw = stats.mannwhitneyu(odd, even)
+    per = [np.nanmedian(r[o]) - np.nanmedian(r[~o]) for r, o in zip(ratio, trials.odd)]
+    return {
+        "value": float(np.median(odd) / np.median(even)),
+        "supports": bool(mw.pvalue < 0.01),
+        "text": f"r/e_an on odd / even impacts {np.median(odd):.3f} / {np.median(even):.3f} "
+        f"(p = {mw.pvalue:.2g}); odd minus even per trial from {np.min(per):+.3f} to "
+        f"{np.max(per):+.3f}",
+    }
+
+
 def starts(sig):
     return {k: sig.get("hinge_asymmetry", {}).get(k, 0.0) for k in ("s_alpha", "s_e")}
 
@@ -70,5 +86,6 @@ CAUSE = Cause(
     boundaries=("two-sided",),
     signature=signature,
     starts=starts,
+    on_ratios=on_ratios,
     short="asym",
 )

@@ -33,6 +33,18 @@ def signature(ob):
     }
 
 
+def on_ratios(trials):
+    """The trend of r/e_an with the squared impact speed relative to the first impact's."""
+    ratio = trials.ratio
+    ok = np.isfinite(ratio)
+    sl = stats.linregress(trials.u[ok], ratio[ok])
+    return {
+        "value": float(-sl.slope),
+        "supports": bool(sl.pvalue < 0.01),
+        "text": f"r/e_an against (thetadot^-_k/thetadot^-_1)^2: slope {sl.slope:+.3f} (p = {sl.pvalue:.2g})",
+    }
+
+
 def starts(sig):
     return {"a": sig.get("restitution_scale", {}).get("value", 1.0)}
 
@@ -44,6 +56,7 @@ CAUSE = Cause(
     laws=laws,
     signature=signature,
     starts=starts,
+    on_ratios=on_ratios,
     replaces=("restitution_scale",),
     short="eamp",
 )

@@ -31,6 +31,18 @@ def signature(ob):
     }
 
 
+def on_ratios(trials):
+    """The measured r/e_an of the impacts: one level per trial (its median), their mean over trials."""
+    ratio = trials.ratio
+    ok = np.isfinite(ratio)
+    med = series_level(ratio, ok)
+    return {
+        "value": med,
+        "supports": abs(med - 1) > C.practical,
+        "text": f"measured r/e_an = {med:.3f} (mean over trials of their medians, {ok.sum()} impacts)",
+    }
+
+
 def starts(sig):
     return {"c": sig.get("restitution_scale", {}).get("value", 1.0)}
 
@@ -42,5 +54,6 @@ CAUSE = Cause(
     laws=laws,
     signature=signature,
     starts=starts,
+    on_ratios=on_ratios,
     short="escale",
 )
