@@ -109,3 +109,23 @@ def test_a_toy_cause_added_to_the_catalogue_is_named(with_toy, hidden_chip):
     lo, hi = f["ci95"]["chip"]
     assert lo - 1e-4 <= 0.05 <= hi + 1e-4, (f["params"], (lo, hi))
     assert f["gain"]["deviance_per_obs"] > 0
+
+
+@pytest.mark.parametrize("cause", catalogue.in_order(("temperature",)), ids=lambda c: c.name)
+def test_a_cause_at_its_null_values_leaves_the_base_model(cause):
+    walls = [MapWall(0.2, 2.0, b, order) for b, order in (("two-sided", 0.0), ("one-sided", 1.0))]
+    base = D.model.base_params(walls)
+    null = D.model.model_of(walls, cause.laws(cause.values({})))
+    for name, value in vars(base).items():
+        if isinstance(value, np.ndarray) and name not in ("gap_model", "e0"):
+            np.testing.assert_allclose(getattr(null, name), value, rtol=1e-15, atol=0, err_msg=name)
+    # a gap of zero swings through nothing: Eq. 2 twice and the transverse impact are Eq. 14
+    v = np.full((2, 1), 1.0)
+    np.testing.assert_allclose(
+        D.model.impact_speeds(v, np.ones((2, 1)), null)[0], D.model.impact_speeds(v, np.ones((2, 1)), base)[0]
+    )
+
+
+def test_the_model_takes_only_the_laws_of_physics_law():
+    with pytest.raises(TypeError, match="no law of rocklab.physics.law"):
+        D.model.base_params([MapWall(0.2, 2.0, "two-sided")]).under(I.Scaled(I.HousnerTwoSided(), 0.9))

@@ -16,8 +16,9 @@ A law holds the change, not the wall: a factor on what the base model has
 (a gap, a stop).  Its values are floats, or per-test arrays where a cause
 takes one value per test (a stop threshold left out test by test).  The
 laws of several causes compose by acting in turn, in the catalogue's order
-(:data:`rocklab.diagnosis.catalogue.CAUSES`); a law acting twice
-multiplies.  Null values leave the base model as it is.
+(:data:`rocklab.diagnosis.catalogue.CAUSES`): factors multiply, a term or a
+rule is that of the last law to set it.  Null values leave the base model
+as it is.
 """
 
 from __future__ import annotations
