@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from rocklab.diagnosis import model as dm
+from rocklab.diagnosis import extended as dx
 from rocklab.physics import flight, restitution
 from rocklab.physics import impact as I
 from rocklab.simulation.model import RockingModel
@@ -59,9 +59,9 @@ def test_the_simulator_and_the_free_run_share_the_flights(k):
     assert t[0] == pytest.approx(flight.quarter_period(0.85 * A_S, a0, P), rel=1e-8)
     # the diagnosis' model of it builds the same simulator model
     ext, values = ("instability_amplitude",), {"alpha_r_over_alpha": 0.9, "rounding": k}
-    mp = dm.model_params([_wall()], ext, values).row(0)
+    mp = dx.model_params([_wall()], ext, values).row(0)
     assert mp.flight(0.5 * A_S, 1) == pytest.approx(flight.flight_angle(0.5 * A_S, A_S, k))
-    sim = dm.rocking_model(_wall(), ext, values)
+    sim = dx.rocking_model(_wall(), ext, values)
     assert sim.alpha_pos == pytest.approx(A_S) and sim.hinge_rounding == k
 
 

@@ -96,9 +96,9 @@ def test_losses_on_an_angle_that_depends_on_the_amplitude_match_the_exact_simula
     ext = ("instability_amplitude", "flight_loss")
     values = {"alpha_r_over_alpha": 1.0, "rounding": k, "zeta": 0.0}
     values |= {"mu_over_alpha": loss["mu"] / ALPHA, "kappa_alpha": loss["kappa"] * ALPHA}
-    sim = dm.rocking_model(wall, ext, values)
+    sim = D.rocking_model(wall, ext, values)
     assert (sim.hinge_rounding, sim.hinge_friction, sim.flight_drag) == pytest.approx((k, loss["mu"], loss["kappa"]))
-    mp = dm.model_params([wall], ext, values)
+    mp = D.model_params([wall], ext, values)
     v_before = np.abs(imp.thetadot_before.to_numpy())[None, :-1]
     A_model, _, a, _, _ = dm.next_flight(v_before, np.ones_like(v_before), mp)
     np.testing.assert_allclose(A_model[0], pk[1:], rtol=1e-8)

@@ -24,12 +24,12 @@ from rocklab.seismic.overturning import (
     named_model,
     overturning_map,
     record_comparison,
-    record_reductions,
     reductions,
     subgrid,
     subgrid_step,
     summary_table,
 )
+from rocklab.seismic.reductions import record_reductions
 from rocklab.simulation.batch import overturning_batch
 from rocklab.simulation.model import RockingModel
 

@@ -42,8 +42,7 @@ def _impact_law(args, alpha):
     if args.impact is not None:
         law = LAWS[args.impact]()
     if args.e_scale != 1.0:
-        default = impact.OneSided() if args.boundary == "one-sided" and args.gap == 0 else impact.HousnerTwoSided()
-        law = impact.Scaled(law or default, args.e_scale)
+        law = impact.calibrated(law or impact.analytic(args.boundary, args.gap > 0), args.e_scale, args.e_scale)
     if args.amplitude_law is not None:
         a, b = check_eq17(args.amplitude_law, "--amplitude-law")
         law = impact.AmplitudeLaw(law or impact.OneSided(), a, b)

@@ -9,9 +9,10 @@ the method and the catalogue of causes are in docs/diagnosis-method.md.
 module             holds
 =================  ==============================================================
 ``evidence``       the measured tests, their stacks, one-step residuals, covariates
-``model``          the extended rocking model: parameters, impacts, free run
-``causes/``        one module per candidate cause (parameters, signature, effect)
-``catalogue``      the ordered list of causes, their signatures and starts
+``model``          the one wall model: parameters, what a law changes, impacts, free run
+``causes/``        one module per candidate cause (parameters, signature, laws)
+``catalogue``      the ordered list of causes, their laws, signatures and starts
+``extended``       the model of named causes: arrays, exact simulator, errors
 ``estimation/``    the engine: noise model, fits, held-out deviance, bootstrap, selection
 ``discovery``      whether a finding's form was discovered (a family) rather than listed
 ``problem``        the tests of a series as a problem of the engine
@@ -24,10 +25,11 @@ module             holds
 """
 
 from rocklab.diagnosis.catalogue import CAUSES, signatures
-from rocklab.diagnosis.errors import engineering_errors, engineering_rows, what_is_wrong
+from rocklab.diagnosis.errors import engineering_rows, what_is_wrong
 from rocklab.diagnosis.estimation import Problem, finite_mean, parameter_intervals, select_effects
 from rocklab.diagnosis.evidence import MeasuredTest, TestStack, measured_test, records_by_series, residuals
-from rocklab.diagnosis.model import free_run, model_params, rocking_model, simulate_measured
+from rocklab.diagnosis.extended import engineering_errors, model_params, rocking_model, simulate_measured
+from rocklab.diagnosis.model import free_run
 from rocklab.diagnosis.report import diagnosis_markdown, write_diagnosis
 from rocklab.diagnosis.result import (
     BoundaryDiagnosis,

@@ -39,15 +39,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
 from rocklab.data import LIMESTONE
 from rocklab.diagnosis import catalogue
-from rocklab.diagnosis.causes import restitution_housner_loss, restitution_scale
+from rocklab.diagnosis.causes import restitution_housner_loss
 from rocklab.diagnosis.discovery import discovery, family_against_listed
 from rocklab.diagnosis.estimation import Problem, beyond_the_catalogue, finite_mean, select_effects
-from rocklab.diagnosis.evidence import series_level
 from rocklab.physics import restitution
+from rocklab.physics.law import Amplitude, HousnerLoss, Restitution
 
 #: Impacts per trial used (later ones are dominated by the processing noise).
 N_IMPACTS = 10
@@ -58,7 +57,21 @@ R_MAX = 1.5
 #: Folder of the tables, with their provenance (package data, :mod:`rocklab.data`).
 TABLES = LIMESTONE
 
-CANDIDATES = ("restitution_scale", "restitution_amplitude", "hinge_asymmetry")
+#: The laws the ratios of the impacts tell: the listed causes that act through them alone are the
+#: candidates (:func:`candidates`); the rotations, which the tables lack, are not modelled.
+IMPACT_LAWS = (HousnerLoss, Restitution, Amplitude)
+
+
+def candidates():
+    """The listed causes of two-sided walls whose laws change e (:data:`IMPACT_LAWS`), in catalogue
+    order: each changes the ratios of the impacts; a law of the rotations they also have (an angle)
+    is not fitted."""
+    null = catalogue.null_values()
+    return tuple(
+        c
+        for c in catalogue.for_boundary("two-sided")
+        if any(isinstance(law, IMPACT_LAWS) for law in c.laws(c.values(null)))
+    )
 
 
 def read_events(path=TABLES / "limestone-rocking-events.csv"):
@@ -78,6 +91,11 @@ class _Trials:
     r: np.ndarray  # measured ratio, NaN where unused
     u: np.ndarray  # (thetadot^-_k / thetadot^-_1)^2
     odd: np.ndarray  # impact leaves the release edge
+
+    @property
+    def ratio(self):
+        """r / e_an of every impact, Housner's e_an of Eq. 2 [-]."""
+        return self.r / restitution.two_sided(self.alpha)[:, None]
 
     def subset(self, idx):
         return replace(
@@ -126,7 +144,9 @@ class BlockProblem(Problem):
     def __init__(self, trials: _Trials):
         self.T = trials
         self.n_tests = len(trials.ids)
-        self.causes = tuple(c for c in catalogue.CAUSES if c.name in CANDIDATES)
+        self.causes = candidates()
+        # the base e of Housner's loss acts at its null where it is no candidate
+        self._acting = (restitution_housner_loss.CAUSE, *self.causes)
         if np.ptp(trials.alpha) > 0:
             # Housner's loss and a constant loss are told apart only across slendernesses
             self.causes += (restitution_housner_loss.CAUSE,)
@@ -135,11 +155,23 @@ class BlockProblem(Problem):
         return self.T.subset(np.asarray(idx))
 
     def model_e(self, sub, values):
+        """e of every impact: the laws of the causes (at their null where not in ``values``) on
+        Housner's e, the base e first, then the factors on the edge being left (odd impacts leave
+        the release edge), then Eq. 17 in the speed relative to the first impact's."""
         v = catalogue.null_values()
         v.update(values)
-        e_an = restitution_housner_loss.restitution(restitution.two_sided(sub.alpha)[:, None], v)
-        e = e_an * v["c"] * np.exp(np.where(sub.odd, 0.5, -0.5) * v["s_e"])
-        return e * np.clip(v["a"] - v["b"] * sub.u, 0.0, 1.0 / e)
+        laws = [law for c in self._acting for law in c.laws(c.values(v))]
+        e = restitution.two_sided(sub.alpha)[:, None]
+        for law in laws:
+            if isinstance(law, HousnerLoss):
+                e = law.restitution(e)
+        for law in laws:
+            if isinstance(law, Restitution):
+                e = e * law.on_impacts(sub.odd)
+        for law in laws:
+            if isinstance(law, Amplitude):
+                e = e * np.clip(law.a - law.b * sub.u, 0.0, 1.0 / e)
+        return e
 
     def residuals(self, sub, ext, values):
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -167,7 +199,7 @@ class BlockProblem(Problem):
         return [q for q in super().params(ext) if q.name != "s_alpha"]
 
     def starts(self, ext):
-        ratio = self.T.r / restitution.two_sided(self.T.alpha)[:, None]
+        ratio = self.T.ratio
         med = float(np.nanmedian(ratio))
         return {"c": med, "a": med}
 
@@ -180,45 +212,14 @@ class BlockProblem(Problem):
 
 
 def signatures(trials: _Trials):
-    """Evidence in the ratios that needs no fit: level, trend with the impact speed, odd/even, and
-    across slendernesses the trend of e/e_an with (B/H)^2 (:func:`slenderness_trend`)."""
-    ratio = trials.r / restitution.two_sided(trials.alpha)[:, None]
-    ok = np.isfinite(ratio)
-    e, u = ratio[ok], trials.u[ok]
-    med = series_level(ratio, ok)
-    sl = stats.linregress(u, e)
-    odd, even = ratio[ok & trials.odd], ratio[ok & ~trials.odd]
-    mw = stats.mannwhitneyu(odd, even)
-    per = [
-        np.nanmedian(ratio[i][trials.odd[i]]) - np.nanmedian(ratio[i][~trials.odd[i]]) for i in range(len(trials.ids))
-    ]
+    """Evidence in the ratios that needs no fit: each cause's own (its ``on_ratios``), Housner's loss
+    across slendernesses first."""
     out = {}
-    if np.ptp(trials.alpha) > 0:
-        st = slenderness_trend(trials)
-        out["restitution_housner_loss"] = {
-            "value": st["slope"],
-            "supports": bool(st["p"] < 0.01),
-            "text": f"per-trial median r/e_an against (B/H)^2: slope {st['slope']:+.3f} (p = {st['p']:.2g})",
-        }
-    return out | {
-        "restitution_scale": {
-            "value": med,
-            "supports": abs(med - 1) > restitution_scale.C.practical,
-            "text": f"measured r/e_an = {med:.3f} (mean over trials of their medians, {e.size} impacts)",
-        },
-        "restitution_amplitude": {
-            "value": float(-sl.slope),
-            "supports": bool(sl.pvalue < 0.01),
-            "text": f"r/e_an against (thetadot^-_k/thetadot^-_1)^2: slope {sl.slope:+.3f} (p = {sl.pvalue:.2g})",
-        },
-        "hinge_asymmetry": {
-            "value": float(np.median(odd) / np.median(even)),
-            "supports": bool(mw.pvalue < 0.01),
-            "text": f"r/e_an on odd / even impacts {np.median(odd):.3f} / {np.median(even):.3f} "
-            f"(p = {mw.pvalue:.2g}); odd minus even per trial from {np.min(per):+.3f} to "
-            f"{np.max(per):+.3f}",
-        },
-    }
+    for cause in (restitution_housner_loss.CAUSE, *candidates()):
+        s = cause.on_ratios(trials) if cause.on_ratios is not None else None
+        if s is not None:
+            out[cause.name] = s
+    return out
 
 
 def diagnose_group(trials: _Trials, *, n_boot=40, seed=0):
@@ -292,34 +293,6 @@ def diagnose_group(trials: _Trials, *, n_boot=40, seed=0):
     }
 
 
-def slenderness_trend(trials: _Trials):
-    """How e/e_an varies with slenderness, trial by trial.
-
-    The median r/e_an of each trial regressed on (B/H)^2 ~ sin^2 alpha, the
-    variable of Housner's e: a slope means that Eq. 2 gets the trend with
-    slenderness wrong, not only the level.
-
-    Returns
-    -------
-    dict
-        ``intercept``, ``slope`` (per unit (B/H)^2), ``p``, and the level of
-        each group (mean over its trials of their medians).
-    """
-    ratio = trials.r / restitution.two_sided(trials.alpha)[:, None]
-    ok = np.isfinite(ratio)
-    med = np.array([np.median(ratio[i][ok[i]]) for i in range(len(trials.ids))])
-    x = np.tan(trials.alpha) ** 2
-    fit = stats.linregress(x, med)
-    hb = np.round(1.0 / np.tan(trials.alpha))
-    return {
-        "intercept": float(fit.intercept),
-        "slope": float(fit.slope),
-        "slope_se": float(fit.stderr),
-        "p": float(fit.pvalue),
-        "levels": {f"{h:.0f}": float(np.mean(med[hb == h])) for h in np.unique(hb)},
-    }
-
-
 def diagnose_blocks(events=None, *, n_boot=40, seed=0):
     """Diagnose every block group of the limestone tables."""
     events = read_events() if events is None else events
@@ -329,7 +302,7 @@ def diagnose_blocks(events=None, *, n_boot=40, seed=0):
     return {
         "all": diagnose_group(every, n_boot=n_boot, seed=seed),
         "groups": entries,
-        "slenderness": slenderness_trend(every),
+        "slenderness": restitution_housner_loss.slenderness_trend(every),
         "source": "Colombo et al., UMinho free-rocking limestone blocks, DOI 10.60756/uminho-jh25 (CC BY 4.0)",
     }
 

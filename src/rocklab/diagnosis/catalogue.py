@@ -1,9 +1,14 @@
 """The catalogue of candidate causes: one module each in :mod:`rocklab.diagnosis.causes`.
 
 :data:`CAUSES` is the ordered list the diagnosis reads: the order in which
-the causes act on the model and are reported when tied.  Adding a cause is
-one new module (a :class:`rocklab.diagnosis.causes.Cause` named ``CAUSE``)
-and one line here (docs/diagnosis-method.md, "Adding a cause").
+the causes' laws act on the model (:func:`laws`) and the causes are
+reported when tied.  Adding a cause is one new module (a
+:class:`rocklab.diagnosis.causes.Cause` named ``CAUSE``, its physics as
+laws of :mod:`rocklab.physics.law`, its metadata as attributes) and one
+line here (docs/diagnosis-method.md, "Adding a cause"): the diagnosis, the
+exact simulator, the calibrated maps (:mod:`rocklab.seismic.calibrated`)
+and the limestone blocks (:mod:`rocklab.diagnosis.block_tests`) read it
+from here.
 :data:`FAMILIES` are the generalised families (issue 12), each holding a
 listed cause as one member, searched only where the listed causes leave
 structure.
@@ -56,13 +61,32 @@ def in_order(columns=()):
     families = list(FAMILIES)
     i = families.index(restitution_drift.CAUSE) + 1
     families[i:i] = restitution_drift.along_log(tuple(columns))
-    return [*CAUSES[:-1], *families, CAUSES[-1]]
+    # the causes estimated after selection act last, on the chosen model as it is
+    later = [c for c in CAUSES if c.stage != "selection"]
+    return [*(c for c in CAUSES if c not in later), *families, *later]
 
 
 def by_name(name):
     """The cause of the catalogue called ``name`` (a drift along a column of the test log too)."""
     column = restitution_drift.column_of(name)
     return next(c for c in in_order(() if column is None else (column,)) if c.name == name)
+
+
+def laws(ext, values=None, columns=()):
+    """The laws of the causes named ``ext`` (:attr:`rocklab.diagnosis.causes.Cause.laws`) with their
+    parameter ``values`` (null where missing), in the order they act on a wall (:func:`in_order`,
+    with a drift along each of the test log's ``columns``)."""
+    return [law for c in in_order(columns) if c.name in ext for law in c.laws(c.values(values or {}))]
+
+
+def by_short(short):
+    """The cause of the catalogue whose short name (:attr:`rocklab.diagnosis.causes.Cause.short`) is ``short``."""
+    return next(c for c in in_order() if c.short == short)
+
+
+def short_names():
+    """The short names of the causes the maps can carry, in catalogue order."""
+    return [c.short for c in in_order() if c.short]
 
 
 def null_values():

@@ -3,26 +3,24 @@
 The free run of a model (:func:`rocklab.diagnosis.model.free_run`) from
 each test's measured release against the measured motion
 (:func:`engineering_rows`), summarised over a series
-(:func:`engineering_errors`) and stated in words (:func:`what_is_wrong`).
+(:func:`summarise_rows`, :func:`rocklab.diagnosis.extended.engineering_errors`
+for a model of named causes) and stated in words (:func:`what_is_wrong`).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 
 from rocklab.diagnosis.estimation import finite_mean
 from rocklab.diagnosis.evidence import MeasuredTest, TestStack, log_ratio, residuals
-from rocklab.diagnosis.model import free_run, model_params, simulate_measured
-from rocklab.physics import restitution
+from rocklab.diagnosis.model import ModelParams, free_run, simulate_test
+from rocklab.simulation.model import RockingModel
 
 
-def engineering_rows(tests, ext=(), values=None, base="analytic", n_max=600):
-    """Per-test measures of a model's free run against the measured motion.
-
-    ``base``: the literature model under the causes (:func:`rocklab.diagnosis.model.rocking_model`).
+def engineering_rows(tests, mp: ModelParams, n_max=600):
+    """Per-test measures of the free run of the model ``mp`` of ``tests`` against the measured motion.
 
     Returns
     -------
@@ -35,11 +33,6 @@ def engineering_rows(tests, ext=(), values=None, base="analytic", n_max=600):
         each as a (measured, model) pair where both exist.
     """
     S = TestStack.of(tests)
-    mp = model_params(tests, ext, values)
-    if base == "zero":
-        mp = replace(mp, e0=0.0 * mp.e0, gap_model=np.zeros_like(mp.gap_model))
-    elif base == "two-sided-e":
-        mp = replace(mp, e0=np.where(mp.one_sided, -restitution.two_sided(mp.alpha), mp.e0))
     run = free_run(S, mp, n_max)
     R = residuals(S, mp)
     rows = []
@@ -74,11 +67,11 @@ def engineering_rows(tests, ext=(), values=None, base="analytic", n_max=600):
     return rows
 
 
-def history_rms(test: MeasuredTest, ext=(), values=None, base="analytic"):
-    """RMS of (theta_model - theta_measured) / alpha over the measured motion (exact simulator)."""
+def history_rms(test: MeasuredTest, model: RockingModel):
+    """RMS of (theta_model - theta_measured) / alpha over the measured motion (the exact simulator ``model``)."""
     if test.t is None:
         return np.nan
-    t, th = simulate_measured(test, ext, values, base)
+    t, th = simulate_test(test, model)
     sel = (test.t >= test.t_release) & (test.t <= test.t_end)
     m = np.interp(test.t[sel], t, th, right=0.0)
     return float(np.sqrt(np.mean((m - test.theta[sel]) ** 2)) / test.alpha)
@@ -94,14 +87,6 @@ def summarise_rows(rows):
             out[key] = {"measured": finite_mean(arr[:, 0]), "model": finite_mean(arr[:, 1])}
         else:
             out[key] = finite_mean(np.array(vals, float))
-    return out
-
-
-def engineering_errors(tests, ext=(), values=None, base="analytic", n_history=2):
-    """Series means of :func:`engineering_rows` and the RMS of theta/alpha on ``n_history`` tests."""
-    out = summarise_rows(engineering_rows(tests, ext, values, base))
-    rms = [history_rms(t, ext, values, base) for t in tests[:n_history]]
-    out["rms_theta_over_alpha"] = finite_mean(rms) if rms else None
     return out
 
 

@@ -1,13 +1,24 @@
-"""The extended rocking model of the diagnosis: the base model and what the causes change.
+"""The one wall model: the base rocking model and what the causes' laws change.
 
 Base model: a rigid block on the nominal alpha with the analytic e of its
 boundary (Eq. 2 two-sided, Eq. 14 one-sided), released from rest at the
-measured theta0.  Each cause of :mod:`rocklab.diagnosis.catalogue` changes
-the per-test arrays of :class:`ModelParams`; the closed forms of a flight
-(:mod:`rocklab.physics.flight`) then give the one-step predictions
-(:mod:`rocklab.diagnosis.evidence`), the flight-by-flight free run
-(:func:`next_flight`, :func:`free_run`) and the model of the exact
-simulator (:func:`rocking_model`).
+measured theta0.  A cause declares what it does to a wall once, as laws of
+:mod:`rocklab.physics.law` (``Cause.laws(values)``); :meth:`ModelParams.under`
+is the one place where a law becomes the per-test arrays of the model.  The
+closed forms of a flight (:mod:`rocklab.physics.flight`) then give the
+one-step predictions (:mod:`rocklab.diagnosis.evidence`), the
+flight-by-flight free run (:func:`next_flight`, :func:`free_run`).
+
+Design: the diagnosis needs the model of a whole series at once (per-test
+arrays, a value per test where a cause takes one), the exact simulator one
+wall; so :class:`ModelParams` is the model and the simulator's
+:class:`~rocklab.simulation.model.RockingModel` is derived from one of its
+rows by :func:`simulator`, the one place where the model's restitution,
+gap and stop become impact laws of :mod:`rocklab.physics.impact`.  There is
+no second mapping of the causes: the calibrated walls of the maps are
+:func:`simulator` of the maps' wall (:mod:`rocklab.seismic.calibrated`).
+This module knows no cause by name: the catalogue resolves names to laws
+(:func:`rocklab.diagnosis.extended.model_params`).
 """
 
 from __future__ import annotations
@@ -17,6 +28,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from rocklab.physics import impact as _impact
+from rocklab.physics import law as _law
 from rocklab.physics import restitution
 from rocklab.physics.flight import (
     apex,
@@ -38,11 +50,10 @@ RELEASE_MARGIN = 1e-3
 
 @dataclass
 class ModelParams:
-    """Per-test arrays (shape (tests,)) of an extended model.
+    """Per-test arrays (shape (tests,)) of an extended model (:meth:`under` applies a law).
 
-    ``impact_hooks`` are functions ``hook(v_out, v, side, mp) -> v_out``
-    applied in turn to the take-off speed of every impact (a cause outside
-    the fields below), their parameters per test in ``extra``.
+    ``extra`` holds the test log's columns a drift may follow
+    (``"log:<column>"``, the test's place in the series' range, 0 to 1).
     """
 
     alpha: np.ndarray
@@ -64,7 +75,7 @@ class ModelParams:
     mu: np.ndarray = None  # dry friction at the hinge [-] (rocklab.physics.flight.loss_deceleration)
     kappa: np.ndarray = None  # quadratic drag in flight [1/rad]
     extra: dict = field(default_factory=dict)
-    impact_hooks: tuple = ()
+    speed_knots: np.ndarray = None  # (tests, knots): e / e_an at the knots of physics.law.SpeedFactor
 
     def __post_init__(self):
         for name in ("mu", "kappa"):
@@ -91,6 +102,55 @@ class ModelParams:
         """Rocking angle [rad] of a flight of apex A [rad] on hinge ``side``
         (:func:`rocklab.physics.flight.flight_angle`)."""
         return flight_angle(A, self.hinge(side), per_test(self.rounding, side))
+
+    def place(self, column=None):
+        """n of each test: its place in the series, or in the range of the test log's ``column``
+        (0 to 1); a wall without the column (the maps' wall) stands for the middle of the series."""
+        return self.order if column is None else self.extra.get(f"log:{column}", 0.5 + 0 * self.order)
+
+    def under(self, law):
+        """The model as ``law`` (one of :mod:`rocklab.physics.law`) changes it: the one place
+        where a cause's law becomes the model's arrays."""
+        if isinstance(law, _law.Restitution):
+            pos, neg = law.factors(None if law.drift is None else self.place(law.along))
+            return replace(self, c_pos=pos * self.c_pos, c_neg=neg * self.c_neg)
+        if isinstance(law, _law.Amplitude):
+            return replace(self, amp_a=law.a * self.amp_a, amp_b=law.b * np.ones_like(self.alpha))
+        if isinstance(law, _law.HousnerLoss):
+            return replace(self, e0=law.restitution(self.e0))
+        if isinstance(law, _law.SpeedFactor):
+            return replace(self, speed_knots=np.tile(np.array(law.knots), (self.alpha.size, 1)))
+        if isinstance(law, _law.Hinge):
+            a_pos, a_neg = law.angles(self.a_pos, self.a_neg)
+            k = self.rounding if law.rounding is None else law.rounding * np.ones_like(self.alpha)
+            return replace(self, a_pos=a_pos, a_neg=a_neg, rounding=k)
+        if isinstance(law, _law.FlightLoss):
+            return replace(
+                self,
+                zeta=law.zeta * np.ones_like(self.alpha),
+                mu=law.mu_over_alpha * self.alpha,
+                kappa=law.kappa_alpha / self.alpha,
+            )
+        if isinstance(law, _law.Gap):
+            gap_model = self.one_sided.copy()
+            return replace(
+                self,
+                gap_model=gap_model,
+                e0=np.where(gap_model, restitution.two_sided(self.alpha), self.e0),
+                gap=law.over_alpha * self.alpha,
+            )
+        if isinstance(law, _law.Stop):
+            return replace(self, stop=law.v_stop * np.ones_like(self.alpha))
+        raise TypeError(f"{type(law).__name__} is no law of rocklab.physics.law")
+
+    def with_base(self, base="analytic"):
+        """The model on a literature base: ``"analytic"`` (itself), ``"zero"`` (e = 0, Liberatore &
+        Spera 2003) or ``"two-sided-e"`` (e_an,2s for a one-sided wall, Hogan 1992)."""
+        if base == "zero":
+            return replace(self, e0=0.0 * self.e0, gap_model=np.zeros_like(self.gap_model))
+        if base == "two-sided-e":
+            return replace(self, e0=np.where(self.one_sided, -restitution.two_sided(self.alpha), self.e0))
+        return self
 
     def row(self, i):
         """The model of test ``i`` (scalars)."""
@@ -137,23 +197,12 @@ def base_params(tests) -> ModelParams:
     )
 
 
-def model_params(tests, ext=(), values=None, base=None) -> ModelParams:
-    """ModelParams of the base model extended by the causes ``ext`` with parameter ``values``.
-
-    The causes act in catalogue order; the values of causes outside ``ext``
-    are not used.  ``base``: :func:`base_params` of ``tests`` already made
-    (the causes replace its arrays, never change them).
-    """
-    # the catalogue's causes need this module (their stages run the model): read it at call time
-    from rocklab.diagnosis import catalogue
-    from rocklab.diagnosis.causes.restitution_drift import column_of
-
+def model_of(tests, laws=(), base=None) -> ModelParams:
+    """The base model of ``tests`` (``base``: its :func:`base_params`, already made) as ``laws`` change
+    it, in their order (:meth:`ModelParams.under`)."""
     mp = base_params(tests) if base is None else base
-    # a drift along a column of the test log that these tests (the maps' wall) lack still acts
-    columns = set(log_columns(tests)) | {column_of(c) for c in ext if column_of(c)}
-    for cause in catalogue.in_order(tuple(sorted(columns))):
-        if cause.name in ext:
-            mp = cause.apply(mp, cause.values(values or {}))
+    for law in laws:
+        mp = mp.under(law)
     return mp
 
 
@@ -180,8 +229,8 @@ def impact_speeds(v, side, mp: ModelParams, timed=True):
     rocking (scale, Eq. 17) is that of the transverse impact, at its own
     velocity: it carries the dissipation that sets e_an,1s apart from
     e_an,2s (Sect. 3), and as the gap closes the sequence tends to Eq. 14
-    with the same calibration.  The impact hooks of :class:`ModelParams`
-    act last.  ``timed=False`` skips the duration (returned as 0), for a
+    with the same calibration.  A law of the impact speed
+    (:class:`rocklab.physics.law.SpeedFactor`) acts last.  ``timed=False`` skips the duration (returned as 0), for a
     caller that needs the speeds only.
 
     Returns
@@ -216,8 +265,13 @@ def impact_speeds(v, side, mp: ModelParams, timed=True):
         duration = np.where(gm, tau, 0.0)
         v_in = np.where(gm & reach, vg, 0.0)
         w = np.where(gm & reach, wg, 0.0)
-    for hook in mp.impact_hooks:
-        v_out = hook(v_out, v, side, mp)
+    if mp.speed_knots is not None:
+        # e / e_an = g(v / thetadot_r), after the base law of the other causes
+        vr = overturning_velocity(per_test(mp.alpha, side), per_test(mp.p, side))
+        x = np.asarray(v) / vr
+        basis = _law.hats(x)
+        g = np.asarray(mp.speed_knots)
+        v_out = v_out * sum(per_test(g[..., j], x) * basis[..., j] for j in range(_law.KNOTS.size))
     return v_out, depth, duration, v_in, w
 
 
@@ -301,32 +355,28 @@ def free_run(S, mp: ModelParams, n_max=600):
     return out
 
 
-def rocking_model(test, ext=(), values=None, base="analytic") -> RockingModel:
-    """The :class:`rocklab.simulation.model.RockingModel` of a diagnosis model, for one test.
+def simulator(mp: ModelParams, base="analytic") -> RockingModel:
+    """The exact simulator's :class:`rocklab.simulation.model.RockingModel` of one wall of the model
+    (a row of :class:`ModelParams`, :meth:`ModelParams.row`).
 
-    ``base``: ``"analytic"`` (Eq. 2 / Eq. 14), ``"two-sided-e"`` (e_an,2s used
-    for a one-sided wall, Hogan 1992) or ``"zero"`` (e = 0, Liberatore & Spera
-    2003).  Impact hooks (:class:`ModelParams`) have no simulator law.
+    ``base``: as :meth:`ModelParams.with_base`.  The impact laws are the
+    base law of the boundary under the model's restitution and Eq. 17
+    (:func:`rocklab.physics.impact.calibrated`), the transverse impact of
+    Eqs. 12-13 under them where the wall swings through a gap, and a stop
+    (:class:`rocklab.physics.impact.Sticking`).  A law of the impact speed
+    and a change of the base e (:class:`~rocklab.physics.law.SpeedFactor`,
+    :class:`~rocklab.physics.law.HousnerLoss`) have no simulator law.
     """
-    mp = model_params([test], ext, values).row(0)
-    one = test.boundary == "one-sided"
+    one = bool(mp.one_sided)
     if base == "zero":
         law = _impact.Zero()
     elif base == "two-sided-e" and one:
-        law = _impact.Constant(-restitution.two_sided(test.alpha))
-    elif one and not mp.gap_model:
-        law = _impact.OneSided()
+        law = _impact.Constant(-restitution.two_sided(float(mp.alpha)))
     else:
-        law = _impact.HousnerTwoSided()
-    calibrated = _impact.Transverse() if mp.gap_model else law
-    if mp.c_pos != mp.c_neg:
-        calibrated = _impact.Sided(
-            _impact.Scaled(calibrated, float(mp.c_pos)), _impact.Scaled(calibrated, float(mp.c_neg))
-        )
-    elif mp.c_pos != 1.0:
-        calibrated = _impact.Scaled(calibrated, float(mp.c_pos))
-    if mp.amp_b != 0.0 or mp.amp_a != 1.0:
-        calibrated = _impact.AmplitudeLaw(calibrated, float(mp.amp_a), float(mp.amp_b))
+        law = _impact.analytic("one-sided" if one else "two-sided", mp.gap_model)
+    calibrated = _impact.calibrated(
+        _impact.Transverse() if mp.gap_model else law, mp.c_pos, mp.c_neg, mp.amp_a, mp.amp_b
+    )
     law, transverse = (law, calibrated) if mp.gap_model else (calibrated, None)
     if mp.stop > 0:
         # the landing from the outer hinge only, as free_run and stop_speeds
@@ -334,9 +384,9 @@ def rocking_model(test, ext=(), values=None, base="analytic") -> RockingModel:
         sticking = _impact.Sticking(law, float(mp.stop))
         law = _impact.Sided(sticking, law) if mp.gap_model else sticking
     return RockingModel(
-        alpha=test.alpha,
-        p=test.p,
-        boundary=test.boundary,
+        alpha=float(mp.alpha),
+        p=float(mp.p),
+        boundary="one-sided" if one else "two-sided",
         impact=law,
         alpha_rock=float(mp.a_pos),
         alpha_neg=float(mp.a_neg),
@@ -349,8 +399,8 @@ def rocking_model(test, ext=(), values=None, base="analytic") -> RockingModel:
     )
 
 
-def simulate_measured(test, ext=(), values=None, base="analytic", t_end=None, fs=None):
-    """Free run of a diagnosis model (exact simulator) from a measured test's release, on its clock.
+def simulate_test(test, model: RockingModel, t_end=None, fs=None):
+    """Free run of a wall's simulator ``model`` (:func:`simulator`) from a measured test's release, on its clock.
 
     Released from the measured rotation and speed (:func:`release_rotation`).
 
@@ -359,7 +409,6 @@ def simulate_measured(test, ext=(), values=None, base="analytic", t_end=None, fs
     t, theta : ndarray
         Time [s] from the start of the record and rotation [rad] (NaN-free).
     """
-    model = rocking_model(test, ext, values, base)
     a0 = model.alpha_side(test.side0)
     fs = 1.0 / test.dt if fs is None else fs
     t_end = (test.t_end - test.t_release) * 1.2 + 1.0 if t_end is None else t_end

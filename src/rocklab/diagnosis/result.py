@@ -430,7 +430,7 @@ class CampaignDiagnosis(_Document):
 class FamilyComparison(_Record):
     """A family of the impact law fitted on the limestone trials, named or not,
     against the base model and the best listed cause
-    (:func:`rocklab.diagnosis.engine.family_against_listed`)."""
+    (:func:`rocklab.diagnosis.discovery.family_against_listed`)."""
 
     effect: str
     form: str | None = None

@@ -24,10 +24,10 @@ import numpy as np
 
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.discovery import discovery
-from rocklab.diagnosis.errors import engineering_errors, what_is_wrong
+from rocklab.diagnosis.errors import what_is_wrong
 from rocklab.diagnosis.estimation import beyond_the_catalogue, finite_mean, select_effects
 from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_test
-from rocklab.diagnosis.model import model_params
+from rocklab.diagnosis.extended import engineering_errors, model_params
 from rocklab.diagnosis.problem import WallProblem
 from rocklab.diagnosis.result import CampaignDiagnosis
 from rocklab.dissipation.statistics import MIN_BOOTSTRAP, interval_note
@@ -73,7 +73,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
     n_boot : int
         Bootstrap resamples (of tests) for the 95 % intervals.
     n_history : int
-        Tests simulated in time (:func:`rocklab.diagnosis.model.simulate_measured`) for the
+        Tests simulated in time (:func:`rocklab.diagnosis.extended.simulate_measured`) for the
         RMS of theta/alpha.
 
     Returns
@@ -170,8 +170,9 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
     structure = list(sel["structure"])
     ext, ext_values = list(effects), dict(values)
     for cause in problem.after_selection:
-        left = cause.unexplained(problem.S, model_params(tests, effects, values))
-        found = cause.estimate(tests, effects, values, seed=seed) if left else None
+        mp = model_params(tests, effects, values)
+        left = cause.unexplained(problem.S, mp)
+        found = cause.estimate(tests, mp, seed=seed) if left else None
         log.info("%s: %s; %s", cause.name, "; ".join(left) or "nothing left for it", _estimated(left, found))
         if found is not None and found["named"]:
             structure = [st for st in structure if st not in left]

@@ -17,7 +17,7 @@ from rocklab.summaries import Tolerance
 
 #: How far two machines may take the diagnoses' numbers apart. A fit stops
 #: when a step moves the parameters by less than 1e-6 of their range, or the
-#: deviance by less than 1e-6 of itself (:mod:`rocklab.diagnosis.engine`),
+#: deviance by less than 1e-6 of itself (:mod:`rocklab.diagnosis.estimation`),
 #: so a parameter that the data barely fix (near its null, or confounded with
 #: another) stops a little elsewhere with the floating point of the machine
 #: (s_e of series 2b-2s: -0.000118036 on one machine, -0.000117894 on

@@ -570,7 +570,7 @@ def simulate_virtual_test(test: VirtualTest, specimen, layout, rng=None, t_end=4
     t, readings, truth
         As :func:`record_from_motion`; truth also holds every parameter used.
     """
-    from rocklab.physics.impact import HousnerTwoSided, Scaled
+    from rocklab.physics.impact import HousnerTwoSided, calibrated
     from rocklab.simulation.model import RockingModel
     from rocklab.simulation.reference import simulate_free
 
@@ -584,7 +584,8 @@ def simulate_virtual_test(test: VirtualTest, specimen, layout, rng=None, t_end=4
     kw = {"alpha_rock": ratio * alpha, **test.model}
     if not one and "impact" not in kw:
         # The campaign's mean e_exp / e_an,2s (Sect. 4): records of ~10 s.
-        kw["impact"] = Scaled(HousnerTwoSided(), restitution.CALIBRATED_RATIO_TWO_SIDED)
+        c = restitution.CALIBRATED_RATIO_TWO_SIDED
+        kw["impact"] = calibrated(HousnerTwoSided(), c, c)
     model = RockingModel.from_wall(h, b, boundary=test.boundary, **kw)
     sgn = 1.0 if test.direction == "push" else -1.0
     a_side = model.alpha_pos if sgn > 0 else model.alpha_minus

@@ -142,10 +142,16 @@ class AmplitudeLaw(ImpactLaw):
     e = e_law * (a - b (|thetadot^-| / thetadot_r)^2), thetadot_r of Eq. 16
     (nominal alpha and p).  The bracket is clipped to [0, 1/|e_law|]: e keeps
     the sign of the underlying law and |e| <= 1.  The paper's fit for
-    one-sided rocking is ``AmplitudeLaw(OneSided(), 1.18, 0.473)``.
+    one-sided rocking is ``AmplitudeLaw(OneSided())``, a and b of
+    :data:`rocklab.physics.restitution.AMPLITUDE_LAW_ONE_SIDED`.
     """
 
-    def __init__(self, law: ImpactLaw, a: float = 1.18, b: float = 0.473):
+    def __init__(
+        self,
+        law: ImpactLaw,
+        a: float = restitution.AMPLITUDE_LAW_ONE_SIDED[0],
+        b: float = restitution.AMPLITUDE_LAW_ONE_SIDED[1],
+    ):
         self.law, self.a, self.b = law, float(a), float(b)
 
     def coefficient(self, thetadot_before, side, alpha, p):
@@ -205,3 +211,26 @@ class Custom(ImpactLaw):
 
     def coefficient(self, thetadot_before, side, alpha, p):
         return self.func(thetadot_before, side, alpha, p)
+
+
+def analytic(boundary, gap=False) -> ImpactLaw:
+    """The analytic law of the base impacts of a wall: Eq. 14 for a one-sided wall without a gap
+    (a rebound), Eq. 2 otherwise (two-sided, or a one-sided wall swinging through a gap, Fig. 12)."""
+    return OneSided() if boundary == "one-sided" and not gap else HousnerTwoSided()
+
+
+def calibrated(law: ImpactLaw, c_pos=1.0, c_neg=1.0, a=1.0, b=0.0) -> ImpactLaw:
+    """``law`` times c_pos on leaving hinge +1, c_neg on leaving hinge -1, and Eq. 17's bracket
+    a - b (thetadot^-/thetadot_r)^2: the one composition of a calibrated impact law.
+
+    Only what departs from the null values is wrapped, so a law at its null
+    is ``law`` itself: ``Scaled`` where both hinges share the factor,
+    ``Sided`` where they differ, then ``AmplitudeLaw``.
+    """
+    if c_pos != c_neg:
+        law = Sided(Scaled(law, float(c_pos)), Scaled(law, float(c_neg)))
+    elif c_pos != 1.0:
+        law = Scaled(law, float(c_pos))
+    if b != 0.0 or a != 1.0:
+        law = AmplitudeLaw(law, float(a), float(b))
+    return law

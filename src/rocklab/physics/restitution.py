@@ -20,6 +20,9 @@ CALIBRATED_RATIO_TWO_SIDED = 0.95
 #: e_exp / e_an,1s of the one-sided walls over the complete histories
 #: (Table 3): the calibrated law of Fig. 23b.
 CALIBRATED_RATIO_ONE_SIDED = 1.05
+#: (a, b) of the paper's amplitude law of the one-sided walls, e/e_an,1s = a - b (thetadot^-/thetadot_r)^2
+#: (Eq. 17, Fig. 15b).
+AMPLITUDE_LAW_ONE_SIDED = (1.18, 0.473)
 
 
 def two_sided(alpha, mR2_over_Io=None):
@@ -150,7 +153,7 @@ def ratio_peak_law(peak_over_alpha, a=1.17, b=0.453):
     return a - b * np.asarray(peak_over_alpha, float)
 
 
-def ratio_velocity_law(velocity_ratio, a=1.18, b=0.473):
+def ratio_velocity_law(velocity_ratio, a=AMPLITUDE_LAW_ONE_SIDED[0], b=AMPLITUDE_LAW_ONE_SIDED[1]):
     """Amplitude law of one-sided rocking in impact velocity, Eq. 17.
 
     e_exp / e_an,1s = a - b (thetadot^- / thetadot_r)^2, thetadot_r from

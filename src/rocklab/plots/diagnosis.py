@@ -6,7 +6,7 @@ for two-sided walls; Eq. 14, the two-sided e of Hogan 1992 and e = 0 of
 Liberatore & Spera 2003 for one-sided walls, Fig. 15a); panel b, the same
 motion with the extended model that :mod:`rocklab.diagnosis` chose for the
 series (Figs. 14b, 15b).  Every model runs on the exact simulator
-(:func:`rocklab.diagnosis.model.simulate_measured`) from the test's measured release.
+(:func:`rocklab.diagnosis.extended.simulate_measured`) from the test's measured release.
 """
 
 from __future__ import annotations
@@ -23,7 +23,8 @@ from rocklab.diagnosis import block_tests, measured_test, records_by_series, sim
 from rocklab.diagnosis.catalogue import by_name
 from rocklab.diagnosis.causes import restitution_drift
 from rocklab.diagnosis.evidence import flight_time_alpha, in_series_order, observe
-from rocklab.diagnosis.model import impact_speeds, model_params
+from rocklab.diagnosis.extended import model_params
+from rocklab.diagnosis.model import impact_speeds
 from rocklab.diagnosis.result import CampaignDiagnosis
 from rocklab.io import read_dataset, valid_tests
 from rocklab.lab.motion import read_motion
@@ -31,7 +32,7 @@ from rocklab.physics import restitution
 from rocklab.physics.flight import quarter_period
 from rocklab.physics.wall import overturning_velocity
 
-#: Literature models of panel a: label -> base of :func:`rocklab.diagnosis.model.rocking_model`.
+#: Literature models of panel a: label -> base of :func:`rocklab.diagnosis.extended.rocking_model`.
 LITERATURE = {
     "two-sided": {"Housner e_an,2s (Eq. 2)": "analytic"},
     "one-sided": {

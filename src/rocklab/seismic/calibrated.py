@@ -16,15 +16,18 @@ of its parameters over the series that name it
 dimensionless (ratios to alpha, to e_an, to thetadot_r of Eq. 16), so the
 findings transfer to the maps' wall (alpha, R of the configuration): the
 calibrated wall is the diagnosis model of that wall
-(:func:`rocklab.diagnosis.model.rocking_model`), the one place where the
-causes become a :class:`~rocklab.simulation.model.RockingModel`.
+(:func:`rocklab.diagnosis.extended.rocking_model`, :func:`map_wall_model`):
+the causes' own laws, no mapping of them here.  What the maps know of a
+cause is an attribute of it (:class:`rocklab.diagnosis.causes.Cause`): its
+short name in the model names (``short``) and, for a family the maps
+cannot carry as found, the member that carries it (``on_the_maps``).
 
 Models
 ------
 ``2s-calibrated`` / ``1s-calibrated``
     Every finding of the boundary.
 ``2s-calibrated-no-<finding>`` ...
-    The same with one finding switched off (:data:`SHORT` names them): the
+    The same with one finding switched off (its cause's short name): the
     change of N_O and of the scatter against the full calibrated wall tells
     which finding matters most.
 """
@@ -39,50 +42,29 @@ import numpy as np
 import pandas as pd
 
 from rocklab.physics import wall
+from rocklab.seismic.reductions import record_reductions
 
 log = logging.getLogger(__name__)
 
 #: Prefix of the model names of a boundary condition (as the paper's models).
 PREFIX = {"two-sided": "2s", "one-sided": "1s"}
 
-#: Short name of each cause of the catalogue in the model names ("-no-<short>").
-SHORT = {
-    "restitution_scale": "escale",
-    "restitution_amplitude": "eamp",
-    "instability_angle": "alpha",
-    "flight_damping": "zeta",
-    "hinge_asymmetry": "asym",
-    "contact_gap": "gap",
-    "stop_threshold": "stop",
-    "restitution_housner_loss": "hloss",
-    "restitution_drift": "drift",
-}
-
 
 def short_name(cause):
-    """The short name of a finding in the model names: a drift along a column of the test log
-    (``restitution_drift[<column>]``) is a drift."""
-    return SHORT[cause.split("[", 1)[0]]
+    """The short name of a finding in the model names (a drift along a column of the test log
+    is a drift): the cause's attribute ``short``."""
+    from rocklab.diagnosis.catalogue import by_name
+
+    return by_name(cause).short
 
 
-#: Findings of the families (issue 12) that the maps' wall cannot carry as found: the member of their
-#: family it carries instead (None: none), and why.
-ON_THE_MAPS = {
-    "instability_amplitude": (
-        "instability_angle",
-        "its angle at the instability point, alpha_r = r alpha, the one of the flights that overturn a wall: "
-        "under ground motion a flight's apex, which sets its angle, is unknown when the flight starts",
-    ),
-    "restitution_speed": (None, "an impact law of the diagnosis' closed forms (a hook) that the simulators lack"),
-    "flight_loss": (
-        "flight_damping",
-        "its viscous member, zeta: the maps' numba engine does not simulate dry friction or drag in flight "
-        "(mu/alpha, kappa alpha), which are lost",
-    ),
-}
+def name_pattern():
+    """Model names of the calibrated walls: ``{2s,1s}-calibrated[-no-<short>]``, a regular expression."""
+    # the catalogue is read at call time: the Snakefile and the map jobs import this module for
+    # its names, and the diagnosis package costs 0.7 s to import
+    from rocklab.diagnosis.catalogue import short_names
 
-#: Model names of the calibrated walls: ``{2s,1s}-calibrated[-no-<short>]``.
-NAME_PATTERN = r"[12]s-calibrated(?:-no-(?:" + "|".join(SHORT.values()) + "))?"
+    return r"[12]s-calibrated(?:-no-(?:" + "|".join(short_names()) + "))?"
 
 
 @dataclass(frozen=True)
@@ -111,9 +93,9 @@ def boundary_findings(diagnosis, boundary):
     -------
     dict
         cause name -> {parameter: value}; empty when the boundary has no
-        series or none names a cause.  A finding of :data:`ON_THE_MAPS` is
-        carried by the member of its family the maps' wall can hold, or left
-        off, with a warning in the log.
+        series or none names a cause.  A finding the maps cannot carry as
+        found (its cause's ``on_the_maps``) is carried by the member of its
+        family the maps' wall can hold, or left off, with a warning in the log.
     """
     from rocklab.diagnosis.catalogue import by_name
     from rocklab.diagnosis.result import BoundaryDiagnosis, CampaignDiagnosis
@@ -131,8 +113,8 @@ def boundary_findings(diagnosis, boundary):
     out = {}
     for f in entry.named:
         cause = f.effect
-        if cause in ON_THE_MAPS:
-            member, why = ON_THE_MAPS[cause]
+        if by_name(cause).on_the_maps is not None:
+            member, why = by_name(cause).on_the_maps
             found = ", ".join(f"{k} = {float(v):.3g}" for k, v in f.params.items())
             # a member at its null carries nothing: a model switching it off would be the same wall
             if member is None or all(float(f.params[q.name]) == q.null for q in by_name(member).params):
@@ -167,12 +149,13 @@ def parse_name(name):
     KeyError
         For a name that is no calibrated model.
     """
+    from rocklab.diagnosis.catalogue import by_short, short_names
+
     m = re.fullmatch(r"([12]s)-calibrated(?:-no-(\w+))?", name)
-    short_to_cause = {v: k for k, v in SHORT.items()}
-    if m is None or (m.group(2) is not None and m.group(2) not in short_to_cause):
-        raise KeyError(f"{name!r} is no calibrated model (<2s|1s>-calibrated[-no-<{'|'.join(SHORT.values())}>])")
+    if m is None or (m.group(2) is not None and m.group(2) not in short_names()):
+        raise KeyError(f"{name!r} is no calibrated model (<2s|1s>-calibrated[-no-<{'|'.join(short_names())}>])")
     boundary = {v: k for k, v in PREFIX.items()}[m.group(1)]
-    return boundary, (short_to_cause[m.group(2)] if m.group(2) else None)
+    return boundary, (by_short(m.group(2)).name if m.group(2) else None)
 
 
 def _switched_off(found, off, name, boundary):
@@ -180,15 +163,15 @@ def _switched_off(found, off, name, boundary):
     a drift along any column of the test log is a drift), None for the full wall."""
     if off is None:
         return None
-    match = [c for c in found if short_name(c) == SHORT[off]]
+    match = [c for c in found if short_name(c) == short_name(off)]
     if not match:
         raise KeyError(f"{name}: the diagnosis does not name {off} for {boundary} walls ({', '.join(found)})")
     return match[0]
 
 
 def is_calibrated(name):
-    """Whether ``name`` is a calibrated model name (:data:`NAME_PATTERN`)."""
-    return re.fullmatch(NAME_PATTERN, str(name)) is not None
+    """Whether ``name`` is a calibrated model name (:func:`name_pattern`)."""
+    return re.fullmatch(name_pattern(), str(name)) is not None
 
 
 def calibrated_model(diagnosis, name, alpha, R, form="linear"):
@@ -219,8 +202,6 @@ def calibrated_model(diagnosis, name, alpha, R, form="linear"):
         A diagnosis whose boundary names no cause the maps' wall carries
         (:func:`boundary_findings`).
     """
-    from rocklab.diagnosis.model import rocking_model
-
     boundary, off = parse_name(name)
     found = boundary_findings(diagnosis, boundary)
     if not found:
@@ -228,7 +209,32 @@ def calibrated_model(diagnosis, name, alpha, R, form="linear"):
     off = _switched_off(found, off, name, boundary)
     ext = [c for c in found if c != off]
     values = {k: v for c in ext for k, v in found[c].items()}
-    model = rocking_model(MapWall(float(alpha), float(wall.frequency_parameter(R)), boundary), ext, values)
+    return map_wall_model(boundary, alpha, R, ext, values, form=form)
+
+
+def map_wall_model(boundary, alpha, R, ext=(), values=None, base="analytic", form="linear"):
+    """The maps' wall (:class:`MapWall`) with the causes ``ext`` of the catalogue at ``values``.
+
+    Parameters
+    ----------
+    boundary : {"two-sided", "one-sided"}
+    alpha : float
+        Nominal slenderness [rad].
+    R : float
+        Half diagonal [m] (p = sqrt(3 g / 4 R), homogeneous wall).
+    ext, values
+        Names of causes and their parameters (:func:`rocklab.diagnosis.extended.rocking_model`).
+    base : {"analytic", "zero", "two-sided-e"}
+        The literature base e (:meth:`rocklab.diagnosis.model.ModelParams.with_base`).
+    form : {"linear", "exact"}
+
+    Returns
+    -------
+    rocklab.simulation.model.RockingModel
+    """
+    from rocklab.diagnosis.extended import rocking_model
+
+    model = rocking_model(MapWall(float(alpha), float(wall.frequency_parameter(R)), boundary), ext, values, base)
     return replace(model, form=form)
 
 
@@ -272,7 +278,7 @@ def calibrated_table(summary, diagnosis):
     Changes are per record, then averaged over the records where they are
     defined: ``N_O_change_pct`` and ``scatter_change_pct`` are
     100 (x_model / x_e-alone - 1) (minus the reductions of
-    :func:`rocklab.seismic.overturning.record_reductions`: positive = more);
+    :func:`rocklab.seismic.reductions.record_reductions`: positive = more);
     ``N_O_shift`` is the mean of N_O(model) - N_O(calibrated) [fraction of
     the map] and ``N_O_shift_abs`` the mean of its absolute value; ``rank``
     orders the findings by ``N_O_shift_abs`` (1: the finding that matters
@@ -297,9 +303,6 @@ def calibrated_table(summary, diagnosis):
     KeyError
         A model the diagnosis names that ``summary`` lacks.
     """
-    # overturning names its models through this module: read it at call time
-    from rocklab.seismic.overturning import record_reductions
-
     rows = []
     # no calibrated model, no map: an empty summary has no columns
     present = set(summary["model"]) if "model" in summary else set()

@@ -47,10 +47,14 @@ import xarray as xr
 
 from rocklab import __version__
 from rocklab.io import cf_attrs
-from rocklab.physics import impact, wall
-from rocklab.physics.restitution import CALIBRATED_RATIO_ONE_SIDED, CALIBRATED_RATIO_TWO_SIDED
+from rocklab.physics.restitution import (
+    AMPLITUDE_LAW_ONE_SIDED,
+    CALIBRATED_RATIO_ONE_SIDED,
+    CALIBRATED_RATIO_TWO_SIDED,
+)
 from rocklab.seismic import calibrated
-from rocklab.simulation.model import OVERTURN, RockingModel
+from rocklab.seismic.reductions import record_reductions
+from rocklab.simulation.model import OVERTURN
 
 log = logging.getLogger(__name__)
 
@@ -65,6 +69,17 @@ MODELS = {
     "1s-zero": ("one-sided", "one-sided, e = 0 (Liberatore & Spera 2003: motion stops at impact); Fig. 23a"),
     "1s-1.05": ("one-sided", "one-sided, e = 1.05 e_an,1s (Eq. 14 calibrated, Table 3); Fig. 23b"),
     "1s-eq17": ("one-sided", "one-sided, e = e_an,1s (a - b (thetadot^-/thetadot_r)^2) (amplitude law, Eq. 17)"),
+}
+
+#: What each map model adds to Housner's wall of its boundary: causes of the catalogue
+#: (:mod:`rocklab.diagnosis.catalogue`) with their values, and the literature base e
+#: (:meth:`rocklab.diagnosis.model.ModelParams.with_base`); ``"1s-eq17"`` takes Eq. 17's (a, b).
+CAUSES_OF = {
+    "2s-housner": ({}, "analytic"),
+    "2s-0.95": ({"restitution_scale": {"c": CALIBRATED_RATIO_TWO_SIDED}}, "analytic"),
+    "1s-zero": ({}, "zero"),
+    "1s-1.05": ({"restitution_scale": {"c": CALIBRATED_RATIO_ONE_SIDED}}, "analytic"),
+    "1s-eq17": ({"restitution_amplitude": dict(zip("ab", AMPLITUDE_LAW_ONE_SIDED))}, "analytic"),
 }
 
 #: Pairs (baseline, model) compared record by record (Sect. 5).
@@ -83,34 +98,6 @@ OVERTURNING_CRITERION = (
 )
 
 
-def impact_law(name, eq17=None):
-    """Impact law of a named map model.
-
-    Parameters
-    ----------
-    name : str
-        A key of :data:`MODELS`.
-    eq17 : tuple of float, optional
-        (a, b) of the one-sided amplitude law, Eq. 17; default the paper's
-        fit 1.18, 0.473 (:class:`rocklab.physics.impact.AmplitudeLaw`).
-
-    Returns
-    -------
-    rocklab.physics.impact.ImpactLaw
-    """
-    if name == "2s-housner":
-        return impact.HousnerTwoSided()
-    if name == "2s-0.95":
-        return impact.Scaled(impact.HousnerTwoSided(), CALIBRATED_RATIO_TWO_SIDED)
-    if name == "1s-zero":
-        return impact.Zero()
-    if name == "1s-1.05":
-        return impact.Scaled(impact.OneSided(), CALIBRATED_RATIO_ONE_SIDED)
-    if name == "1s-eq17":
-        return impact.AmplitudeLaw(impact.OneSided(), *(eq17 or ()))
-    raise KeyError(f"unknown map model {name!r}; choose one of {', '.join(MODELS)}")
-
-
 def named_model(name, alpha=ALPHA, R=R, form="linear", eq17=None, diagnosis=None):
     """The wall of a named map model (:data:`MODELS`, or a calibrated wall).
 
@@ -118,7 +105,7 @@ def named_model(name, alpha=ALPHA, R=R, form="linear", eq17=None, diagnosis=None
     ----------
     name : str
         A key of :data:`MODELS`, or a calibrated model
-        (:data:`rocklab.seismic.calibrated.NAME_PATTERN`, with ``diagnosis``).
+        (:func:`rocklab.seismic.calibrated.name_pattern`, with ``diagnosis``).
     alpha : float
         Slenderness angle [rad] (Fig. 21: 0.1).
     R : float
@@ -127,7 +114,8 @@ def named_model(name, alpha=ALPHA, R=R, form="linear", eq17=None, diagnosis=None
     form : {"linear", "exact"}
         Equation of motion (module docstring: the maps use "linear").
     eq17 : tuple of float, optional
-        (a, b) of Eq. 17 for ``"1s-eq17"``.
+        (a, b) of Eq. 17 for ``"1s-eq17"``; default the paper's fit
+        (:data:`rocklab.physics.restitution.AMPLITUDE_LAW_ONE_SIDED`).
     diagnosis : list of dict or path, optional
         ``results/diagnosis.json`` of a campaign, for the calibrated walls
         (:func:`rocklab.seismic.calibrated.calibrated_model`).
@@ -140,10 +128,13 @@ def named_model(name, alpha=ALPHA, R=R, form="linear", eq17=None, diagnosis=None
         if diagnosis is None:
             raise ValueError(f"the calibrated model {name!r} needs the diagnosis of a campaign (diagnosis=)")
         return calibrated.calibrated_model(diagnosis, name, alpha, R, form)
-    law = impact_law(name, eq17)
-    return RockingModel(
-        alpha=float(alpha), p=float(wall.frequency_parameter(R)), boundary=MODELS[name][0], impact=law, form=form
-    )
+    if name not in MODELS:
+        raise KeyError(f"unknown map model {name!r}; choose one of {', '.join(MODELS)}")
+    causes, base = CAUSES_OF[name]
+    if name == "1s-eq17" and eq17 is not None:
+        causes = {"restitution_amplitude": dict(zip("ab", eq17))}
+    values = {k: v for p in causes.values() for k, v in p.items()}
+    return calibrated.map_wall_model(MODELS[name][0], alpha, R, tuple(causes), values, base, form)
 
 
 def scales(n=201, lo=0.5, hi=1.5):
@@ -390,25 +381,6 @@ def summary_table(maps):
     """
     rows = [{"record": ds.attrs["record"], "model": ds.attrs["model"], **map_indices(ds["overturned"])} for ds in maps]
     return pd.DataFrame(rows)
-
-
-def record_reductions(summary, baseline, model):
-    """Per-record reduction [%] of N_O and of the scatter from ``baseline`` to ``model``.
-
-    100 (1 - x_model / x_baseline); NaN where the baseline's index is zero or
-    undefined (no overturning).  A negative value is an increase.
-
-    Returns
-    -------
-    pandas.DataFrame
-        Indexed by record: N_O and scatter reductions [%].
-    """
-    wide = summary.set_index(["record", "model"])[["N_O", "scatter"]].unstack("model")
-    out = {}
-    for index in ("N_O", "scatter"):
-        base, new = wide[(index, baseline)], wide[(index, model)]
-        out[index] = 100.0 * (1.0 - new / base.where(base > 0))
-    return pd.DataFrame(out)
 
 
 def reductions(summary, comparisons=COMPARISONS, subsets=None):

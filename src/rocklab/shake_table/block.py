@@ -8,12 +8,15 @@ e = 1 - 2 (m R^2 / I_O) sin^2 alpha (Eq. 1, :func:`rocklab.physics.restitution.t
 on the hinge being left.  The table acceleration along +x is the model's
 ``ag`` (positive towards +theta).
 
-The causes of the diagnosis catalogue change the block as they change a
-wall (their parameters are the catalogue's :class:`~rocklab.diagnosis.parameters.Param`):
+The causes of the diagnosis catalogue (:data:`CAUSES`) change the block
+by their own laws (:mod:`rocklab.physics.law`, :func:`block_laws`), as they
+change a wall (their parameters are the catalogue's
+:class:`~rocklab.diagnosis.parameters.Param`):
 
 - ``instability_angle``: both hinges at r times their footprint angle (the
   rounded base rocks on a smaller contact than the 3 mm footprint);
-- ``hinge_asymmetry``: alpha_+- further times exp(+-s_alpha/2);
+- ``hinge_asymmetry``: alpha_+- further times exp(+-s_alpha/2) (its s_e at
+  its null);
 - ``restitution_scale``: e = c e_an on both edges.
 
 Limitation: :class:`RockingModel` has one frequency parameter; the block
@@ -29,8 +32,10 @@ import time
 import numpy as np
 import xarray as xr
 
+from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.causes import hinge_asymmetry, instability_angle, restitution_scale
 from rocklab.physics import impact, restitution
+from rocklab.physics.law import Hinge, Restitution
 from rocklab.simulation.batch import ground_batch
 from rocklab.simulation.model import RockingModel
 
@@ -42,6 +47,11 @@ R = instability_angle.R._replace(lower=0.04, upper=1.0)
 S_ALPHA = hinge_asymmetry.S_ALPHA._replace(lower=-1.5, upper=1.5)
 C = restitution_scale.C._replace(lower=0.8, upper=1.05)
 PARAMS = (R, S_ALPHA, C)
+
+#: The causes of the block, in the catalogue's order (the order their laws act in).
+CAUSES = tuple(
+    c for c in catalogue.CAUSES if c in (instability_angle.CAUSE, hinge_asymmetry.CAUSE, restitution_scale.CAUSE)
+)
 
 #: Grid of each parameter: every test is simulated once at every node, and
 #: every fit (folds, resamples) reads the outcomes from it.  Each grid holds
@@ -84,18 +94,36 @@ def specimen_block(geometry: dict, specimen: str) -> dict:
     return out
 
 
+def block_laws(r=1.0, s_alpha=0.0, c=1.0):
+    """The laws of :data:`CAUSES` at the parameters of :data:`PARAMS`, in the order they act."""
+    values = {R.name: r, S_ALPHA.name: s_alpha, C.name: c}
+    return [law for cause in CAUSES for law in cause.laws(cause.values(values))]
+
+
+def _under(block, laws):
+    """alpha_+, alpha_- [rad] of the block under ``laws`` and the factors of e on leaving each edge."""
+    a_pos, a_neg, c_pos, c_neg = block["alpha_plus"], block["alpha_minus"], 1.0, 1.0
+    for law in laws:
+        if isinstance(law, Hinge):
+            a_pos, a_neg = law.angles(a_pos, a_neg)
+        elif isinstance(law, Restitution):
+            pos, neg = law.factors()
+            c_pos, c_neg = pos * c_pos, neg * c_neg
+        else:
+            raise NotImplementedError(f"the shake-table block has no {type(law).__name__}")
+    return a_pos, a_neg, c_pos, c_neg
+
+
 def hinge_angles(block, r=1.0, s_alpha=0.0):
     """alpha_+, alpha_- [rad] under the instability angle r and the hinge asymmetry s_alpha."""
-    return (
-        r * block["alpha_plus"] * np.exp(0.5 * np.asarray(s_alpha)),
-        r * block["alpha_minus"] * np.exp(-0.5 * np.asarray(s_alpha)),
-    )
+    return _under(block, block_laws(r, s_alpha))[:2]
 
 
 def block_model(block: dict, alpha_r_over_alpha=1.0, s_alpha=0.0, c=1.0) -> RockingModel:
     """The specimen's :class:`RockingModel` with the causes' parameters (null: the nominal block)."""
-    a_pos, a_neg = (float(a) for a in hinge_angles(block, alpha_r_over_alpha, s_alpha))
-    law = impact.Sided(impact.Constant(c * block["e_plus"]), impact.Constant(c * block["e_minus"]))
+    a_pos, a_neg, c_pos, c_neg = (float(x) for x in _under(block, block_laws(alpha_r_over_alpha, s_alpha, c)))
+    housner = impact.Sided(impact.Constant(block["e_plus"]), impact.Constant(block["e_minus"]))
+    law = impact.calibrated(housner, c_pos, c_neg)
     # alpha sets the rest threshold (REST_TOL thetadot_r): that of the weaker hinge.
     return RockingModel(alpha=min(a_pos, a_neg), p=block["p"], alpha_rock=a_pos, alpha_neg=a_neg, impact=law)
 

@@ -28,7 +28,7 @@ from rocklab.io import cf_attrs
 from rocklab.seismic.overturning import map_indices, scales
 from rocklab.shake_table import calibration as cal
 from rocklab.shake_table import records
-from rocklab.shake_table.block import PARAMS, block_model, hinge_angles, nominal
+from rocklab.shake_table.block import CAUSES, PARAMS, block_model, hinge_angles, nominal
 from rocklab.simulation.batch import overturning_batch
 
 log = logging.getLogger(__name__)
@@ -40,14 +40,10 @@ MODELS = ("block-nominal", "block-calibrated", "pgv-threshold", "dem")
 PGA_BINS = (0.0, 0.1, 0.2, 0.3, 0.5, 0.8, np.inf)
 PGV_BINS = (0.0, 0.05, 0.1, 0.15, 0.2, 0.3, np.inf)
 
-#: Cause of each fitted parameter.
-CAUSE_OF = {
-    "alpha_r_over_alpha": "instability_angle",
-    "s_alpha": "hinge_asymmetry",
-    "c": "restitution_scale",
-    cal.SIGMA.name: "instability_angle (scatter)",
-    cal.LAPSE.name: "lapse",
-}
+#: Cause of each fitted parameter: the block's causes (:data:`rocklab.shake_table.block.CAUSES`), the
+#: scatter of the first one's (:data:`rocklab.shake_table.calibration.SIGMA`) and the lapse.
+CAUSE_OF = {q.name: c.name for c in CAUSES for q in c.params if q.name in {p.name for p in PARAMS}}
+CAUSE_OF |= {cal.SIGMA.name: f"{CAUSE_OF[PARAMS[0].name]} (scatter)", cal.LAPSE.name: "lapse"}
 
 
 def _col(model):

@@ -1,5 +1,11 @@
 """Rocking wall of Housner (1963), Sect. 1 and Fig. 1 of the paper.
 
+The exact simulator's wall.  The causes of the diagnosis do not map
+themselves onto it: a wall of the diagnosis' model is derived from the
+one model, :class:`rocklab.diagnosis.model.ModelParams`, by
+:func:`rocklab.diagnosis.model.simulator` (the calibrated walls of the maps
+too), from the causes' laws (:mod:`rocklab.physics.law`).
+
 Equation of motion (per unit I_O) on the hinge ``s = sign(theta)`` with
 rocking angle ``alpha_s`` (``alpha_rock`` for s = +1, ``alpha_neg`` for -1)::
 
@@ -182,11 +188,7 @@ class RockingModel:
 
     @property
     def base_law(self) -> _impact.ImpactLaw:
-        if self.impact is not None:
-            return self.impact
-        if self.one_sided and self.gap == 0:
-            return _impact.OneSided()
-        return _impact.HousnerTwoSided()
+        return _impact.analytic(self.boundary, self.gap > 0) if self.impact is None else self.impact
 
     @property
     def transverse_law(self) -> _impact.ImpactLaw:

@@ -1,8 +1,10 @@
 """Candidate causes of the diagnosis, one module each (the list is :mod:`rocklab.diagnosis.catalogue`).
 
 A cause is a physical extension of the base rocking model: a module that
-declares one :class:`Cause` named ``CAUSE``.  docs/diagnosis-method.md
-shows how to add one.
+declares one :class:`Cause` named ``CAUSE``, whose physics is written once,
+as laws of :mod:`rocklab.physics.law` (:attr:`Cause.laws`) that every model
+reads: the diagnosis, the exact simulator, the maps, the shake-table and
+limestone blocks.  docs/diagnosis-method.md shows how to add one.
 """
 
 from __future__ import annotations
@@ -35,11 +37,10 @@ class Cause:
         The extension in one line (docs and tables).
     params : tuple of Param
         Bounds, null value (the base model) and smallest effect worth naming.
-    apply : callable
-        ``apply(mp, values) -> ModelParams``: the base model's
-        :class:`rocklab.diagnosis.model.ModelParams` as the cause changes it,
-        ``values`` its parameters by name (impact law, hinge angles, flight
-        loss, gap, stop, or an impact hook).
+    laws : callable
+        ``laws(values) -> tuple``: what the cause does to a wall, as laws of
+        :mod:`rocklab.physics.law` (restitution, Eq. 17, hinge angles, flight
+        loss, gap, stop, ...), ``values`` its parameters by name.
     boundaries : tuple of str
         Boundary conditions it can occur in.
     signature : callable
@@ -61,9 +62,10 @@ class Cause:
         After-selection causes: ``unexplained(stack, mp) -> list of str``,
         what the model ``mp`` leaves that this cause would explain.
     estimate : callable, optional
-        After-selection causes: ``estimate(tests, ext, values, seed) ->
-        dict or None`` with ``named`` (bool), ``values`` (its parameters) and
-        ``finding`` (the entry of the diagnosis).
+        After-selection causes: ``estimate(tests, mp, seed) -> dict or None``,
+        ``mp`` the chosen model of ``tests``
+        (:class:`rocklab.diagnosis.model.ModelParams`), with ``named`` (bool),
+        ``values`` (its parameters) and ``finding`` (the entry of the diagnosis).
     family : str, optional
         A generalised family (issue 12) rather than a listed cause: the
         listed cause it holds as one member (its null values).  Families
@@ -79,12 +81,26 @@ class Cause:
         (``values``, ``listed``: the parameters of the chosen and of the
         listed model), for the figure of
         :func:`rocklab.plots.diagnosis.family_curve_figure`.
+    on_ratios : callable, optional
+        ``on_ratios(trials) -> dict or None``: its signature in the ratios of
+        the impacts alone, r = thetadot^+/thetadot^- of every impact of
+        trials without rotations (the limestone blocks of
+        :mod:`rocklab.diagnosis.block_tests`: ``trials.ratio`` r/e_an,
+        ``u`` (thetadot^-_k/thetadot^-_1)^2, ``odd`` the impacts leaving the
+        release edge, ``alpha``), as :attr:`signature`.
+    short : str, optional
+        Its name in the calibrated walls' model names, ``<2s|1s>-calibrated-no-<short>``
+        (:mod:`rocklab.seismic.calibrated`); None for a cause the maps do not carry as found.
+    on_the_maps : tuple, optional
+        A cause the maps' wall cannot carry as found: ``(member, why)``, the
+        cause of the catalogue that carries it instead (None: none, it is
+        left off) and why.
     """
 
     name: str
     law: str
     params: tuple[Param, ...]
-    apply: Callable
+    laws: Callable
     boundaries: tuple[str, ...] = BOTH
     signature: Callable = _no_signature
     starts: Callable = _no_starts
@@ -95,6 +111,9 @@ class Cause:
     family: str | None = None
     closed_form: Callable | None = None
     curve: Callable | None = None
+    on_ratios: Callable | None = None
+    short: str | None = None
+    on_the_maps: tuple[str | None, str] | None = None
 
     def holds(self, ci, name, value):
         """Whether the 95 % interval ``ci`` of parameter ``name`` holds ``value`` (to its practical margin)."""

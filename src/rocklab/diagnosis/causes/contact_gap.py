@@ -6,25 +6,17 @@ transverse walls (:func:`rocklab.diagnosis.model.impact_speeds`).
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from rocklab.diagnosis.causes import Cause
 from rocklab.diagnosis.parameters import Param
-from rocklab.physics import restitution
+from rocklab.physics.law import Gap
 
 GAMMA = Param("gap_over_alpha", 0.0, 0.3, 0.0, practical=0.002)
 
 
-def apply(mp, v):
-    gap_model = mp.one_sided.copy()
-    return replace(
-        mp,
-        gap_model=gap_model,
-        e0=np.where(gap_model, restitution.two_sided(mp.alpha), mp.e0),
-        gap=v["gap_over_alpha"] * mp.alpha,
-    )
+def laws(v):
+    return (Gap(v["gap_over_alpha"]),)
 
 
 def signature(ob):
@@ -49,8 +41,9 @@ CAUSE = Cause(
     name="contact_gap",
     law="one-sided: the wall swings inwards through a gap g = gamma alpha",
     params=(GAMMA,),
-    apply=apply,
+    laws=laws,
     boundaries=("one-sided",),
     signature=signature,
     starts=starts,
+    short="gap",
 )

@@ -3,21 +3,21 @@
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import Cause
 from rocklab.diagnosis.parameters import Param
+from rocklab.physics.law import FlightLoss
 
 stats = lazy_module("scipy.stats")
 
 ZETA = Param("zeta", 0.0, 0.2, 0.0, practical=2e-4)
 
 
-def apply(mp, v):
-    return replace(mp, zeta=v["zeta"] * np.ones_like(mp.alpha))
+def laws(v):
+    return (FlightLoss(v["zeta"]),)
 
 
 def signature(ob):
@@ -49,7 +49,8 @@ CAUSE = Cause(
     name="flight_damping",
     law="-2 zeta p thetadot between impacts",
     params=(ZETA,),
-    apply=apply,
+    laws=laws,
     signature=signature,
     starts=starts,
+    short="zeta",
 )

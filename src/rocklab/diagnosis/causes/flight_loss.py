@@ -20,14 +20,13 @@ the curve is read on the flights whose fit windows stay within one half.
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import Cause, flight_damping
 from rocklab.diagnosis.parameters import Param
 from rocklab.physics.flight import speed_loss, takeoff_speed
+from rocklab.physics.law import FlightLoss
 from rocklab.physics.wall import overturning_velocity
 
 stats = lazy_module("scipy.stats")
@@ -53,13 +52,8 @@ MEMBERS = (
 )
 
 
-def apply(mp, v):
-    return replace(
-        mp,
-        zeta=v["zeta"] * np.ones_like(mp.alpha),
-        mu=v["mu_over_alpha"] * mp.alpha,
-        kappa=v["kappa_alpha"] / mp.alpha,
-    )
+def laws(v):
+    return (FlightLoss(v["zeta"], v["mu_over_alpha"], v["kappa_alpha"]),)
 
 
 def long_flights(ob):
@@ -234,11 +228,16 @@ CAUSE = Cause(
     law="-2 zeta p thetadot - mu p^2 sign(thetadot) - kappa thetadot |thetadot| between impacts "
     "(viscous, dry friction at the hinge, drag)",
     params=(flight_damping.ZETA, MU, KAPPA),
-    apply=apply,
+    laws=laws,
     signature=signature,
     starts=starts,
     replaces=("flight_damping",),
     family="flight_damping",
     closed_form=closed_form,
     curve=curve,
+    on_the_maps=(
+        "flight_damping",
+        "its viscous member, zeta: the maps' numba engine does not simulate dry friction or drag in flight "
+        "(mu/alpha, kappa alpha), which are lost",
+    ),
 )

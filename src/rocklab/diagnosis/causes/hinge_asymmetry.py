@@ -3,14 +3,12 @@ on the hinge being left."""
 
 from __future__ import annotations
 
-import math
-from dataclasses import replace
-
 import numpy as np
 
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import Cause
 from rocklab.diagnosis.parameters import Param
+from rocklab.physics.law import Hinge, Restitution
 
 stats = lazy_module("scipy.stats")
 
@@ -18,15 +16,8 @@ S_ALPHA = Param("s_alpha", -0.5, 0.5, 0.0, practical=0.005)
 S_E = Param("s_e", -0.5, 0.5, 0.0, practical=0.003)
 
 
-def apply(mp, v):
-    ha, he = v["s_alpha"] / 2, v["s_e"] / 2
-    return replace(
-        mp,
-        c_pos=mp.c_pos * math.exp(he),
-        c_neg=mp.c_neg * math.exp(-he),
-        a_pos=mp.a_pos * math.exp(ha),
-        a_neg=mp.a_neg * math.exp(-ha),
-    )
+def laws(v):
+    return (Restitution(asymmetry=v["s_e"]), Hinge(asymmetry=v["s_alpha"]))
 
 
 def signature(ob):
@@ -67,6 +58,22 @@ def signature(ob):
     }
 
 
+def on_ratios(trials):
+    """r/e_an on odd and even impacts: the two base edges in turn."""
+    ratio = trials.ratio
+    ok = np.isfinite(ratio)
+    odd, even = ratio[ok & trials.odd], ratio[ok & ~trials.odd]
+    mw = stats.mannwhitneyu(odd, even)
+    per = [np.nanmedian(r[o]) - np.nanmedian(r[~o]) for r, o in zip(ratio, trials.odd)]
+    return {
+        "value": float(np.median(odd) / np.median(even)),
+        "supports": bool(mw.pvalue < 0.01),
+        "text": f"r/e_an on odd / even impacts {np.median(odd):.3f} / {np.median(even):.3f} "
+        f"(p = {mw.pvalue:.2g}); odd minus even per trial from {np.min(per):+.3f} to "
+        f"{np.max(per):+.3f}",
+    }
+
+
 def starts(sig):
     return {k: sig.get("hinge_asymmetry", {}).get(k, 0.0) for k in ("s_alpha", "s_e")}
 
@@ -75,8 +82,10 @@ CAUSE = Cause(
     name="hinge_asymmetry",
     law="alpha_+- = alpha_r exp(+-s_alpha/2), e_+- = e exp(+-s_e/2) on the hinge being left",
     params=(S_ALPHA, S_E),
-    apply=apply,
+    laws=laws,
     boundaries=("two-sided",),
     signature=signature,
     starts=starts,
+    on_ratios=on_ratios,
+    short="asym",
 )

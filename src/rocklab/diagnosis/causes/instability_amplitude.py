@@ -11,20 +11,19 @@ which does not fit the flight times at all amplitudes when k is not 0.
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from rocklab.diagnosis.causes import Cause, instability_angle
 from rocklab.diagnosis.estimation.structure import within_slope
 from rocklab.diagnosis.parameters import Param
+from rocklab.physics.law import Hinge
 
 K = Param("rounding", -0.6, 0.8, 0.0, practical=0.02)
 
 
-def apply(mp, v):
+def laws(v):
     r = v["alpha_r_over_alpha"]
-    return replace(mp, a_pos=r * mp.a_pos, a_neg=r * mp.a_neg, rounding=v["rounding"] * np.ones_like(mp.alpha))
+    return (Hinge(r, rounding=v["rounding"]),)
 
 
 def signature(ob):
@@ -63,10 +62,15 @@ CAUSE = Cause(
     name="instability_amplitude",
     law="the flight of apex A rocks on alpha_r (1 - k) + k A, alpha_r = r alpha (a rounded or crushing hinge)",
     params=(instability_angle.R, K),
-    apply=apply,
+    laws=laws,
     signature=signature,
     starts=starts,
     replaces=("instability_angle",),
     family="instability_angle",
     closed_form=closed_form,
+    on_the_maps=(
+        "instability_angle",
+        "its angle at the instability point, alpha_r = r alpha, the one of the flights that overturn a wall: "
+        "under ground motion a flight's apex, which sets its angle, is unknown when the flight starts",
+    ),
 )

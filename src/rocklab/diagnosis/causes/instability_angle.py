@@ -5,18 +5,17 @@ A rounded hinge, indented mortar (Sect. 3).
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from rocklab.diagnosis.causes import Cause
 from rocklab.diagnosis.parameters import Param
+from rocklab.physics.law import Hinge
 
 R = Param("alpha_r_over_alpha", 0.3, 1.2, 1.0, practical=0.005)
 
 
-def apply(mp, v):
-    return replace(mp, a_pos=v["alpha_r_over_alpha"] * mp.a_pos, a_neg=v["alpha_r_over_alpha"] * mp.a_neg)
+def laws(v):
+    return (Hinge(v["alpha_r_over_alpha"]),)
 
 
 def signature(ob):
@@ -45,7 +44,8 @@ CAUSE = Cause(
     name="instability_angle",
     law="the wall rocks on alpha_r = r alpha < alpha",
     params=(R,),
-    apply=apply,
+    laws=laws,
     signature=signature,
     starts=starts,
+    short="alpha",
 )

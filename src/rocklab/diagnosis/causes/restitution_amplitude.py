@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import Cause
 from rocklab.diagnosis.parameters import Param
+from rocklab.physics.law import Amplitude
 
 stats = lazy_module("scipy.stats")
 
@@ -17,8 +16,8 @@ A = Param("a", 0.2, 2.5, 1.0)
 B = Param("b", -3.0, 3.0, 0.0, practical=0.01)
 
 
-def apply(mp, v):
-    return replace(mp, amp_a=v["a"] * mp.amp_a, amp_b=v["b"] * np.ones_like(mp.alpha))
+def laws(v):
+    return (Amplitude(v["a"], v["b"]),)
 
 
 def signature(ob):
@@ -34,6 +33,18 @@ def signature(ob):
     }
 
 
+def on_ratios(trials):
+    """The trend of r/e_an with the squared impact speed relative to the first impact's."""
+    ratio = trials.ratio
+    ok = np.isfinite(ratio)
+    sl = stats.linregress(trials.u[ok], ratio[ok])
+    return {
+        "value": float(-sl.slope),
+        "supports": bool(sl.pvalue < 0.01),
+        "text": f"r/e_an against (thetadot^-_k/thetadot^-_1)^2: slope {sl.slope:+.3f} (p = {sl.pvalue:.2g})",
+    }
+
+
 def starts(sig):
     return {"a": sig.get("restitution_scale", {}).get("value", 1.0)}
 
@@ -42,8 +53,10 @@ CAUSE = Cause(
     name="restitution_amplitude",
     law="e/e_an = a - b (thetadot^-/thetadot_r)^2 (Eq. 17)",
     params=(A, B),
-    apply=apply,
+    laws=laws,
     signature=signature,
     starts=starts,
+    on_ratios=on_ratios,
     replaces=("restitution_scale",),
+    short="eamp",
 )

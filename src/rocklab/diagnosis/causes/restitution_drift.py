@@ -13,7 +13,6 @@ follows as it chooses between causes.
 
 from __future__ import annotations
 
-from dataclasses import replace
 from functools import lru_cache
 
 import numpy as np
@@ -21,6 +20,7 @@ import numpy as np
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import Cause, restitution_scale
 from rocklab.diagnosis.parameters import Param
+from rocklab.physics.law import Restitution
 
 stats = lazy_module("scipy.stats")
 
@@ -35,18 +35,15 @@ def column_of(name):
     return None
 
 
-def _place(mp_or_tests, column):
-    """n of each test: its place in the series, or in the range of a column of the test log."""
-    if isinstance(mp_or_tests, list):
-        return np.array([t.order if column is None else t.log[column] for t in mp_or_tests], float)
-    # a wall without the column (the maps' wall) stands for the middle of the series, as for the order
-    return mp_or_tests.order if column is None else mp_or_tests.extra.get(f"log:{column}", 0.5 + 0 * mp_or_tests.order)
+def _place(tests, column):
+    """n of each test: its place in the series, or in the range of a column of the test log
+    (of a model: :meth:`rocklab.diagnosis.model.ModelParams.place`)."""
+    return np.array([t.order if column is None else t.log[column] for t in tests], float)
 
 
 def _cause(column, others=()):
-    def apply(mp, v):
-        factor = v["c"] * np.exp(v["drift"] * (_place(mp, column) - 0.5))
-        return replace(mp, c_pos=factor * mp.c_pos, c_neg=factor * mp.c_neg)
+    def laws(v):
+        return (Restitution(v["c"], drift=v["drift"], along=column),)
 
     what = "the test's place in the series" if column is None else f"the test's value of {column} in the test log"
 
@@ -80,12 +77,13 @@ def _cause(column, others=()):
         name=name,
         law=f"e = c e_an exp(d (n - 1/2)), {n}",
         params=(restitution_scale.C, D),
-        apply=apply,
+        laws=laws,
         signature=signature,
         starts=starts,
         replaces=("restitution_scale", *(o for o in others if o != name)),
         family="restitution_scale",
         closed_form=closed_form,
+        short="drift",
     )
 
 

@@ -10,24 +10,62 @@ a series (no boundary condition).
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
+from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import Cause
 from rocklab.diagnosis.parameters import Param
+from rocklab.physics.law import HousnerLoss
+
+stats = lazy_module("scipy.stats")
 
 LAMBDA = Param("loss_fraction", 0.0, 3.0, 1.0, practical=0.01)
 DELTA = Param("loss_constant", -0.2, 0.2, 0.0, practical=0.002)
 
 
-def restitution(e_an, v):
-    """e = 1 - lambda (1 - |e_an|) - delta, with the sign of e_an."""
-    return np.sign(e_an) * (1.0 - v["loss_fraction"] * (1.0 - np.abs(e_an)) - v["loss_constant"])
+def laws(v):
+    return (HousnerLoss(v["loss_fraction"], v["loss_constant"]),)
 
 
-def apply(mp, v):
-    return replace(mp, e0=restitution(mp.e0, v))
+def slenderness_trend(trials):
+    """How e/e_an varies with slenderness, trial by trial.
+
+    The median r/e_an of each trial regressed on (B/H)^2 ~ sin^2 alpha, the
+    variable of Housner's e: a slope means that Eq. 2 gets the trend with
+    slenderness wrong, not only the level.
+
+    Returns
+    -------
+    dict
+        ``intercept``, ``slope`` (per unit (B/H)^2), ``p``, and the level of
+        each group (mean over its trials of their medians).
+    """
+    ratio = trials.ratio
+    ok = np.isfinite(ratio)
+    med = np.array([np.median(ratio[i][ok[i]]) for i in range(len(trials.ids))])
+    x = np.tan(trials.alpha) ** 2
+    fit = stats.linregress(x, med)
+    hb = np.round(1.0 / np.tan(trials.alpha))
+    return {
+        "intercept": float(fit.intercept),
+        "slope": float(fit.slope),
+        "slope_se": float(fit.stderr),
+        "p": float(fit.pvalue),
+        "levels": {f"{h:.0f}": float(np.mean(med[hb == h])) for h in np.unique(hb)},
+    }
+
+
+def on_ratios(trials):
+    """Across slendernesses, the trend of the per-trial median r/e_an with (B/H)^2 (:func:`slenderness_trend`);
+    None within one slenderness."""
+    if not np.ptp(trials.alpha) > 0:
+        return None
+    st = slenderness_trend(trials)
+    return {
+        "value": st["slope"],
+        "supports": bool(st["p"] < 0.01),
+        "text": f"per-trial median r/e_an against (B/H)^2: slope {st['slope']:+.3f} (p = {st['p']:.2g})",
+    }
 
 
 def closed_form(values, ci):
@@ -45,8 +83,10 @@ CAUSE = Cause(
     name="restitution_housner_loss",
     law="e = 1 - lambda (1 - e_an) - delta across walls of different slenderness",
     params=(LAMBDA, DELTA),
-    apply=apply,
+    laws=laws,
     boundaries=(),
     family="restitution_scale",
     closed_form=closed_form,
+    on_ratios=on_ratios,
+    short="hloss",
 )

@@ -2,19 +2,18 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from rocklab.diagnosis.causes import Cause
 from rocklab.diagnosis.evidence import series_level
 from rocklab.diagnosis.parameters import Param
+from rocklab.physics.law import Restitution
 
 C = Param("c", 0.2, 2.0, 1.0, practical=0.005)
 
 
-def apply(mp, v):
-    return replace(mp, c_pos=v["c"] * mp.c_pos, c_neg=v["c"] * mp.c_neg)
+def laws(v):
+    return (Restitution(v["c"]),)
 
 
 def signature(ob):
@@ -32,6 +31,18 @@ def signature(ob):
     }
 
 
+def on_ratios(trials):
+    """The measured r/e_an of the impacts: one level per trial (its median), their mean over trials."""
+    ratio = trials.ratio
+    ok = np.isfinite(ratio)
+    med = series_level(ratio, ok)
+    return {
+        "value": med,
+        "supports": abs(med - 1) > C.practical,
+        "text": f"measured r/e_an = {med:.3f} (mean over trials of their medians, {ok.sum()} impacts)",
+    }
+
+
 def starts(sig):
     return {"c": sig.get("restitution_scale", {}).get("value", 1.0)}
 
@@ -40,7 +51,9 @@ CAUSE = Cause(
     name="restitution_scale",
     law="e = c e_an",
     params=(C,),
-    apply=apply,
+    laws=laws,
     signature=signature,
     starts=starts,
+    on_ratios=on_ratios,
+    short="escale",
 )

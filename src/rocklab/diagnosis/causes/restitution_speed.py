@@ -7,58 +7,28 @@ structure.  The closed forms it holds as members (:func:`closed_form`
 says which one the intervals of the fitted values hold): a constant
 (:mod:`restitution_scale`), Eq. 17 (:mod:`restitution_amplitude`), a law
 affine in the speed, a threshold below which the impact stops the wall
-(the law of :mod:`stop_threshold`).  It acts as an impact hook, after the
-base law (:class:`rocklab.diagnosis.model.ModelParams`), so the exact
-simulator has no law of it.
+(the law of :mod:`stop_threshold`).  Its law
+(:class:`rocklab.physics.law.SpeedFactor`) acts after the base law, in the
+closed forms only: the exact simulator has no law of it.
 """
 
 from __future__ import annotations
-
-from dataclasses import replace
 
 import numpy as np
 
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import Cause
-from rocklab.diagnosis.model import per_test
 from rocklab.diagnosis.parameters import Param
-from rocklab.physics.wall import overturning_velocity
+from rocklab.physics.law import KNOTS, SpeedFactor
 
 stats = lazy_module("scipy.stats")
 
-#: Knots of g in thetadot^- / thetadot_r [-].
-KNOTS = np.array([0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0])
 G = tuple(Param(f"g{j}", 0.0, 2.5, 1.0, practical=0.01) for j in range(KNOTS.size))
 NAMES = [q.name for q in G]
 
 
-def hats(x):
-    """Piecewise-linear basis at :data:`KNOTS` of speeds x [thetadot_r], shape (..., knots); flat beyond them."""
-    x = np.clip(np.asarray(x, float), KNOTS[0], KNOTS[-1])[..., None]
-    return np.maximum(1.0 - np.abs(x - KNOTS) / (KNOTS[1] - KNOTS[0]), 0.0)
-
-
-def speed_factor(values, x):
-    """g(x) from the values at the knots (``values`` (..., knots)) [-]."""
-    return np.sum(np.asarray(values) * hats(x), axis=-1)
-
-
-def scale_by_speed(v_out, v, side, mp):
-    # an impact hook: e / e_an = g(v / thetadot_r), after the base law of the other causes
-    g = mp.extra["speed_knots"]
-    vr = overturning_velocity(per_test(mp.alpha, side), per_test(mp.p, side))
-    x = np.asarray(v) / vr
-    basis = hats(x)
-    return v_out * sum(per_test(np.asarray(g)[..., j], x) * basis[..., j] for j in range(KNOTS.size))
-
-
-def apply(mp, v):
-    g = np.array([v[n] for n in NAMES])
-    return replace(
-        mp,
-        extra={**mp.extra, "speed_knots": np.tile(g, (mp.alpha.size, 1))},
-        impact_hooks=(*mp.impact_hooks, scale_by_speed),
-    )
+def laws(v):
+    return (SpeedFactor(tuple(v[n] for n in NAMES)),)
 
 
 def _binned(ob):
@@ -135,10 +105,11 @@ CAUSE = Cause(
     name="restitution_speed",
     law="e/e_an = g(thetadot^-/thetadot_r), piecewise linear at 0, 1/3, 2/3, 1 (a flexible law of the impact speed)",
     params=G,
-    apply=apply,
+    laws=laws,
     signature=signature,
     starts=starts,
     replaces=("restitution_scale", "restitution_amplitude"),
     family="restitution_amplitude",
     closed_form=closed_form,
+    on_the_maps=(None, "an impact law of the diagnosis' closed forms that the simulators lack"),
 )

@@ -11,7 +11,6 @@ halves the held-out error of the free run in the number of impacts.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 
@@ -19,11 +18,12 @@ from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import BOTH, Cause
 from rocklab.diagnosis.errors import engineering_rows
 from rocklab.diagnosis.evidence import TestStack
-from rocklab.diagnosis.model import model_params, next_flight
+from rocklab.diagnosis.model import next_flight
 from rocklab.diagnosis.parameters import Param
 from rocklab.dissipation.statistics import MIN_BOOTSTRAP, interval_note
 from rocklab.lab.motion import odd_samples
 from rocklab.physics.flight import landing_speed, quarter_period
+from rocklab.physics.law import Stop
 from rocklab.physics.wall import overturning_velocity
 
 signal = lazy_module("scipy.signal")
@@ -32,9 +32,9 @@ NAME = "stop_threshold"
 V_STOP = Param("v_stop_over_vr", 0.0, 1.0, 0.0)
 
 
-def apply(mp, v):
+def laws(v):
     # a value per test is allowed: the threshold of each test taken from the others (estimate)
-    return replace(mp, stop=v["v_stop_over_vr"] * np.ones_like(mp.alpha))
+    return (Stop(v["v_stop_over_vr"]),)
 
 
 def _largest_apex_after_end(S: TestStack, mp, idx, window_s, n_max=200):
@@ -159,7 +159,7 @@ def bracket_centre(lo, hi):
     return float(np.exp(0.5 * np.mean(np.log(lo) + np.log(hi)))), False
 
 
-def threshold(tests, ext=(), values=None, *, n_boot=200, seed=0, min_tests=3):
+def threshold(tests, mp, *, n_boot=200, seed=0, min_tests=3):
     """The landing speed below which the walls of a series stop dead, and what it gains.
 
     Each test brackets its own stop speed (:func:`stop_speeds`, a bracket as
@@ -169,10 +169,10 @@ def threshold(tests, ext=(), values=None, *, n_boot=200, seed=0, min_tests=3):
     the brackets share a common part, one threshold fits every wall: the
     estimate is that part's geometric centre and the interval spans it
     (:func:`bracket_centre`, also used for the tests left out).  Gain:
-    the free run of the model (:func:`rocklab.diagnosis.errors.engineering_rows`)
-    with each test's threshold taken from the other tests (leave one out)
-    against the model without it, in the number of impacts and the duration
-    of rocking.
+    the free run of the model ``mp`` of ``tests`` (:class:`rocklab.diagnosis.model.ModelParams`,
+    :func:`rocklab.diagnosis.errors.engineering_rows`) with each test's threshold
+    taken from the other tests (leave one out) against the model without it,
+    in the number of impacts and the duration of rocking.
 
     Returns
     -------
@@ -185,7 +185,7 @@ def threshold(tests, ext=(), values=None, *, n_boot=200, seed=0, min_tests=3):
         held-out error in the number of impacts at least halved).
     """
     S = TestStack.of(tests)
-    lo, hi = stop_speeds(S, model_params(tests, ext, values))
+    lo, hi = stop_speeds(S, mp)
     ok = np.isfinite(lo)
     if ok.sum() < max(min_tests, 3, 0.5 * len(tests)):
         return None
@@ -199,7 +199,7 @@ def threshold(tests, ext=(), values=None, *, n_boot=200, seed=0, min_tests=3):
         # one threshold fits every wall: it is known only within the common
         # bracket, however alike the walls' brackets are
         ci = [min(ci[0], float(np.max(lo))), max(ci[1], float(np.min(hi)))]
-    obs = [tests[i] for i in np.flatnonzero(ok)]
+    obs, m = [tests[i] for i in np.flatnonzero(ok)], mp.row(np.flatnonzero(ok))
     keep = ~np.eye(x.size, dtype=bool)
     loo = np.array([bracket_centre(lo[k], hi[k])[0] for k in keep])
 
@@ -208,10 +208,8 @@ def threshold(tests, ext=(), values=None, *, n_boot=200, seed=0, min_tests=3):
         d = np.array([100.0 * (r["duration_s"][1] / r["duration_s"][0] - 1.0) for r in rows], float)
         return float(np.sqrt(np.mean(n**2))), float(np.sqrt(np.mean(d**2)))
 
-    (n0, d0), (n1, d1) = (
-        errors(engineering_rows(obs, ext, values)),
-        errors(engineering_rows(obs, tuple(ext) + (NAME,), {**(values or {}), V_STOP.name: loo})),
-    )
+    # the stop acts last in the catalogue's order: on the chosen model as it is
+    (n0, d0), (n1, d1) = errors(engineering_rows(obs, m)), errors(engineering_rows(obs, m.under(Stop(loo))))
     return {
         "v_stop_over_vr": centre,
         "ci95": ci,
@@ -248,9 +246,10 @@ def finding(stop):
     }
 
 
-def estimate(tests, ext, values, seed=0):
-    """The stage after selection: :func:`threshold` as a finding, or None where none is found."""
-    stop = threshold(tests, ext, values, seed=seed)
+def estimate(tests, mp, seed=0):
+    """The stage after selection: :func:`threshold` of the chosen model ``mp`` as a finding, or None
+    where none is found."""
+    stop = threshold(tests, mp, seed=seed)
     if stop is None:
         return None
     return {"named": stop["named"], "values": {V_STOP.name: stop["v_stop_over_vr"]}, "finding": finding(stop)}
@@ -260,9 +259,10 @@ CAUSE = Cause(
     name=NAME,
     law="the wall sticks on landings slower than v_stop thetadot_r",
     params=(V_STOP,),
-    apply=apply,
+    laws=laws,
     boundaries=BOTH,
     stage="after selection",
     unexplained=end_of_motion,
     estimate=estimate,
+    short="stop",
 )

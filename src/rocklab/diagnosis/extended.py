@@ -1,0 +1,56 @@
+"""The extended model of named causes: the catalogue's laws on the one wall model.
+
+A model of the diagnosis is named by its causes (``ext``, names of
+:mod:`rocklab.diagnosis.catalogue`) and their parameter ``values``; here
+the names become the causes' laws (:func:`rocklab.diagnosis.catalogue.laws`)
+acting on the base model of :mod:`rocklab.diagnosis.model`: its per-test
+arrays (:func:`model_params`), the exact simulator of one wall
+(:func:`rocking_model`) and what the model's free run gets wrong
+(:func:`engineering_errors`).
+"""
+
+from __future__ import annotations
+
+from rocklab.diagnosis import catalogue
+from rocklab.diagnosis.causes.restitution_drift import column_of
+from rocklab.diagnosis.estimation import finite_mean
+from rocklab.diagnosis.errors import engineering_rows, history_rms, summarise_rows
+from rocklab.diagnosis.model import ModelParams, log_columns, model_of, simulate_test, simulator
+from rocklab.simulation.model import RockingModel
+
+
+def model_params(tests, ext=(), values=None, base=None) -> ModelParams:
+    """ModelParams of the base model extended by the causes ``ext`` with parameter ``values``.
+
+    The causes act in catalogue order; the values of causes outside ``ext``
+    are not used.  ``base``: :func:`rocklab.diagnosis.model.base_params` of
+    ``tests`` already made (the causes replace its arrays, never change them).
+    """
+    # a drift along a column of the test log that these tests (the maps' wall) lack still acts
+    columns = set(log_columns(tests)) | {column_of(c) for c in ext if column_of(c)}
+    return model_of(tests, catalogue.laws(ext, values, tuple(sorted(columns))), base)
+
+
+def rocking_model(test, ext=(), values=None, base="analytic") -> RockingModel:
+    """The exact simulator of a diagnosis model, for one test (:func:`rocklab.diagnosis.model.simulator`).
+
+    ``base``: ``"analytic"`` (Eq. 2 / Eq. 14), ``"two-sided-e"`` (e_an,2s used
+    for a one-sided wall, Hogan 1992) or ``"zero"`` (e = 0, Liberatore & Spera
+    2003).
+    """
+    return simulator(model_params([test], ext, values).row(0), base)
+
+
+def simulate_measured(test, ext=(), values=None, base="analytic", t_end=None, fs=None):
+    """Free run of a diagnosis model (exact simulator) from a measured test's release, on its clock
+    (:func:`rocklab.diagnosis.model.simulate_test`)."""
+    return simulate_test(test, rocking_model(test, ext, values, base), t_end, fs)
+
+
+def engineering_errors(tests, ext=(), values=None, base="analytic", n_history=2):
+    """Series means of :func:`rocklab.diagnosis.errors.engineering_rows` and the RMS of theta/alpha
+    on ``n_history`` tests (exact simulator)."""
+    out = summarise_rows(engineering_rows(tests, model_params(tests, ext, values).with_base(base)))
+    rms = [history_rms(t, rocking_model(t, ext, values, base)) for t in tests[:n_history]]
+    out["rms_theta_over_alpha"] = finite_mean(rms) if rms else None
+    return out
