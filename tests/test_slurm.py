@@ -219,7 +219,10 @@ def _running_jobs():
 
 
 def _kill_one_job(cmd):
-    """Run cmd, scancel the first of its jobs that runs and every retry of it; (killed ids, log)."""
+    """Run cmd, scancel the first of its jobs that runs and every retry of it.
+
+    Returns the killed SLURM job ids, the comment that names their rule, and the run's log.
+    """
     run = subprocess.Popen(
         cmd,
         cwd=ROOT,
