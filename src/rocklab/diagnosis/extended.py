@@ -13,8 +13,8 @@ from __future__ import annotations
 
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.causes.restitution_drift import column_of
-from rocklab.diagnosis.estimation import finite_mean
 from rocklab.diagnosis.errors import engineering_rows, history_rms, summarise_rows
+from rocklab.diagnosis.estimation import finite_mean
 from rocklab.diagnosis.model import ModelParams, log_columns, model_of, simulate_test, simulator
 from rocklab.simulation.model import RockingModel
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from rocklab.diagnosis.causes import stop_threshold
 from rocklab.diagnosis.result import BoundaryDiagnosis, CampaignDiagnosis
 from rocklab.dissipation.statistics import MIN_BOOTSTRAP, counted, note_lines, note_mark
 
@@ -111,7 +112,7 @@ def diagnosis_markdown(diagnosis) -> str:
                     f"| {f.effect} | {_fmt_params(f)} | {_fmt_ci(f, notes)} | "
                     f"{_f(f.error_heldout['deviance_per_obs'], '.3g')} | "
                     f"{_f(g['deviance_per_obs'], '.3g')}; {'' if fr is None else f'{fr:.3f}'} | {ev} "
-                    f"{f.evidence.get('fit', '') if f.effect == 'stop_threshold' else ''} |"
+                    f"{f.evidence.get('fit', '') if f.effect == stop_threshold.CAUSE.name else ''} |"
                 )
             out += ["", *(line for note in note_lines(notes) for line in (note, ""))]
         for f in e.discovered:

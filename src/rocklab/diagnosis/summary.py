@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 
+from rocklab.diagnosis.causes import stop_threshold
 from rocklab.diagnosis.result import CampaignDiagnosis, LimestoneDiagnosis
 from rocklab.summaries import Tolerance
 
@@ -45,7 +46,7 @@ def _stop_gain(series_entries) -> dict | None:
     of each series' squared rms error."""
     rows = []
     for s in series_entries:
-        f = s.finding("stop_threshold")
+        f = s.finding(stop_threshold.CAUSE.name)
         if f is not None:
             err, gain = f.error_heldout, f.gain
             rows.append(
@@ -117,7 +118,7 @@ def diagnosis_summary(path) -> dict:
             # absent where no series was large enough to extend the model
             "extended": (e.extended or {}).get("statement"),
             "stop_heldout": _stop_gain(mine),
-            "no_stop": [s.key for s in mine if "stop_threshold" not in s.verdict],
+            "no_stop": [s.key for s in mine if stop_threshold.CAUSE.name not in s.verdict],
             "minority": [{"series": s.key, "effect": f.effect, "params": f.params} for s, f in d.minority(e.boundary)],
         }
     return out

@@ -21,7 +21,7 @@ import numpy as np
 
 from rocklab.diagnosis import block_tests, measured_test, records_by_series, simulate_measured
 from rocklab.diagnosis.catalogue import by_name
-from rocklab.diagnosis.causes import restitution_drift
+from rocklab.diagnosis.causes import instability_angle, restitution_drift, stop_threshold
 from rocklab.diagnosis.evidence import flight_time_alpha, in_series_order, observe
 from rocklab.diagnosis.extended import model_params
 from rocklab.diagnosis.model import impact_speeds
@@ -140,7 +140,7 @@ def discovery_figure(tests, entry):
     listed, listed_values = entry.listed_verdict or [], entry.listed_params or {}
     values = {k: v for f in entry.findings for k, v in f.params.items()}
     # the stop acts on the free run's end, not on the laws drawn here
-    chosen = [f.effect for f in entry.findings if f.effect != "stop_threshold"]
+    chosen = [f.effect for f in entry.findings if f.effect != stop_threshold.CAUSE.name]
     fig, axes = plt.subplots(1, len(found), figsize=(7 * len(found), 4.5), squeeze=False)
     for ax, f in zip(axes[0], found):
         fam = by_name(f.effect).family
@@ -150,7 +150,7 @@ def discovery_figure(tests, entry):
         if f.curve is not None:
             # a family with a curve of its own (the losses in flight against the flight's speed)
             family_curve_figure(f, entry.key, ax)
-        elif fam == "instability_angle":
+        elif fam == instability_angle.CAUSE.name:
             x = ob.S.A[:, :-1] / ob.alpha
             ax.plot(x.ravel(), ob.a_T.ravel(), ".", color="0.3", ms=3, zorder=3, label="measured flights")
             # up to the largest flight measured: at the instability point the flight time is unbounded

@@ -46,6 +46,7 @@ import pandas as pd
 import xarray as xr
 
 from rocklab import __version__
+from rocklab.diagnosis.causes import restitution_amplitude, restitution_scale
 from rocklab.io import cf_attrs
 from rocklab.physics.restitution import (
     AMPLITUDE_LAW_ONE_SIDED,
@@ -76,10 +77,10 @@ MODELS = {
 #: (:meth:`rocklab.diagnosis.model.ModelParams.with_base`); ``"1s-eq17"`` takes Eq. 17's (a, b).
 CAUSES_OF = {
     "2s-housner": ({}, "analytic"),
-    "2s-0.95": ({"restitution_scale": {"c": CALIBRATED_RATIO_TWO_SIDED}}, "analytic"),
+    "2s-0.95": ({restitution_scale.CAUSE.name: {"c": CALIBRATED_RATIO_TWO_SIDED}}, "analytic"),
     "1s-zero": ({}, "zero"),
-    "1s-1.05": ({"restitution_scale": {"c": CALIBRATED_RATIO_ONE_SIDED}}, "analytic"),
-    "1s-eq17": ({"restitution_amplitude": dict(zip("ab", AMPLITUDE_LAW_ONE_SIDED))}, "analytic"),
+    "1s-1.05": ({restitution_scale.CAUSE.name: {"c": CALIBRATED_RATIO_ONE_SIDED}}, "analytic"),
+    "1s-eq17": ({restitution_amplitude.CAUSE.name: dict(zip("ab", AMPLITUDE_LAW_ONE_SIDED))}, "analytic"),
 }
 
 #: Pairs (baseline, model) compared record by record (Sect. 5).
@@ -132,7 +133,7 @@ def named_model(name, alpha=ALPHA, R=R, form="linear", eq17=None, diagnosis=None
         raise KeyError(f"unknown map model {name!r}; choose one of {', '.join(MODELS)}")
     causes, base = CAUSES_OF[name]
     if name == "1s-eq17" and eq17 is not None:
-        causes = {"restitution_amplitude": dict(zip("ab", eq17))}
+        causes = {restitution_amplitude.CAUSE.name: dict(zip("ab", eq17))}
     values = {k: v for p in causes.values() for k, v in p.items()}
     return calibrated.map_wall_model(MODELS[name][0], alpha, R, tuple(causes), values, base, form)
 
