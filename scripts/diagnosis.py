@@ -7,5 +7,6 @@ from rocklab.diagnosis import with_boundaries, write_diagnosis
 from rocklab.io import setup_logging
 
 setup_logging(snakemake.log[0])
-entries = [e for path in snakemake.input for e in json.loads(Path(path).read_text())]
+# by series, as the boundary conditions' files interleave them
+entries = sorted((e for path in snakemake.input for e in json.loads(Path(path).read_text())), key=lambda e: e["key"])
 write_diagnosis(with_boundaries(entries, seed=snakemake.params.seed), snakemake.output.json, snakemake.output.md)

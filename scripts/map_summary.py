@@ -5,7 +5,7 @@ from rocklab.seismic.accelerograms import table4_agreement
 from rocklab.seismic.overturning import TABLE4_SUBSET, record_comparison, reductions, summary_table
 
 setup_logging(snakemake.log[0])
-summary = summary_table(load_datasets(snakemake.input.maps))
+summary = summary_table(load_datasets(snakemake.params.maps))
 agreement = table4_agreement()
 matching = agreement.index[agreement.pga_pgv_match]
 write_table(summary, snakemake.output.summary, snakemake.params.summary_schema)

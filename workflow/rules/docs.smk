@@ -6,24 +6,23 @@
 DOC_PAGES = sorted(p.name for p in Path(workflow.basedir, "docs", "templates").glob("*.md"))
 
 
-def docs_outputs():
-    return [res("docs", "numbers.json")] + [res("docs", page) for page in DOC_PAGES]
+DOCS_OUTPUTS = [res("docs", "numbers.json")] + [res("docs", page) for page in DOC_PAGES]
 
 
 rule docs:
     input:
         # Every stage has run, so every job's benchmark file exists.
         results=all_outputs(),
-        tables=[res(name) for name in ("tests.csv", "amplitude_laws.csv", "effects.csv")],
+        tables=[rules.dissipation_tables.output[name] for name in ("tests", "laws", "effects")],
         templates=[repo_path("docs", "templates", page) for page in DOC_PAGES],
     output:
         numbers=res("docs", "numbers.json"),
         pages=[res("docs", page) for page in DOC_PAGES],
-    params:
-        results_dir=config["results_dir"],
     log:
         res("logs", "docs.log"),
     benchmark:
         res("benchmarks", "docs.tsv")
+    params:
+        results_dir=lambda wildcards, output: str(Path(output.numbers).parents[1]),
     script:
         "../../scripts/docs_pages.py"
