@@ -1,5 +1,6 @@
-# Paths, the campaign's test list and the per-test parameters that decide
-# when a test must be reduced again.
+# Paths, the campaign's test list, its jobs (reduction, diagnosis per
+# boundary condition), the per-test parameters that decide when a test must
+# be reduced again, the targets and the rules' input functions.
 import functools
 import json
 import re

@@ -16,7 +16,9 @@
 # patterns of its wildcards, and a job writes as many netCDF files as it has
 # tests.  The rows file is written last, so a job cut short has none and runs
 # again; every later use of a test's files goes through it (reduced_inputs,
-# or a checkpoint downstream of it).
+# or a checkpoint downstream of it).  A job's tests are its params: a test
+# added to it reduces it again (the params trigger; not under
+# --rerun-triggers mtime alone); a test's file deleted by hand does not.
 rule reduce:
     output:
         rows=res("reduction", "{job}.json"),

@@ -49,7 +49,8 @@ MAP_BATCH = {r: k for k, batch in MAP_BATCHES.items() for r in batch}
 # A job's declared output is the list of the maps it wrote, written last (a
 # rule's outputs are patterns of its wildcards, and a job holds as many
 # records as maps.records_per_job); the rules that read maps take it as
-# input, the maps' paths as params.
+# input, the maps' paths as params.  Its records are params too: another
+# record in the batch recomputes it (not under --rerun-triggers mtime alone).
 rule overturning_maps:
     input:
         records=lambda wildcards: [record_path(r) for r in MAP_BATCHES[wildcards.batch]],
