@@ -1,6 +1,7 @@
 # Two commands set everything up on a fresh machine with Python >= 3.11 and make:
 #   make run    reduce the embedded campaign (raw/) into results/
-#   make test   run the test suite
+#   make test   run the test suite (every kind: unit, slow, workflow, docs; tests/conftest.py)
+#   make test-unit  the unit tests alone, in under a minute
 #   make docs   write the docs/ pages from the results (docs/templates + results/)
 #   make report results/report.html, the browsable report of the results of `make run`
 PYTHON ?= python3
@@ -9,7 +10,7 @@ BIN    := $(VENV)/bin
 CORES  ?= 2
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test lint bench docs report venv clean dryrun unlock
+.PHONY: run test test-unit lint bench docs report venv clean dryrun unlock
 
 # pip byte-compiles what it installs one file at a time (30 s of CPU, most of
 # the install); compileall does it on every core. Compiled once here, as an
@@ -40,10 +41,17 @@ dryrun: $(STAMP)
 
 LINTED := src tests scripts bench
 
+# snakefmt formats the rule files as ruff the Python; `snakemake --lint` runs
+# in tests/test_workflow.py (clean but for its wish of a conda environment
+# per rule: the environment is requirements.lock in the venv).
 test: $(STAMP)
 	$(BIN)/ruff check $(LINTED)
 	$(BIN)/ruff format --check --quiet $(LINTED)
+	$(BIN)/snakefmt --check Snakefile workflow
 	$(BIN)/python -m pytest -n $(CORES) -q
+
+test-unit: $(STAMP)
+	$(BIN)/python -m pytest -m unit -n $(CORES) -q
 
 # Every benchmark runs; one that misses its target fails `make bench` at the end.
 bench: $(STAMP)

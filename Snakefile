@@ -1,5 +1,7 @@
 # rocklab: reduce a free-rocking campaign in the lab's raw format.
 # This file only wires the rules; each stage lives in workflow/rules/.
+from pathlib import Path
+
 from snakemake.exceptions import WorkflowError
 from snakemake.utils import min_version, validate
 
@@ -8,7 +10,8 @@ from rocklab.config import SCHEMA, schema_error
 min_version("8.0")
 
 
-configfile: "config/config.yaml"
+# beside this file, not in the working directory: `--directory` may name any folder
+configfile: Path(workflow.basedir, "config", "config.yaml")
 
 
 # Every key, its meaning and its default: the schema, which fills in what the
@@ -43,10 +46,10 @@ localrules:
 
 rule all:
     """Everything: the campaign, the overturning maps, the limestone blocks and the docs pages."""
+    default_target: True
     input:
         all_outputs(),
-        docs_outputs(),
-    default_target: True
+        DOCS_OUTPUTS,
 
 
 rule campaign:
@@ -58,22 +61,22 @@ rule campaign:
 rule maps:
     """The overturning maps of Sect. 5 (Figs. 21-23 and their indices)."""
     input:
-        map_outputs(),
+        MAP_OUTPUTS,
 
 
 rule calibrated:
     """The calibrated wall of the campaign's diagnosis on the maps (maps/calibrated.csv)."""
     input:
-        calibrated_outputs(),
+        CALIBRATED_OUTPUTS,
 
 
 rule limestone:
     """The restitution of the UMinho limestone blocks."""
     input:
-        limestone_outputs(),
+        LIMESTONE_OUTPUTS,
 
 
 rule shake_table:
     """Real shake-table outcomes (shake_table_dir): the block against the PGV threshold and DEM."""
     input:
-        shake_table_outputs(),
+        SHAKE_TABLE_OUTPUTS,

@@ -3,7 +3,7 @@
     python bench/diagnosis.py --out results/bench [--results results]
 
 Reads the reduced tests and their motion (``<results>/tests``,
-``<results>/motion``, as the workflow's ``diagnose_series_*`` jobs do) and
+``<results>/motion``, as the workflow's ``diagnose_series`` jobs do) and
 times :func:`rocklab.diagnosis.diagnose_records` on each series with the
 workflow's settings (``config/config.yaml``, defaults from its schema):
 CPU and wall seconds, the verdict; then the boundary conditions summed up

@@ -78,12 +78,13 @@ def run(campaign: Path, results: Path) -> dict:
     for job, ids in jobs.items():
         cpu[job] = run_shim(
             "reduce_tests.py",
-            output={
-                "tests": [str(results / "tests" / f"{t}.nc") for t in ids],
+            output={"rows": str(results / "reduction" / f"{job}.json")},
+            params={
+                "netcdf": [str(results / "tests" / f"{t}.nc") for t in ids],
                 "motion": [str(results / "motion" / f"{t}.nc") for t in ids],
-                "rows": str(results / "reduction" / f"{job}.json"),
+                "raw_dir": str(raw_dir),
+                "options": options,
             },
-            params={"raw_dir": str(raw_dir), "options": options},
             log=[str(results / "logs" / "reduce" / f"{job}.log")],
         )
     ids = [t for part in jobs.values() for t in part]

@@ -1,4 +1,4 @@
-"""Snakemake shim: results/diagnosis/<series>.json of each series of a boundary condition ([] if there is none).
+"""Snakemake shim: results/diagnosis/<boundary>.json, the entries of the series of a boundary condition.
 
 The series are read and diagnosed one at a time, so that the job's memory is
 that of its largest series, not of the boundary condition's whole campaign.
@@ -12,7 +12,8 @@ from rocklab.lab.motion import read_motion
 
 setup_logging(snakemake.log[0])
 motions = {Path(p).stem: p for p in snakemake.params.motions}
-for series, out in zip(snakemake.params.series, snakemake.output):
+entries = []
+for series in snakemake.params.series:
     # a list: the tests are read twice (their motions, their records); of
     # their records the diagnosis needs the rotation, its time and the attributes
     tests = list(valid_tests(snakemake.params.tests[series], variables=("theta",)))
@@ -24,4 +25,6 @@ for series, out in zip(snakemake.params.series, snakemake.output):
         n_history=snakemake.params.n_history,
         seed=snakemake.params.seed,
     )
-    CampaignDiagnosis.from_dict([entry] if entry else []).to_json(out)
+    if entry:
+        entries.append(entry)
+CampaignDiagnosis.from_dict(entries).to_json(snakemake.output[0])

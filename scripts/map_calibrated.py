@@ -11,7 +11,7 @@ from rocklab.summaries import write_summary
 setup_logging(snakemake.log[0])
 # the paper's e-alone maps are files, the calibrated ones the files of a folder per record
 paths = [
-    q for path in map(Path, snakemake.input.maps) for q in (sorted(path.glob("*.nc")) if path.is_dir() else [path])
+    q for path in map(Path, snakemake.params.maps) for q in (sorted(path.glob("*.nc")) if path.is_dir() else [path])
 ]
 # the e-alone maps have the paper's grid: read on the calibrated walls' cells
 summary = summary_table(subgrid(ds, snakemake.params.n) for ds in load_datasets(paths))

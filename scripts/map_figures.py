@@ -7,7 +7,7 @@ from rocklab.plots import maps as map_figures
 from rocklab.plots import save_png
 
 setup_logging(snakemake.log[0])
-save_png(map_figures.overturning_maps(list(load_datasets(snakemake.input.two_sided))), snakemake.output.fig21, dpi=120)
-save_png(map_figures.overturning_maps(list(load_datasets(snakemake.input.one_sided))), snakemake.output.fig23, dpi=120)
+save_png(map_figures.overturning_maps(list(load_datasets(snakemake.params.two_sided))), snakemake.output.fig21, dpi=120)
+save_png(map_figures.overturning_maps(list(load_datasets(snakemake.params.one_sided))), snakemake.output.fig23, dpi=120)
 summary = pd.read_csv(snakemake.input.summary)
 save_png(map_figures.map_indices_figure(summary), snakemake.output.fig22, dpi=120)

@@ -7,7 +7,7 @@ from rocklab.seismic.summary import maps_summary
 from rocklab.summaries import write_summary
 
 setup_logging(snakemake.log[0])
-summary = summary_table(load_datasets(snakemake.input.maps))
+summary = summary_table(load_datasets(snakemake.params.maps))
 agreement = table4_agreement()
 matching = agreement.index[agreement.pga_pgv_match]
 write_table(summary, snakemake.output.summary, snakemake.params.summary_schema)

@@ -1,11 +1,15 @@
 """Snakemake shim: the overturning maps (Sect. 5) of a batch of records.
 
-Rules ``overturning_maps_<k>``: the paper's models, one file per record and
-model.  Rules ``calibrated_maps_<k>``: the calibrated walls the campaign's
-diagnosis names, one folder per record, one file per model in it.  Each
-record logs to its own file.
+Rule ``overturning_maps``: the paper's models, one file per record and
+model.  Rule ``calibrated_maps``: the calibrated walls the campaign's
+diagnosis names, one folder per record (emptied first, as Snakemake empties
+a folder it is told of), one file per model in it.  Each record logs to its
+own file.  Last, the job's declared output: the maps it wrote, by record.
 """
 
+import json
+import logging
+import shutil
 from pathlib import Path
 
 import numba
@@ -17,18 +21,22 @@ from rocklab.seismic.accelerograms import load_record
 from rocklab.seismic.overturning import overturning_map
 
 numba.set_num_threads(min(snakemake.threads, numba.config.NUMBA_NUM_THREADS))
+setup_logging(snakemake.log[0])
 p = snakemake.params
 # read once: every calibrated model of every record of the batch is built from it
 diagnosis = CampaignDiagnosis.from_json(snakemake.input.diagnosis) if "diagnosis" in snakemake.input.keys() else None
 names = calibrated.model_names(diagnosis) if diagnosis is not None else p.models
+written = {}
+logging.info("records %s: %d maps each, logged in %s", ", ".join(p.records), len(names), ", ".join(p.logs))
 for k, record in enumerate(p.records):
-    setup_logging(snakemake.log[k])
+    setup_logging(p.logs[k])
     if diagnosis is not None:
-        folder = Path(snakemake.output[k])
-        folder.mkdir(parents=True, exist_ok=True)
+        folder = Path(p.folders[k])
+        shutil.rmtree(folder, ignore_errors=True)
+        folder.mkdir(parents=True)
         paths = [folder / f"{record}__{name}.nc" for name in names]
     else:
-        paths = snakemake.output[k * len(names) : (k + 1) * len(names)]
+        paths = p.maps[k * len(names) : (k + 1) * len(names)]
     trace = load_record(record)
     for name, path in zip(names, paths):
         ds = overturning_map(
@@ -46,3 +54,5 @@ for k, record in enumerate(p.records):
             chunks=p.chunks,
         )
         write_netcdf(ds, path)
+    written[record] = [Path(path).name for path in paths]
+Path(snakemake.output[0]).write_text(json.dumps(written, indent=1) + "\n")

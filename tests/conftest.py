@@ -1,4 +1,17 @@
-"""Shared fixtures: a tiny campaign cut from the embedded one."""
+"""Shared fixtures (a tiny campaign cut from the embedded one), and the kind of every test.
+
+Kinds (markers, registered in pyproject.toml; ``make test`` runs them all):
+
+- ``unit``: the library, a test in well under a second or two; ``make
+  test-unit`` runs them in under a minute on two cores.
+- ``slow``: the library's long computations (maps against their reference,
+  bootstraps, simulations of whole campaigns).
+- ``workflow``: Snakemake or an installed package run as a user runs them.
+- ``docs``: the committed pages, the README and the report against the results.
+
+The kind is given here, by file and test, not in the test files: a test that
+runs Snakemake (its ``skipif`` names snakemake) is a workflow test wherever it is.
+"""
 
 import shutil
 from pathlib import Path
@@ -8,6 +21,73 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 CAMPAIGN = ROOT / "raw" / "campaign"
+
+#: The kind of every test of a file, where it is not ``unit``.
+KIND_OF_FILE = {
+    "test_workflow.py": "workflow",
+    "test_interrupt.py": "workflow",
+    "test_install.py": "workflow",
+    "test_docs.py": "docs",
+    "test_report.py": "docs",
+}
+#: Tests of the library that take a second or more each, their fixtures included
+#: (``pytest -m unit --durations=0``, 2 cores): file -> names of tests, or of
+#: the fixtures that make every test using them slow.
+SLOW = {
+    # a module's campaigns diagnosed once: 110 s and 80 s
+    "test_diagnosis.py": {"diagnosed"},
+    "test_diagnosis_flight.py": {"diagnosed", "test_a_viscous_loss_is_still_the_listed_flight_damping"},
+    "test_overturning.py": {
+        "test_maps_agree_with_the_event_driven_reference_up_to_the_boundary",
+        "test_calibrated_maps_agree_with_the_event_driven_reference",
+        "test_cells_at_the_onset_threshold_finish",
+    },
+    "test_batch.py": {
+        "test_overturning_batch_matches_reference",
+        "test_ground_batch_covers_the_free_motion_after_the_record",
+        "test_onset_on_the_first_sample",
+    },
+    "test_campaign.py": {"test_embedded_records_read_as_python_reads_them"},
+}
+#: Tests that run Snakemake without a ``skipif`` that names it: file -> test names.
+WORKFLOW = {"test_config.py": {"test_every_run_takes_the_workflow_profile"}}
+
+
+def test_kind(item):
+    """The kind of a collected test (see the module's docstring)."""
+    kind = KIND_OF_FILE.get(item.path.name, "unit")
+    if kind == "unit" and (
+        item.originalname in WORKFLOW.get(item.path.name, ())
+        or any("snakemake" in str(m.kwargs.get("reason", "")) for m in item.iter_markers("skipif"))
+    ):
+        return "workflow"
+    slow = SLOW.get(item.path.name, set())
+    if kind == "unit" and (item.originalname in slow or slow & set(item.fixturenames)):
+        return "slow"
+    return kind
+
+
+#: Files whose Snakemake runs have a working directory of their own (``--directory`` a temporary folder).
+OWN_WORKDIR = {"test_workflow.py", "test_interrupt.py", "test_install.py"}
+#: Files whose fixtures run Snakemake in the checkout.
+IN_CHECKOUT = {"test_report.py"}
+
+
+def runs_in_checkout(item):
+    """Whether a test runs Snakemake with the checkout as its working directory."""
+    name = item.path.name
+    return name in IN_CHECKOUT or (
+        name not in OWN_WORKDIR and test_kind(item) == "workflow" and hasattr(item.module, "SNAKEMAKE")
+    )
+
+
+def pytest_collection_modifyitems(items):
+    for item in items:
+        item.add_marker(test_kind(item))
+        # one worker runs them one after the other (--dist loadgroup): two
+        # Snakemake runs in one folder race on .snakemake/locks
+        if runs_in_checkout(item):
+            item.add_marker(pytest.mark.xdist_group("checkout"))
 
 
 @pytest.fixture

@@ -42,13 +42,17 @@ STAGES = {"reduction": "logs/reduce", "diagnosis": "logs/diagnosis", "map": "log
 
 
 def _command(campaign, results, config):
+    """The run of the tables into ``results``, in the folder of ``results``: each
+    test's runs have a working directory (Snakemake's locks, its record of
+    incomplete jobs) of their own."""
     cmd = [str(SNAKEMAKE), *(str(results / t) for t in TABLES), "--cores", "2", "--quiet", "--rerun-incomplete"]
-    return cmd + ["--directory", str(ROOT), "--configfile", str(config), "--config", f"raw_dir={campaign}",
-                  f"results_dir={results}"]  # fmt: skip
+    return cmd + ["--snakefile", str(ROOT / "Snakefile"), "--directory", str(results.parent), "--configfile",
+                  str(config), "--config", f"raw_dir={campaign}", f"results_dir={results}"]  # fmt: skip
 
 
 def _run(campaign, results, config):
-    run = subprocess.run(_command(campaign, results, config), capture_output=True, text=True, cwd=ROOT, timeout=900)
+    cmd = _command(campaign, results, config)
+    run = subprocess.run(cmd, capture_output=True, text=True, cwd=results.parent, timeout=900)
     assert run.returncode == 0, run.stderr[-3000:]
 
 
@@ -60,7 +64,7 @@ def _run_killed(campaign, results, config, stage, delay, sig, jobs_only=False):
     Returns whether the run was cut."""
     proc = subprocess.Popen(
         _command(campaign, results, config),
-        cwd=ROOT,
+        cwd=results.parent,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
         start_new_session=True,

@@ -1,13 +1,18 @@
-# Paths, the campaign's test list and the per-test parameters that decide
-# when a test must be reduced again.
+# Paths, the campaign's test list, its jobs (reduction, diagnosis per
+# boundary condition), the per-test parameters that decide when a test must
+# be reduced again, the targets and the rules' input functions.
 import functools
 import json
 import re
 from pathlib import Path
 
+from snakemake.exceptions import WorkflowError
+
 from rocklab.config import check_names, check_paths, recorded_path
 from rocklab.lab.campaign import UNREADABLE, open_campaign
-from rocklab.seismic.accelerograms import read_manifest
+from rocklab.seismic import calibrated
+from rocklab.seismic.accelerograms import accelerogram_dir, read_manifest
+from rocklab.shake_table.records import check_dir
 
 # config is validated by the Snakefile, every default filled in from
 # workflow/schemas/config.schema.yaml: the rules read it without defaults.
@@ -27,6 +32,17 @@ TESTS_BY_SERIES = {k: v for k, v in CAMPAIGN.reduction_groups().items() if k != 
 REDUCTION_JOBS = CAMPAIGN.reduction_jobs(config["reduction"]["max_tests_per_job"])
 #: The reduction job of each test.
 REDUCTION_JOB = {t: job for job, ids in REDUCTION_JOBS.items() for t in ids}
+#: The series of each boundary condition, in the order of tests.csv: one diagnosis job each
+#: (the tests refused at the door are in no series: they have no diagnosis).
+SERIES_BY_BOUNDARY = {}
+for _series, _ids in TESTS_BY_SERIES.items():
+    SERIES_BY_BOUNDARY.setdefault(CAMPAIGN.test_row(_ids[0]).boundary, []).append(_series)
+
+
+def tests_of_boundary(boundary):
+    """The tests of a boundary condition's series, series by series."""
+    return [t for s in SERIES_BY_BOUNDARY[boundary] for t in TESTS_BY_SERIES[s]]
+
 
 # Scheduling: on few cores Snakemake starts the selectable jobs of highest
 # priority first.  The campaign's chain (reduction, diagnosis, its
@@ -39,22 +55,13 @@ REDUCTION_JOB = {t: job for job, ids in REDUCTION_JOBS.items() for t in ids}
 PRIORITY = {"campaign_chain": 20, "maps": 10, "longest_figures": 5}
 
 
-onstart:
-    # No job-rate limit on a local run.  With one (Snakemake's default, 100
-    # jobs a second) every scheduling round that leaves a job waiting for a
-    # core starts a one-second timer for another round, and each job that
-    # ends starts one more such chain: 1,344 rounds for the 31 jobs of the
-    # embedded campaign, each re-reading the params and input sizes of every
-    # waiting job, in Snakemake's own process, which competes with the jobs
-    # for the two cores.  Without it Snakemake schedules when a job ends.
-    # The limiter only exists once the run starts (it is not a setting a
-    # Snakefile reaches); a remote executor keeps it.
-    if workflow.local_exec and getattr(getattr(workflow, "scheduler", None), "job_rate_limiter", None) is not None:
-        workflow.scheduler.job_rate_limiter = None
-
-
 def res(*parts):
     return str(RESULTS.joinpath(*parts))
+
+
+def one_of(names):
+    """A wildcard constraint matching exactly these names (a job's name, a boundary condition)."""
+    return "|".join(re.escape(str(n)) for n in names)
 
 
 def repo_path(*parts):
@@ -79,7 +86,7 @@ def record_stamp(test_id):
     stats every input of every waiting job at each scheduling round, and
     checksums every input for every output at a job's end (45,000 per job
     of 150 tests): with the records as inputs (and the rounds of its
-    default job-rate limit, see the onstart handler above) its own CPU grew
+    job-rate limit, profiles/default) its own CPU grew
     with the square of the campaign, 9 s for the embedded campaign, 390 s
     for ten times it.  A missing record is not a missing input either: the test is
     reduced to an 'unreadable' entry and the rest of the campaign goes on.
@@ -93,13 +100,8 @@ def record_stamp(test_id):
     return [st.st_size, st.st_mtime_ns]
 
 
-def reduction_rows(job):
-    """The attributes of the QC rows of a reduction job's tests (rocklab.lab.reduction.row_attrs)."""
-    return res("reduction", f"{job}.json")
-
-
 def reduced_inputs(test_ids):
-    """What a rule over many reduced tests takes as input: the rows files of
+    """The input of a job over many reduced tests: the rows files of
     their reduction jobs, not the tests' netCDF files (passed as params).
 
     Each job writes its tests' files and its rows file together, so the rows
@@ -107,10 +109,10 @@ def reduced_inputs(test_ids):
     every input of every job waiting for a core at each scheduling round:
     listed file by file, the 2,500 netCDF inputs of the QC, dissipation and
     diagnosis jobs cost Snakemake's own process some 20 s of CPU of a 35 s
-    total (with the rounds of its default job-rate limit, several a second,
-    which the onstart handler above drops), beside the jobs it runs.
+    total (with the rounds of its job-rate limit, several a second, see
+    profiles/default), beside the jobs it runs.
     """
-    return list(dict.fromkeys(reduction_rows(REDUCTION_JOB[t]) for t in test_ids))
+    return expand(rules.reduce.output.rows, job=list(dict.fromkeys(REDUCTION_JOB[t] for t in test_ids)))
 
 
 def test_params(test_id):
@@ -164,8 +166,9 @@ def report_item(path, caption, stage, label, subcategory=None, **kw):
     its stage's category, listed as label (a string: one 'result' column)
     or labels (a dict of columns, e.g. per wildcard)."""
     labels = {"result": label} if isinstance(label, str) else label
-    return report(path, caption=f"../report/{caption}.rst", category=CATEGORY[stage],
-                  subcategory=subcategory, labels=labels, **kw)
+    return report(
+        path, caption=f"../report/{caption}.rst", category=CATEGORY[stage], subcategory=subcategory, labels=labels, **kw
+    )
 
 
 def report_figure(n, stage, what, subcategory=None):
@@ -182,8 +185,93 @@ def report_page(name, stage, what, subcategory=None):
 def campaign_outputs():
     """Everything of the campaign in raw_dir: reduction, QC, dissipation,
     diagnosis, their figures and report pages (no map, no limestone block)."""
-    return qc_outputs() + dissipation_outputs() + figure_outputs() + diagnosis_outputs()
+    return QC_OUTPUTS + DISSIPATION_OUTPUTS + FIGURE_OUTPUTS + DIAGNOSIS_OUTPUTS
 
 
 def all_outputs():
-    return campaign_outputs() + limestone_outputs() + map_outputs() + calibrated_outputs()
+    return campaign_outputs() + LIMESTONE_OUTPUTS + MAP_OUTPUTS + CALIBRATED_OUTPUTS
+
+
+# Input functions of the stages' rules (`snakemake --lint` wants a rule file
+# without functions).  A test's netCDF file and a map are no rule's declared
+# output (a job writes a number of them that its wildcards do not give): a
+# function that returns them is evaluated after a checkpoint downstream of the
+# jobs that write them.
+
+
+def kinematics_sample(wildcards):
+    """The reduced test that Figs. 6, 8 and 9 draw, once the QC table (after
+    every reduction job) is written."""
+    from rocklab.io import valid_test_ids
+
+    qc = checkpoints.qc_table.get().output.qc
+    return res("tests", f"{KINEMATICS_SAMPLE or valid_test_ids(qc)[0]}.nc")
+
+
+def fig20_sample_test(wildcards):
+    """The reduced test that Fig. 20a draws (none without a one-sided test with a
+    monitor), once the dissipation tables (after every reduction job) are written."""
+    import pandas as pd
+    from rocklab.plots.dissipation import fig20_sample
+
+    tests = checkpoints.dissipation_tables.get().output.tests
+    test_id = FIG20_SAMPLE or fig20_sample(pd.read_csv(tests))
+    return [res("tests", f"{test_id}.nc")] if test_id else []
+
+
+def diagnosis_samples(kind):
+    """The sample test of every diagnosed series (the tests the figures draw), once the diagnosis has run,
+    and every test of a series with a form discovered beyond the catalogue (drawn against them all)."""
+
+    def inputs(wildcards):
+        # here, not at the top: the diagnosis package is read once the checkpoint has run, not at every start
+        from rocklab.diagnosis.result import CampaignDiagnosis
+
+        diagnosis = CampaignDiagnosis.from_json(checkpoints.diagnosis.get().output.json)
+        ids = diagnosis.sample_tests
+        ids |= {t for e in diagnosis.series if e.discovered for t in TESTS_BY_SERIES[e.key]}
+        return sorted(res(kind, f"{t}.nc") for t in ids)
+
+    return inputs
+
+
+def map_path(record, model):
+    return res("maps", f"{record}__{model}.nc")
+
+
+def record_path(record):
+    """The shipped file of a record, so that replacing it recomputes its maps."""
+    return recorded_path(accelerogram_dir() / MANIFEST.set_index("record").loc[record, "file"])
+
+
+def calibrated_map_names():
+    """The calibrated walls of the campaign's diagnosis (a checkpoint), and the
+    paper's e-alone models of the boundaries they calibrate."""
+    names = calibrated.model_names(checkpoints.diagnosis.get().output.json)
+    boundaries = {calibrated.parse_name(n)[0] for n in names}
+    return names, [calibrated.E_ALONE[b] for b in calibrated.PREFIX if b in boundaries]
+
+
+def calibrated_map_inputs(wildcards):
+    """The maps of the paper's e-alone models and the folders of the calibrated
+    ones, for the boundaries the campaign's diagnosis calibrates."""
+    names, e_alone = calibrated_map_names()
+    return [map_path(r, m) for r in MAP_RECORDS for m in e_alone] + [
+        res("maps", "calibrated", r) for r in MAP_RECORDS if names
+    ]
+
+
+def calibrated_map_batches(wildcards):
+    """The map jobs that write :func:`calibrated_map_inputs`: their lists of maps."""
+    names, e_alone = calibrated_map_names()
+    batches = expand(rules.overturning_maps.output, batch=MAP_BATCHES) if e_alone else []
+    return batches + (expand(rules.calibrated_maps.output, batch=MAP_BATCHES) if names else [])
+
+
+def shake_table_data(wildcards):
+    """tests.csv and geometry.json of shake_table_dir; a missing folder stops the target, naming the key."""
+    try:
+        folder = check_dir(ST_DIR)
+    except FileNotFoundError as exc:
+        raise WorkflowError(str(exc)) from None
+    return [recorded_path(folder / "tests.csv"), recorded_path(folder / "geometry.json")]

@@ -12,72 +12,66 @@ DIAGNOSIS = config["diagnosis"]
 BLOCKS = Path(recorded_path(LIMESTONE))
 
 
-def diagnosis_outputs():
-    return [res("diagnosis.json"), res("report", "diagnosis.html"), res("figures", "fig14.png"),
-            res("figures", "fig15.png"), res("figures", "diagnosis")] + campaign_effects_outputs()
+CAMPAIGN_EFFECTS_OUTPUTS = [res("report", "campaign_effects.html"), res("figures", "campaign_covariates.png")]
+DIAGNOSIS_OUTPUTS = [
+    res("diagnosis.json"),
+    res("report", "diagnosis.html"),
+    res("figures", "fig14.png"),
+    res("figures", "fig15.png"),
+    res("figures", "diagnosis"),
+] + CAMPAIGN_EFFECTS_OUTPUTS
+LIMESTONE_OUTPUTS = [res("limestone_diagnosis.json"), res("report", "limestone_diagnosis.html")]
 
 
-def campaign_effects_outputs():
-    return [res("report", "campaign_effects.html"), res("figures", "campaign_covariates.png")]
-
-
-def limestone_outputs():
-    return [res("limestone_diagnosis.json"), res("report", "limestone_diagnosis.html")]
-
-
-#: The series of each boundary condition, in the order of tests.csv (one diagnosis job each).
-#: (the tests refused at the door are in no series: they have no diagnosis)
-SERIES_BY_BOUNDARY = {}
-for _series, _ids in TESTS_BY_SERIES.items():
-    SERIES_BY_BOUNDARY.setdefault(CAMPAIGN.test_row(_ids[0]).boundary, []).append(_series)
-
-# One job per boundary condition, not per series: a job spends 2 s starting
-# Python and importing the library, as long as diagnosing a small series, so
-# 26 per-series jobs spent some 50 s of the embedded campaign's diagnosis on
-# start-up.  Each still writes one file per series, as the checkpoint reads.
-for _boundary, _series in SERIES_BY_BOUNDARY.items():
-    _ids = [t for s in _series for t in TESTS_BY_SERIES[s]]
-
-    rule:
-        name:
-            "diagnose_series_" + re.sub(r"\W", "_", _boundary)
-        priority: PRIORITY["campaign_chain"]
-        input:
-            reduced_inputs(_ids),
-        output:
-            [res("diagnosis", f"{s}.json") for s in _series],
-        params:
-            series=list(_series),
-            # the tests of each series, each with its own QC verdict, read
-            # series by series: the job holds one series' tests at a time
-            tests={s: [res("tests", f"{t}.nc") for t in TESTS_BY_SERIES[s]] for s in _series},
-            # their motion, extracted once by the reduction
-            motions=[res("motion", f"{t}.nc") for t in _ids],
-            n_boot=DIAGNOSIS["n_boot"],
-            n_history=DIAGNOSIS["n_history"],
-            seed=DIAGNOSIS["seed"],
-        log:
-            res("logs", "diagnosis", f"{_boundary}.log"),
-        benchmark:
-            res("benchmarks", "diagnosis", f"{_boundary}.tsv")
-        script:
-            "../../scripts/diagnose_series.py"
+# One job per boundary condition (SERIES_BY_BOUNDARY, common.smk), not per
+# series: a job spends 2 s starting Python and importing the library, as long
+# as diagnosing a small series, so 26 per-series jobs spent some 50 s of the
+# embedded campaign's diagnosis on start-up.  It writes the entries of its
+# series, in the order of tests.csv, to one file.
+rule diagnose_series:
+    input:
+        lambda wildcards: reduced_inputs(tests_of_boundary(wildcards.boundary)),
+    output:
+        res("diagnosis", "{boundary}.json"),
+    log:
+        res("logs", "diagnosis", "{boundary}.log"),
+    benchmark:
+        res("benchmarks", "diagnosis", "{boundary}.tsv")
+    wildcard_constraints:
+        boundary=one_of(SERIES_BY_BOUNDARY),
+    priority: PRIORITY["campaign_chain"]
+    params:
+        series=lambda wildcards: SERIES_BY_BOUNDARY[wildcards.boundary],
+        # the tests of each series, each with its own QC verdict, read
+        # series by series: the job holds one series' tests at a time
+        tests=lambda wildcards: {
+            s: [res("tests", f"{t}.nc") for t in TESTS_BY_SERIES[s]] for s in SERIES_BY_BOUNDARY[wildcards.boundary]
+        },
+        # their motion, extracted once by the reduction
+        motions=lambda wildcards: [res("motion", f"{t}.nc") for t in tests_of_boundary(wildcards.boundary)],
+        n_boot=DIAGNOSIS["n_boot"],
+        n_history=DIAGNOSIS["n_history"],
+        seed=DIAGNOSIS["seed"],
+    script:
+        "../../scripts/diagnose_series.py"
 
 
 checkpoint diagnosis:
-    priority: PRIORITY["campaign_chain"]
     input:
-        expand(res("diagnosis", "{series}.json"), series=sorted(TESTS_BY_SERIES)),
+        expand(rules.diagnose_series.output, boundary=SERIES_BY_BOUNDARY),
     output:
-        json=report_item(res("diagnosis.json"), "diagnosis_json", "diagnosis", "diagnosis.json, for programs", "Summary"),
+        json=report_item(
+            res("diagnosis.json"), "diagnosis_json", "diagnosis", "diagnosis.json, for programs", "Summary"
+        ),
         md=res("diagnosis.md"),
         docs_summary=res("summaries", "diagnosis.json"),
-    params:
-        seed=DIAGNOSIS["seed"],
     log:
         res("logs", "diagnosis.log"),
     benchmark:
         res("benchmarks", "diagnosis.tsv")
+    priority: PRIORITY["campaign_chain"]
+    params:
+        seed=DIAGNOSIS["seed"],
     script:
         "../../scripts/diagnosis.py"
 
@@ -96,38 +90,28 @@ rule diagnosis_pages:
         "../../scripts/report_pages.py"
 
 
-def diagnosis_samples(kind):
-    """The sample test of every diagnosed series (the tests the figures draw), once the diagnosis has run,
-    and every test of a series with a form discovered beyond the catalogue (drawn against them all)."""
-
-    def inputs(wildcards):
-        # here, not at the top: the diagnosis package is read once the checkpoint has run, not at every start
-        from rocklab.diagnosis.result import CampaignDiagnosis
-
-        diagnosis = CampaignDiagnosis.from_json(checkpoints.diagnosis.get().output.json)
-        ids = diagnosis.sample_tests
-        ids |= {t for e in diagnosis.series if e.discovered for t in TESTS_BY_SERIES[e.key]}
-        return sorted(res(kind, f"{t}.nc") for t in ids)
-
-    return inputs
-
-
 rule diagnosis_figures:
-    priority: PRIORITY["longest_figures"]
     input:
-        diagnosis=res("diagnosis.json"),
+        diagnosis=rules.diagnosis.output.json,
         tests=diagnosis_samples("tests"),
         motions=diagnosis_samples("motion"),
     output:
         fig14=report_figure("14", "diagnosis", "two-sided, models against the test", "Summary"),
         fig15=report_figure("15", "diagnosis", "one-sided, models against the test", "Summary"),
         # every series' figure its own report item, labelled by its series
-        series=report_item(directory(res("figures", "diagnosis")), "diagnosis_series", "diagnosis",
-                           {"series": "{series}"}, "Per series", patterns=["{series}.png"]),
+        series=report_item(
+            directory(res("figures", "diagnosis")),
+            "diagnosis_series",
+            "diagnosis",
+            {"series": "{series}"},
+            "Per series",
+            patterns=["{series}.png"],
+        ),
     log:
         res("logs", "diagnosis_figures.log"),
     benchmark:
         res("benchmarks", "diagnosis_figures.tsv")
+    priority: PRIORITY["longest_figures"]
     script:
         "../../scripts/diagnosis_figures.py"
 
@@ -136,19 +120,24 @@ rule limestone_diagnosis:
     input:
         events=str(BLOCKS / "limestone-rocking-events.csv"),
     output:
-        json=report_item(res("limestone_diagnosis.json"), "limestone_json", "limestone",
-                         "limestone_diagnosis.json, for programs"),
+        json=report_item(
+            res("limestone_diagnosis.json"), "limestone_json", "limestone", "limestone_diagnosis.json, for programs"
+        ),
         md=res("limestone_diagnosis.md"),
-        figure=report_item(res("figures", "limestone_family.png"), "limestone_family", "limestone",
-                           "the impact law across slendernesses: data, Housner, listed causes, families"),
+        figure=report_item(
+            res("figures", "limestone_family.png"),
+            "limestone_family",
+            "limestone",
+            "the impact law across slendernesses: data, Housner, listed causes, families",
+        ),
         docs_summary=res("summaries", "limestone.json"),
-    params:
-        n_boot=DIAGNOSIS["n_boot"],
-        seed=DIAGNOSIS["seed"],
     log:
         res("logs", "limestone_diagnosis.log"),
     benchmark:
         res("benchmarks", "limestone_diagnosis.tsv")
+    params:
+        n_boot=DIAGNOSIS["n_boot"],
+        seed=DIAGNOSIS["seed"],
     script:
         "../../scripts/limestone_diagnosis.py"
 
@@ -172,21 +161,26 @@ rule limestone_pages:
 # from the tables, not the tests' files (a second or two).
 rule campaign_effects:
     input:
-        tests=res("tests.csv"),
-        qc=res("qc.csv"),
-        diagnosis=res("diagnosis.json"),
+        tests=rules.dissipation_tables.output.tests,
+        qc=rules.qc_table.output.qc,
+        diagnosis=rules.diagnosis.output.json,
     output:
         table=res("diagnosis", "campaign_effects.csv"),
-        figure=report_item(res("figures", "campaign_covariates.png"), "campaign_covariates", "diagnosis",
-                           "the parameters against h/b and contact depth", "Summary"),
+        figure=report_item(
+            res("figures", "campaign_covariates.png"),
+            "campaign_covariates",
+            "diagnosis",
+            "the parameters against h/b and contact depth",
+            "Summary",
+        ),
         docs_summary=res("summaries", "campaign_level.json"),
-    params:
-        margin=DIAGNOSIS["campaign_margin"],
-        schema=schema_path("campaign_effects.schema.yaml"),
     log:
         res("logs", "campaign_effects.log"),
     benchmark:
         res("benchmarks", "campaign_effects.tsv")
+    params:
+        margin=DIAGNOSIS["campaign_margin"],
+        schema=schema_path("campaign_effects.schema.yaml"),
     script:
         "../../scripts/campaign_effects.py"
 
@@ -196,13 +190,17 @@ rule campaign_effects_pages:
     input:
         campaign_effects=res("diagnosis", "campaign_effects.csv"),
     output:
-        campaign_effects=report_page("campaign_effects", "diagnosis",
-                                     "campaign_effects.csv, the paper's campaign-wide statements tested", "Summary"),
-    params:
-        schemas={"campaign_effects": schema_path("campaign_effects.schema.yaml")},
+        campaign_effects=report_page(
+            "campaign_effects",
+            "diagnosis",
+            "campaign_effects.csv, the paper's campaign-wide statements tested",
+            "Summary",
+        ),
     log:
         res("logs", "report_pages", "campaign_effects.log"),
     benchmark:
         res("benchmarks", "report_pages", "campaign_effects.tsv")
+    params:
+        schemas={"campaign_effects": schema_path("campaign_effects.schema.yaml")},
     script:
         "../../scripts/report_pages.py"

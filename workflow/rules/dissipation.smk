@@ -14,15 +14,14 @@ DISSIPATION_PAGES = {
 }
 
 
-def dissipation_outputs():
-    return [res(name) for name in ("table3.csv", "table3.md", "summary.csv")] + [
-        res("report", f"{name}.html") for name in DISSIPATION_PAGES
-    ]
+DISSIPATION_OUTPUTS = [res(name) for name in ("table3.csv", "table3.md", "summary.csv")] + [
+    res("report", f"{name}.html") for name in DISSIPATION_PAGES
+]
 
 
 checkpoint dissipation_tables:
     input:
-        qc=res("qc.csv"),
+        qc=rules.qc_table.output.qc,
         reduced=reduced_inputs(TEST_IDS),
     output:
         tests=res("tests.csv"),
@@ -35,15 +34,15 @@ checkpoint dissipation_tables:
         table3_md=res("table3.md"),
         summary=res("summary.csv"),
         docs_summary=res("summaries", "dissipation.json"),
+    log:
+        res("logs", "dissipation_tables.log"),
+    benchmark:
+        res("benchmarks", "dissipation_tables.tsv")
     params:
         motions=[res("motion", f"{t}.nc") for t in TEST_IDS],
         schemas=schema_path(""),
         n_boot=config["statistics"]["n_boot"],
         seed=config["statistics"]["seed"],
-    log:
-        res("logs", "dissipation_tables.log"),
-    benchmark:
-        res("benchmarks", "dissipation_tables.tsv")
     script:
         "../../scripts/dissipation_tables.py"
 
@@ -54,11 +53,11 @@ rule dissipation_pages:
         **{name: res(f"{name}.csv") for name in DISSIPATION_PAGES},
     output:
         **{name: report_page(name, "dissipation", what, "Tables") for name, (what, _) in DISSIPATION_PAGES.items()},
-    params:
-        schemas={name: schema_path(schema) for name, (_, schema) in DISSIPATION_PAGES.items() if schema},
     log:
         res("logs", "report_pages", "dissipation.log"),
     benchmark:
         res("benchmarks", "report_pages", "dissipation.tsv")
+    params:
+        schemas={name: schema_path(schema) for name, (_, schema) in DISSIPATION_PAGES.items() if schema},
     script:
         "../../scripts/report_pages.py"

@@ -7,8 +7,7 @@
 DOC_PAGES = sorted(p.name for p in Path(workflow.basedir, "docs", "templates").glob("*.md"))
 
 
-def docs_outputs():
-    return [res("docs", "numbers.json")] + [res("docs", page) for page in DOC_PAGES]
+DOCS_OUTPUTS = [res("docs", "numbers.json")] + [res("docs", page) for page in DOC_PAGES]
 
 
 rule docs:
@@ -28,11 +27,11 @@ rule docs:
     output:
         numbers=res("docs", "numbers.json"),
         pages=[res("docs", page) for page in DOC_PAGES],
-    params:
-        results_dir=config["results_dir"],
     log:
         res("logs", "docs.log"),
     benchmark:
         res("benchmarks", "docs.tsv")
+    params:
+        results_dir=lambda wildcards, output: str(Path(output.numbers).parents[1]),
     script:
         "../../scripts/docs_pages.py"

@@ -15,51 +15,33 @@ DISSIPATION_FIGS = ("10", "11", "13", "16", "17", "18", "19", "20")
 report: "../report/workflow.rst"
 
 
-def figure_outputs():
-    return [res("figures", f"fig{n}.png") for n in ("06", "08", "09", *DISSIPATION_FIGS)]
-
-
-def kinematics_sample(wildcards):
-    """The reduced test that Figs. 6, 8 and 9 draw."""
-    from rocklab.io import valid_test_ids
-
-    test_id = KINEMATICS_SAMPLE or valid_test_ids(checkpoints.qc_table.get().output.qc)[0]
-    return res("tests", f"{test_id}.nc")
-
-
-def fig20_sample_test(wildcards):
-    """The reduced test that Fig. 20a draws (none without a one-sided test with a monitor)."""
-    import pandas as pd
-    from rocklab.plots.dissipation import fig20_sample
-
-    test_id = FIG20_SAMPLE or fig20_sample(pd.read_csv(checkpoints.dissipation_tables.get().output.tests))
-    return [res("tests", f"{test_id}.nc")] if test_id else []
+FIGURE_OUTPUTS = [res("figures", f"fig{n}.png") for n in ("06", "08", "09", *DISSIPATION_FIGS)]
 
 
 rule kinematics_figures:
     input:
-        qc=res("qc.csv"),
-        kinematics=res("kinematics.csv"),
+        qc=rules.qc_table.output.qc,
+        kinematics=rules.qc_table.output.kinematics,
         sample=kinematics_sample,
     output:
         fig6=report_figure("06", "kinematics", "a record, elongation and velocity"),
         fig8=report_figure("08", "kinematics", "the four degrees of freedom"),
         fig9=report_figure("09", "kinematics", "Eq. 3 against Eq. 8; peaks"),
-    params:
-        specimen=FIG_SPECIMEN,
     log:
         res("logs", "kinematics_figures.log"),
     benchmark:
         res("benchmarks", "kinematics_figures.tsv")
+    params:
+        specimen=FIG_SPECIMEN,
     script:
         "../../scripts/kinematics_figures.py"
 
 
 rule dissipation_figures:
     input:
-        tests=res("tests.csv"),
-        e_by_n=res("e_by_n.csv"),
-        series=res("series.csv"),
+        tests=rules.dissipation_tables.output.tests,
+        e_by_n=rules.dissipation_tables.output.e_by_n,
+        series=rules.dissipation_tables.output.series,
         sample=fig20_sample_test,
     output:
         fig10=report_figure("10", "dissipation", "theta0 / alpha test by test", "Figures"),

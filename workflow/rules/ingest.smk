@@ -11,24 +11,29 @@
 # longer starting Python and importing the library (about 2 s of CPU) than
 # reducing thirty tests.
 
-for _k, (_job, _ids) in enumerate(REDUCTION_JOBS.items()):
 
-    rule:
-        name:
-            # a rule name is an identifier; the index keeps "1a-b" and "1a_b" apart
-            f"reduce_{_k:03d}_" + re.sub(r"\W", "_", _job)
-        priority: PRIORITY["campaign_chain"]
-        output:
-            tests=[res("tests", f"{t}.nc") for t in _ids],
-            motion=[res("motion", f"{t}.nc") for t in _ids],
-            rows=reduction_rows(_job),
-        params:
-            tests=lambda wildcards, ids=_ids: {t: test_params(t) for t in ids},
-            raw_dir=config["raw_dir"],
-            options={"channels": config["channels"], "validity": config["validity"]},
-        log:
-            res("logs", "reduce", f"{_job}.log"),
-        benchmark:
-            res("benchmarks", "reduce", f"{_job}.tsv")
-        script:
-            "../../scripts/reduce_tests.py"
+# The job's rows file is its one declared output: a rule's outputs are
+# patterns of its wildcards, and a job writes as many netCDF files as it has
+# tests.  The rows file is written last, so a job cut short has none and runs
+# again; every later use of a test's files goes through it (reduced_inputs,
+# or a checkpoint downstream of it).  A job's tests are its params: a test
+# added to it reduces it again (the params trigger; not under
+# --rerun-triggers mtime alone); a test's file deleted by hand does not.
+rule reduce:
+    output:
+        rows=res("reduction", "{job}.json"),
+    log:
+        res("logs", "reduce", "{job}.log"),
+    benchmark:
+        res("benchmarks", "reduce", "{job}.tsv")
+    wildcard_constraints:
+        job=one_of(REDUCTION_JOBS),
+    priority: PRIORITY["campaign_chain"]
+    params:
+        tests=lambda wildcards: {t: test_params(t) for t in REDUCTION_JOBS[wildcards.job]},
+        netcdf=lambda wildcards: [res("tests", f"{t}.nc") for t in REDUCTION_JOBS[wildcards.job]],
+        motion=lambda wildcards: [res("motion", f"{t}.nc") for t in REDUCTION_JOBS[wildcards.job]],
+        raw_dir=config["raw_dir"],
+        options={"channels": config["channels"], "validity": config["validity"]},
+    script:
+        "../../scripts/reduce_tests.py"

@@ -2,8 +2,7 @@
 # A checkpoint: the test drawn in Figs. 6, 8 and 9 is chosen from its verdicts.
 
 
-def qc_outputs():
-    return [res("qc.csv"), res("kinematics.csv"), res("report", "qc.html"), res("report", "kinematics.html")]
+QC_OUTPUTS = [res("qc.csv"), res("kinematics.csv"), res("report", "qc.html"), res("report", "kinematics.html")]
 
 
 checkpoint qc_table:
@@ -14,13 +13,13 @@ checkpoint qc_table:
         qc=res("qc.csv"),
         kinematics=res("kinematics.csv"),
         docs_summary=res("summaries", "quality_control.json"),
-    params:
-        raw_dir=config["raw_dir"],
-        schema=schema_path("qc.schema.yaml"),
     log:
         res("logs", "qc_table.log"),
     benchmark:
         res("benchmarks", "qc_table.tsv")
+    params:
+        raw_dir=lambda wildcards, input: str(Path(input.log).parent),
+        schema=schema_path("qc.schema.yaml"),
     script:
         "../../scripts/qc_table.py"
 
@@ -33,11 +32,11 @@ rule qc_pages:
     output:
         qc=report_page("qc", "qc", "qc.csv, the verdict of every test"),
         kinematics=report_page("kinematics", "kinematics", "kinematics.csv, peaks and the Eq. 8 check"),
-    params:
-        schemas={"qc": schema_path("qc.schema.yaml")},
     log:
         res("logs", "report_pages", "qc.log"),
     benchmark:
         res("benchmarks", "report_pages", "qc.tsv")
+    params:
+        schemas={"qc": schema_path("qc.schema.yaml")},
     script:
         "../../scripts/report_pages.py"

@@ -3,30 +3,18 @@
 # The table motions are read once; each specimen's block is simulated once per
 # test at every node of the causes' grid (the job that takes time); every fit,
 # fold and resample reads that grid.
-from snakemake.exceptions import WorkflowError
-
-from rocklab.shake_table.records import SPECIMENS, check_dir
+from rocklab.shake_table.records import SPECIMENS
 
 ST = config["shake_table"]
 ST_DIR = config["shake_table_dir"]
 ST_TABLES = ("scores", "predictions", "nominal_errors", "fragility", "parameters")
 
 
-def shake_table_outputs():
-    return (
-        [res("shake_table", f"{name}.csv") for name in ("motions", *ST_TABLES)]
-        + [res("shake_table", f"maps_{s}.nc") for s in SPECIMENS]
-        + [res("figures", f"shake_table_{name}.png") for name in ("fragility", "maps")]
-    )
-
-
-def shake_table_data(wildcards):
-    """tests.csv and geometry.json of shake_table_dir; a missing folder stops the target, naming the key."""
-    try:
-        folder = check_dir(ST_DIR)
-    except FileNotFoundError as exc:
-        raise WorkflowError(str(exc)) from None
-    return [recorded_path(folder / "tests.csv"), recorded_path(folder / "geometry.json")]
+SHAKE_TABLE_OUTPUTS = (
+    [res("shake_table", f"{name}.csv") for name in ("motions", *ST_TABLES)]
+    + [res("shake_table", f"maps_{s}.nc") for s in SPECIMENS]
+    + [res("figures", f"shake_table_{name}.png") for name in ("fragility", "maps")]
+)
 
 
 rule shake_table_motions:
@@ -34,14 +22,14 @@ rule shake_table_motions:
         shake_table_data,
     output:
         res("shake_table", "motions.csv"),
-    params:
-        folder=ST_DIR,
-        ground_motions=ST["ground_motions"],
-        schema=schema_path("shake_table_motions.schema.yaml"),
     log:
         res("logs", "shake_table", "motions.log"),
     benchmark:
         res("benchmarks", "shake_table", "motions.tsv")
+    params:
+        folder=ST_DIR,
+        ground_motions=ST["ground_motions"],
+        schema=schema_path("shake_table_motions.schema.yaml"),
     script:
         "../../scripts/shake_table_motions.py"
 
@@ -52,15 +40,15 @@ rule shake_table_outcomes:
         motions=res("shake_table", "motions.csv"),
     output:
         res("shake_table", "outcomes_{specimen}.nc"),
-    wildcard_constraints:
-        specimen="|".join(SPECIMENS),
-    params:
-        folder=ST_DIR,
-    threads: ST["threads"]
     log:
         res("logs", "shake_table", "outcomes_{specimen}.log"),
     benchmark:
         res("benchmarks", "shake_table", "outcomes_{specimen}.tsv")
+    wildcard_constraints:
+        specimen="|".join(SPECIMENS),
+    threads: ST["threads"]
+    params:
+        folder=ST_DIR,
     script:
         "../../scripts/shake_table_outcomes.py"
 
@@ -73,16 +61,16 @@ rule shake_table_calibration:
     output:
         **{name: res("shake_table", f"{name}.csv") for name in ST_TABLES},
         docs_summary=res("summaries", "shake_table.json"),
+    log:
+        res("logs", "shake_table", "calibration.log"),
+    benchmark:
+        res("benchmarks", "shake_table", "calibration.tsv")
     params:
         folder=ST_DIR,
         folds=ST["folds"],
         n_boot=ST["n_boot"],
         n_boot_cv=ST["n_boot_cv"],
         schemas={name: schema_path(f"shake_table_{name}.schema.yaml") for name in ST_TABLES},
-    log:
-        res("logs", "shake_table", "calibration.log"),
-    benchmark:
-        res("benchmarks", "shake_table", "calibration.tsv")
     script:
         "../../scripts/shake_table_calibration.py"
 
@@ -94,16 +82,16 @@ rule shake_table_maps:
         parameters=res("shake_table", "parameters.csv"),
     output:
         res("shake_table", "maps_{specimen}.nc"),
-    wildcard_constraints:
-        specimen="|".join(SPECIMENS),
-    params:
-        folder=ST_DIR,
-        n=ST["map_n"],
-    threads: ST["threads"]
     log:
         res("logs", "shake_table", "maps_{specimen}.log"),
     benchmark:
         res("benchmarks", "shake_table", "maps_{specimen}.tsv")
+    wildcard_constraints:
+        specimen="|".join(SPECIMENS),
+    threads: ST["threads"]
+    params:
+        folder=ST_DIR,
+        n=ST["map_n"],
     script:
         "../../scripts/shake_table_maps.py"
 
