@@ -6,9 +6,7 @@ from rocklab.io import setup_logging
 from rocklab.summaries import write_summary
 
 setup_logging(snakemake.log[0])
-series = CampaignDiagnosis.joined(CampaignDiagnosis.from_json(path) for path in snakemake.input)
-# by series, as the boundary conditions' files interleave them
-series.entries.sort(key=lambda e: e.key)
+series = CampaignDiagnosis.of_series_files(snakemake.input)
 entries = with_boundaries(series.to_dict(), seed=snakemake.params.seed)
 write_diagnosis(entries, snakemake.output.json, snakemake.output.md)
 write_summary(diagnosis_summary(snakemake.output.json), snakemake.output.docs_summary)

@@ -27,6 +27,7 @@ KIND_OF_FILE = {
     "test_workflow.py": "workflow",
     "test_interrupt.py": "workflow",
     "test_install.py": "workflow",
+    "test_slurm.py": "workflow",
     "test_docs.py": "docs",
     "test_report.py": "docs",
 }
@@ -68,7 +69,7 @@ def test_kind(item):
 
 
 #: Files whose Snakemake runs have a working directory of their own (``--directory`` a temporary folder).
-OWN_WORKDIR = {"test_workflow.py", "test_interrupt.py", "test_install.py"}
+OWN_WORKDIR = {"test_workflow.py", "test_interrupt.py", "test_install.py", "test_slurm.py"}
 #: Files whose fixtures run Snakemake in the checkout.
 IN_CHECKOUT = {"test_report.py"}
 

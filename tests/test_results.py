@@ -31,8 +31,9 @@ def embedded(*names):
 
 
 def series_files():
+    """results/diagnosis/<boundary>.json: the series of each boundary condition."""
     folder = results_dir() / "diagnosis"
-    return sorted(folder.glob("*.json")) if folder.is_dir() else []
+    return sorted(folder.glob("*-sided.json")) if folder.is_dir() else []
 
 
 #: A series entry with every key a full diagnosis writes (numbers made up), as a JSON document.
@@ -83,19 +84,19 @@ def test_the_embedded_campaign_diagnosis_reads_and_writes_back_byte_for_byte(tmp
     assert diagnosis.to_dict() == json.loads(path.read_text())
 
 
-def test_each_series_file_is_its_entry_of_the_campaign_and_writes_back(tmp_path):
+def test_each_boundary_file_holds_its_series_of_the_campaign_and_writes_back(tmp_path):
     (campaign,) = embedded("diagnosis.json")
     paths = series_files()
     if not paths:
-        pytest.skip("no results/diagnosis/<series>.json here")
+        pytest.skip("no results/diagnosis/<boundary>.json here")
     whole = R.CampaignDiagnosis.from_json(campaign)
     parts = [R.CampaignDiagnosis.from_json(p) for p in paths]
     for path, part in zip(paths, parts):
-        assert len(part.entries) <= 1 and not part.boundaries
+        assert not part.boundaries and {e.boundary for e in part.series} <= {path.stem}
         part.to_json(tmp_path / path.name)
         assert (tmp_path / path.name).read_bytes() == path.read_bytes(), path.name
-    # the campaign's series are those of the files, in the files' order (as the workflow joins them)
-    assert R.CampaignDiagnosis.joined(parts).entries == whole.series
+    # the campaign's series are those of the files, by series (as the workflow joins them)
+    assert R.CampaignDiagnosis.of_series_files(paths).entries == whole.series
 
 
 def test_the_campaign_diagnosis_is_made_again_from_its_series_files(tmp_path):
@@ -105,7 +106,7 @@ def test_the_campaign_diagnosis_is_made_again_from_its_series_files(tmp_path):
     campaign, md = embedded("diagnosis.json", "diagnosis.md")
     config = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     seed = (config.get("diagnosis") or {}).get("seed", 0)
-    series = R.CampaignDiagnosis.joined(R.CampaignDiagnosis.from_json(p) for p in series_files())
+    series = R.CampaignDiagnosis.of_series_files(series_files())
     write_diagnosis(with_boundaries(series.to_dict(), seed=seed), tmp_path / "d.json", tmp_path / "d.md")
     assert (tmp_path / "d.json").read_bytes() == campaign.read_bytes()
     assert (tmp_path / "d.md").read_bytes() == md.read_bytes()

@@ -24,8 +24,6 @@ import yaml
 
 from rocklab.lab import virtual_lab
 
-pytestmark = pytest.mark.workflow
-
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 PROFILE = ROOT / "workflow" / "profiles" / "slurm"

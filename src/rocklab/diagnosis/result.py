@@ -1,4 +1,4 @@
-"""The diagnosis' results as typed objects: results/diagnosis.json, diagnosis/<series>.json, limestone_diagnosis.json.
+"""The diagnosis' results as typed objects: results/diagnosis.json, diagnosis/<boundary>.json, limestone_diagnosis.json.
 
 The JSON files are the diagnosis' interface with the rest of the workflow
 (the calibrated walls of the maps, the campaign's covariates, the figures,
@@ -11,8 +11,9 @@ their JSON schemas on the way in and out (:data:`DIAGNOSIS_SCHEMA`,
 object                      file
 ==========================  =========================================================
 :class:`CampaignDiagnosis`  results/diagnosis.json: the series, then the boundary
-                            conditions; results/diagnosis/<series>.json holds one
-                            series (none where it has no test of two impacts)
+                            conditions; results/diagnosis/<boundary>.json holds the
+                            series of one boundary condition (none where a series
+                            has no test of two impacts)
 :class:`SeriesDiagnosis`    an entry of one series (:func:`~rocklab.diagnosis.series.diagnose_series`)
 :class:`BoundaryDiagnosis`  an entry of one boundary condition, its series summed up
                             (:func:`~rocklab.diagnosis.series.diagnose_boundary`)
@@ -49,7 +50,7 @@ from rocklab.data import data_path
 jsonschema = lazy_module("jsonschema")
 yaml = lazy_module("yaml")
 
-#: JSON schema of results/diagnosis.json and results/diagnosis/<series>.json
+#: JSON schema of results/diagnosis.json and results/diagnosis/<boundary>.json
 #: (shipped with the package, linked from ``workflow/schemas/``).
 DIAGNOSIS_SCHEMA = data_path("schemas", "diagnosis.schema.yaml")
 #: JSON schema of results/limestone_diagnosis.json.
@@ -264,7 +265,7 @@ class _Entry(_Record):
 
 @dataclass
 class SeriesDiagnosis(_Entry):
-    """The diagnosis of one series (results/diagnosis/<series>.json, an entry of diagnosis.json).
+    """The diagnosis of one series (an entry of results/diagnosis/<boundary>.json and of diagnosis.json).
 
     A series too small to name a cause (``too_small`` says why) has no
     ``signatures``, ``heldout`` nor ``extended``; ``listed_verdict`` and
@@ -339,7 +340,7 @@ def entry_of(d):
 
 @dataclass
 class CampaignDiagnosis(_Document):
-    """The entries of a diagnosis: results/diagnosis.json, or one series' results/diagnosis/<series>.json.
+    """The entries of a diagnosis: results/diagnosis.json, or the series of results/diagnosis/<boundary>.json.
 
     ``entries`` are the series then the boundary conditions, as
     :func:`~rocklab.diagnosis.series.diagnose_campaign` gives them.
@@ -381,8 +382,15 @@ class CampaignDiagnosis(_Document):
 
     @classmethod
     def joined(cls, parts):
-        """One diagnosis of the entries of several, in their order (the series' files of a campaign)."""
+        """One diagnosis of the entries of several, in their order."""
         return cls([e for part in parts for e in part.entries])
+
+    @classmethod
+    def of_series_files(cls, paths):
+        """The series of a campaign from its boundary conditions' files (results/diagnosis/<boundary>.json),
+        ordered by series as diagnosis.json lists them (the files interleave them)."""
+        joined = cls.joined(cls.from_json(path) for path in paths)
+        return cls(sorted(joined.entries, key=lambda e: e.key))
 
     @property
     def series(self) -> list[SeriesDiagnosis]:

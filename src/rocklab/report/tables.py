@@ -10,7 +10,15 @@ from __future__ import annotations
 import functools
 from collections.abc import Callable, Mapping
 
+from rocklab.lab.validity import Verdict
 from rocklab.report.format import NOT_MEASURED, show
+
+#: The rejections of a series' row (an unreadable test belongs to no series).
+SERIES_REJECTIONS = (
+    Verdict.INSTRUMENT_MALFUNCTION,
+    Verdict.RESIDUAL_OUT_OF_PLUMB,
+    Verdict.DISTURBED_INITIAL_CONDITIONS,
+)
 
 
 def _row(cells) -> str:
@@ -48,13 +56,11 @@ def qc_series(n: Mapping) -> str:
             s["series"],
             show(s["n_valid"]),
             show(s["n_rejected"]),
-            show(s["instrument_malfunction"]),
-            show(s["residual_out_of_plumb"]),
-            show(s["disturbed_initial_conditions"]),
+            *(show(s[v]) for v in SERIES_REJECTIONS),
         ]
         for s in n["quality_control"]["series"]
     ]
-    header = ["series", "valid", "rejected", "instrument_malfunction", "residual_out_of_plumb", "disturbed"]
+    header = ["series", "valid", "rejected", *(v.value for v in SERIES_REJECTIONS)]
     return markdown_table(header, rows)
 
 
