@@ -104,6 +104,8 @@ def test_the_campaign_diagnosis_is_made_again_from_its_series_files(tmp_path):
     from rocklab.diagnosis import with_boundaries, write_diagnosis
 
     campaign, md = embedded("diagnosis.json", "diagnosis.md")
+    if not series_files():
+        pytest.skip("no results/diagnosis/<boundary>.json here")
     config = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     seed = (config.get("diagnosis") or {}).get("seed", 0)
     series = R.CampaignDiagnosis.of_series_files(series_files())
