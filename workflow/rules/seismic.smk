@@ -3,7 +3,7 @@
 # figures; the calibrated walls of the campaign's diagnosis beside them.
 from rocklab.seismic.accelerograms import accelerogram_dir, read_manifest
 from rocklab.seismic import calibrated
-from rocklab.seismic.overturning import MODELS
+from rocklab.seismic.walls import MODELS
 from rocklab.config import calibrated_map_n
 
 MAPS = config["maps"]
