@@ -1,6 +1,6 @@
 """Benchmark: overturning maps of Sect. 5 (201 x 201 histories) against a solve_ivp loop.
 
-Times one map per model of :data:`rocklab.seismic.overturning.MODELS` on El Centro
+Times one map per model of :data:`rocklab.seismic.walls.MODELS` on El Centro
 (40EIC180, Table 4 row 1), the scipy event-driven reference
 (:func:`rocklab.simulation.reference.simulate_ground`) on ``--histories`` cells of the
 same grid drawn at random, and every map of every shipped record (measured,
@@ -26,7 +26,8 @@ import numba
 import numpy as np
 
 from rocklab.seismic.accelerograms import load_record, read_manifest
-from rocklab.seismic.overturning import MODELS, named_model, overturning_map, scales
+from rocklab.seismic.maps import overturning_map, scales
+from rocklab.seismic.walls import MODELS, named_model
 from rocklab.simulation.reference import simulate_ground
 
 RECORD = "40EIC180"

@@ -1,13 +1,13 @@
 """Validation: overturning maps against the converged event-driven reference.
 
-For each model of :data:`rocklab.seismic.overturning.MODELS` and each record, the
+For each model of :data:`rocklab.seismic.walls.MODELS` and each record, the
 full 201 x 201 map is computed by the batch engine and every 10th cell in
 both directions (a 21 x 21 subgrid) is recomputed by
 :func:`rocklab.simulation.reference.simulate_ground` with rtol 1e-10, atol 1e-12,
 the histories spread over a Pool of ``--workers`` processes.  A cell where they
 differ must lie on the boundary: the reference itself reaches the map's
 decision at one of the cell's four neighbours of the 201 grid
-(:func:`rocklab.seismic.overturning.check_against_reference`).  The check passes
+(:func:`rocklab.seismic.reference_check.check_against_reference`).  The check passes
 when every map agrees on at least 99 % of its cells and every difference
 lies on the boundary.
 
@@ -39,7 +39,9 @@ from multiprocessing import Pool
 from pathlib import Path
 
 from rocklab.seismic.accelerograms import load_record
-from rocklab.seismic.overturning import MODELS, check_against_reference, named_model, overturning_map
+from rocklab.seismic.maps import overturning_map
+from rocklab.seismic.reference_check import check_against_reference
+from rocklab.seismic.walls import MODELS, named_model
 
 #: The pulse-like Rinaldi 228 (row 13), Pacoima Dam (row 3) and El Centro (row 1): see the module doc.
 RECORDS = ("RRS228", "Pac164", "40EIC180")

@@ -22,7 +22,8 @@ from pathlib import Path
 import numpy as np
 
 from rocklab.seismic.accelerograms import load_record
-from rocklab.seismic.overturning import named_model, reference_decisions
+from rocklab.seismic.reference_check import reference_decisions
+from rocklab.seismic.walls import named_model
 from rocklab.simulation.batch import overturning_batch
 
 #: El Centro 1940 N-S (Table 4 row 1), shipped in rocklab/data/accelerograms.

@@ -4,7 +4,8 @@ from pathlib import Path
 
 from rocklab.io import load_datasets, setup_logging, write_table
 from rocklab.seismic.calibrated import calibrated_table
-from rocklab.seismic.overturning import subgrid, summary_table
+from rocklab.seismic.indices import summary_table
+from rocklab.seismic.maps import subgrid
 from rocklab.seismic.summary import calibrated_summary
 from rocklab.summaries import write_summary
 

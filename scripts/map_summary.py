@@ -2,7 +2,8 @@
 
 from rocklab.io import load_datasets, setup_logging, write_table
 from rocklab.seismic.accelerograms import table4_agreement
-from rocklab.seismic.overturning import TABLE4_SUBSET, record_comparison, reductions, summary_table
+from rocklab.seismic.indices import summary_table
+from rocklab.seismic.paper_comparison import TABLE4_SUBSET, record_comparison, reductions
 from rocklab.seismic.summary import maps_summary
 from rocklab.summaries import write_summary
 

@@ -18,7 +18,7 @@ from rocklab.diagnosis.result import CampaignDiagnosis
 from rocklab.io import setup_logging, write_netcdf
 from rocklab.seismic import calibrated
 from rocklab.seismic.accelerograms import load_record
-from rocklab.seismic.overturning import overturning_map
+from rocklab.seismic.maps import overturning_map
 
 numba.set_num_threads(min(snakemake.threads, numba.config.NUMBA_NUM_THREADS))
 setup_logging(snakemake.log[0])

@@ -306,7 +306,7 @@ def test_compile_kernels_covers_the_library_calls():
     """``make venv`` compiles the kernels with compile_kernels: the calls of a
     map job and of the batch front ends then need no other signature."""
     from rocklab.seismic.accelerograms import load_record
-    from rocklab.seismic.overturning import overturning_map
+    from rocklab.seismic.maps import overturning_map
     from rocklab.simulation.batch import compile_kernels
 
     compile_kernels()

@@ -20,7 +20,7 @@ from rocklab.lab.campaign import open_campaign
 from rocklab.lab.motion import stored_motion
 from rocklab.lab.reduction import reduce_test
 from rocklab.seismic.accelerograms import load_record
-from rocklab.seismic.overturning import overturning_map
+from rocklab.seismic.maps import overturning_map
 
 
 def _checker_or_reason():

@@ -319,7 +319,8 @@ def test_version(capsys):
 
 def test_map_of_a_shipped_record_equals_the_library(tmp_path, capsys):
     from rocklab.seismic.accelerograms import load_record
-    from rocklab.seismic.overturning import map_indices, overturning_map
+    from rocklab.seismic.indices import map_indices
+    from rocklab.seismic.maps import overturning_map
 
     nc, png = tmp_path / "map.nc", tmp_path / "map.png"
     code, out, err = run(
@@ -345,7 +346,7 @@ def test_map_of_a_shipped_record_equals_the_library(tmp_path, capsys):
 def test_map_of_a_column_file_for_a_wall_and_two_models(tmp_path, capsys):
     """A user's one-column record in g, a wall by height and thickness, Eq. 17 coefficients."""
     from rocklab.physics import wall
-    from rocklab.seismic.overturning import overturning_map
+    from rocklab.seismic.maps import overturning_map
 
     dt = 0.01
     t = np.arange(0, 4, dt)

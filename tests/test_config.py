@@ -82,7 +82,8 @@ def test_library_defaults_equal_the_schema(schema):
     from rocklab.lab import channels, validity
     from rocklab.lab.campaign import Campaign
     from rocklab.physics.impact import AmplitudeLaw
-    from rocklab.seismic import overturning
+    from rocklab.seismic.maps import overturning_map
+    from rocklab.seismic.walls import ALPHA, R
 
     d = schema_defaults(schema)
     assert d["channels"] == channels.OPTIONS
@@ -94,9 +95,9 @@ def test_library_defaults_equal_the_schema(schema):
     assert diagnosis.pop("campaign_margin") == _signature_defaults(campaign_effects, "margin")["margin"]
     assert diagnosis == _signature_defaults(diagnose_records, "n_boot", "n_history", "seed")
     maps = d["maps"]
-    assert (maps["alpha"], maps["R"]) == (overturning.ALPHA, overturning.R)
+    assert (maps["alpha"], maps["R"]) == (ALPHA, R)
     names = ("n", "lo", "hi", "alpha", "R", "form", "polarity", "chunks")
-    assert {k: maps[k] for k in names} == _signature_defaults(overturning.overturning_map, *names)
+    assert {k: maps[k] for k in names} == _signature_defaults(overturning_map, *names)
     assert maps["eq17"] == _signature_defaults(AmplitudeLaw, "a", "b")
 
 

@@ -15,6 +15,7 @@ from rocklab import diagnosis as D
 from rocklab.diagnosis.causes import stop_threshold
 from rocklab.lab import kinematics
 from rocklab.lab import virtual_lab as vl
+from rocklab.lab import virtual_record as vr
 from rocklab.physics import impact as I
 from rocklab.physics import restitution, wall
 from rocklab.simulation.model import RockingModel
@@ -50,9 +51,8 @@ def virtual_series(
     one = boundary == "one-sided"
     specimen = ONE if one else TWO
     sp = SPEC.loc[specimen]
-    layout = vl.usual_layout("S", sp.length_mm, sp.height_mm, sp.thickness_mm, one)
-    X = layout[["wall_x_mm", "wall_y_mm", "wall_z_mm"]].to_numpy(float)
-    F = layout[["frame_x_mm", "frame_y_mm", "frame_z_mm"]].to_numpy(float)
+    layout = vr.usual_layout("S", sp.length_mm, sp.height_mm, sp.thickness_mm, one)
+    X, F = vr.transducer_geometry(layout)
     used = np.r_[np.ones(5), np.zeros(len(layout) - 5)]  # channel 5 monitors, it is no rigid-body input
     rng = np.random.default_rng(seed)
     recs = []
@@ -67,7 +67,7 @@ def virtual_series(
             alpha_ratio=alpha_ratio,
             theta0_ratio=float(rng.uniform(*theta0_range)),
             model=model(i) if callable(model) else dict(model),
-            effects=vl.Effects(noise_mm=noise_mm, hum_mm=noise_mm),
+            effects=vr.Effects(noise_mm=noise_mm, hum_mm=noise_mm),
         )
         t, E, truth = vl.simulate_virtual_test(vt, sp, layout, rng=rng, t_end=60.0)
         theta = kinematics.solve_wall_motion(E, X, F, sp.thickness_mm, weights=used)["theta"]

@@ -26,7 +26,7 @@ from rocklab.physics import restitution
 from rocklab.physics.law import Restitution
 from rocklab.seismic import calibrated
 from rocklab.seismic.calibrated import MapWall
-from rocklab.seismic.overturning import overturning_map
+from rocklab.seismic.maps import overturning_map
 
 L = Param("chip", 0.0, 0.5, 0.0, practical=0.002)
 

@@ -108,6 +108,7 @@ def test_the_test_log_reaches_the_diagnosis(tmp_path):
     test's place in the series' range: what a drift may follow (tests/test_diagnosis.py hides one)."""
     from rocklab.diagnosis.evidence import in_series_order, measured_test, records_by_series
     from rocklab.lab import virtual_lab as vl
+    from rocklab.lab import virtual_record as vr
     from rocklab.lab.campaign import open_campaign
     from rocklab.lab.reduction import reduce_test
 
@@ -116,7 +117,7 @@ def test_the_test_log_reaches_the_diagnosis(tmp_path):
         {"date": "2024-03-03T10:00", "temperature_C": "19.0", "operator": "CD"},
         {"date": "2024-03-02T22:00", "temperature_C": "", "operator": "AB"},
     ]
-    plan = [vl.VirtualTest(f"T{i}", "1a", effects=vl.Effects.off(), log=log) for i, log in enumerate(logs)]
+    plan = [vl.VirtualTest(f"T{i}", "1a", effects=vr.Effects.off(), log=log) for i, log in enumerate(logs)]
     vl.write_campaign(tmp_path, plan, t_end=3.0)
     campaign = open_campaign(tmp_path)
     datasets = [reduce_test(campaign, f"T{i}") for i in range(3)]

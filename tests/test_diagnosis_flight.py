@@ -132,7 +132,7 @@ def test_the_losses_by_their_dependence_on_the_speed():
 
 
 def test_the_engine_refuses_dry_friction_and_drag_the_maps_carry_the_viscous_member(caplog):
-    from rocklab.seismic.overturning import overturning_map
+    from rocklab.seismic.maps import overturning_map
 
     with pytest.raises(NotImplementedError, match="no dry friction or drag in flight"):
         RockingModel(alpha=ALPHA, p=P, hinge_friction=0.001).numba_params()

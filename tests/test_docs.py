@@ -18,7 +18,7 @@ from rocklab.dissipation.summary import dissipation_summary
 from rocklab.lab.summary import quality_control_summary
 from rocklab.lab.validity import FAULT_COLUMNS
 from rocklab.report import pages, tables
-from rocklab.seismic.overturning import record_comparison
+from rocklab.seismic.paper_comparison import record_comparison
 from rocklab.seismic.summary import FLIPPED_FRACTION, maps_summary
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -17,19 +17,12 @@ from rocklab.io import write_netcdf
 from rocklab.physics import restitution, wall
 from rocklab.physics.impact import Constant
 from rocklab.seismic.accelerograms import load_record
-from rocklab.seismic.overturning import (
-    MODELS,
-    check_against_reference,
-    map_indices,
-    named_model,
-    overturning_map,
-    record_comparison,
-    reductions,
-    subgrid,
-    subgrid_step,
-    summary_table,
-)
+from rocklab.seismic.indices import map_indices, summary_table
+from rocklab.seismic.maps import overturning_map, subgrid, subgrid_step
+from rocklab.seismic.paper_comparison import record_comparison, reductions
 from rocklab.seismic.reductions import record_reductions
+from rocklab.seismic.reference_check import check_against_reference
+from rocklab.seismic.walls import MODELS, named_model
 from rocklab.simulation.batch import overturning_batch
 from rocklab.simulation.model import RockingModel
 
@@ -248,7 +241,8 @@ def test_cells_at_the_onset_threshold_finish():
     code = (
         "from rocklab.seismic.accelerograms import load_record\n"
         "from rocklab.simulation.batch import overturning_batch\n"
-        "from rocklab.seismic.overturning import named_model, scales\n"
+        "from rocklab.seismic.maps import scales\n"
+        "from rocklab.seismic.walls import named_model\n"
         "g = scales(201)\n"
         "for rec, i, j in [('LucN80W', 15, 4), ('Pac164', 27, 20), ('Pac164', 27, 7)]:\n"
         "    tr = load_record(rec)\n"

@@ -117,7 +117,7 @@ def test_impacts_separated_by_their_excursion():
     come back to the edge; a root search that returned the segment's start
     once logged 29 base impacts at one instant (Pac164 x1.25, D x0.70)."""
     from rocklab.seismic.accelerograms import load_record
-    from rocklab.seismic.overturning import named_model
+    from rocklab.seismic.walls import named_model
 
     tr = load_record("Pac164")
     model = named_model("2s-housner")  # the linearised Fig. 21 wall

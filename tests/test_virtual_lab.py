@@ -1,4 +1,5 @@
-"""The virtual lab: simulated motions written as a campaign in the lab's format."""
+"""The virtual lab: simulated motions as records (rocklab.lab.virtual_record), written as a campaign in the
+lab's format (rocklab.lab.virtual_lab)."""
 
 import gzip
 import importlib.util
@@ -10,15 +11,15 @@ import pytest
 
 from rocklab.lab import kinematics
 from rocklab.lab import virtual_lab as vl
+from rocklab.lab import virtual_record as vr
 from rocklab.physics import wall
 
 HAVE_SIM = importlib.util.find_spec("rocklab.simulation.model") is not None
 needs_sim = pytest.mark.skipif(not HAVE_SIM, reason="rocklab.simulation.model not available")
 
 SPEC = vl.DEFAULT_SPECIMENS.set_index("specimen").loc["1a"]
-LAYOUT = vl.usual_layout("S-1a-2s", SPEC.length_mm, SPEC.height_mm, SPEC.thickness_mm, False)
-X = LAYOUT[["wall_x_mm", "wall_y_mm", "wall_z_mm"]].to_numpy(float)
-F = LAYOUT[["frame_x_mm", "frame_y_mm", "frame_z_mm"]].to_numpy(float)
+LAYOUT = vr.usual_layout("S-1a-2s", SPEC.length_mm, SPEC.height_mm, SPEC.thickness_mm, False)
+X, F = vr.transducer_geometry(LAYOUT)
 
 
 def free_motion(fs=400.0, theta0=0.09, dur=6.0):
@@ -47,15 +48,15 @@ def solve(E, weights=None):
 def test_usual_layout_matches_real_campaign_geometry():
     # Specimen 1a of the real campaign: heights 382, 926, 654 mm.
     assert LAYOUT.wall_z_mm.tolist() == [382, 926, 382, 926, 654]
-    one = vl.usual_layout("S", 1420, 800, 113, True)
+    one = vr.usual_layout("S", 1420, 800, 113, True)
     assert one.channel.tolist() == [0, 1, 2, 3, 4, 5]
     assert one.iloc[5][["wall_y_mm", "frame_y_mm", "wall_z_mm"]].tolist() == [56.5, 216.5, 400]
 
 
 def test_exact_round_trip_with_effects_off():
     t, theta, impacts = free_motion()
-    tt, E, truth = vl.record_from_motion(
-        t, theta, 400.0, LAYOUT, SPEC, impacts=impacts, effects=vl.Effects.off(), rng=1
+    tt, E, truth = vr.record_from_motion(
+        t, theta, 400.0, LAYOUT, SPEC, impacts=impacts, effects=vr.Effects.off(), rng=1
     )
     sol = solve(E, [1, 1, 0, 1, 1])
     assert np.max(np.abs(sol["theta"] - truth["theta"])) < 1e-9
@@ -67,8 +68,8 @@ def test_exact_round_trip_with_effects_off():
 
 def test_hold_creep_release_and_rest_phases():
     t, theta, impacts = free_motion()
-    eff = vl.Effects.off(creep_rad_s=3e-4, hold_s=(2.0, 2.0), rest_s=(3.0, 3.0))
-    tt, E, truth = vl.record_from_motion(t, theta, 400.0, LAYOUT, SPEC, impacts=impacts, effects=eff, t_rest=5.0, rng=2)
+    eff = vr.Effects.off(creep_rad_s=3e-4, hold_s=(2.0, 2.0), rest_s=(3.0, 3.0))
+    tt, E, truth = vr.record_from_motion(t, theta, 400.0, LAYOUT, SPEC, impacts=impacts, effects=eff, t_rest=5.0, rng=2)
     assert truth["t_release"] == pytest.approx(2.0)
     assert tt[-1] == pytest.approx(2.0 + 5.0 + 3.0, abs=0.01)
     hold = truth["theta"][:800]
@@ -78,11 +79,11 @@ def test_hold_creep_release_and_rest_phases():
 def test_noise_and_hum_levels_like_the_real_campaign():
     t = np.arange(0, 4, 1 / 400)
     z = np.zeros_like(t)
-    E = vl.instrument_readings(t, z + 0.05, z, z, z, LAYOUT, 113, 1090, vl.Effects(hum_mm=0.0), rng=3)
-    E0 = vl.instrument_readings(t, z + 0.05, z, z, z, LAYOUT, 113, 1090, vl.Effects.off(), rng=3)
+    E = vr.instrument_readings(t, z + 0.05, z, z, z, LAYOUT, 113, 1090, vr.Effects(hum_mm=0.0), rng=3)
+    E0 = vr.instrument_readings(t, z + 0.05, z, z, z, LAYOUT, 113, 1090, vr.Effects.off(), rng=3)
     noise = E - E0
     assert np.allclose(noise.std(axis=0), 0.002, rtol=0.1)
-    E = vl.instrument_readings(t, z, z, z, z, LAYOUT, 113, 1090, vl.Effects(noise_mm=0.0, hum_mm=0.002), rng=3)
+    E = vr.instrument_readings(t, z, z, z, z, LAYOUT, 113, 1090, vr.Effects(noise_mm=0.0, hum_mm=0.002), rng=3)
     spec = np.abs(np.fft.rfft(E, axis=0)) * 2 / len(t)
     f = np.fft.rfftfreq(len(t), 1 / 400)
     k50 = np.argmin(np.abs(f - 50))
@@ -93,8 +94,8 @@ def test_noise_and_hum_levels_like_the_real_campaign():
 def test_ringing_follows_impacts_and_decays():
     t = np.arange(0, 2, 1 / 400)
     z = np.zeros_like(t)
-    eff = vl.Effects.off(ringing_mm=0.08)
-    E = vl.instrument_readings(t, z, z, z, z, LAYOUT, 113, 1090, eff, impacts=[(1.0, 1.0)], rng=4)
+    eff = vr.Effects.off(ringing_mm=0.08)
+    E = vr.instrument_readings(t, z, z, z, z, LAYOUT, 113, 1090, eff, impacts=[(1.0, 1.0)], rng=4)
     assert np.all(E[t < 1.0] == 0)
     after = np.abs(E[(t > 1.0) & (t < 1.03), 1]).max()
     late = np.abs(E[t > 1.1, 1]).max()
@@ -106,13 +107,13 @@ def test_ringing_follows_impacts_and_decays():
 def test_faults_are_injected_as_specified():
     t, theta, impacts = free_motion()
     faults = [
-        vl.Fault("dead", 0),
-        vl.Fault("stuck", 1, start_s=4.0),
-        vl.Fault("clipped", 3, level=0.5),
-        vl.Fault("spikes", 4, count=5),
-        vl.Fault("gaps", 2, count=3, max_len=4),
+        vr.Fault("dead", 0),
+        vr.Fault("stuck", 1, start_s=4.0),
+        vr.Fault("clipped", 3, level=0.5),
+        vr.Fault("spikes", 4, count=5),
+        vr.Fault("gaps", 2, count=3, max_len=4),
     ]
-    tt, E, truth = vl.record_from_motion(t, theta, 400.0, LAYOUT, SPEC, impacts=impacts, faults=faults, rng=5)
+    tt, E, truth = vr.record_from_motion(t, theta, 400.0, LAYOUT, SPEC, impacts=impacts, faults=faults, rng=5)
     assert np.abs(E[:, 0]).max() < 0.02  # dead: ~0
     i4 = np.searchsorted(tt, 4.0)
     assert np.all(E[i4:, 1] == E[i4, 1]) and np.ptp(E[:i4, 1]) > 10  # stuck
@@ -129,12 +130,12 @@ def test_record_file_in_the_lab_format(tmp_path):
     t = np.arange(0, 1, 1 / 100)
     E = np.column_stack([np.linspace(-1, 1, 100), np.full(100, 12.34567)])
     E[10, 1] = np.nan
-    vl.write_record(tmp_path / "T9.csv.gz", "T9", 100.0, t, E, [0, 4])
+    vr.write_record(tmp_path / "T9.csv.gz", "T9", 100.0, t, E, [0, 4])
     comments, header, rows = read_raw(tmp_path / "T9.csv.gz")
     assert comments == ["# test_id: T9", "# sampling_rate_hz: 100", "# units: s, mm"]
     assert header == "time_s,ch0,ch4"
     assert rows[0] == "0.0000,-1.000,12.346" and rows[10].endswith(",") and len(rows) == 100
-    vl.write_record(tmp_path / "T8.csv.gz", "T8", 400.0, t, E, [0, 4], unreadable=True)
+    vr.write_record(tmp_path / "T8.csv.gz", "T8", 400.0, t, E, [0, 4], unreadable=True)
     with pytest.raises((EOFError, OSError)):
         read_raw(tmp_path / "T8.csv.gz")
 
@@ -143,27 +144,27 @@ def test_expected_verdicts():
     v = vl.expected_verdict
     b = 113.0
     assert v([], LAYOUT, b, 0.0, 0.3)[0] == "valid"
-    assert v([vl.Fault("dead", 1)], LAYOUT, b, 0.0, 0.3)[0] == "valid"  # backup
-    assert v([vl.Fault("stuck", 4)], LAYOUT, b, 0.0, 0.3)[0] == "valid"  # v = 0
-    assert v([vl.Fault("spikes", 0), vl.Fault("gaps", 1)], LAYOUT, b, 0, 0)[0] == "valid"
-    assert v([vl.Fault("dead", 0), vl.Fault("clipped", 2)], LAYOUT, b, 0.0, 0.3)[0] == "instrument_malfunction"
+    assert v([vr.Fault("dead", 1)], LAYOUT, b, 0.0, 0.3)[0] == "valid"  # backup
+    assert v([vr.Fault("stuck", 4)], LAYOUT, b, 0.0, 0.3)[0] == "valid"  # v = 0
+    assert v([vr.Fault("spikes", 0), vr.Fault("gaps", 1)], LAYOUT, b, 0, 0)[0] == "valid"
+    assert v([vr.Fault("dead", 0), vr.Fault("clipped", 2)], LAYOUT, b, 0.0, 0.3)[0] == "instrument_malfunction"
     assert v([], LAYOUT, b, 0.2, 0.3)[0] == "disturbed_initial_conditions"
     assert v([], LAYOUT, b, 0.05, 2.0)[0] == "residual_out_of_plumb"
-    assert v([vl.Fault("unreadable"), vl.Fault("dead", 0), vl.Fault("dead", 1)], LAYOUT, b, 0.5, 3)[0] == "unreadable"
+    assert v([vr.Fault("unreadable"), vr.Fault("dead", 0), vr.Fault("dead", 1)], LAYOUT, b, 0.5, 3)[0] == "unreadable"
     # Channel 5 sits on the face: losing it and one side channel is no malfunction.
-    one = vl.usual_layout("S", 1420, 800, 113, True)
-    assert v([vl.Fault("dead", 5), vl.Fault("dead", 0)], one, b, 0.0, 0.0)[0] == "valid"
+    one = vr.usual_layout("S", 1420, 800, 113, True)
+    assert v([vr.Fault("dead", 5), vr.Fault("dead", 0)], one, b, 0.0, 0.0)[0] == "valid"
 
 
 @pytest.mark.parametrize("kind,top", [("rotation", 2.5), ("sliding", -3.0)])
 def test_residual_out_of_plumb_is_seen_at_the_top(kind, top):
     t, theta, impacts = free_motion()
-    tt, E, truth = vl.record_from_motion(
+    tt, E, truth = vr.record_from_motion(
         t, theta, 400.0, LAYOUT, SPEC, impacts=impacts, residual_top_mm=top, residual_kind=kind, t_rest=5.0, rng=6
     )
     assert truth["residual_top_mm"] == pytest.approx(abs(top), abs=0.05)
     sol = solve(E[-400:], [1, 1, 0, 1, 1])
-    seen = vl.top_offset_mm(
+    seen = vr.top_offset_mm(
         sol["theta"], sol["phi"], sol["v"], sol["w"], SPEC.length_mm, SPEC.height_mm, SPEC.thickness_mm
     )
     assert np.median(seen) == pytest.approx(abs(top), abs=0.05)
@@ -171,7 +172,7 @@ def test_residual_out_of_plumb_is_seen_at_the_top(kind, top):
 
 def test_seed_reproducibility(tmp_path):
     t, theta, impacts = free_motion()
-    runs = [vl.record_from_motion(t, theta, 400.0, LAYOUT, SPEC, impacts=impacts, rng=s)[1] for s in (7, 7, 8)]
+    runs = [vr.record_from_motion(t, theta, 400.0, LAYOUT, SPEC, impacts=impacts, rng=s)[1] for s in (7, 7, 8)]
     assert np.array_equal(runs[0], runs[1], equal_nan=True)
     assert not np.array_equal(runs[0], runs[2])
 

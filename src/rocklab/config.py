@@ -148,8 +148,8 @@ def calibrated_map_n(n, calibrated_n) -> int:
         Naming ``maps.calibrated_n`` when its grid is not a subgrid of the
         paper's maps of ``n`` values (the e-alone maps are read on its cells).
     """
-    # overturning imports numba: only where maps are configured
-    from rocklab.seismic.overturning import subgrid_step
+    # the maps import xarray and the causes of the diagnosis: only where maps are configured
+    from rocklab.seismic.maps import subgrid_step
 
     n_cal = min(calibrated_n, n)
     try:

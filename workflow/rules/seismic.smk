@@ -2,7 +2,7 @@
 # then the indices of Fig. 22 with the reductions between models, and the
 # figures; the calibrated walls of the campaign's diagnosis beside them.
 from rocklab.seismic.accelerograms import read_manifest
-from rocklab.seismic.overturning import MODELS
+from rocklab.seismic.walls import MODELS
 from rocklab.config import calibrated_map_n
 
 MAPS = config["maps"]

@@ -3,7 +3,7 @@
 ``rocklab simulate`` runs one wall, free or under a record, with the
 event-driven reference of :mod:`rocklab.simulation.model` and writes its
 history to netCDF.  ``rocklab map`` computes overturning maps of Sect. 5
-(:func:`rocklab.seismic.overturning.overturning_map`) for a shipped or a
+(:func:`rocklab.seismic.maps.overturning_map`) for a shipped or a
 user's record, writes them to netCDF and a figure and prints their indices.
 One module per command (:mod:`rocklab.cli.simulate`, :mod:`rocklab.cli.map`),
 each registering its parser in :data:`COMMANDS`; what they share (argument

@@ -1,6 +1,6 @@
 """``rocklab map``: overturning maps of Sect. 5 for a shipped or a user's record.
 
-The maps of :func:`rocklab.seismic.overturning.overturning_map`, written to
+The maps of :func:`rocklab.seismic.maps.overturning_map`, written to
 netCDF and a figure, their indices printed (:func:`overturning_maps`); the
 progress on stderr (:class:`ProgressBar`).
 """
@@ -76,7 +76,7 @@ class ProgressBar:
 
 def map_models(args):
     """Names of the maps asked for (``--model``, ``--all-models``) and their checks."""
-    from rocklab.seismic.overturning import MODELS
+    from rocklab.seismic.walls import MODELS
 
     models = list(MODELS) if args.all_models else list(dict.fromkeys(args.model))
     unknown = [m for m in models if m not in MODELS]
@@ -123,7 +123,9 @@ def overturning_maps(args) -> int:
     """
     import numba
 
-    from rocklab.seismic.overturning import ALPHA, R, map_indices, overturning_map
+    from rocklab.seismic.indices import map_indices
+    from rocklab.seismic.maps import overturning_map
+    from rocklab.seismic.walls import ALPHA, R
 
     if args.hi <= args.lo:
         raise UsageError("--hi", f"must be > --lo (got --lo {args.lo:g} --hi {args.hi:g})")
@@ -196,7 +198,8 @@ models (Sect. 5):
 
 
 def add_parser(sub):
-    from rocklab.seismic.overturning import ALPHA, MODELS, R, overturning_map
+    from rocklab.seismic.maps import overturning_map
+    from rocklab.seismic.walls import ALPHA, MODELS, R
 
     # the library's defaults are the command's, from one place
     lib = {k: v.default for k, v in inspect.signature(overturning_map).parameters.items()}

@@ -14,7 +14,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.colors import ListedColormap
 
-from rocklab.seismic.overturning import MODELS
+from rocklab.seismic.walls import MODELS
 
 #: White: standing; gray: overturned, as the paper's dots.
 _MAP_COLOURS = ListedColormap(["white", "0.45"])
@@ -32,7 +32,7 @@ def overturning_maps(maps, title=None):
     Parameters
     ----------
     maps : sequence of xarray.Dataset
-        Results of :func:`rocklab.seismic.overturning.overturning_map`; each panel is
+        Results of :func:`rocklab.seismic.maps.overturning_map`; each panel is
         labelled with its model's description.
     title : str, optional
     """
@@ -64,7 +64,7 @@ def map_indices_figure(summary, models=("2s-housner", "2s-0.95"), order=None):
     Parameters
     ----------
     summary : pandas.DataFrame
-        :func:`rocklab.seismic.overturning.summary_table`.
+        :func:`rocklab.seismic.indices.summary_table`.
     models : sequence of str
         Models drawn side by side for every record.
     order : sequence of str, optional

@@ -287,7 +287,7 @@ def calibrated_table(summary, diagnosis):
     Parameters
     ----------
     summary : pandas.DataFrame
-        :func:`rocklab.seismic.overturning.summary_table` of the maps of the
+        :func:`rocklab.seismic.indices.summary_table` of the maps of the
         e-alone and calibrated models (other models are ignored).
     diagnosis : rocklab.diagnosis.result.CampaignDiagnosis, its entries or path
         ``results/diagnosis.json``, which names the models.

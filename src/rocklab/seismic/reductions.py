@@ -1,6 +1,6 @@
 """Per-record reductions of the map indices from one model to another (Sect. 5).
 
-Read by the paper's comparison (:func:`rocklab.seismic.overturning.reductions`)
+Read by the paper's comparison (:func:`rocklab.seismic.paper_comparison.reductions`)
 and by the calibrated walls' table (:func:`rocklab.seismic.calibrated.calibrated_table`).
 """
 

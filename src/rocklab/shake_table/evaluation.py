@@ -25,7 +25,8 @@ import pandas as pd
 import xarray as xr
 
 from rocklab.io import cf_attrs
-from rocklab.seismic.overturning import map_indices, scales
+from rocklab.seismic.indices import map_indices
+from rocklab.seismic.maps import scales
 from rocklab.shake_table import calibration as cal
 from rocklab.shake_table import records
 from rocklab.shake_table.block import CAUSES, PARAMS, block_model, hinge_angles, nominal
@@ -280,9 +281,9 @@ def calibrated_map(ag, dt, block, values, record, n=41, lo=0.5, hi=1.5, specimen
     """Overturning map (Sect. 5) of the calibrated block under one table record.
 
     The grid of amplitude and duration scales of
-    :func:`rocklab.seismic.overturning.scales`, simulated by
+    :func:`rocklab.seismic.maps.scales`, simulated by
     :func:`rocklab.simulation.batch.overturning_batch`; its indices in the
-    attributes (:func:`rocklab.seismic.overturning.map_indices`).
+    attributes (:func:`rocklab.seismic.indices.map_indices`).
     """
     model = block_model(block, values["alpha_r_over_alpha"], values["s_alpha"], values["c"])
     amp, dur = scales(n, lo, hi), scales(n, lo, hi)
