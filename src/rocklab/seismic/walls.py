@@ -31,6 +31,7 @@ MODELS = {
     "1s-eq17": ("one-sided", "one-sided, e = e_an,1s (a - b (thetadot^-/thetadot_r)^2) (amplitude law, Eq. 17)"),
 }
 
+
 def causes_of(name, eq17=AMPLITUDE_LAW_ONE_SIDED):
     """What a map model of :data:`MODELS` adds to Housner's wall of its boundary.
 
