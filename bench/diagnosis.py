@@ -2,8 +2,8 @@
 
     python bench/diagnosis.py --out results/bench [--results results]
 
-Reads the reduced tests and their motion (``<results>/tests``,
-``<results>/motion``, as the workflow's ``diagnose_series`` jobs do) and
+Reads the reduced tests and their motion (``<results>/tests``, each file
+with its motion inside, as the workflow's ``diagnose_series`` jobs do) and
 times :func:`rocklab.diagnosis.diagnose_records` on each series with the
 workflow's settings (``config/config.yaml``, defaults from its schema):
 CPU and wall seconds, the verdict; then the boundary conditions summed up
@@ -40,9 +40,9 @@ def main():
     args = ap.parse_args()
     cfg = schema_defaults(yaml.safe_load((ROOT / SCHEMA).read_text()))["diagnosis"]
     cfg |= (yaml.safe_load((ROOT / "config" / "config.yaml").read_text()) or {}).get("diagnosis", {})
-    datasets = list(valid_tests(sorted((args.results / "tests").glob("*.nc"))))
-    motion = args.results / "motion"
-    motions = {ds.attrs["test_id"]: read_motion(motion / f"{ds.attrs['test_id']}.nc") for ds in datasets}
+    tests = args.results / "tests"
+    datasets = list(valid_tests(sorted(tests.glob("*.nc"))))
+    motions = {ds.attrs["test_id"]: read_motion(tests / f"{ds.attrs['test_id']}.nc") for ds in datasets}
     series, entries = {}, []
     for key, records in records_by_series(datasets, motions).items():
         t0, c0 = time.perf_counter(), time.process_time()

@@ -9,16 +9,16 @@ from the checkout's root with the campaign named relative to it (as each
 test's ``source_file`` records it), then the tables made of its outputs (``scripts/qc_table.py``,
 ``scripts/dissipation_tables.py``), into ``DIR/results``.  The CPU time of
 each job (start-up and imports included: the kernel's count of the child
-process, robust on a shared machine) and the size of ``tests/`` and
-``motion/`` go to ``DIR/reduction.json``.
+process, robust on a shared machine) and the size of ``tests/`` (each
+test with its motion) go to ``DIR/reduction.json``.
 
 With ``--reference``, a ``DIR/results`` of the same campaign written by
 another checkout (run this file there with that checkout's sources) or
 the ``results/`` of a workflow run (``make run``), every
-netCDF file is compared with its namesake: dimensions, variables (in
-order: dtype, dimensions, attributes, every value bit for bit, NaN where
-NaN) and global attributes (in order; the time of the ``history`` line
-aside); the compression filters are listed, not compared.  The tables are
+netCDF file is compared with its namesake, each group (the motion) as the
+root: dimensions, variables (in order: dtype, dimensions, attributes, every
+value bit for bit, NaN where NaN) and global attributes (in order; the time
+of the ``history`` line aside); the compression filters are listed, not compared.  The tables are
 compared byte for byte.  Exits 1 on any difference.
 """
 
@@ -81,7 +81,6 @@ def run(campaign: Path, results: Path) -> dict:
             output={"rows": str(results / "reduction" / f"{job}.json")},
             params={
                 "netcdf": [str(results / "tests" / f"{t}.nc") for t in ids],
-                "motion": [str(results / "motion" / f"{t}.nc") for t in ids],
                 "raw_dir": str(raw_dir),
                 "options": options,
             },
@@ -108,7 +107,7 @@ def run(campaign: Path, results: Path) -> dict:
             "table3_md": tables["table3"][:-3] + "md",
         },
         params={
-            "motions": [str(results / "motion" / f"{t}.nc") for t in ids],
+            "test_files": [str(results / "tests" / f"{t}.nc") for t in ids],
             "schemas": str(ROOT / "workflow" / "schemas"),
             **config["statistics"],
         },
@@ -132,44 +131,53 @@ def _attrs(obj) -> list:
 
 def netcdf_differences(path, ref) -> list:
     """What differs between two netCDF files, in words (empty when identical)."""
-    out = []
     with netCDF4.Dataset(path) as a, netCDF4.Dataset(ref) as b:
-        for nc in (a, b):
-            nc.set_auto_maskandscale(False)
-            nc.set_auto_chartostring(False)
-        dims = [[(d.name, d.size) for d in nc.dimensions.values()] for nc in (a, b)]
-        if dims[0] != dims[1]:
-            out.append(f"dimensions {dims[0]} != {dims[1]}")
-        if list(a.variables) != list(b.variables):
-            out.append(f"variables {list(a.variables)} != {list(b.variables)}")
-        for name in set(a.variables) & set(b.variables):
-            va, vb = a.variables[name], b.variables[name]
-            if va.dimensions != vb.dimensions or not _same(va[...], vb[...]):
-                out.append(f"{name}: values")
-            ka, kb = _attrs(va), _attrs(vb)
-            if [k for k, _ in ka] != [k for k, _ in kb] or not all(_same(x, y) for (_, x), (_, y) in zip(ka, kb)):
-                out.append(f"{name}: attributes")
-        # the history line's time is when the file was written
-        ga, gb = (
-            [(k, re.sub(r"^\S+Z ", "", v, flags=re.M) if k == "history" else v) for k, v in _attrs(nc)] for nc in (a, b)
-        )
-        if [k for k, _ in ga] != [k for k, _ in gb] or not all(_same(x, y) for (_, x), (_, y) in zip(ga, gb)):
-            out.append("global attributes")
+        if list(a.groups) != list(b.groups):
+            return [f"groups {list(a.groups)} != {list(b.groups)}"]
+        out = _group_differences(a, b)
+        for name in a.groups:
+            out += [f"group {name}: {d}" for d in _group_differences(a.groups[name], b.groups[name])]
+    return out
+
+
+def _group_differences(a, b) -> list:
+    """:func:`netcdf_differences` of one group (or the root) of each file."""
+    out = []
+    for nc in (a, b):
+        nc.set_auto_maskandscale(False)
+        nc.set_auto_chartostring(False)
+    dims = [[(d.name, d.size) for d in nc.dimensions.values()] for nc in (a, b)]
+    if dims[0] != dims[1]:
+        out.append(f"dimensions {dims[0]} != {dims[1]}")
+    if list(a.variables) != list(b.variables):
+        out.append(f"variables {list(a.variables)} != {list(b.variables)}")
+    for name in set(a.variables) & set(b.variables):
+        va, vb = a.variables[name], b.variables[name]
+        if va.dimensions != vb.dimensions or not _same(va[...], vb[...]):
+            out.append(f"{name}: values")
+        ka, kb = _attrs(va), _attrs(vb)
+        if [k for k, _ in ka] != [k for k, _ in kb] or not all(_same(x, y) for (_, x), (_, y) in zip(ka, kb)):
+            out.append(f"{name}: attributes")
+    # the history line's time is when the file was written
+    ga, gb = (
+        [(k, re.sub(r"^\S+Z ", "", v, flags=re.M) if k == "history" else v) for k, v in _attrs(nc)] for nc in (a, b)
+    )
+    if [k for k, _ in ga] != [k for k, _ in gb] or not all(_same(x, y) for (_, x), (_, y) in zip(ga, gb)):
+        out.append("global attributes")
     return out
 
 
 def compare(results: Path, reference: Path) -> dict:
     """Every netCDF file and table of ``results`` against ``reference``."""
     report = {"files": 0, "different": {}}
-    for folder in ("tests", "motion"):
-        names = sorted(p.name for p in (results / folder).glob("*.nc"))
-        if names != sorted(p.name for p in (reference / folder).glob("*.nc")):
-            report["different"][folder] = "not the same files"
-        for name in names:
-            report["files"] += 1
-            diff = netcdf_differences(results / folder / name, reference / folder / name)
-            if diff:
-                report["different"][f"{folder}/{name}"] = diff
+    names = sorted(p.name for p in (results / "tests").glob("*.nc"))
+    if names != sorted(p.name for p in (reference / "tests").glob("*.nc")):
+        report["different"]["tests"] = "not the same files"
+    for name in names:
+        report["files"] += 1
+        diff = netcdf_differences(results / "tests" / name, reference / "tests" / name)
+        if diff:
+            report["different"][f"tests/{name}"] = diff
     for table in sorted(results.glob("*.csv")) + sorted(results.glob("*.md")):
         report["files"] += 1
         if table.read_bytes() != (reference / table.name).read_bytes():
@@ -199,12 +207,8 @@ def main(argv=None):
         "cpu_s": sum(cpu.values()),
         "cpu_s_by_job": cpu,
         "tests_mb": size_mb(results / "tests"),
-        "motion_mb": size_mb(results / "motion"),
     }
-    print(
-        f"reduction: {out['jobs']} jobs, {out['cpu_s']:.1f} s of CPU;"
-        f" tests {out['tests_mb']:.1f} MB, motion {out['motion_mb']:.1f} MB"
-    )
+    print(f"reduction: {out['jobs']} jobs, {out['cpu_s']:.1f} s of CPU; tests {out['tests_mb']:.1f} MB")
     if args.reference:
         out["comparison"] = compare(results, args.reference)
         print(f"{out['comparison']['files']} files compared, {len(out['comparison']['different'])} different")

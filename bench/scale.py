@@ -88,8 +88,16 @@ def _tree_rss(proc: psutil.Process) -> tuple[int, int]:
 
 
 def stage_times(results: Path) -> dict:
-    """Job time [s] summed per stage (the first folder or file of results/benchmarks)."""
-    return benchmark_times(results).groupby("stage").s.sum().to_dict()
+    """Per stage (the first folder or file of results/benchmarks): the job
+    time [s] summed (``stage_s``), the jobs (``stage_jobs``) and the longest
+    job [s] (``stage_longest_s``), which a cluster's projection spreads
+    (:func:`rocklab.benchmarks.cluster_projection`)."""
+    by_stage = benchmark_times(results).groupby("stage").s
+    return {
+        "stage_s": by_stage.sum().to_dict(),
+        "stage_jobs": by_stage.size().to_dict(),
+        "stage_longest_s": by_stage.max().to_dict(),
+    }
 
 
 def run_snakemake(args: list, log_path: Path) -> dict:
@@ -134,12 +142,26 @@ def run_workflow(campaign: Path, results: Path, cores: int) -> dict:
     # Fig. 9b of a specimen of the virtual lab (the default is one of the embedded campaign)
     config = [f"raw_dir={campaign}", f"results_dir={results}", "figures={'fig9_specimen': '1a'}"]
     args = ["campaign", "--cores", str(cores), "--config", *config]
-    return {**run_snakemake(args, results.parent / f"{results.name}.log"), "stage_s": stage_times(results)}
+    return {**run_snakemake(args, results.parent / f"{results.name}.log"), **stage_times(results)}
 
 
-def summary(runs: list, cores: int) -> dict:
-    """The runs, and the line through the smallest and the largest campaign."""
+def summary(runs: list, cores: int, baseline: dict | None = None) -> dict:
+    """The runs, and the line through the smallest and the largest campaign;
+    with ``baseline`` (another checkout's ``scale.json`` on the same sizes),
+    its wall and CPU times and the ratio of the largest campaign's wall times."""
     out = {"cores": cores, "cpu_count": os.cpu_count(), "load_avg_1min": os.getloadavg()[0], "runs": runs}
+    if baseline is not None:
+        old = {r["n_tests"]: r for r in baseline["runs"]}
+        out["baseline"] = {
+            "label": baseline.get("label"),
+            "runs": [
+                {k: old[r["n_tests"]][k] for k in ("n_tests", "wall_s", "cpu_s", "peak_rss_tree_mb")}
+                for r in runs
+                if r["n_tests"] in old
+            ],
+        }
+        if runs[-1]["n_tests"] in old:
+            out["baseline"]["largest_wall_ratio"] = runs[-1]["wall_s"] / old[runs[-1]["n_tests"]]["wall_s"]
     if len(runs) < 2:
         return out
     small, large = runs[0], runs[-1]
@@ -173,10 +195,17 @@ def main(argv=None):
     ap.add_argument("--sizes", type=int, nargs="+", default=[100, 1000])
     ap.add_argument("--cores", type=int, default=2)
     ap.add_argument(
+        "--baseline",
+        type=Path,
+        help="scale.json of another checkout (run there on the same sizes, on the same machine) to compare with",
+    )
+    ap.add_argument("--label", help="what --baseline measured (e.g. its commit)")
+    ap.add_argument(
         "--workdir", type=Path, default=None, help="where campaigns and results go (default: a temp folder)"
     )
     args = ap.parse_args(argv)
     work = Path(args.workdir or tempfile.mkdtemp(prefix="rocklab-scale-"))
+    baseline = {**json.loads(args.baseline.read_text()), "label": args.label} if args.baseline else None
     runs = []
     for n in sorted(args.sizes):
         campaign, results = work / f"campaign-{n}", work / f"results-{n}"
@@ -189,7 +218,7 @@ def main(argv=None):
         print(f"{n} tests: {run['wall_s']:.1f} s, peak {run['peak_rss_tree_mb']:.0f} MB", flush=True)
         runs.append(run)
         # after each size, so that a long run cut short keeps what it measured
-        out = summary(runs, args.cores)
+        out = summary(runs, args.cores, baseline)
         args.out.mkdir(parents=True, exist_ok=True)
         (args.out / "scale.json").write_text(json.dumps(out, indent=2) + "\n")
     print(json.dumps({k: v for k, v in out.items() if k != "runs"}, indent=2))

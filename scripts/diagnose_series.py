@@ -11,13 +11,14 @@ from rocklab.io import setup_logging, valid_tests
 from rocklab.lab.motion import read_motion
 
 setup_logging(snakemake.log[0])
-motions = {Path(p).stem: p for p in snakemake.params.motions}
 entries = []
 for series in snakemake.params.series:
     # a list: the tests are read twice (their motions, their records); of
     # their records the diagnosis needs the rotation, its time and the attributes
-    tests = list(valid_tests(snakemake.params.tests[series], variables=("theta",)))
-    stored = {t.attrs["test_id"]: read_motion(motions[t.attrs["test_id"]]) for t in tests}
+    paths = {Path(p).stem: p for p in snakemake.params.tests[series]}
+    tests = list(valid_tests(paths.values(), variables=("theta",)))
+    # the motion each test's file holds (its group, read apart from its records)
+    stored = {t.attrs["test_id"]: read_motion(paths[t.attrs["test_id"]]) for t in tests}
     entry = diagnose_records(
         records_by_series(tests, stored).get(series, []),
         series,

@@ -1,4 +1,4 @@
-"""Snakemake shim: the energy-dissipation tables of the valid tests, from their stored motions."""
+"""Snakemake shim: the energy-dissipation tables of the valid tests, from the motions stored in their files."""
 
 import logging
 from pathlib import Path
@@ -7,13 +7,17 @@ import pandas as pd
 
 from rocklab.dissipation.statistics import campaign_tables, table3_markdown
 from rocklab.dissipation.summary import dissipation_summary
-from rocklab.io import setup_logging, valid_tests, write_table
+from rocklab.io import setup_logging, write_table
+from rocklab.lab.motion import valid_stored_motions
 from rocklab.summaries import write_summary
 
 setup_logging(snakemake.log[0])
 qc = pd.read_csv(snakemake.input.qc, keep_default_na=False, na_values=[""])
 tables, failed = campaign_tables(
-    valid_tests(snakemake.params.motions, snakemake.input.qc), qc, snakemake.params.n_boot, snakemake.params.seed
+    valid_stored_motions(snakemake.params.test_files, snakemake.input.qc),
+    qc,
+    snakemake.params.n_boot,
+    snakemake.params.seed,
 )
 for test_id, why in failed:
     logging.warning("%s: motion not analysed: %s", test_id, why)

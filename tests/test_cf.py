@@ -17,7 +17,7 @@ from rocklab import cli
 from rocklab.io import write_netcdf
 from rocklab.lab import virtual_lab
 from rocklab.lab.campaign import open_campaign
-from rocklab.lab.motion import stored_motion
+from rocklab.lab.motion import write_test_with_motion
 from rocklab.lab.reduction import reduce_test
 from rocklab.seismic.accelerograms import load_record
 from rocklab.seismic.maps import overturning_map
@@ -98,15 +98,15 @@ def test_a_reduced_test_is_cf_and_reads_back_as_seconds(reduced, tables, tmp_pat
         xr.testing.assert_equal(back, reduced)
 
 
-def test_a_stored_motion_is_cf(reduced, tables, tmp_path):
-    path = tmp_path / "M.nc"
-    write_netcdf(stored_motion(reduced), path)
+def test_a_reduced_test_with_its_motion_is_cf(reduced, tables, tmp_path):
+    path = tmp_path / "T.nc"
+    write_test_with_motion(reduced, path)
     assert_cf(path, tables)
 
 
 def test_a_test_without_motion_is_cf(tables, tmp_path):
-    path = tmp_path / "M.nc"
-    write_netcdf(stored_motion(xr.Dataset(attrs={"test_id": "T1", "reject_detail": "no file"})), path)
+    path = tmp_path / "T.nc"
+    write_test_with_motion(xr.Dataset(attrs={"test_id": "T1", "reject_detail": "no file"}), path)
     assert_cf(path, tables)
 
 

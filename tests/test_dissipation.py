@@ -20,10 +20,9 @@ from rocklab.dissipation.analysis import (
     no_sliding_check,
     table3_windows,
 )
-from rocklab.io import write_netcdf
 from rocklab.lab import virtual_lab
 from rocklab.lab.campaign import open_campaign
-from rocklab.lab.motion import monitor_readings, stored_motion
+from rocklab.lab.motion import monitor_readings, read_stored_motion, write_test_with_motion
 from rocklab.lab.reduction import reduce_test
 from rocklab.physics import restitution
 from rocklab.physics.impact import Constant
@@ -252,11 +251,13 @@ def virtual_tests(tmp_path_factory):
 
 @pytest.mark.parametrize("test_id", ["V0001", "V0002"])
 def test_the_stored_motion_gives_the_tables_of_the_reduced_test(virtual_tests, test_id, tmp_path):
-    """results/motion/<test_id>.nc, written and read back, gives the same three tables."""
+    """The motion stored in results/tests/<test_id>.nc, written and read back, gives the same three tables;
+    the test beside it reads back as it was."""
     ds = virtual_tests[test_id][0]
-    write_netcdf(stored_motion(ds), tmp_path / "m.nc")
-    with xr.open_dataset(tmp_path / "m.nc") as stored:
-        s, imp, e_n = analyse_stored_motion(stored.load())
+    write_test_with_motion(ds, tmp_path / "T.nc")
+    s, imp, e_n = analyse_stored_motion(read_stored_motion(tmp_path / "T.nc"))
+    with xr.open_dataset(tmp_path / "T.nc") as back:
+        xr.testing.assert_identical(back.load().drop_attrs(deep=False), ds.drop_attrs(deep=False))
     s0, imp0, e_n0 = analyse_reduced_test(ds)
     assert s.keys() == s0.keys()
     assert all(s[k] == s0[k] or (pd.isna(s[k]) and pd.isna(s0[k])) for k in s)

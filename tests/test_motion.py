@@ -17,6 +17,7 @@ from scipy.integrate import solve_ivp
 from rocklab.io import write_netcdf
 from rocklab.lab.flight_fit import local_fit, model_velocity
 from rocklab.lab.motion import (
+    MOTION_GROUP,
     SCALAR_FIELDS,
     centre_amplification,
     extract_motion,
@@ -301,10 +302,10 @@ def test_a_wall_that_stops_dead_ends_on_its_last_flight(k_gap, hump, quiet):
 
 
 def test_a_stored_motion_reads_back_equal(two_sided, tmp_path):
-    """results/motion/<test_id>.nc: the Motion read back equals the one extracted."""
+    """The motion group of results/tests/<test_id>.nc: the Motion read back equals the one extracted."""
     t, th, _ = two_sided
     m = extract_motion(t, th, 400.0, "two-sided", P)
-    write_netcdf(motion_to_dataset(m, {"test_id": "T1"}), tmp_path / "T1.nc")
+    write_netcdf(xr.Dataset(), tmp_path / "T1.nc", groups={MOTION_GROUP: motion_to_dataset(m, {"test_id": "T1"})})
     back = read_motion(tmp_path / "T1.nc")
     for name in SCALAR_FIELDS:
         assert getattr(back, name) == getattr(m, name) or (np.isnan(getattr(m, name)) and np.isnan(getattr(back, name)))
@@ -320,7 +321,7 @@ def test_a_motion_without_impacts_reads_back_equal(tmp_path):
     n = int((truth["impacts"][0, 0] + 0.05) * 400)
     m = extract_motion(t[:n], th[:n], 400.0, "two-sided", P)
     assert m.impacts.empty
-    write_netcdf(motion_to_dataset(m), tmp_path / "T2.nc")
+    write_netcdf(xr.Dataset(), tmp_path / "T2.nc", groups={MOTION_GROUP: motion_to_dataset(m)})
     back = read_motion(tmp_path / "T2.nc")
     pd.testing.assert_frame_equal(back.impacts, m.impacts)
     assert back.peaks.size == 0

@@ -14,6 +14,7 @@ import pandas as pd
 import pytest
 
 from rocklab.lab.campaign import UNREADABLE, open_campaign
+from rocklab.lab.motion import read_stored_motion
 from rocklab.lab.reduction import qc_table, reduce_test, reduce_tests
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -182,8 +183,8 @@ def test_workflow_reduces_any_campaign_and_never_writes_to_it(virtual_campaign, 
     assert set(tests.test_id) == set(qc.test_id[qc.valid.astype(str) == "True"])
     for name in ("impacts.csv", "series.csv", "figures/fig09.png", "report/qc.html", "report/diagnosis.html"):
         assert (results / name).exists()
-    # the motion of every test, extracted once by its reduction job
-    assert {p.stem for p in (results / "motion").glob("*.nc")} == set(qc.test_id)
+    # the motion of every test, extracted once by its reduction job and stored in the test's file
+    assert {read_stored_motion(p).attrs["test_id"] for p in (results / "tests").glob("*.nc")} == set(qc.test_id)
     # every series with valid tests is diagnosed from those stored motions, each with its figure
     diagnosed = {e["key"] for e in json.loads((results / "diagnosis.json").read_text()) if e["scope"] == "series"}
     assert diagnosed and diagnosed <= set(tests.series)

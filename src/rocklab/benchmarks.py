@@ -11,9 +11,11 @@ run: the pages quote them, the check of the committed pages leaves them out
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import pandas as pd
+import yaml
 
 from rocklab.io import benchmark_times
 
@@ -48,6 +50,15 @@ def _scale(bench: dict) -> dict:
     out["small_reduce_s_per_test"], out["large_reduce_s_per_test"] = per_test[0], per_test[-1]
     ten = bench.get("ten_times_embedded") or {}
     cpu_ten = ten.get("cpu_s")
+    # another checkout's run on the same sizes and machine (bench/scale.py --baseline)
+    base = bench.get("baseline") or {}
+    old = {r["n_tests"]: r for r in base.get("runs", [])}
+    for size, run in runs.items():
+        out[f"baseline_{size}_s"] = old.get(run["n_tests"], {}).get("wall_s")
+        out[f"baseline_{size}_cpu_s"] = old.get(run["n_tests"], {}).get("cpu_s")
+        out[f"baseline_{size}_peak_mb"] = old.get(run["n_tests"], {}).get("peak_rss_tree_mb")
+    out["baseline_label"] = base.get("label")
+    out["large_over_baseline"] = base.get("largest_wall_ratio")
     return {
         "cores": bench["cores"],
         **out,
@@ -57,6 +68,115 @@ def _scale(bench: dict) -> dict:
         "ten_times_n_tests": ten.get("n_tests"),
         "ten_times_cpu_s": cpu_ten,
         "ten_times_wall_s_at_least": cpu_ten / bench["cores"] if cpu_ten is not None else None,
+    }
+
+
+#: The project's SLURM profile (workflow/profiles/slurm), relative to the checkout the workflow runs in.
+SLURM_PROFILE = Path("workflow") / "profiles" / "slurm"
+#: Nodes and cores per node of the clusters the projection spreads the work on (an assumption: a
+#: common compute node; the profile's jobs ask no more than that).
+CLUSTER_NODES = (1, 4, 16)
+CORES_PER_NODE = 32
+#: Projected campaign: this many times the embedded one.
+CAMPAIGN_FACTOR = 100
+#: Projected maps: every shipped record, every map model (the paper's and the calibrated walls'),
+#: on this many cells a side.
+MAP_CELLS = 801
+#: Map models of each map job: the paper's (rule overturning_maps) and the calibrated walls'
+#: (rule calibrated_maps, at most 9: workflow/rules/seismic.smk).
+MAP_JOB_MODELS = {"overturning_maps": 5, "calibrated_maps": 9}
+
+
+def slurm_profile(root=".") -> dict:
+    """What the SLURM profile asks for each job: ``mem_mb``, ``runtime``
+    [min] and ``cpus_per_task`` by default, ``jobs`` (at most at once), and
+    the map jobs' ``threads`` and ``records_per_job`` (its ``maps.yaml``)."""
+    folder = Path(root) / SLURM_PROFILE
+    profile = yaml.safe_load((folder / "config.yaml").read_text())
+    maps = yaml.safe_load((folder / "maps.yaml").read_text())["maps"]
+    return {**profile["default-resources"], "jobs": profile["jobs"], **{f"maps_{k}": v for k, v in maps.items()}}
+
+
+def _waves(jobs: int, slots: int) -> int:
+    return math.ceil(jobs / max(slots, 1))
+
+
+def campaign_projection(scale: dict, profile: dict, n_embedded: int, max_tests_per_job: int) -> dict:
+    """A campaign :data:`CAMPAIGN_FACTOR` times the embedded one on a SLURM cluster.
+
+    From the two campaigns of ``bench/scale.py`` (``scale``): each stage's
+    job time on the line through them (linear in the tests: the bench's
+    ``at_most_linear``); the reduction in jobs of ``max_tests_per_job``
+    tests, every other stage in as many jobs as in the larger campaign, its
+    longest job grown with the stage.  On ``N`` nodes of
+    :data:`CORES_PER_NODE` cores, each job one core (the profile's
+    ``cpus_per_task``), a stage takes its job time over the cores or its
+    longest job, whichever is longer, and the stages follow one another: an
+    upper bound (the dissipation and diagnosis branches run at once),
+    without SLURM's queueing and start of each job.
+    """
+    small, large = scale["runs"][0], scale["runs"][-1]
+    n = CAMPAIGN_FACTOR * n_embedded
+    stages = {}
+    for stage, s_large in large["stage_s"].items():
+        s_small = small["stage_s"].get(stage, 0.0)
+        slope = (s_large - s_small) / (large["n_tests"] - small["n_tests"])
+        job_s = max(s_large + slope * (n - large["n_tests"]), s_large)
+        if stage == "reduce":
+            jobs = math.ceil(n / max_tests_per_job)
+            longest = job_s / jobs
+        else:
+            jobs = large["stage_jobs"][stage]
+            longest = large["stage_longest_s"][stage] * job_s / s_large if s_large else 0.0
+        stages[stage] = {"jobs": jobs, "job_s": job_s, "longest_s": longest}
+    slots = {nodes: nodes * CORES_PER_NODE // profile["cpus_per_task"] for nodes in CLUSTER_NODES}
+    return {
+        "n_tests": n,
+        "stages": stages,
+        "jobs": sum(st["jobs"] for st in stages.values()),
+        "job_s": sum(st["job_s"] for st in stages.values()),
+        "largest_process_mb": large["peak_rss_process_mb"],
+        "mem_mb": profile["mem_mb"],
+        "fits_mem": large["peak_rss_process_mb"] <= profile["mem_mb"],
+        "longest_job_s": max(st["longest_s"] for st in stages.values()),
+        "runtime_min": profile["runtime"],
+        "wall_s": [sum(max(st["job_s"] / k, st["longest_s"]) for st in stages.values()) for k in slots.values()],
+    }
+
+
+def maps_projection(maps: dict, profile: dict) -> dict:
+    """Every map model of every shipped record on :data:`MAP_CELLS` x
+    :data:`MAP_CELLS` cells on a SLURM cluster.
+
+    From ``bench/maps.py`` (``maps``): the CPU time of one history, its maps'
+    CPU time over their cells (the same kind of histories on a finer grid:
+    linear in the cells); the profile's map jobs, one per record and rule
+    (``maps_records_per_job``), each on ``maps_threads`` cores, which numba
+    keeps busy (the job's wall time its CPU time over its threads).  On
+    ``N`` nodes of :data:`CORES_PER_NODE` cores, as many jobs at once as
+    fit, in waves of the longest (calibrated) job.
+    """
+    n_records = len(maps["all_maps_records"])
+    per_cell = maps["all_maps_cpu_s"] / (maps["all_maps_count"] * maps["grid"][0] * maps["grid"][1])
+    map_cpu_s = per_cell * MAP_CELLS**2
+    threads = profile["maps_threads"]
+    per_job = profile["maps_records_per_job"]
+    jobs = {rule: math.ceil(n_records / per_job) for rule in MAP_JOB_MODELS}
+    job_wall_s = {rule: map_cpu_s * models * per_job / threads for rule, models in MAP_JOB_MODELS.items()}
+    slots = {nodes: nodes * (CORES_PER_NODE // threads) for nodes in CLUSTER_NODES}
+    return {
+        "records": n_records,
+        "models": sum(MAP_JOB_MODELS.values()),
+        "cells": MAP_CELLS,
+        "measured_grid": maps["grid"][0],
+        "map_cpu_s": map_cpu_s,
+        "cpu_s": map_cpu_s * n_records * sum(MAP_JOB_MODELS.values()),
+        "jobs": sum(jobs.values()),
+        "threads": threads,
+        "job_wall_s": job_wall_s,
+        # one variable of the map: float64 per cell
+        "grid_mb": 8 * MAP_CELLS**2 / 1e6,
+        "wall_s": [_waves(sum(jobs.values()), k) * max(job_wall_s.values()) for k in slots.values()],
     }
 
 
@@ -123,6 +243,7 @@ def performance_summary(results) -> dict:
     out["fresh_clone"] = {k: fc[k] for k in keys} | {"load_1min": fc["load_before"][0]} if fc else None
     sc = _bench(results, "scale")
     out["scale"] = _scale(sc) if sc else None
+    out["projection"] = _projection(sc, mp)
     ref = _bench(results, "maps_reference")
     out["maps_reference"] = (
         {
@@ -141,6 +262,35 @@ def performance_summary(results) -> dict:
     )
     out["shake_table"] = shake_table_times(results)
     return out
+
+
+def _projection(scale, maps) -> dict:
+    """:func:`campaign_projection` and :func:`maps_projection` of the
+    benchmarks that ran (``None`` for one that did not), on the profile and
+    the workflow's configuration of the checkout (the working directory)."""
+    from rocklab.config import SCHEMA, schema_defaults
+
+    profile = slurm_profile()
+    config = schema_defaults(yaml.safe_load(Path(SCHEMA).read_text()))["reduction"]
+    config |= (yaml.safe_load(Path("config/config.yaml").read_text()) or {}).get("reduction", {})
+    n_embedded = len(pd.read_csv(Path("raw") / "campaign" / "tests.csv"))
+    has_stages = scale is not None and len(scale["runs"]) > 1 and "stage_jobs" in scale["runs"][-1]
+    from rocklab.seismic.accelerograms.manifest import read_manifest
+
+    return {
+        "nodes": list(CLUSTER_NODES),
+        "cores_per_node": CORES_PER_NODE,
+        "factor": CAMPAIGN_FACTOR,
+        "n_tests": CAMPAIGN_FACTOR * n_embedded,
+        "cells": MAP_CELLS,
+        "records": len(read_manifest()),
+        "models": sum(MAP_JOB_MODELS.values()),
+        "profile": profile,
+        "campaign": campaign_projection(scale, profile, n_embedded, config["max_tests_per_job"])
+        if has_stages
+        else None,
+        "maps": maps_projection(maps, profile) if maps else None,
+    }
 
 
 def shake_table_times(results) -> dict | None:

@@ -92,13 +92,20 @@ XARRAY_CODED = frozenset(
 #: Units by which xarray may read a variable as times (with "since") or
 #: durations (``xarray.coding.times.TIME_UNITS``).
 TIME_UNITS = frozenset({"days", "hours", "minutes", "seconds", "milliseconds", "microseconds", "nanoseconds"})
+#: Global attributes that CF-1.8 (section 2.7) keeps in the root group.
+ROOT_ONLY = ("Conventions", "history")
 #: What a netCDF attribute may hold (xarray's check before it writes one).
 ATTRIBUTE_TYPES = (str, Number, np.ndarray, np.number, list, tuple, bytes)
 
 
-def write_netcdf(ds, path):
+def write_netcdf(ds, path, groups=None):
     """Write a dataset compressed, through a temporary file, so an interrupted
     run never leaves a truncated output that looks complete.
+
+    ``groups`` maps a name to a dataset stored in the file as the netCDF-4
+    group of that name (CF-1.8 section 2.7; read back with
+    :func:`read_dataset`'s ``group``): its variables and attributes, less
+    ``Conventions`` and ``history``, which CF keeps in the root group.
 
     Numbers are compressed (:data:`COMPRESSION`), floats with ``_FillValue``
     NaN; booleans are stored as int8 with ``dtype = "bool"``; text as
@@ -121,8 +128,18 @@ def write_netcdf(ds, path):
     line = f"{datetime.now(UTC):%Y-%m-%dT%H:%M:%SZ} rocklab {__version__}: wrote {path.name}"
     attrs["history"] = "\n".join(filter(None, [attrs.get("history", ""), line]))
     stored = {name: _stored_variable(var) for name, var in ds.variables.items()}
+    grouped = {
+        name: (
+            {k: v for k, v in g.attrs.items() if k not in ROOT_ONLY},
+            {n: _stored_variable(var) for n, var in g.variables.items()},
+        )
+        for name, g in (groups or {}).items()
+    }
     # auxiliary coordinates: xarray names them in a `coordinates` attribute
-    direct = all(v is not None for v in stored.values()) and set(ds.coords) <= set(ds.dims)
+    direct = all(
+        all(v is not None for v in variables.values()) and set(d.coords) <= set(d.dims)
+        for d, variables in [(ds, stored), *(((groups or {})[n], v) for n, (_, v) in grouped.items())]
+    )
     # a writer killed outright (SIGKILL) leaves its temporary file: the next
     # write of the same file, the rerun, removes it
     for stale in path.parent.glob(f".{glob.escape(path.name)}.*.tmp"):
@@ -131,9 +148,13 @@ def write_netcdf(ds, path):
     os.close(fd)
     try:
         if direct:
-            _write_variables(stored, attrs, tmp, path)
+            _write_variables(stored, attrs, tmp, path, grouped)
         else:
             _write_with_xarray(ds.assign_attrs(attrs), tmp)
+            for name, g in (groups or {}).items():
+                g = g.copy(deep=False)
+                g.attrs = grouped[name][0]
+                _write_with_xarray(g, tmp, name)
         # mkstemp makes the file private (0600): give it the mode of any new file
         umask = os.umask(0)
         os.umask(umask)
@@ -172,24 +193,31 @@ def _stored_variable(var):
     return None
 
 
-def _write_variables(stored, attrs, tmp, path):
-    """Write :func:`_stored_variable`'s variables and the global ``attrs`` to ``tmp`` (for ``path``)."""
+def _write_variables(stored, attrs, tmp, path, groups=None):
+    """Write :func:`_stored_variable`'s variables and the global ``attrs`` to
+    ``tmp`` (for ``path``), and each of ``groups`` (name: its attributes and
+    stored variables) as a group."""
     import netCDF4
 
     with netCDF4.Dataset(tmp, "w", format="NETCDF4") as nc:
-        _set_attributes(nc, attrs, path)
-        for name, (dims, data, var_attrs, fill, compression) in stored.items():
-            for dim, size in zip(dims, data.shape):
-                if dim not in nc.dimensions:
-                    nc.createDimension(dim, size)
-            var = nc.createVariable(name, data.dtype, dims, fill_value=fill, **compression)
-            _set_attributes(var, var_attrs, f"{path}, variable {name}")
+        parts = [(nc, attrs, stored, str(path))]
+        for name, (group_attrs, group_stored) in (groups or {}).items():
+            parts.append((nc.createGroup(name), group_attrs, group_stored, f"{path}, group {name}"))
+        for where, where_attrs, variables, label in parts:
+            _set_attributes(where, where_attrs, label)
+            for name, (dims, data, var_attrs, fill, compression) in variables.items():
+                for dim, size in zip(dims, data.shape):
+                    if dim not in where.dimensions:
+                        where.createDimension(dim, size)
+                var = where.createVariable(name, data.dtype, dims, fill_value=fill, **compression)
+                _set_attributes(var, var_attrs, f"{label}, variable {name}")
         # every variable defined before any is written: a write after a
         # definition has netCDF-C write the metadata of the whole file again
-        nc.set_auto_maskandscale(False)
-        nc.set_auto_chartostring(False)
-        for name, (_, data, *_) in stored.items():
-            nc.variables[name][...] = data
+        for where, _, variables, _ in parts:
+            where.set_auto_maskandscale(False)
+            where.set_auto_chartostring(False)
+            for name, (_, data, *_) in variables.items():
+                where.variables[name][...] = data
 
 
 def _set_attributes(obj, attrs, where):
@@ -206,13 +234,14 @@ def _set_attributes(obj, attrs, where):
             obj.setncattr(key, value)
 
 
-def _write_with_xarray(ds, tmp):
-    """:func:`write_netcdf`'s encoding through ``xarray.Dataset.to_netcdf``."""
+def _write_with_xarray(ds, tmp, group=None):
+    """:func:`write_netcdf`'s encoding through ``xarray.Dataset.to_netcdf``
+    (into ``group`` of the file ``tmp`` already holds, if given)."""
     encoding = {name: dict(COMPRESSION) for name, var in ds.variables.items() if var.dtype.kind in "fiu" and var.ndim}
     text = {name: var.astype(str) for name, var in ds.variables.items() if var.dtype.kind in "OU"}
     encoding.update({name: {"dtype": "S1"} for name in text})
     # one assign, a shallow copy: the caller's dataset is left as it is
-    ds.assign(text).to_netcdf(tmp, engine="netcdf4", encoding=encoding)
+    ds.assign(text).to_netcdf(tmp, engine="netcdf4", encoding=encoding, group=group, mode="a" if group else "w")
 
 
 def benchmark_times(results) -> pd.DataFrame:
@@ -255,7 +284,7 @@ def _attributes(obj) -> dict:
     return {k: obj.getncattr(k) for k in obj.ncattrs()}
 
 
-def read_dataset(path, variables=None):
+def read_dataset(path, variables=None, group=None):
     """A netCDF file loaded into memory (closed), as
     ``xarray.open_dataset(path)[variables].load()`` gives it.
 
@@ -276,21 +305,27 @@ def read_dataset(path, variables=None):
     variables : sequence of str, optional
         The variables to load, with the coordinates of their dimensions
         (``time`` for a reduced test's ``theta``); all if None.
+    group : str, optional
+        The group of the file to read (:func:`write_netcdf`'s ``groups``),
+        its attributes as the dataset's; the root group if None.
 
     Raises
     ------
     KeyError
         Naming the file and the variables it lacks.
     """
-    return _read(path, variables)
+    return _read(path, variables, group=group)
 
 
-def _read(path, variables=None, keep=None):
+def _read(path, variables=None, keep=None, group=None):
     """:func:`read_dataset`; None where ``keep(global attributes)`` is false."""
     import netCDF4
     import xarray as xr
 
-    with netCDF4.Dataset(path) as nc:
+    with netCDF4.Dataset(path) as root:
+        if group is not None and group not in root.groups:
+            raise KeyError(f"{path}: no group {group}")
+        nc = root if group is None else root.groups[group]
         attrs = _attributes(nc)
         if keep is not None and not keep(attrs):
             return None
@@ -303,7 +338,7 @@ def _read(path, variables=None, keep=None):
         decoded = {name: _decoded_variable(nc.variables[name]) for name in names}
         if any(v is None for v in decoded.values()) or "coordinates" in attrs:
             # from this handle: netCDF-C can crash on a file opened twice at once
-            ds = xr.open_dataset(xr.backends.NetCDF4DataStore(nc))
+            ds = xr.open_dataset(xr.backends.NetCDF4DataStore(root, group=group))
             return (ds if variables is None else ds[wanted]).load()
     # xarray's order: the data variables, then the coordinates
     coords = {name: var for name, var in decoded.items() if var.dims == (name,)}
@@ -388,25 +423,26 @@ def valid_test_ids(qc_path) -> list:
     return qc.test_id[qc.valid.astype(str) == "True"].tolist()
 
 
-def load_datasets(paths, keep=None, variables=None):
-    """Yield the netCDF files at ``paths`` loaded into memory (files closed,
-    :func:`read_dataset`), those for whose global attributes ``keep(attrs)``
-    is true if given."""
+def load_datasets(paths, keep=None, variables=None, group=None):
+    """Yield the netCDF files at ``paths`` (their ``group`` if given) loaded
+    into memory (files closed, :func:`read_dataset`), those for whose
+    attributes ``keep(attrs)`` is true if given."""
     for path in paths:
-        ds = _read(path, variables, keep)
+        ds = _read(path, variables, keep, group)
         if ds is not None:
             yield ds
 
 
-def valid_tests(paths, qc_path=None, variables=None):
+def valid_tests(paths, qc_path=None, variables=None, group=None):
     """Yield the reduced datasets of the valid tests, loaded.
 
     Valid: marked so in ``qc.csv``, or without it by the test's own verdict
     (its ``valid`` attribute, of which qc.csv is made), so that a job over
     a few tests need not depend on the QC of the whole campaign.
-    ``variables``: those to load (:func:`read_dataset`), all if None.
+    ``variables``: those to load (:func:`read_dataset`), all if None;
+    ``group``: the group of each file to read (its attributes carry ``valid``).
     """
     if qc_path is None:
-        return load_datasets(paths, lambda attrs: int(attrs.get("valid", 0)), variables)
+        return load_datasets(paths, lambda attrs: int(attrs.get("valid", 0)), variables, group)
     valid = set(valid_test_ids(qc_path))
-    return load_datasets((p for p in paths if Path(p).stem in valid), variables=variables)
+    return load_datasets((p for p in paths if Path(p).stem in valid), variables=variables, group=group)

@@ -219,7 +219,7 @@ def fig20_sample_test(wildcards):
     return [res("tests", f"{test_id}.nc")] if test_id else []
 
 
-def diagnosis_samples(kind):
+def diagnosis_samples():
     """The sample test of every diagnosed series (the tests the figures draw), once the diagnosis has run,
     and every test of a series with a form discovered beyond the catalogue (drawn against them all)."""
 
@@ -230,7 +230,7 @@ def diagnosis_samples(kind):
         diagnosis = CampaignDiagnosis.from_json(checkpoints.diagnosis.get().output.json)
         ids = diagnosis.sample_tests
         ids |= {t for e in diagnosis.series if e.discovered for t in TESTS_BY_SERIES[e.key]}
-        return sorted(res(kind, f"{t}.nc") for t in ids)
+        return sorted(res("tests", f"{t}.nc") for t in ids)
 
     return inputs
 

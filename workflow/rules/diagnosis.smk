@@ -47,8 +47,6 @@ rule diagnose_series:
         tests=lambda wildcards: {
             s: [res("tests", f"{t}.nc") for t in TESTS_BY_SERIES[s]] for s in SERIES_BY_BOUNDARY[wildcards.boundary]
         },
-        # their motion, extracted once by the reduction
-        motions=lambda wildcards: [res("motion", f"{t}.nc") for t in tests_of_boundary(wildcards.boundary)],
         n_boot=DIAGNOSIS["n_boot"],
         n_history=DIAGNOSIS["n_history"],
         seed=DIAGNOSIS["seed"],
@@ -93,8 +91,7 @@ rule diagnosis_pages:
 rule diagnosis_figures:
     input:
         diagnosis=rules.diagnosis.output.json,
-        tests=diagnosis_samples("tests"),
-        motions=diagnosis_samples("motion"),
+        tests=diagnosis_samples(),
     output:
         fig14=report_figure("14", "diagnosis", "two-sided, models against the test", "Summary"),
         fig15=report_figure("15", "diagnosis", "one-sided, models against the test", "Summary"),

@@ -39,7 +39,8 @@ checkpoint dissipation_tables:
     benchmark:
         res("benchmarks", "dissipation_tables.tsv")
     params:
-        motions=[res("motion", f"{t}.nc") for t in TEST_IDS],
+        # the reduced tests, whose files hold their motions
+        test_files=[res("tests", f"{t}.nc") for t in TEST_IDS],
         schemas=schema_path(""),
         n_boot=config["statistics"]["n_boot"],
         seed=config["statistics"]["seed"],

@@ -1,6 +1,6 @@
 # Stage 1: each test's raw record to its wall motion (reader, channel health,
 # four-DOF kinematics, validity by the lab's rules), one netCDF per test, and
-# the motion extracted from it (release, impacts, peaks), stored once for the
+# the motion extracted from it (release, impacts, peaks), stored inside it for the
 # dissipation tables and the diagnosis; and per job the attributes of its tests'
 # QC rows (results/reduction/<job>.json), the input that stands for the job's
 # files downstream (reduced_inputs in common.smk).
@@ -32,7 +32,6 @@ rule reduce:
     params:
         tests=lambda wildcards: {t: test_params(t) for t in REDUCTION_JOBS[wildcards.job]},
         netcdf=lambda wildcards: [res("tests", f"{t}.nc") for t in REDUCTION_JOBS[wildcards.job]],
-        motion=lambda wildcards: [res("motion", f"{t}.nc") for t in REDUCTION_JOBS[wildcards.job]],
         raw_dir=config["raw_dir"],
         options={"channels": config["channels"], "validity": config["validity"]},
     script:

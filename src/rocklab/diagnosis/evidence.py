@@ -214,7 +214,7 @@ def records_by_series(datasets, motions=None):
         Reduced tests.
     motions : mapping, optional
         Test id -> :class:`rocklab.lab.motion.Motion` already extracted (the
-        workflow's ``results/motion/<test_id>.nc``, :func:`rocklab.lab.motion.read_motion`);
+        motion stored in the workflow's ``results/tests/<test_id>.nc``, :func:`rocklab.lab.motion.read_motion`);
         a test without one has its motion extracted from theta by :func:`measured_test`.
     """
     motions = motions or {}

@@ -37,12 +37,15 @@ short last flights are too uncertain and would cut real ones.
 Stored motion
 -------------
 The workflow extracts the motion of each test once, in the reduction job of
-its series, and stores it beside the reduced test as
-``results/motion/<test_id>.nc`` (:func:`stored_motion`): the :class:`Motion`
-(:func:`motion_to_dataset`, read back by :func:`read_motion`), who the test
-is and the constants of its wall (:data:`TEST_ATTRS`), and the channel-5
-amplification of Fig. 20b.  The dissipation tables and the diagnosis read
-it instead of extracting the motion again.
+its series, and stores it inside the reduced test's file
+``results/tests/<test_id>.nc``, as its netCDF-4 group :data:`MOTION_GROUP`
+(:func:`write_test_with_motion`; one file per test, not two: a third of the
+reduction's time was the writing of a second file): the :class:`Motion`
+(:func:`motion_to_dataset`), who the test is and the constants of its wall
+(:data:`TEST_ATTRS`), and the channel-5 amplification of Fig. 20b
+(:func:`stored_motion`).  The dissipation tables, the diagnosis and its
+figures read it back (:func:`read_stored_motion`, :func:`read_motion`,
+:func:`valid_stored_motions`) instead of extracting the motion again.
 
 All angles are returned as magnitudes of the rotation measured on the side
 of release (``sign`` gives that side); velocities keep the sign of the input.
@@ -56,12 +59,14 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from rocklab.io import cf_attrs, read_dataset
+from rocklab.io import cf_attrs, read_dataset, valid_tests, write_netcdf
 from rocklab.lab import kinematics
 from rocklab.lab.channels import LOST_STATUSES
 from rocklab.lab.flight_fit import local_fit, model_value, model_velocity, odd_samples, root_tau, stationary_tau
 from rocklab.lab.release import screw_departure
 
+#: Group of a reduced test's netCDF file that holds its stored motion.
+MOTION_GROUP = "motion"
 #: Boundary conditions of Sect. 2.1.
 BOUNDARIES = ("two-sided", "one-sided")
 #: Columns of :attr:`Motion.impacts`, in order.
@@ -475,9 +480,30 @@ def motion_from_dataset(ds) -> Motion:
     )
 
 
+def read_stored_motion(path) -> xr.Dataset:
+    """The stored motion (:func:`stored_motion`) of the reduced test at ``path``
+    (``results/tests/<test_id>.nc``, written by :func:`write_test_with_motion`)."""
+    return read_dataset(path, group=MOTION_GROUP)
+
+
 def read_motion(path) -> Motion:
-    """The :class:`Motion` stored at ``path`` (``results/motion/<test_id>.nc``)."""
-    return motion_from_dataset(read_dataset(path))
+    """The :class:`Motion` stored in the reduced test at ``path`` (:func:`read_stored_motion`)."""
+    return motion_from_dataset(read_stored_motion(path))
+
+
+def valid_stored_motions(paths, qc_path=None):
+    """Yield the stored motions of the valid tests among the reduced tests at
+    ``paths`` (:func:`read_stored_motion`; valid as
+    :func:`rocklab.io.valid_tests` says)."""
+    return valid_tests(paths, qc_path, group=MOTION_GROUP)
+
+
+def write_test_with_motion(ds, path) -> xr.Dataset:
+    """Write the reduced test ``ds`` to ``path`` with its :func:`stored_motion`
+    as the group :data:`MOTION_GROUP` (module docstring); returns that motion."""
+    motion = stored_motion(ds)
+    write_netcdf(ds, path, groups={MOTION_GROUP: motion})
+    return motion
 
 
 def stored_motion(ds) -> xr.Dataset:

@@ -193,7 +193,7 @@ def discovery_figure(tests, entry):
     return fig
 
 
-def series_figures(diagnosis, test_paths, motion_paths=()):
+def series_figures(diagnosis, test_paths):
     """Figs. 14-15 for the sample test of every series of results/diagnosis.json.
 
     Parameters
@@ -203,10 +203,8 @@ def series_figures(diagnosis, test_paths, motion_paths=()):
     test_paths : sequence of path
         Reduced tests (``results/tests/<test_id>.nc``): at least the sample
         test of every series, and every test of a series with a form
-        discovered beyond the catalogue (:func:`discovery_figure`).
-    motion_paths : sequence of path, optional
-        Their stored motions (``results/motion/<test_id>.nc``); a test
-        without one has its motion extracted again.
+        discovered beyond the catalogue (:func:`discovery_figure`), each
+        with its stored motion (:func:`rocklab.lab.motion.write_test_with_motion`).
 
     Returns
     -------
@@ -219,16 +217,15 @@ def series_figures(diagnosis, test_paths, motion_paths=()):
         the campaign has none).
     """
     paths = {Path(p).stem: p for p in test_paths}
-    motions = {Path(p).stem: p for p in motion_paths}
     diagnosis = CampaignDiagnosis.of(diagnosis)
     out = {}
     for e in diagnosis.series:
         test_id = e.sample_test
-        motion = {test_id: read_motion(motions[test_id])} if test_id in motions else None
+        motion = {test_id: read_motion(paths[test_id])}
         (recs,) = records_by_series([read_dataset(paths[test_id], ("theta",))], motion).values()
         out[e.key] = history_figure(measured_test(recs[0]), e)
         if e.discovered:
-            out[f"discovered/{e.key}"] = discovery_figure(_series_tests(e.key, paths, motions), e)
+            out[f"discovered/{e.key}"] = discovery_figure(_series_tests(e.key, paths), e)
     for name, boundary in (("fig14", "two-sided"), ("fig15", "one-sided")):
         own = diagnosis.series_of(boundary)
         out[name] = out[max(own, key=lambda e: e.n_tests).key] if own else _empty(boundary)
@@ -348,11 +345,11 @@ def family_figure(result, events):
     return fig
 
 
-def _series_tests(key, paths, motions):
+def _series_tests(key, paths):
     """The valid tests of series ``key`` among ``paths`` (stem -> path) as the diagnosis read them."""
     datasets = [ds for ds in valid_tests(paths.values(), variables=("theta",)) if ds.attrs.get("series") == key]
     ids = [ds.attrs["test_id"] for ds in datasets]
-    stored = {t: read_motion(motions[t]) for t in ids if t in motions}
+    stored = {t: read_motion(paths[t]) for t in ids}
     (recs,) = records_by_series(datasets, stored).values()
     return in_series_order([t for t in map(measured_test, recs) if t.n_impacts >= 2])
 
