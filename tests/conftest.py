@@ -28,6 +28,7 @@ KIND_OF_FILE = {
     "test_interrupt.py": "workflow",
     "test_install.py": "workflow",
     "test_slurm.py": "workflow",
+    "test_shapes.py": "workflow",
     "test_docs.py": "docs",
     "test_report.py": "docs",
 }
@@ -69,17 +70,20 @@ def test_kind(item):
 
 
 #: Files whose Snakemake runs have a working directory of their own (``--directory`` a temporary folder).
-OWN_WORKDIR = {"test_workflow.py", "test_interrupt.py", "test_install.py", "test_slurm.py"}
-#: Files whose fixtures run Snakemake in the checkout.
-IN_CHECKOUT = {"test_report.py"}
+OWN_WORKDIR = {
+    "test_workflow.py",
+    "test_interrupt.py",
+    "test_install.py",
+    "test_slurm.py",
+    "test_shapes.py",
+    "test_report.py",
+}
 
 
 def runs_in_checkout(item):
     """Whether a test runs Snakemake with the checkout as its working directory."""
     name = item.path.name
-    return name in IN_CHECKOUT or (
-        name not in OWN_WORKDIR and test_kind(item) == "workflow" and hasattr(item.module, "SNAKEMAKE")
-    )
+    return name not in OWN_WORKDIR and test_kind(item) == "workflow" and hasattr(item.module, "SNAKEMAKE")
 
 
 def pytest_collection_modifyitems(items):

@@ -151,10 +151,12 @@ def report(tmp_path_factory):
         "maps": {"records": ["Pac164"], "n": 5, "threads": 1},
     }
     (tmp / "config.yaml").write_text(yaml.safe_dump(config))
-    common = ["campaign", "limestone", "maps", "--directory", str(ROOT), "--configfile", str(tmp / "config.yaml")]
+    # a working directory of its own (Snakemake's locks and metadata): other workflow tests run at once
+    common = ["campaign", "limestone", "maps", "--snakefile", str(ROOT / "Snakefile"), "--directory", str(tmp)]
+    common += ["--configfile", str(tmp / "config.yaml")]
     env = {**os.environ, "PYTHONWARNINGS": "ignore"}
     for extra in (["--cores", "2", "--quiet"], ["--report", str(tmp / "report.html")]):
-        run = subprocess.run([str(SNAKEMAKE), *common, *extra], capture_output=True, text=True, cwd=ROOT, env=env)
+        run = subprocess.run([str(SNAKEMAKE), *common, *extra], capture_output=True, text=True, cwd=tmp, env=env)
         assert run.returncode == 0, run.stderr[-3000:]
     return tmp / "report.html", tmp / "results"
 

@@ -205,7 +205,13 @@ def kinematics_sample(wildcards):
     from rocklab.io import valid_test_ids
 
     qc = checkpoints.qc_table.get().output.qc
-    return res("tests", f"{KINEMATICS_SAMPLE or valid_test_ids(qc)[0]}.nc")
+    if KINEMATICS_SAMPLE:
+        return res("tests", f"{KINEMATICS_SAMPLE}.nc")
+    valid = valid_test_ids(qc)
+    if not valid:
+        # every later stage needs a reduced test: stop here, with the table that says why
+        raise WorkflowError(f"no test of the campaign is valid, nothing to reduce further: see {qc}, reject_reason")
+    return res("tests", f"{valid[0]}.nc")
 
 
 def fig20_sample_test(wildcards):
