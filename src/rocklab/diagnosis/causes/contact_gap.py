@@ -34,7 +34,7 @@ def signature(ob):
 
 
 def starts(sig):
-    return {"gap_over_alpha": max(sig.get("contact_gap", {}).get("value", 0.0), 1e-3)}
+    return {"gap_over_alpha": max(sig.get(CAUSE.name, {}).get("value", 0.0), 1e-3)}
 
 
 CAUSE = Cause(

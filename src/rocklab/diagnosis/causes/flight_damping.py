@@ -42,7 +42,7 @@ def signature(ob):
 
 
 def starts(sig):
-    return {"zeta": max(sig.get("flight_damping", {}).get("zeta", 0.0), 1e-4)}
+    return {"zeta": max(sig.get(CAUSE.name, {}).get("zeta", 0.0), 1e-4)}
 
 
 CAUSE = Cause(

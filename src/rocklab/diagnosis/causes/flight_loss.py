@@ -150,7 +150,7 @@ def signature(ob):
 
 def starts(sig):
     """The member that fits the flight-loss curve best, at its fitted value (not the listed viscous loss's)."""
-    s = sig.get("flight_loss")
+    s = sig.get(CAUSE.name)
     if not s or s["best"] == "zeta":
         return {}  # the listed loss's own start (its signature)
     return {s["best"]: s["start"]}
@@ -231,12 +231,12 @@ CAUSE = Cause(
     laws=laws,
     signature=signature,
     starts=starts,
-    replaces=("flight_damping",),
-    family="flight_damping",
+    replaces=(flight_damping.CAUSE.name,),
+    family=flight_damping.CAUSE.name,
     closed_form=closed_form,
     curve=curve,
     on_the_maps=(
-        "flight_damping",
+        flight_damping.CAUSE.name,
         "its viscous member, zeta: the maps' numba engine does not simulate dry friction or drag in flight "
         "(mu/alpha, kappa alpha), which are lost",
     ),

@@ -75,7 +75,7 @@ def on_ratios(trials):
 
 
 def starts(sig):
-    return {k: sig.get("hinge_asymmetry", {}).get(k, 0.0) for k in ("s_alpha", "s_e")}
+    return {k: sig.get(CAUSE.name, {}).get(k, 0.0) for k in ("s_alpha", "s_e")}
 
 
 CAUSE = Cause(

@@ -47,7 +47,7 @@ def signature(ob):
 
 
 def starts(sig):
-    return {"rounding": sig.get("instability_amplitude", {}).get("value", K.null)}
+    return {"rounding": sig.get(CAUSE.name, {}).get("value", K.null)}
 
 
 def closed_form(values, ci):
@@ -65,11 +65,11 @@ CAUSE = Cause(
     laws=laws,
     signature=signature,
     starts=starts,
-    replaces=("instability_angle",),
-    family="instability_angle",
+    replaces=(instability_angle.CAUSE.name,),
+    family=instability_angle.CAUSE.name,
     closed_form=closed_form,
     on_the_maps=(
-        "instability_angle",
+        instability_angle.CAUSE.name,
         "its angle at the instability point, alpha_r = r alpha, the one of the flights that overturn a wall: "
         "under ground motion a flight's apex, which sets its angle, is unknown when the flight starts",
     ),

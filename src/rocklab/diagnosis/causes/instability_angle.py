@@ -37,7 +37,7 @@ def signature(ob):
 
 
 def starts(sig):
-    return {"alpha_r_over_alpha": sig.get("instability_angle", {}).get("value", R.null)}
+    return {"alpha_r_over_alpha": sig.get(CAUSE.name, {}).get("value", R.null)}
 
 
 CAUSE = Cause(

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from rocklab._imports import lazy_module
-from rocklab.diagnosis.causes import Cause
+from rocklab.diagnosis.causes import Cause, restitution_scale
 from rocklab.diagnosis.parameters import Param
 from rocklab.physics.law import Amplitude
 
@@ -46,7 +46,7 @@ def on_ratios(trials):
 
 
 def starts(sig):
-    return {"a": sig.get("restitution_scale", {}).get("value", 1.0)}
+    return {"a": sig.get(restitution_scale.CAUSE.name, {}).get("value", 1.0)}
 
 
 CAUSE = Cause(
@@ -57,6 +57,6 @@ CAUSE = Cause(
     signature=signature,
     starts=starts,
     on_ratios=on_ratios,
-    replaces=("restitution_scale",),
+    replaces=(restitution_scale.CAUSE.name,),
     short="eamp",
 )

@@ -80,8 +80,8 @@ def _cause(column, others=()):
         laws=laws,
         signature=signature,
         starts=starts,
-        replaces=("restitution_scale", *(o for o in others if o != name)),
-        family="restitution_scale",
+        replaces=(restitution_scale.CAUSE.name, *(o for o in others if o != name)),
+        family=restitution_scale.CAUSE.name,
         closed_form=closed_form,
         short="drift",
     )

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from rocklab._imports import lazy_module
-from rocklab.diagnosis.causes import Cause
+from rocklab.diagnosis.causes import Cause, restitution_scale
 from rocklab.diagnosis.parameters import Param
 from rocklab.physics.law import HousnerLoss
 
@@ -85,7 +85,7 @@ CAUSE = Cause(
     params=(LAMBDA, DELTA),
     laws=laws,
     boundaries=(),
-    family="restitution_scale",
+    family=restitution_scale.CAUSE.name,
     closed_form=closed_form,
     on_ratios=on_ratios,
     short="hloss",

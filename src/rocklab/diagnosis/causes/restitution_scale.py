@@ -44,7 +44,7 @@ def on_ratios(trials):
 
 
 def starts(sig):
-    return {"c": sig.get("restitution_scale", {}).get("value", 1.0)}
+    return {"c": sig.get(CAUSE.name, {}).get("value", 1.0)}
 
 
 CAUSE = Cause(

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from rocklab._imports import lazy_module
-from rocklab.diagnosis.causes import Cause
+from rocklab.diagnosis.causes import Cause, restitution_amplitude, restitution_scale
 from rocklab.diagnosis.parameters import Param
 from rocklab.physics.law import KNOTS, SpeedFactor
 
@@ -62,7 +62,7 @@ def signature(ob):
 
 
 def starts(sig):
-    s = sig.get("restitution_speed")
+    s = sig.get(CAUSE.name)
     if not s:
         return {}
     g = np.interp(KNOTS, s["at"], s["value"])
@@ -108,8 +108,8 @@ CAUSE = Cause(
     laws=laws,
     signature=signature,
     starts=starts,
-    replaces=("restitution_scale", "restitution_amplitude"),
-    family="restitution_amplitude",
+    replaces=(restitution_scale.CAUSE.name, restitution_amplitude.CAUSE.name),
+    family=restitution_amplitude.CAUSE.name,
     closed_form=closed_form,
     on_the_maps=(None, "an impact law of the diagnosis' closed forms that the simulators lack"),
 )
