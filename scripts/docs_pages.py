@@ -8,5 +8,6 @@ from rocklab.report.pages import write_docs
 
 setup_logging(snakemake.log[0])
 templates = Path(snakemake.input.templates[0]).parent
-for path in write_docs(snakemake.params.results_dir, templates, Path(snakemake.output.numbers).parent):
+out = Path(snakemake.output.numbers).parent
+for path in write_docs(snakemake.params.results_dir, templates, out, checkout=snakemake.params.checkout):
     logging.info("wrote %s", path)

@@ -1,5 +1,7 @@
 """The cluster projections of docs/performance.md (rocklab.benchmarks), from measured per-job costs."""
 
+from pathlib import Path
+
 import pytest
 
 from rocklab.benchmarks import (
@@ -53,5 +55,5 @@ def test_the_maps_grow_with_their_cells_and_pack_in_waves():
 
 
 def test_the_profile_is_read_from_the_checkout():
-    profile = slurm_profile()
+    profile = slurm_profile(Path(__file__).resolve().parents[1])
     assert profile["cpus_per_task"] >= 1 and profile["maps_threads"] <= CORES_PER_NODE

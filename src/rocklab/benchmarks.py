@@ -87,10 +87,10 @@ MAP_CELLS = 801
 MAP_JOB_MODELS = {"overturning_maps": 5, "calibrated_maps": 9}
 
 
-def slurm_profile(root=".") -> dict:
-    """What the SLURM profile asks for each job: ``mem_mb``, ``runtime``
-    [min] and ``cpus_per_task`` by default, ``jobs`` (at most at once), and
-    the map jobs' ``threads`` and ``records_per_job`` (its ``maps.yaml``)."""
+def slurm_profile(root) -> dict:
+    """What the SLURM profile of the checkout ``root`` asks for each job: ``mem_mb``,
+    ``runtime`` [min] and ``cpus_per_task`` by default, ``jobs`` (at most at once),
+    and the map jobs' ``threads`` and ``records_per_job`` (its ``maps.yaml``)."""
     folder = Path(root) / SLURM_PROFILE
     profile = yaml.safe_load((folder / "config.yaml").read_text())
     maps = yaml.safe_load((folder / "maps.yaml").read_text())["maps"]
@@ -180,13 +180,16 @@ def maps_projection(maps: dict, profile: dict) -> dict:
     }
 
 
-def performance_summary(results) -> dict:
+def performance_summary(results, checkout=None) -> dict:
     """Timings: the workflow's job times and, when measured, ``make bench``.
 
     Parameters
     ----------
     results : str or pathlib.Path
         The results folder of a finished run.
+    checkout : str or pathlib.Path, optional
+        The repository whose SLURM profile, configuration and embedded
+        campaign the cluster projection reads; without it, no projection.
 
     Returns
     -------
@@ -194,7 +197,8 @@ def performance_summary(results) -> dict:
         ``jobs`` (jobs, total and longest time per rule or folder of jobs),
         ``n_jobs``, ``total_job_s``, ``shake_table`` (the job times of the
         target ``shake_table``, ``None`` where it did not run) and one entry
-        per benchmark of ``make bench`` (``None`` where it did not run).
+        per benchmark of ``make bench`` (``None`` where it did not run), and
+        ``projection`` (``None`` without ``checkout``).
     """
     results = Path(results)
     jobs = _benchmarks(results)
@@ -243,7 +247,7 @@ def performance_summary(results) -> dict:
     out["fresh_clone"] = {k: fc[k] for k in keys} | {"load_1min": fc["load_before"][0]} if fc else None
     sc = _bench(results, "scale")
     out["scale"] = _scale(sc) if sc else None
-    out["projection"] = _projection(sc, mp)
+    out["projection"] = _projection(sc, mp, checkout) if checkout is not None else None
     ref = _bench(results, "maps_reference")
     out["maps_reference"] = (
         {
@@ -264,16 +268,17 @@ def performance_summary(results) -> dict:
     return out
 
 
-def _projection(scale, maps) -> dict:
+def _projection(scale, maps, checkout) -> dict:
     """:func:`campaign_projection` and :func:`maps_projection` of the
     benchmarks that ran (``None`` for one that did not), on the profile and
-    the workflow's configuration of the checkout (the working directory)."""
+    the workflow's configuration of the checkout."""
     from rocklab.config import SCHEMA, schema_defaults
 
-    profile = slurm_profile()
-    config = schema_defaults(yaml.safe_load(Path(SCHEMA).read_text()))["reduction"]
-    config |= (yaml.safe_load(Path("config/config.yaml").read_text()) or {}).get("reduction", {})
-    n_embedded = len(pd.read_csv(Path("raw") / "campaign" / "tests.csv"))
+    checkout = Path(checkout)
+    profile = slurm_profile(checkout)
+    config = schema_defaults(yaml.safe_load((checkout / SCHEMA).read_text()))["reduction"]
+    config |= (yaml.safe_load((checkout / "config" / "config.yaml").read_text()) or {}).get("reduction", {})
+    n_embedded = len(pd.read_csv(checkout / "raw" / "campaign" / "tests.csv"))
     has_stages = scale is not None and len(scale["runs"]) > 1 and "stage_jobs" in scale["runs"][-1]
     from rocklab.seismic.accelerograms.manifest import read_manifest
 

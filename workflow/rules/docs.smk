@@ -33,5 +33,7 @@ rule docs:
         res("benchmarks", "docs.tsv")
     params:
         results_dir=lambda wildcards, output: str(Path(output.numbers).parents[1]),
+        # the SLURM profile, configuration and embedded campaign of the cluster projection
+        checkout=workflow.basedir,
     script:
         "../../scripts/docs_pages.py"

@@ -62,13 +62,15 @@ def summary_paths(results_dir) -> dict[str, Path]:
     return {name: Path(results_dir) / "summaries" / f"{name}.json" for name in SECTIONS}
 
 
-def docs_numbers(results_dir) -> dict:
+def docs_numbers(results_dir, checkout=None) -> dict:
     """The numbers file of a results folder: every stage's summary and the timings.
 
     A stage that did not run (no summary file) is ``None``: its pages say "not measured".
+    ``checkout``: the repository the cluster projection reads
+    (:func:`rocklab.benchmarks.performance_summary`).
     """
     numbers = {name: summaries.read_summary(path) for name, path in summary_paths(results_dir).items()}
-    numbers["performance"] = summaries.rounded(performance_summary(results_dir))
+    numbers["performance"] = summaries.rounded(performance_summary(results_dir, checkout))
     return {"volatile": list(VOLATILE), **numbers}
 
 
@@ -137,7 +139,7 @@ def render_pages(template_dir, numbers: Mapping, strict: bool = True) -> dict[st
     return {p.name: render(p.read_text(), numbers, strict) for p in sorted(Path(template_dir).glob("*.md"))}
 
 
-def write_docs(results_dir, template_dir, out_dir, strict: bool = False) -> list[Path]:
+def write_docs(results_dir, template_dir, out_dir, strict: bool = False, checkout=None) -> list[Path]:
     """Write the numbers file and every page of ``template_dir`` into ``out_dir``.
 
     Not ``strict`` by default: any campaign gets its pages, with "not
@@ -149,7 +151,7 @@ def write_docs(results_dir, template_dir, out_dir, strict: bool = False) -> list
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     written = [out / "numbers.json"]
-    write_numbers(docs_numbers(results_dir), written[0])
+    write_numbers(docs_numbers(results_dir, checkout), written[0])
     # The pages are filled from the file as written (its key order), so that
     # they are a function of the numbers file alone.
     numbers = read_numbers(written[0])
