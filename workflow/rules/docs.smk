@@ -33,7 +33,8 @@ rule docs:
         res("benchmarks", "docs.tsv")
     params:
         results_dir=lambda wildcards, output: str(Path(output.numbers).parents[1]),
-        # the SLURM profile, configuration and embedded campaign of the cluster projection
-        checkout=workflow.basedir,
+        # the checkout (of the templates, docs/templates/): its SLURM profile,
+        # configuration and embedded campaign make the cluster projection
+        checkout=lambda wildcards, input: str(Path(input.templates[0]).parents[2]),
     script:
         "../../scripts/docs_pages.py"
