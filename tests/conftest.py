@@ -95,6 +95,15 @@ def pytest_collection_modifyitems(items):
             item.add_marker(pytest.mark.xdist_group("checkout"))
 
 
+def pytest_terminal_summary(terminalreporter):
+    """What the test SLURM cluster ran (tests/test_slurm.py's ``slurm`` properties), even under ``-q``."""
+    lines = [v for r in terminalreporter.stats.get("passed", []) for k, v in r.user_properties if k == "slurm"]
+    if lines:
+        terminalreporter.write_sep("-", "jobs on the test SLURM cluster")
+        for line in lines:
+            terminalreporter.write_line(line)
+
+
 @pytest.fixture
 def tiny_campaign(tmp_path):
     """Three tests of the embedded campaign (two-sided push, one-sided, 100 Hz) in a writable copy."""

@@ -210,6 +210,12 @@ def _run(cmd):
     return run.stdout + run.stderr
 
 
+def _jobs(log):
+    """What a run's log says it did: SLURM jobs submitted, jobs finished (local rules included)."""
+    submitted, finished = log.count("has been submitted with SLURM jobid"), log.count("Finished jobid")
+    return f"{submitted} SLURM jobs submitted, {finished} finished"
+
+
 def _running_jobs():
     """SLURM job id -> comment (the plugin's ``rule_<name>[_wildcards_...]``) of the running jobs."""
     out = subprocess.run(["squeue", "-h", "-t", "RUNNING", "-o", "%i %k"], capture_output=True, text=True).stdout
@@ -255,7 +261,7 @@ def _map_files(results):
     return sorted(p.relative_to(results) for p in (results / "maps").rglob("*") if p.is_file())
 
 
-def test_maps_on_slurm_survive_a_killed_job_and_equal_the_local_maps(slurm_cluster, tmp_path):
+def test_maps_on_slurm_survive_a_killed_job_and_equal_the_local_maps(slurm_cluster, tmp_path, record_property):
     # two records, one job each (the profile's maps.yaml), two threads: the node's two cores
     config = _config(
         tmp_path, raw_dir=str(ROOT / "raw" / "campaign"), maps={"records": ["Pac164", "RRS228"], "n": 3, "threads": 2}
@@ -272,6 +278,10 @@ def test_maps_on_slurm_survive_a_killed_job_and_equal_the_local_maps(slurm_clust
     assert "Exiting because a job execution failed" in log
     rerun = _run(on_slurm)
     assert "has been submitted with SLURM jobid" in rerun and "Complete log" in rerun
+    # shown at the end of the run (tests/conftest.py): what the cluster did, in CI's output too
+    record_property(
+        "slurm", f"maps: {_jobs(log)}, SLURM jobs {' and '.join(killed)} cancelled; the rerun: {_jobs(rerun)}"
+    )
     files = _map_files(local)
     # five maps per record, the three tables, and the list of maps each job wrote (one job per record)
     assert files == _map_files(cluster) and len(files) == 2 * 5 + 3 + 2
@@ -284,7 +294,7 @@ def test_maps_on_slurm_survive_a_killed_job_and_equal_the_local_maps(slurm_clust
         assert (cluster / name).stat().st_size > 0
 
 
-def test_campaign_on_slurm_writes_the_tables_of_the_local_run(slurm_cluster, tmp_path):
+def test_campaign_on_slurm_writes_the_tables_of_the_local_run(slurm_cluster, tmp_path, record_property):
     folder = tmp_path / "campaign"
     virtual_lab.write_campaign(folder, virtual_lab.default_plan(3, seed=3), seed=3)
     config = _config(tmp_path, raw_dir=str(folder), figures={"fig9_specimen": "1a"})
@@ -292,6 +302,7 @@ def test_campaign_on_slurm_writes_the_tables_of_the_local_run(slurm_cluster, tmp
     _run(_snakemake("campaign", tmp_path / "wd-local", config + ["--config", f"results_dir={local}"], "--cores", "2"))
     log = _run(_on_slurm("campaign", tmp_path / "wd-slurm", config + ["--config", f"results_dir={cluster}"]))
     assert "has been submitted with SLURM jobid" in log
+    record_property("slurm", f"campaign: {_jobs(log)}")
     tables = sorted(p.name for p in local.glob("*.csv"))
     assert {"qc.csv", "tests.csv", "impacts.csv", "series.csv"} <= set(tables)
     assert tables == sorted(p.name for p in cluster.glob("*.csv"))
