@@ -303,14 +303,13 @@ def shake_table_times(results) -> dict | None:
 
     Under a loaded machine the CPU time is the one that compares from run to run.
     """
-    bench = {
-        t.stem: pd.read_csv(t, sep="\t").iloc[0]
-        for t in sorted((Path(results) / "benchmarks" / "shake_table").glob("*.tsv"))
-    }
-    if not bench:
+    jobs = benchmark_times(results)
+    jobs = jobs[jobs.stage == "shake_table"]
+    if jobs.empty:
         return None
-    job_times = {k: float(b["s"]) for k, b in bench.items()}
-    job_cpu = {k: float(b["cpu_time"]) for k, b in bench.items()}
+    names = [Path(job).name for job in jobs.job]
+    job_times = dict(zip(names, jobs.s.astype(float)))
+    job_cpu = dict(zip(names, jobs.cpu_s.astype(float)))
     return {
         "job_time_s": sum(job_times.values()),
         "job_times_s": job_times,

@@ -2,7 +2,6 @@
 # boundary condition), the per-test parameters that decide when a test must
 # be reduced again, the targets and the rules' input functions.
 import functools
-import json
 import re
 from pathlib import Path
 
