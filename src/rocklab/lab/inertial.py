@@ -25,7 +25,9 @@ Here, from what the record itself says:
   are the instants at which the wall is on its base edge, theta = 0; the
   median of the integrated theta there is the offset that the
   accelerometer's bias gave the tilt at the anchor, and is removed
-  (:func:`vertical_offset`); the impacts' velocities are then found on theta
+  (:func:`vertical_offset`) when no larger than that bias can make it (a
+  larger one is a wall that settled askew, its base shifted, which the
+  residual out-of-plumb must see: then flagged, not removed); the impacts' velocities are then found on theta
   as for any record (:mod:`rocklab.lab.motion`), whose flight fits on an
   integrated rate are fits of the rate;
 * a dead or clipped gyroscope or accelerometer loses the instrument
@@ -138,13 +140,14 @@ def error_bound(rate, tilt, fs, duration, bias, bias_end, offset_sigma=np.nan):
 def force_spikes(time, acc_y, acc_z, fs, min_gap_s=0.05) -> np.ndarray:
     """Times of the spikes of the specific force [s]: impacts.
 
-    The jump of |f| from one sample to the next, against its median level
+    The jump of the force vector from one sample to the next (mostly along
+    y: an impact is a jump of theta'', tangential), against its median level
     (the noise), above :data:`SPIKE_NOISES` noise levels; spikes closer than
     ``min_gap_s`` are one impact, at its largest jump.
     """
     from scipy.signal import find_peaks  # imported here: scipy costs 1 s at start-up
 
-    jump = np.abs(np.diff(np.hypot(acc_y, acc_z), prepend=np.hypot(acc_y[0], acc_z[0])))
+    jump = np.hypot(np.diff(acc_y, prepend=acc_y[0]), np.diff(acc_z, prepend=acc_z[0]))
     level = 1.4826 * np.median(jump) / np.sqrt(2.0) if jump.size else 0.0
     if not level > 0:
         return np.array([])
@@ -180,8 +183,11 @@ def inertial_motion(rec: InertialRecord, alpha, p) -> InstrumentMotion:
     spikes = force_spikes(t, acc_y, acc_z, fs)
     offset, offset_sigma = vertical_offset(t, theta, spikes, fs)
     flags = ["phi, v, w not measured: 0"]
-    if np.isfinite(offset):
+    if np.isfinite(offset) and abs(offset) <= ACC_BIAS_M_S2 / G + BOUND_SIGMAS * offset_sigma:
         theta = theta - offset
+    elif np.isfinite(offset):
+        flags.append(f"impacts {offset:.2g} rad off the accelerometer's vertical: the base shifted, not removed")
+        offset_sigma = np.nan
     else:
         flags.append(f"{spikes.size} force spike(s): the vertical from the accelerometer alone")
     bound = error_bound(rate, tilt, fs, float(t[-1] - t[0]), bias, bias_end, offset_sigma)

@@ -5,10 +5,10 @@ rotation"), in the system's own zero with the wall vertical at rest, and
 sometimes phi, v and w.  Optical systems lose markers: an empty field is a
 lost sample.  Here:
 
-* theta is kept as measured; a lost stretch is bridged by a monotone cubic
-  (PCHIP) through the samples around it when the motion allows it: no
-  longer than :data:`MAX_BRIDGE_S`, in which a flight of the wall is a
-  smooth curve;
+* theta is kept as measured; a lost stretch is bridged by a cubic spline
+  through the measured samples when the motion allows it: no longer than
+  :data:`MAX_BRIDGE_S`, in which a flight of the wall is a smooth curve
+  (a monotone cubic would flatten the peak of a flight that it bridges);
 * a lost stretch during which the wall reached the vertical (theta changes
   sign across it, or the bridge comes within :data:`VERTICAL_NOISES` noise
   levels of zero) hides an impact: the bridge there is no measurement, so
@@ -43,16 +43,16 @@ def lost_stretches(lost) -> list:
 
 
 def bridge(time, x, lost):
-    """``x`` with its lost samples bridged by PCHIP through the measured ones;
+    """``x`` with its lost samples bridged by a cubic spline through the measured ones;
     before the first and after the last measured sample, that sample (the
     record starts held and ends at rest)."""
-    from scipy.interpolate import PchipInterpolator  # imported here: scipy costs 1 s at start-up
+    from scipy.interpolate import CubicSpline  # imported here: scipy costs 1 s at start-up
 
     x = np.array(x, float)
     good = ~lost
     if lost.any() and good.sum() >= 2:
         inner = lost & (time > time[good][0]) & (time < time[good][-1])
-        x[inner] = PchipInterpolator(time[good], x[good])(time[inner])
+        x[inner] = CubicSpline(time[good], x[good])(time[inner])
         x[: np.argmax(good)] = x[good][0]
         x[len(x) - np.argmax(good[::-1]) :] = x[good][-1]
     return x
@@ -141,11 +141,12 @@ def rotation_motion(rec: RotationRecord, alpha, noise_of) -> InstrumentMotion:
 
 
 def unseen_impacts(t_arrival, t_departure, time, lost) -> np.ndarray:
-    """Which impacts fell on a lost stretch that reached the vertical (:func:`at_vertical`).
+    """Which impacts fell on a lost stretch.
 
     An impact from its arrival at theta = 0 to its departure, widened by a
-    sample each side, that overlaps a lost stretch was not measured: its
-    velocities would be those of the bridge.
+    sample each side, that overlaps a lost stretch (widened to the measured
+    samples around it) was not measured: its velocities would be those of
+    the bridge.
 
     Parameters
     ----------
