@@ -75,6 +75,7 @@ def instrument_accuracy(instrument, fs, n_tests=4, seed=0) -> dict:
     from rocklab.lab.motion import motion_from_dataset, stored_motion
     from rocklab.lab.reduction import reduce_test
     from rocklab.lab.virtual_lab import DEFAULT_SPECIMENS, VirtualTest, simulate_virtual_test, write_campaign
+    from rocklab.lab.virtual_record import usual_layout
 
     specs = DEFAULT_SPECIMENS.specimen.tolist()
     plan = [
@@ -87,13 +88,8 @@ def instrument_accuracy(instrument, fs, n_tests=4, seed=0) -> dict:
         streams = np.random.SeedSequence(seed).spawn(len(plan))
         for test, ss in zip(plan, streams):
             spec = DEFAULT_SPECIMENS.set_index("specimen").loc[test.specimen]
-            # the same stream as write_campaign: the same record, and its truth
-            layout = pd.read_csv(f"{tmp}/setups.csv")
-            layout = layout[layout.setup == test.setup] if test.setup else None
-            if layout is None:
-                from rocklab.lab.virtual_record import usual_layout
-
-                layout = usual_layout("", spec.length_mm, spec.height_mm, spec.thickness_mm, False)
+            # the same stream and layout as write_campaign: the same record, and its truth
+            layout = usual_layout(test.setup, spec.length_mm, spec.height_mm, spec.thickness_mm, False)
             _, _, truth = simulate_virtual_test(test, spec, layout, np.random.default_rng(ss))
             ds = reduce_test(campaign, test.test_id)
             motion = motion_from_dataset(stored_motion(ds))

@@ -40,6 +40,7 @@ import numpy as np
 
 from rocklab.lab.instrument import InstrumentMotion, health
 from rocklab.lab.records import InertialRecord
+from rocklab.lab.rotation import bridge
 
 #: Standard gravity [m/s^2].
 G = 9.81
@@ -167,8 +168,6 @@ def inertial_motion(rec: InertialRecord, alpha, p) -> InstrumentMotion:
         Frequency parameter of the wall [rad/s]: its release from about alpha
         gives the rate a span of about p alpha.
     """
-    from rocklab.lab.rotation import bridge
-
     t, fs = rec.time, rec.fs
     spans = {
         "gyro_x_rad_s": (rec.rate, p * alpha),
