@@ -76,6 +76,7 @@ def test_kind(item):
 #: Files whose Snakemake runs have a working directory of their own (``--directory`` a temporary folder).
 OWN_WORKDIR = {
     "test_workflow.py",
+    "test_instruments_workflow.py",
     "test_interrupt.py",
     "test_install.py",
     "test_slurm.py",
