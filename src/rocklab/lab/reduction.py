@@ -197,6 +197,40 @@ def reduce_test(campaign: Campaign, test_id: str, options=None) -> xr.Dataset:
     return _reduce_transducers(campaign, meta, rec, opt)
 
 
+#: CF ``long_name`` of the wall's degrees of freedom in a reduced test, whatever the instrument.
+DOF_LONG_NAMES = {
+    "theta": "rocking rotation about the active base edge (Eqs. 3-7)",
+    "phi": "twist about the vertical axis",
+    "v": "base sliding along x",
+    "w": "base sliding along y",
+}
+
+
+#: CF ``long_name`` of the top corners' displacement of a reduced test (the out-of-plumb rule).
+TOP_Y_LONG_NAME = "y displacement of the top corners (x = -L/2, +L/2)"
+
+
+def _judged(meta: dict, time, fs, theta, phi, v, w, malfunction, rules) -> tuple[dict, np.ndarray]:
+    """The lab's rules on a test's motion (:mod:`rocklab.lab.validity`), whatever the instrument:
+    the verdict and the numbers it rests on, as attributes of the reduced test, and the y
+    displacement of the top corners [mm] (N, 2) that the out-of-plumb is read from."""
+    top = validity.top_displacement(theta, phi, v, w, meta["length_mm"], meta["height_mm"], meta["thickness_mm"])
+    residual = validity.residual_out_of_plumb(top, fs)
+    state = release.release_state(time, theta, meta["p"])
+    ratio = state["thetadot0"] / meta["overturning_velocity"]
+    valid, reason, detail = validity.verdict(malfunction, ratio, residual, rules)
+    return {
+        "valid": int(valid),
+        "reject_reason": reason,
+        "reject_detail": detail or "",
+        "residual_top_mm": residual,
+        "release_velocity_ratio": ratio,
+        "t_release": state["t_release"],
+        "theta0_release": state["theta0"],
+        "alpha_fit_release": state["alpha_fit"],
+    }, top
+
+
 def _reduce_transducers(campaign: Campaign, meta: dict, rec: Record, opt: dict) -> xr.Dataset:
     """:func:`reduce_test` of a transducer record: channel health, four-DOF kinematics, the lab's rules."""
     test_id, path = meta["test_id"], rec.path
@@ -238,19 +272,8 @@ def _reduce_transducers(campaign: Campaign, meta: dict, rec: Record, opt: dict) 
         solve_v=choice.solve_v,
     )
 
-    top = validity.top_displacement(
-        motion.theta.values,
-        motion.phi.values,
-        motion.v.values,
-        motion.w.values,
-        meta["length_mm"],
-        meta["height_mm"],
-        meta["thickness_mm"],
-    )
-    residual = validity.residual_out_of_plumb(top, rec.fs)
-    state = release.release_state(rec.time, motion.theta.values, meta["p"])
-    ratio = state["thetadot0"] / meta["overturning_velocity"]
-    valid, reason, detail = validity.verdict(choice.malfunction, ratio, residual, opt["validity"])
+    dof = [motion[k].values for k in DOF_LONG_NAMES]
+    judged, top = _judged(meta, rec.time, rec.fs, *dof, choice.malfunction, opt["validity"])
 
     flags = [d for d in (r.describe() for r in reports) if d] + choice.flags
     # the channel variables in one assign: each added one by one is a merge
@@ -305,13 +328,11 @@ def _reduce_transducers(campaign: Campaign, meta: dict, rec: Record, opt: dict) 
     channel_vars["top_y"] = (
         ("time", "corner"),
         top,
-        {"units": "mm", "long_name": "y displacement of the top corners (x = -L/2, +L/2)"},
+        {"units": "mm", "long_name": TOP_Y_LONG_NAME},
     )
     ds = motion.assign(channel_vars)
-    ds.theta.attrs.update(long_name="rocking rotation about the active base edge (Eqs. 3-7)")
-    ds.phi.attrs.update(long_name="twist about the vertical axis")
-    ds.v.attrs.update(long_name="base sliding along x")
-    ds.w.attrs.update(long_name="base sliding along y")
+    for k, long_name in DOF_LONG_NAMES.items():
+        ds[k].attrs.update(long_name=long_name)
     ds.residual_rms.attrs.update(long_name="root mean square residual of the kinematic fit over the used transducers")
     ds.n_channels.attrs.update(long_name="number of transducers in the kinematic fit", units="1")
     ds.converged.attrs.update(
@@ -327,14 +348,7 @@ def _reduce_transducers(campaign: Campaign, meta: dict, rec: Record, opt: dict) 
         **_cf_attrs(test_id),
         sha256=rec.sha256,
         sampling_rate_hz=rec.fs,
-        valid=int(valid),
-        reject_reason=reason,
-        reject_detail=detail or "",
-        residual_top_mm=residual,
-        release_velocity_ratio=ratio,
-        t_release=state["t_release"],
-        theta0_release=state["theta0"],
-        alpha_fit_release=state["alpha_fit"],
+        **judged,
         channels_used=" ".join(f"ch{c}" for c in choice.used),
         flags="; ".join(flags),
         **validity.channel_faults(reports, choice),
@@ -356,36 +370,21 @@ def _reduce_instrument(meta: dict, rec: RotationRecord | InertialRecord, opt: di
         kind, m = "inertial", inertial.inertial_motion(rec, meta["alpha"], meta["p"])
         used = " ".join(INERTIAL_COLUMNS)
     units = {"theta": "rad", "phi": "rad", "v": "mm", "w": "mm"}
-    long_names = {
-        "theta": "rocking rotation about the active base edge (Eqs. 3-7)",
-        "phi": "twist about the vertical axis",
-        "v": "base sliding along x",
-        "w": "base sliding along y",
-    }
-    data = {k: ("time", getattr(m, k), {"units": units[k], "long_name": long_names[k]}) for k in units}
+    dof = [getattr(m, k) for k in DOF_LONG_NAMES]
+    data = {k: ("time", x, {"units": units[k], "long_name": DOF_LONG_NAMES[k]}) for k, x in zip(DOF_LONG_NAMES, dof)}
     ds = xr.Dataset(
         {**data, **m.variables},
         coords={"time": ("time", rec.time, {"long_name": "time since the start of the record", "units": "s"})},
     )
-    L, h, b = meta["length_mm"], meta["height_mm"], meta["thickness_mm"]
-    top = validity.top_displacement(m.theta, m.phi, m.v, m.w, L, h, b)
-    residual = validity.residual_out_of_plumb(top, rec.fs)
-    state = release.release_state(rec.time, m.theta, meta["p"])
-    ratio = state["thetadot0"] / meta["overturning_velocity"]
-    valid, reason, detail = validity.verdict(m.malfunction, ratio, residual, opt["validity"])
+    b = meta["thickness_mm"]
+    judged, top = _judged(meta, rec.time, rec.fs, *dof, m.malfunction, opt["validity"])
+    ds["top_y"] = (("time", "corner"), top, {"units": "mm", "long_name": TOP_Y_LONG_NAME})
     ds.attrs.update({k: v for k, v in meta.items() if not (isinstance(v, float) and np.isnan(v))})
     ds.attrs.update(
         **_cf_attrs(meta["test_id"], kind),
         sha256=rec.sha256,
         sampling_rate_hz=rec.fs,
-        valid=int(valid),
-        reject_reason=reason,
-        reject_detail=detail or "",
-        residual_top_mm=residual,
-        release_velocity_ratio=ratio,
-        t_release=state["t_release"],
-        theta0_release=state["theta0"],
-        alpha_fit_release=state["alpha_fit"],
+        **judged,
         channels_used=used,
         flags="; ".join(m.flags),
         **{**validity.NO_FAULTS, **m.faults, "in_plane_lost": int("v" not in getattr(rec, "dof", {}))},
