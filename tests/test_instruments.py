@@ -254,3 +254,11 @@ def test_the_readers_give_each_kind(mixed):
     assert isinstance(rec, InertialRecord) and rec.fs == 1000.0
     assert rec.sensor_mm.tolist() == pytest.approx([SPEC.length_mm / 2, 0.0, 0.8 * SPEC.height_mm], abs=0.5)
     assert replace(InertialEffects(), sensor=(0, 1, 0.5)).sensor == (0, 1, 0.5)
+
+
+def test_fig6_draws_the_rotation_of_a_test_no_transducer_recorded(mixed):
+    from rocklab.plots.kinematics import sample_record
+
+    fig = sample_record(mixed[2]["I1000"])
+    assert fig.axes[0].get_ylabel() == "θ [rad]" and "inertial" in fig.axes[0].lines[0].get_label()
+    assert sample_record(mixed[2]["X1"]).axes[0].get_ylabel() == "Δl [mm]"
