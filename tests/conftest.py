@@ -50,6 +50,10 @@ SLOW = {
         "test_onset_on_the_first_sample",
     },
     "test_campaign.py": {"test_embedded_records_read_as_python_reads_them"},
+    # the mixed campaign of every instrument, reduced once: 8 s; the accuracy at 240 and 1000 Hz: 3 s
+    "test_instruments.py": {"mixed", "test_per_impact_restitution_within_0005_of_the_truth_at_240_and_1000_hz"},
+    # one series per instrument and scenario diagnosed once: 16 s
+    "test_instruments_diagnosis.py": {"diagnosed"},
 }
 #: Tests that run Snakemake without a ``skipif`` that names it: file -> test names.
 WORKFLOW = {"test_config.py": {"test_every_run_takes_the_workflow_profile"}}
@@ -72,6 +76,7 @@ def test_kind(item):
 #: Files whose Snakemake runs have a working directory of their own (``--directory`` a temporary folder).
 OWN_WORKDIR = {
     "test_workflow.py",
+    "test_instruments_workflow.py",
     "test_interrupt.py",
     "test_install.py",
     "test_slurm.py",

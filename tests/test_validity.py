@@ -90,10 +90,10 @@ def test_release_velocity_recovered(kick):
 def test_verdict_order():
     roles = channel_roles(_usual_setup(), 113.0)
     rules = {"residual_top_mm": 1.5, "release_velocity_ratio": 0.1}
-    assert verdict(choose_channels(roles, set()), 0.02, 0.5, rules) == (True, "", "")
-    assert verdict(choose_channels(roles, set()), 0.2, 3.0, rules)[1] == "disturbed_initial_conditions"
-    assert verdict(choose_channels(roles, set()), 0.02, 1.6, rules)[1] == "residual_out_of_plumb"
-    assert verdict(choose_channels(roles, {0, 1}), 0.2, 3.0, rules)[1] == "instrument_malfunction"
+    assert verdict(choose_channels(roles, set()).malfunction, 0.02, 0.5, rules) == (True, "", "")
+    assert verdict(choose_channels(roles, set()).malfunction, 0.2, 3.0, rules)[1] == "disturbed_initial_conditions"
+    assert verdict(choose_channels(roles, set()).malfunction, 0.02, 1.6, rules)[1] == "residual_out_of_plumb"
+    assert verdict(choose_channels(roles, {0, 1}).malfunction, 0.2, 3.0, rules)[1] == "instrument_malfunction"
 
 
 def test_the_qc_schema_allows_the_verdicts_and_no_other_word():

@@ -22,6 +22,7 @@ rule docs:
             rules.limestone_diagnosis.output.docs_summary,
             rules.map_summary.output.docs_summary,
             rules.map_calibrated.output.docs_summary,
+            rules.instrument_accuracy.output.docs_summary,
         ],
         templates=[repo_path("docs", "templates", page) for page in DOC_PAGES],
     output:

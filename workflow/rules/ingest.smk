@@ -36,3 +36,18 @@ rule reduce:
         options={"channels": config["channels"], "validity": config["validity"]},
     script:
         "../../scripts/reduce_tests.py"
+
+
+# The accuracy of each instrument (transducers, motion capture, inertial) at
+# the labs' sampling rates, measured on virtual-lab walls against their truth
+# (rocklab.lab.accuracy): the numbers of docs/instruments.md. No input: the
+# walls are the virtual lab's, whatever the campaign.
+rule instrument_accuracy:
+    output:
+        docs_summary=res("summaries", "instruments.json"),
+    log:
+        res("logs", "instrument_accuracy.log"),
+    benchmark:
+        res("benchmarks", "instrument_accuracy.tsv")
+    script:
+        "../../scripts/instrument_accuracy.py"

@@ -310,7 +310,9 @@ def read_tests(campaign_dir, specimens=None, setups=None) -> TestLog:
     specimen or setup is unknown or refused, whose boundary or direction is
     not an allowed word, whose contact depth is missing or not positive, or
     whose file is empty, leaves the campaign folder or is not a regular
-    file, is kept and recorded in :attr:`TestLog.errors`.
+    file, is kept and recorded in :attr:`TestLog.errors`.  An empty setup
+    is a test that no transducer recorded: whether its record agrees is the
+    reduction's question (:mod:`rocklab.lab.reduction`).
 
     Parameters
     ----------
@@ -344,7 +346,7 @@ def read_tests(campaign_dir, specimens=None, setups=None) -> TestLog:
             )
         if problem is None and row.specimen not in known_spec and bad_spec.reason(row.specimen):
             problem = f"specimen {row.specimen!r} refused: {bad_spec.reason(row.specimen)}"
-        elif problem is None and row.setup not in known_setup and bad_setup.reason(row.setup):
+        elif problem is None and row.setup and row.setup not in known_setup and bad_setup.reason(row.setup):
             problem = f"setup {row.setup!r} refused: {bad_setup.reason(row.setup)}"
         elif problem is None:
             problem = _row_problem(root, row, known_spec, known_setup)
@@ -392,7 +394,8 @@ def _row_problem(root, row, known_spec, known_setup) -> str | None:
     """What makes a row of tests.csv unreadable by itself (None when nothing)."""
     if row.specimen not in known_spec:
         return f"unknown specimen {row.specimen!r} (not in specimens.csv)"
-    if row.setup not in known_setup:
+    # no setup: a test no transducer recorded (its record says so, rocklab.lab.records)
+    if row.setup and row.setup not in known_setup:
         return f"unknown setup {row.setup!r} (not in setups.csv)"
     if row.boundary not in BOUNDARIES:
         return f"boundary {row.boundary!r} is not one of {', '.join(BOUNDARIES)}"

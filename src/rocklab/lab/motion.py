@@ -53,7 +53,7 @@ of release (``sign`` gives that side); velocities keep the sign of the input.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
@@ -64,6 +64,7 @@ from rocklab.lab import kinematics
 from rocklab.lab.channels import LOST_STATUSES
 from rocklab.lab.flight_fit import local_fit, model_value, model_velocity, odd_samples, root_tau, stationary_tau
 from rocklab.lab.release import screw_departure
+from rocklab.lab.rotation import unseen_impacts
 
 #: Group of a reduced test's netCDF file that holds its stored motion.
 MOTION_GROUP = "motion"
@@ -429,6 +430,8 @@ def monitor_readings(ds):
         Channel number, measured and rigid-body elongation [mm] on ``time``;
         None when the setup has no working monitor channel.
     """
+    if "channel_role" not in ds:  # a test no transducer recorded
+        return None
     role = ds.channel_role.values.astype(str)
     status = ds.channel_status.values.astype(str)
     k = np.flatnonzero((role == "monitor") & ~np.isin(status, LOST_STATUSES))
@@ -513,7 +516,9 @@ def stored_motion(ds) -> xr.Dataset:
     :data:`TEST_ATTRS`, and ``centre_amplification``: the largest |reading|
     of the monitor channel after the first impact over that of the
     rigid-body motion (:func:`monitor_readings`,
-    :func:`centre_amplification`; NaN without a working monitor).  A test
+    :func:`centre_amplification`; NaN without a working monitor).  The
+    impacts of a rotation record that fell on a lost stretch keep no
+    velocities (:func:`rocklab.lab.rotation.unseen_impacts`).  A test
     with no rotation (unreadable) or no motion found keeps the reason in
     ``motion_error`` instead of the motion.
 
@@ -531,6 +536,12 @@ def stored_motion(ds) -> xr.Dataset:
         m = extract_motion(ds.time.values, ds.theta.values, float(a["sampling_rate_hz"]), a["boundary"], float(a["p"]))
     except ValueError as exc:
         return xr.Dataset(attrs={**_cf_attrs(attrs), **attrs, "motion_error": str(exc)})
+    if "theta_lost" in ds and len(m.impacts):
+        # an impact on a lost stretch of a rotation record was not measured: its velocities would be the bridge's
+        unseen = unseen_impacts(m.impacts.t_s, m.impacts.t_after_s, ds.time.values, ds.theta_lost.values.astype(bool))
+        impacts = m.impacts.copy()
+        impacts.loc[unseen, ["thetadot_before", "thetadot_after", "e_velocity"]] = np.nan
+        m = replace(m, impacts=impacts)
     amp = np.nan
     mon = monitor_readings(ds)
     if mon is not None and np.isfinite(m.t_first_impact):

@@ -5,6 +5,11 @@ Composes :mod:`rocklab.lab.campaign` and :mod:`rocklab.lab.records`
 :mod:`rocklab.lab.kinematics` (four degrees of freedom) and
 :mod:`rocklab.lab.validity` (the lab's rules) into one ``xarray.Dataset`` per
 test with CF-style attributes, and turns a set of them into the QC table.
+A test recorded by another instrument (its record's ``# record:``) is
+reduced by :mod:`rocklab.lab.rotation` or :mod:`rocklab.lab.inertial`
+to the same variables (``theta``, ``phi``, ``v``, ``w`` on ``time``) and
+judged by the same rules, so that everything downstream runs unchanged;
+``instrument`` says which (:data:`rocklab.lab.instrument.QC_COLUMNS`).
 """
 
 from __future__ import annotations
@@ -21,10 +26,19 @@ import xarray as xr
 
 from rocklab.io import cf_attrs
 from rocklab.lab import channels as health
-from rocklab.lab import kinematics, release, validity
+from rocklab.lab import inertial, instrument, kinematics, release, rotation, validity
 from rocklab.lab.campaign import TEST_COLUMNS, Campaign, row_series
+from rocklab.lab.motion import noise_level
 from rocklab.lab.raw_format import RawFormatError
-from rocklab.lab.records import read_record
+from rocklab.lab.records import (
+    INERTIAL_COLUMNS,
+    TRANSDUCERS,
+    InertialRecord,
+    Record,
+    RotationRecord,
+    check_sensor,
+    read_any_record,
+)
 from rocklab.physics import wall
 
 log = logging.getLogger(__name__)
@@ -43,6 +57,7 @@ QC_COLUMNS = [
     "channels_used",
     "flags",
     *validity.FAULT_COLUMNS,
+    *instrument.QC_COLUMNS,
 ]
 
 
@@ -121,8 +136,12 @@ def _row_metadata(campaign: Campaign, test_id: str) -> dict:
     return {"test_id": test_id, "specimen": row.specimen, "series": "", "boundary": row.boundary}
 
 
-#: CF ``source`` of a reduced test.
-SOURCE = "laboratory free-rocking test, displacement transducers"
+#: CF ``source`` of a reduced test, by the instrument that recorded it.
+SOURCE = {
+    TRANSDUCERS: "laboratory free-rocking test, displacement transducers",
+    "rotation": "laboratory free-rocking test, rotation record (motion capture, inclinometer or video)",
+    "inertial": "laboratory free-rocking test, gyroscope and accelerometer on the wall",
+}
 
 
 def _unreadable(meta: dict, error: Exception) -> xr.Dataset:
@@ -138,8 +157,8 @@ def _unreadable(meta: dict, error: Exception) -> xr.Dataset:
     return ds
 
 
-def _cf_attrs(test_id):
-    return cf_attrs(f"rocklab reduction of test {test_id}", SOURCE)
+def _cf_attrs(test_id, kind=TRANSDUCERS):
+    return cf_attrs(f"rocklab reduction of test {test_id}", SOURCE[kind])
 
 
 def reduce_test(campaign: Campaign, test_id: str, options=None) -> xr.Dataset:
@@ -164,9 +183,57 @@ def reduce_test(campaign: Campaign, test_id: str, options=None) -> xr.Dataset:
     path = campaign.record_path(test_id)
     meta["source_file"] = str(path)
     try:
-        rec = read_record(path, expected_test_id=test_id)
+        rec = read_any_record(path, expected_test_id=test_id)
+        if isinstance(rec, InertialRecord):
+            check_sensor(rec, meta["length_mm"], meta["height_mm"], meta["thickness_mm"])
     except RawFormatError as exc:
         return _unreadable(meta, exc)
+    if not isinstance(rec, Record):
+        return _reduce_instrument(meta, rec, opt)
+    if not meta["setup"]:
+        return _unreadable(
+            meta, RawFormatError(path, None, "a transducer record, but tests.csv gives the test no setup")
+        )
+    return _reduce_transducers(campaign, meta, rec, opt)
+
+
+#: CF ``long_name`` of the wall's degrees of freedom in a reduced test, whatever the instrument.
+DOF_LONG_NAMES = {
+    "theta": "rocking rotation about the active base edge (Eqs. 3-7)",
+    "phi": "twist about the vertical axis",
+    "v": "base sliding along x",
+    "w": "base sliding along y",
+}
+
+
+#: CF ``long_name`` of the top corners' displacement of a reduced test (the out-of-plumb rule).
+TOP_Y_LONG_NAME = "y displacement of the top corners (x = -L/2, +L/2)"
+
+
+def _judged(meta: dict, time, fs, theta, phi, v, w, malfunction, rules) -> tuple[dict, np.ndarray]:
+    """The lab's rules on a test's motion (:mod:`rocklab.lab.validity`), whatever the instrument:
+    the verdict and the numbers it rests on, as attributes of the reduced test, and the y
+    displacement of the top corners [mm] (N, 2) that the out-of-plumb is read from."""
+    top = validity.top_displacement(theta, phi, v, w, meta["length_mm"], meta["height_mm"], meta["thickness_mm"])
+    residual = validity.residual_out_of_plumb(top, fs)
+    state = release.release_state(time, theta, meta["p"])
+    ratio = state["thetadot0"] / meta["overturning_velocity"]
+    valid, reason, detail = validity.verdict(malfunction, ratio, residual, rules)
+    return {
+        "valid": int(valid),
+        "reject_reason": reason,
+        "reject_detail": detail or "",
+        "residual_top_mm": residual,
+        "release_velocity_ratio": ratio,
+        "t_release": state["t_release"],
+        "theta0_release": state["theta0"],
+        "alpha_fit_release": state["alpha_fit"],
+    }, top
+
+
+def _reduce_transducers(campaign: Campaign, meta: dict, rec: Record, opt: dict) -> xr.Dataset:
+    """:func:`reduce_test` of a transducer record: channel health, four-DOF kinematics, the lab's rules."""
+    test_id, path = meta["test_id"], rec.path
     described = campaign.setup(meta["setup"])
     missing = sorted(set(rec.channels) - set(described.channel))
     if missing:
@@ -205,19 +272,8 @@ def reduce_test(campaign: Campaign, test_id: str, options=None) -> xr.Dataset:
         solve_v=choice.solve_v,
     )
 
-    top = validity.top_displacement(
-        motion.theta.values,
-        motion.phi.values,
-        motion.v.values,
-        motion.w.values,
-        meta["length_mm"],
-        meta["height_mm"],
-        meta["thickness_mm"],
-    )
-    residual = validity.residual_out_of_plumb(top, rec.fs)
-    state = release.release_state(rec.time, motion.theta.values, meta["p"])
-    ratio = state["thetadot0"] / meta["overturning_velocity"]
-    valid, reason, detail = validity.verdict(choice, ratio, residual, opt["validity"])
+    dof = [motion[k].values for k in DOF_LONG_NAMES]
+    judged, top = _judged(meta, rec.time, rec.fs, *dof, choice.malfunction, opt["validity"])
 
     flags = [d for d in (r.describe() for r in reports) if d] + choice.flags
     # the channel variables in one assign: each added one by one is a merge
@@ -272,13 +328,11 @@ def reduce_test(campaign: Campaign, test_id: str, options=None) -> xr.Dataset:
     channel_vars["top_y"] = (
         ("time", "corner"),
         top,
-        {"units": "mm", "long_name": "y displacement of the top corners (x = -L/2, +L/2)"},
+        {"units": "mm", "long_name": TOP_Y_LONG_NAME},
     )
     ds = motion.assign(channel_vars)
-    ds.theta.attrs.update(long_name="rocking rotation about the active base edge (Eqs. 3-7)")
-    ds.phi.attrs.update(long_name="twist about the vertical axis")
-    ds.v.attrs.update(long_name="base sliding along x")
-    ds.w.attrs.update(long_name="base sliding along y")
+    for k, long_name in DOF_LONG_NAMES.items():
+        ds[k].attrs.update(long_name=long_name)
     ds.residual_rms.attrs.update(long_name="root mean square residual of the kinematic fit over the used transducers")
     ds.n_channels.attrs.update(long_name="number of transducers in the kinematic fit", units="1")
     ds.converged.attrs.update(
@@ -294,14 +348,7 @@ def reduce_test(campaign: Campaign, test_id: str, options=None) -> xr.Dataset:
         **_cf_attrs(test_id),
         sha256=rec.sha256,
         sampling_rate_hz=rec.fs,
-        valid=int(valid),
-        reject_reason=reason,
-        reject_detail=detail or "",
-        residual_top_mm=residual,
-        release_velocity_ratio=ratio,
-        t_release=state["t_release"],
-        theta0_release=state["theta0"],
-        alpha_fit_release=state["alpha_fit"],
+        **judged,
         channels_used=" ".join(f"ch{c}" for c in choice.used),
         flags="; ".join(flags),
         **validity.channel_faults(reports, choice),
@@ -309,6 +356,41 @@ def reduce_test(campaign: Campaign, test_id: str, options=None) -> xr.Dataset:
         residual_rms_median_mm=float(np.nanmedian(ds.residual_rms.values))
         if np.isfinite(ds.residual_rms.values).any()
         else np.nan,
+        instrument=TRANSDUCERS,
+    )
+    return ds
+
+
+def _reduce_instrument(meta: dict, rec: RotationRecord | InertialRecord, opt: dict) -> xr.Dataset:
+    """:func:`reduce_test` of a rotation or inertial record: the instrument's motion, the lab's rules."""
+    if isinstance(rec, RotationRecord):
+        kind, m = "rotation", rotation.rotation_motion(rec, meta["alpha"], noise_level)
+        used = " ".join(f"{k}_{'rad' if k in ('theta', 'phi') else 'mm'}" for k in rec.dof)
+    else:
+        kind, m = "inertial", inertial.inertial_motion(rec, meta["alpha"], meta["p"])
+        used = " ".join(INERTIAL_COLUMNS)
+    units = {"theta": "rad", "phi": "rad", "v": "mm", "w": "mm"}
+    dof = [getattr(m, k) for k in DOF_LONG_NAMES]
+    data = {k: ("time", x, {"units": units[k], "long_name": DOF_LONG_NAMES[k]}) for k, x in zip(DOF_LONG_NAMES, dof)}
+    ds = xr.Dataset(
+        {**data, **m.variables},
+        coords={"time": ("time", rec.time, {"long_name": "time since the start of the record", "units": "s"})},
+    )
+    b = meta["thickness_mm"]
+    judged, top = _judged(meta, rec.time, rec.fs, *dof, m.malfunction, opt["validity"])
+    ds["top_y"] = (("time", "corner"), top, {"units": "mm", "long_name": TOP_Y_LONG_NAME})
+    ds.attrs.update({k: v for k, v in meta.items() if not (isinstance(v, float) and np.isnan(v))})
+    ds.attrs.update(
+        **_cf_attrs(meta["test_id"], kind),
+        sha256=rec.sha256,
+        sampling_rate_hz=rec.fs,
+        **judged,
+        channels_used=used,
+        flags="; ".join(m.flags),
+        **{**validity.NO_FAULTS, **m.faults, "in_plane_lost": int("v" not in getattr(rec, "dof", {}))},
+        **{f"peak_{k}": v for k, v in kinematics.normalised_peaks(m.theta, m.phi, m.v, m.w, meta["alpha"], b).items()},
+        **{**instrument.NO_VALUES, **m.attrs},
+        instrument=kind,
     )
     return ds
 
@@ -351,6 +433,8 @@ def qc_row(ds: xr.Dataset) -> dict:
         "flags": a.get("flags", ""),
         **{c: a.get(c, validity.NO_FAULTS[c]) for c in validity.FAULT_COLUMNS},
         "in_plane_lost": bool(a.get("in_plane_lost", 0)),
+        "instrument": a.get("instrument", ""),
+        **{c: a.get(c, v) for c, v in instrument.NO_VALUES.items()},
     }
 
 
@@ -377,6 +461,8 @@ def qc_table(datasets, campaign: Campaign) -> pd.DataFrame:
                     "flags": "",
                     **validity.NO_FAULTS,
                     "in_plane_lost": False,
+                    "instrument": "",
+                    **instrument.NO_VALUES,
                 }
             )
     seen = set()

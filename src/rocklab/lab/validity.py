@@ -234,12 +234,14 @@ def residual_out_of_plumb(top_y, fs, tail_s=1.0):
     return float(np.nanmax(np.abs(np.nanmedian(tail, axis=0))))
 
 
-def verdict(choice: ChannelChoice, release_ratio, residual_top_mm, rules=RULES) -> tuple[bool, str, str]:
+def verdict(malfunction, release_ratio, residual_top_mm, rules=RULES) -> tuple[bool, str, str]:
     """Valid flag, reject reason and its explanation by the lab's rules.
 
     Parameters
     ----------
-    choice : ChannelChoice
+    malfunction : str or None
+        Why the instruments are lost (:attr:`ChannelChoice.malfunction`, or
+        :attr:`rocklab.lab.instrument.InstrumentMotion.malfunction`), None when they work.
     release_ratio : float
         Release angular velocity over Eq. 16.
     residual_top_mm : float
@@ -247,8 +249,8 @@ def verdict(choice: ChannelChoice, release_ratio, residual_top_mm, rules=RULES) 
     rules : dict
         ``residual_top_mm``, ``release_velocity_ratio`` (config ``validity``).
     """
-    if choice.malfunction:
-        return False, Verdict.INSTRUMENT_MALFUNCTION, choice.malfunction
+    if malfunction:
+        return False, Verdict.INSTRUMENT_MALFUNCTION, malfunction
     if not np.isfinite(release_ratio):
         return False, Verdict.DISTURBED_INITIAL_CONDITIONS, "no undisturbed fall from the held rotation found"
     if release_ratio > rules["release_velocity_ratio"]:

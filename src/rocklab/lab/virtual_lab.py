@@ -18,7 +18,7 @@ Lengths of the record in mm, dynamics in SI (m, s, rad).
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +30,15 @@ from rocklab.lab.validity import (
     RESIDUAL_TOP_MM,
     Verdict,
     channel_roles,
+)
+from rocklab.lab.virtual_instruments import (
+    InertialEffects,
+    RotationEffects,
+    inertial_readings,
+    instrument_fault,
+    rotation_readings,
+    sensor_point,
+    write_instrument_record,
 )
 from rocklab.lab.virtual_record import (
     LOSING_FAULTS,
@@ -92,6 +101,12 @@ class VirtualTest:
     log : dict
         Further columns of the test's row of tests.csv (column -> value: a
         date, a temperature the operator wrote, ...).
+    instrument : {'transducers', 'rotation', 'inertial'}
+        What records the test (:mod:`rocklab.lab.virtual_instruments`): the
+        same true motion whatever it is.  A rotation or inertial test has no
+        setup; its ``faults`` are of :data:`rocklab.lab.virtual_instruments.INSTRUMENT_FAULTS`.
+    rotation, inertial : RotationEffects, InertialEffects
+        What the motion-capture system and the inertial sensor do to the motion.
     """
 
     test_id: str
@@ -110,15 +125,23 @@ class VirtualTest:
     effects: Effects = field(default_factory=Effects)
     note: str = ""
     log: dict = field(default_factory=dict)
+    instrument: str = "transducers"
+    rotation: RotationEffects = field(default_factory=RotationEffects)
+    inertial: InertialEffects = field(default_factory=InertialEffects)
 
     @property
     def setup(self) -> str:
+        """The transducer setup of the test (none for the other instruments)."""
+        if self.instrument != "transducers":
+            return ""
         bc = "2s" if self.boundary == "two-sided" else f"1s-cd{self.contact_depth_mm:g}"
         return f"S-{self.specimen}-{bc}"
 
 
-def expected_verdict(faults, layout, thickness_mm, release_ratio, residual_top_mm):
+def expected_verdict(faults, layout, thickness_mm, release_ratio, residual_top_mm, instrument="transducers"):
     """Verdict the lab's rules give a test, from what was injected.
+
+    A rotation or inertial test is lost by a dead or clipped instrument, whatever its ``layout``.
 
     Returns
     -------
@@ -128,11 +151,16 @@ def expected_verdict(faults, layout, thickness_mm, release_ratio, residual_top_m
     """
     if any(f.kind == "unreadable" for f in faults):
         return Verdict.UNREADABLE, "file truncated"
-    roles = channel_roles(layout, thickness_mm)
-    oop = set(roles.channel[roles.role == "out_of_plane"])
-    lost = sorted({f.channel for f in faults if f.kind in LOSING_FAULTS} & oop)
-    if len(lost) > MAX_LOST_OUT_OF_PLANE:
-        return Verdict.INSTRUMENT_MALFUNCTION, f"{len(lost)} out-of-plane channels lost ({lost})"
+    if instrument != "transducers":
+        lost = [f.kind for f in faults if f.kind in LOSING_FAULTS]
+        if lost:
+            return Verdict.INSTRUMENT_MALFUNCTION, f"{instrument} instrument {lost[0]}"
+    else:
+        roles = channel_roles(layout, thickness_mm)
+        oop = set(roles.channel[roles.role == "out_of_plane"])
+        lost = sorted({f.channel for f in faults if f.kind in LOSING_FAULTS} & oop)
+        if len(lost) > MAX_LOST_OUT_OF_PLANE:
+            return Verdict.INSTRUMENT_MALFUNCTION, f"{len(lost)} out-of-plane channels lost ({lost})"
     if release_ratio > RELEASE_VELOCITY_RATIO:
         return Verdict.DISTURBED_INITIAL_CONDITIONS, f"release velocity {release_ratio:.0%} of Eq. 16"
     if abs(residual_top_mm) > RESIDUAL_TOP_MM:
@@ -201,7 +229,7 @@ def simulate_virtual_test(test: VirtualTest, specimen, layout, rng=None, t_end=4
         impacts=hist.impacts,
         t_rest=t_rest,
         effects=test.effects,
-        faults=test.faults,
+        faults=test.faults if test.instrument == "transducers" else (),
         residual_top_mm=test.residual_top_mm,
         residual_kind=test.residual_kind,
         rng=rng,
@@ -212,8 +240,17 @@ def simulate_virtual_test(test: VirtualTest, specimen, layout, rng=None, t_end=4
     # a one-sided wall with a gap rocks on the base impacts of Eq. 2
     e_an = restitution.analytic("one-sided" if one and model.gap == 0 else "two-sided", alpha)
     reason, why = expected_verdict(
-        test.faults, layout, specimen["thickness_mm"], test.release_ratio, truth["residual_top_mm"]
+        test.faults, layout, specimen["thickness_mm"], test.release_ratio, truth["residual_top_mm"], test.instrument
     )
+    if test.instrument == "rotation":
+        E = rotation_readings(t, truth["theta"], truth["phi"], truth["v"], truth["w"], test.rotation, rng)
+    elif test.instrument == "inertial":
+        truth["sensor_mm"] = sensor_point(specimen, test.inertial)
+        E, truth["gyro_bias_rad_s"] = inertial_readings(
+            t, truth["theta"], truth["sensor_mm"], specimen["thickness_mm"], test.inertial, rng
+        )
+    for f in test.faults if test.instrument != "transducers" else ():
+        instrument_fault(E, f.kind, rng, f.level)
     truth.update(
         {
             "alpha": alpha,
@@ -231,6 +268,9 @@ def simulate_virtual_test(test: VirtualTest, specimen, layout, rng=None, t_end=4
             "form": model.form,
             "e_first": float(ratios[0]) if ratios.size else np.nan,
             "e_true": float(np.median(ratios)) if ratios.size else np.nan,
+            "impacts": pd.DataFrame(
+                {"t": base["t"].to_numpy(float) + truth["t_release"], "e": ratios} if len(base) else {"t": [], "e": []}
+            ),
             "e_analytic": float(e_an),
             "n_impacts": int(len(imp)),
             "overturned": bool(hist.overturned),
@@ -284,22 +324,20 @@ def write_campaign(out_dir, tests, specimens=None, layouts=None, seed=0, t_end=4
     streams = np.random.SeedSequence(seed).spawn(len(tests))
     for test, ss in zip(tests, streams):
         sp = spec.loc[test.specimen]
-        if test.setup not in layouts:
-            layouts[test.setup] = usual_layout(
-                test.setup, sp.length_mm, sp.height_mm, sp.thickness_mm, test.boundary == "one-sided"
-            )
-        layout = layouts[test.setup]
+        # the transducers' layout of a test that other instruments record: the same true motion, not written
+        key = test.setup or replace(test, instrument="transducers").setup
+        if key not in layouts:
+            layouts[key] = usual_layout(key, sp.length_mm, sp.height_mm, sp.thickness_mm, test.boundary == "one-sided")
+        layout = layouts[key]
         t, E, truth = simulate_virtual_test(test, sp, layout, np.random.default_rng(ss), t_end)
         rel = f"tests/{test.test_id}.csv.gz"
-        write_record(
-            out / rel,
-            test.test_id,
-            test.fs,
-            t,
-            E,
-            layout.channel.tolist(),
-            unreadable=any(f.kind == "unreadable" for f in test.faults),
-        )
+        unreadable = any(f.kind == "unreadable" for f in test.faults)
+        if test.instrument == "transducers":
+            write_record(out / rel, test.test_id, test.fs, t, E, layout.channel.tolist(), unreadable=unreadable)
+        else:
+            write_instrument_record(
+                out / rel, test.test_id, test.instrument, test.fs, t, E, truth.get("sensor_mm"), unreadable
+            )
         rows.append(
             {
                 "test_id": test.test_id,
@@ -320,6 +358,8 @@ def write_campaign(out_dir, tests, specimens=None, layouts=None, seed=0, t_end=4
                 "boundary": test.boundary,
                 "direction": test.direction,
                 "fs": test.fs,
+                "instrument": test.instrument,
+                "gyro_bias_rad_s": truth.get("gyro_bias_rad_s", np.nan),
                 "theta0": truth["theta0"],
                 "thetadot0": truth["thetadot0"],
                 "release_ratio": test.release_ratio,
@@ -353,8 +393,11 @@ def write_campaign(out_dir, tests, specimens=None, layouts=None, seed=0, t_end=4
             }
         )
     specimens.to_csv(out / "specimens.csv", index=False)
-    used = {t.setup for t in tests}
-    pd.concat([layouts[s] for s in sorted(used)], ignore_index=True).to_csv(out / "setups.csv", index=False)
+    used = sorted({t.setup for t in tests if t.setup})
+    columns = usual_layout("", 1, 1, 1, False).columns
+    pd.concat([layouts[s] for s in used] or [pd.DataFrame(columns=columns)], ignore_index=True).to_csv(
+        out / "setups.csv", index=False
+    )
     pd.DataFrame(rows).to_csv(out / "tests.csv", index=False)
     truth = pd.DataFrame(truths)
     truth.to_csv(out / "truth.csv", index=False)

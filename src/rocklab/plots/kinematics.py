@@ -28,9 +28,15 @@ def transducer_velocity(x, fs, window_s=0.025):
 
 
 def sample_record(ds, channel=3):
-    """Fig. 6: a transducer's record and its numerically derived velocity."""
-    ch = int(channel) if channel in ds.channel.values else int(ds.channel.values[0])
-    x = ds.elongation.sel(channel=ch).values
+    """Fig. 6: a transducer's record and its numerically derived velocity (a test that no transducer
+    recorded: its rotation theta, as its rotation or inertial record gave it)."""
+    if "elongation" in ds:
+        ch = int(channel) if channel in ds.channel.values else int(ds.channel.values[0])
+        x = ds.elongation.sel(channel=ch).values
+        what, unit = f"Δl, transducer {ch}", "mm"
+    else:
+        x = ds.theta.values
+        what, unit = f"θ, {ds.attrs.get('instrument', '')} record", "rad"
     t = ds.time.values
     fs = float(ds.attrs["sampling_rate_hz"])
     ok = np.isfinite(x)
@@ -39,13 +45,13 @@ def sample_record(ds, channel=3):
     fig, axes = plt.subplots(2, 1, figsize=(8, 6))
     t_rel = float(ds.attrs.get("t_release", t[0]))
     for ax, window in zip(axes, [(t[0], t[-1]), (t_rel - 0.5, t_rel + 2.5)]):
-        ax.plot(t, x, "--", color="k", lw=0.8, label=f"Δl, transducer {ch} [mm]")
+        ax.plot(t, x, "--", color="k", lw=0.8, label=f"{what} [{unit}]")
         ax2 = ax.twinx()
-        ax2.plot(t, v, color="C0", lw=0.8, label="velocity [mm/s]")
+        ax2.plot(t, v, color="C0", lw=0.8, label=f"velocity [{unit}/s]")
         ax.set_xlim(*window)
         ax.set_xlabel("t [s]")
-        ax.set_ylabel("Δl [mm]")
-        ax2.set_ylabel("dΔl/dt [mm/s]")
+        ax.set_ylabel(f"{what.split(',')[0]} [{unit}]")
+        ax2.set_ylabel(f"d{what.split(',')[0]}/dt [{unit}/s]")
     axes[0].set_title(f"Fig. 6 - test {ds.attrs['test_id']} ({ds.attrs['series']}); b: zoom on the motion")
     fig.set_layout_engine("tight")
     return fig

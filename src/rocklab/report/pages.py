@@ -33,6 +33,7 @@ from rocklab import summaries
 from rocklab.benchmarks import performance_summary
 from rocklab.diagnosis.summary import TOLERANCES as FIT_TOLERANCES
 from rocklab.dissipation.summary import CAMPAIGN_LEVEL_TOLERANCES
+from rocklab.lab.accuracy import TOLERANCES as ACCURACY_TOLERANCES
 from rocklab.report.format import NOT_MEASURED, show
 from rocklab.report.tables import TABLES
 from rocklab.seismic.summary import TOLERANCES as MAP_TOLERANCES
@@ -48,6 +49,7 @@ SECTIONS = {
     "maps": MAP_TOLERANCES,
     "calibrated": MAP_TOLERANCES,
     "shake_table": {},
+    "instruments": ACCURACY_TOLERANCES,
 }
 
 #: Sections left out of the comparison of two numbers files: those whose values

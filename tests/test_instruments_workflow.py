@@ -1,0 +1,81 @@
+"""Campaigns of other instruments through the workflow's `campaign` target: a mixed one (transducer,
+rotation and inertial tests of the same walls), every valid test of each kind read, judged valid and
+carried to the dissipation; and one without transducers at all."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from rocklab.lab import virtual_lab as vl
+
+ROOT = Path(__file__).resolve().parents[1]
+SNAKEMAKE = Path(sys.executable).with_name("snakemake")
+INSTRUMENTS = {"transducers": 400.0, "rotation": 240.0, "inertial": 1000.0}
+
+
+def _campaign_target(tmp_path, plan):
+    """Write ``plan`` as a campaign and run the `campaign` target on it (a working directory of its own);
+    its truth and its results folder."""
+    folder, results = tmp_path / "campaign", tmp_path / "results"
+    truth = vl.write_campaign(folder, plan, seed=11).set_index("test_id")
+    cmd = [
+        str(SNAKEMAKE),
+        "campaign",
+        "--cores",
+        "1",
+        "--snakefile",
+        str(ROOT / "Snakefile"),
+        "--directory",
+        str(tmp_path),
+        "--config",
+        f"raw_dir={folder}",
+        f"results_dir={results}",
+        "figures={'fig9_specimen': '1a'}",
+    ]
+    env = {**os.environ, "PYTHONWARNINGS": "ignore"}
+    run = subprocess.run(cmd, capture_output=True, text=True, cwd=tmp_path, env=env)
+    assert run.returncode == 0, run.stderr[-3000:]
+    return truth, results
+
+
+@pytest.mark.skipif(not SNAKEMAKE.exists(), reason="snakemake not installed beside this interpreter")
+def test_a_mixed_campaign_runs_through_the_campaign_target(tmp_path):
+    plan = [
+        vl.VirtualTest(
+            f"{kind[0].upper()}{spec}{k}", specimen=spec, fs=fs, instrument=kind, theta0_ratio=0.99 + 0.004 * k
+        )
+        for spec in ("1a", "2a")
+        for kind, fs in INSTRUMENTS.items()
+        for k in range(2)
+    ]
+    plan.append(vl.VirtualTest("Rdead", specimen="1a", fs=240.0, instrument="rotation", faults=[vl.Fault("dead")]))
+    truth, results = _campaign_target(tmp_path, plan)
+    qc = pd.read_csv(results / "qc.csv", keep_default_na=False).set_index("test_id")
+    assert qc.instrument.to_dict() == truth.instrument.to_dict()
+    assert qc.valid.to_dict() == truth.expected_valid.to_dict()
+    assert qc.reject_reason["Rdead"] == "instrument_malfunction" and qc.channels_dead["Rdead"] == "theta_rad"
+    tests = pd.read_csv(results / "tests.csv").set_index("test_id")
+    valid = truth.index[truth.expected_valid]
+    assert set(tests.index) == set(valid)
+    # the same walls give the same restitution whatever recorded them
+    e = tests.e_exp_eq11.groupby(truth.instrument[valid].reindex(tests.index)).median()
+    assert (e.max() - e.min()) < 0.01, e
+    assert (results / "diagnosis.json").is_file()
+
+
+@pytest.mark.skipif(not SNAKEMAKE.exists(), reason="snakemake not installed beside this interpreter")
+def test_a_campaign_without_transducers_runs_through_the_campaign_target(tmp_path):
+    """A lab without the transducer frame: no setup, no setup in setups.csv; Figs. 6, 8 and 9 draw its theta."""
+    plan = [
+        vl.VirtualTest(f"{kind[0].upper()}{k}", specimen="1a", fs=fs, instrument=kind, theta0_ratio=0.99 + 0.002 * k)
+        for kind, fs in (("rotation", 100.0), ("inertial", 500.0))
+        for k in range(3)
+    ]
+    truth, results = _campaign_target(tmp_path, plan)
+    qc = pd.read_csv(results / "qc.csv", keep_default_na=False).set_index("test_id")
+    assert qc.valid.all() and set(qc.instrument) == {"rotation", "inertial"}
+    assert list((results / "figures").glob("fig06*")), sorted(p.name for p in (results / "figures").iterdir())
