@@ -21,6 +21,8 @@ RESULTS = Path(config["results_dir"])
 # Every row checked at the door (docs/raw-format.md): a refused row is a row
 # of qc.csv, and no id or path of the tables names a file outside the two folders.
 CAMPAIGN = open_campaign(RAW)
+#: The wall of each specimen (the unit of a wall's properties, rocklab.lab.hierarchy).
+WALL_OF_SPECIMEN = CAMPAIGN.specimens.set_index("specimen").wall.astype(str).to_dict()
 #: The tests with a results file of their own (safe ids, first row of each).
 TEST_IDS = CAMPAIGN.test_ids
 # the tests and records the config names become file names too

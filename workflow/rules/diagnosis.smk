@@ -176,7 +176,7 @@ rule campaign_effects:
     benchmark:
         res("benchmarks", "campaign_effects.tsv")
     params:
-        margin=DIAGNOSIS["campaign_margin"],
+        walls=WALL_OF_SPECIMEN,
         schema=schema_path("campaign_effects.schema.yaml"),
     script:
         "../../scripts/campaign_effects.py"

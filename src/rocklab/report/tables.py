@@ -10,6 +10,7 @@ from __future__ import annotations
 import functools
 from collections.abc import Callable, Mapping
 
+from rocklab.lab.hierarchy import plural
 from rocklab.lab.validity import Verdict
 from rocklab.report.format import NOT_MEASURED, show
 
@@ -198,13 +199,15 @@ def campaign_statements(n: Mapping) -> str:
             f"{e['boundary']}: {e['response']}, {e['covariate'] if e['covariate'] != 'mean' else 'its mean'}",
             e["claim"],
             f"{e['term']}: {_effect_cell(e)}" if e["term"] else _effect_cell(e),
-            show(e["p"], ".2g"),
-            f"{show(e['n_series'])} ({show(e['n_tests'])})",
+            show(e["p_holm"], ".2g"),
+            f"{plural(e['unit_level'], e['n_units'])} ({show(e['n_series'])}, {show(e['n_tests'])})",
             f"**{e['verdict']}**",
         ]
         for e in (c["statements"][key] for key in c["order"])
     ]
-    header = ["the paper", "parameter, covariate", "claim", "effect [95 % CI]", "p", "series (tests)", "verdict"]
+    header = [
+        "the paper", "parameter, covariate", "claim", "effect [95 % CI]", "Holm p", "units (series, tests)", "verdict",
+    ]  # fmt: skip
     return markdown_table(header, rows)
 
 
