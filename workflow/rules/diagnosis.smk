@@ -69,7 +69,7 @@ checkpoint diagnosis:
         res("benchmarks", "diagnosis.tsv")
     priority: PRIORITY["campaign_chain"]
     params:
-        seed=DIAGNOSIS["seed"],
+        walls=WALL_OF_SERIES,
     script:
         "../../scripts/diagnosis.py"
 

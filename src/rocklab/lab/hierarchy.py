@@ -18,6 +18,8 @@ an interval, a test, a fold or a resample imports the level from here
 
 from __future__ import annotations
 
+from rocklab.lab.campaign import UNREADABLE
+
 #: The levels of the lab's campaign, finest first.
 LEVELS = ("impact", "test", "series", "specimen", "wall", "campaign")
 #: The levels of the limestone blocks (rocklab/data/uminho-limestone-free-rocking), finest first.
@@ -80,3 +82,18 @@ def too_few_units(level, n_units, df, per_level=None):
     if df < MIN_DF:
         return f"not testable: {plural(level, n_units)}, {df} residual df ({MIN_DF} needed)"
     return ""
+
+
+def walls_of_specimens(campaign):
+    """Specimen -> wall of a :class:`rocklab.lab.campaign.Campaign` (its specimens.csv)."""
+    return campaign.specimens.set_index("specimen").wall.astype(str).to_dict()
+
+
+def walls_of_series(campaign):
+    """Series -> wall of a :class:`rocklab.lab.campaign.Campaign`: the wall of the specimen of its tests."""
+    walls = walls_of_specimens(campaign)
+    return {
+        series: walls[campaign.test_row(ids[0]).specimen]
+        for series, ids in campaign.reduction_groups().items()
+        if series != UNREADABLE
+    }
