@@ -9,7 +9,7 @@ from snakemake.exceptions import WorkflowError
 
 from rocklab.config import check_names, check_paths, recorded_path
 from rocklab.lab.campaign import UNREADABLE, open_campaign
-from rocklab.lab.hierarchy import walls_of_series, walls_of_specimens
+from rocklab.lab.hierarchy import thickness_of_walls, walls_of_series, walls_of_specimens
 from rocklab.seismic import calibrated
 from rocklab.seismic.accelerograms import accelerogram_dir, read_manifest
 from rocklab.shake_table.records import check_dir
@@ -39,6 +39,8 @@ REDUCTION_JOB = {t: job for job, ids in REDUCTION_JOBS.items() for t in ids}
 SERIES_BY_BOUNDARY = {}
 #: The wall of each series (the unit of a boundary condition's pooled parameters).
 WALL_OF_SERIES = walls_of_series(CAMPAIGN)
+#: The thickness of each wall [m] (the size the findings were measured at, rocklab.seismic.calibrated).
+WALL_THICKNESS = thickness_of_walls(CAMPAIGN)
 for _series, _ids in TESTS_BY_SERIES.items():
     SERIES_BY_BOUNDARY.setdefault(CAMPAIGN.test_row(_ids[0]).boundary, []).append(_series)
 

@@ -70,6 +70,7 @@ checkpoint diagnosis:
     priority: PRIORITY["campaign_chain"]
     params:
         walls=WALL_OF_SERIES,
+        thickness=WALL_THICKNESS,
     script:
         "../../scripts/diagnosis.py"
 

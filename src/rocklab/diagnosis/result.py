@@ -309,7 +309,7 @@ class BoundaryDiagnosis(_Entry):
     extended models of the series that have one.
     """
 
-    _optional = frozenset({"extended", "too_small"})
+    _optional = frozenset({"extended", "too_small", "wall_thickness_m"})
     _nested = {"base": BaseRun, "findings": [PooledFinding]}
 
     scope: str
@@ -331,6 +331,7 @@ class BoundaryDiagnosis(_Entry):
     series_verdicts: dict[str, list[str]] = field(default_factory=dict)
     extended: dict[str, Any] | None = None
     too_small: str | None = None
+    wall_thickness_m: float | None = None
 
 
 def entry_of(d):

@@ -319,7 +319,7 @@ def _parameter_values(cause, name, usable, named):
     return out
 
 
-def diagnose_boundary(entries, boundary, *, walls=None):
+def diagnose_boundary(entries, boundary, *, walls=None, thickness=None):
     """One boundary condition from the diagnoses of its series.
 
     ``entries``: a :class:`~rocklab.diagnosis.result.CampaignDiagnosis` or
@@ -335,7 +335,10 @@ def diagnose_boundary(entries, boundary, *, walls=None):
     t interval (:func:`pooled_parameter`; ``ci_note`` says why there is
     none).  Each finding gives the ``n_series`` that named it, the
     ``n_units`` its parameters rest on and ``n_tests``.  Errors are
-    test-weighted means over all series.
+    test-weighted means over all series.  With ``thickness`` (wall ->
+    thickness [m]) the entry gives ``wall_thickness_m``, the mean over its
+    walls: the size the findings were measured at, for the maps' transfer
+    under absolute sizes (:mod:`rocklab.seismic.calibrated`).
     """
     ser = CampaignDiagnosis.of(entries).series_of(boundary)
     if not ser:
@@ -432,6 +435,8 @@ def diagnose_boundary(entries, boundary, *, walls=None):
         "series_verdicts": verdicts,
         **({"extended": {"statement": ext_statement, "n_series": len(extended)}} if ext_statement else {}),
     }
+    if walls is not None and thickness is not None:
+        out["wall_thickness_m"] = float(np.mean([thickness[w] for w in {walls[e.key] for e in ser}]))
     if not usable:
         out["too_small"] = (
             f"none of its {len(ser)} series has the {MIN_BOOTSTRAP} tests "
@@ -459,12 +464,12 @@ def diagnose_records(records, key, *, n_boot=40, n_history=2, seed=0):
     return diagnose_series(tests, key=str(key), n_boot=n_boot, n_history=n_history, seed=seed)
 
 
-def with_boundaries(entries, *, walls=None):
+def with_boundaries(entries, *, walls=None, thickness=None):
     """Series entries followed by one entry per boundary condition (:func:`diagnose_boundary`; ``walls``:
-    series -> wall)."""
+    series -> wall, ``thickness``: wall -> thickness [m])."""
     out = list(entries)
     for b in ("two-sided", "one-sided"):
-        e = diagnose_boundary(out, b, walls=walls)
+        e = diagnose_boundary(out, b, walls=walls, thickness=thickness)
         if e is not None:
             out.append(e)
     return out

@@ -97,3 +97,9 @@ def walls_of_series(campaign):
         for series, ids in campaign.reduction_groups().items()
         if series != UNREADABLE
     }
+
+
+def thickness_of_walls(campaign):
+    """Wall -> its thickness [m] of a :class:`rocklab.lab.campaign.Campaign` (the mean over its specimens)."""
+    spec = campaign.specimens.assign(wall=campaign.specimens.wall.astype(str))
+    return (spec.groupby("wall").thickness_mm.mean() / 1000.0).to_dict()

@@ -293,6 +293,9 @@ def calibrated_walls(n: Mapping) -> str:
                 "",
             ]
         )
+        if c.get("sizes"):
+            z = c["sizes"]
+            rows.append([f"`{z['model']}` (absolute sizes)", show(z["N_O"], ".3f"), show(z["scatter"], ".3f"), "", ""])
         for finding, f in sorted(c["findings"].items(), key=lambda item: item[1]["rank"]):
             rows.append(
                 [
