@@ -456,6 +456,8 @@ def tiny_results(tmp_path):
                     "slope": 0.6,
                     "slope_se": 0.1,
                     "p": 0.01,
+                    "n_groups": 2,
+                    "n_trials": 4,
                     "levels": {"4": 1.02, "15": 0.97},
                 },
             }
