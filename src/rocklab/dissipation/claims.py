@@ -5,8 +5,9 @@ The paper's statements (:data:`PAPER_CLAIMS`, data:
 :mod:`rocklab.dissipation.covariates` are judged here (:func:`verdict`),
 with one rule for the margin of every "no effect" and "close to" statement
 (:func:`margin_of`): the smallest effect worth naming of the catalogue
-parameter the response is, the smallest change that alters a simulated
-wall by what the diagnosis resolves (issue 24, item 2).  With one margin
+parameter the response is, the departure of the simulated wall's
+parameter from its null below which the diagnosis names no cause
+(issue 24, item 2).  With one margin
 per quantity, two claims on one mean further apart than twice it (the
 ratio "close to one" and "on average 0.93") cannot both be supported.
 """
@@ -149,8 +150,9 @@ def margin_of(response):
     (``practical``) of the catalogue parameter the response is (e_exp/e_an is
     the restitution scale c, theta0/alpha the instability angle
     alpha_r/alpha, :data:`RESPONSE_PARAMETER`; a diagnosis response
-    ``<cause>.<parameter>`` is that parameter): the smallest departure that
-    changes a simulated wall by more than the diagnosis resolves.  NaN for a
+    ``<cause>.<parameter>`` is that parameter): the departure of the
+    simulated wall's parameter below which the diagnosis names no cause
+    (docs/diagnosis-method.md, "Selection").  NaN for a
     parameter with none: no statement of no effect on it can be supported.
     """
     cause, _, name = RESPONSE_PARAMETER.get(response, response).partition(".")

@@ -50,8 +50,8 @@ the row reads "not testable" with the units counted, never a verdict.
 An effect is reported over the range the campaign spans: the slope times
 the range of h/b or contact depth, the change from the first to the last
 test of a series, the difference between two levels.  A covariate with
-one level among the series that carry the response, or confounded with
-the others, is "not testable", never given a verdict.
+one level among the units that carry the response, or constant within
+every unit of the level above, is "not testable", never given a verdict.
 
 Verdicts (:func:`rocklab.dissipation.claims.verdict`) never over-claim.  A claim of no effect is
 "contradicted" when the effect differs from zero, "supported" only when its
@@ -61,8 +61,8 @@ v" is supported when the interval lies below v, contradicted when it lies
 at or above; a claim "close to v" is supported when the interval lies
 within v +- margin, contradicted when it lies outside.  The margin follows
 one rule (:func:`rocklab.dissipation.claims.margin_of`): the smallest effect worth naming of the
-catalogue parameter the response is, the smallest change that alters a
-simulated wall; two claims on one mean further apart than twice it (close
+catalogue parameter the response is, the change of the simulated wall
+below which the diagnosis names no cause; two claims on one mean further apart than twice it (close
 to 1, on average 0.93) cannot both be supported.  The paper's statements
 (:data:`rocklab.dissipation.claims.PAPER_CLAIMS`, data: ``rocklab/data/paper_claims.csv``) are one
 family and every other effect (an exploratory "no effect" check) another;
