@@ -67,15 +67,18 @@ def _level(value) -> str:
 
 
 def _effects(effects: pd.DataFrame) -> dict:
-    """Kruskal-Wallis tests by boundary and factor; push/pull by series."""
+    """Kruskal-Wallis tests by boundary and factor, on the units of the factor's level; push/pull by series."""
     out = {"kruskal": {}, "push_pull": {}}
     for r in effects[effects["factor"] != "push/pull"].itertuples():
         levels = ast.literal_eval(r.levels)
         means = ast.literal_eval(r.level_means)
+        units = ast.literal_eval(r.n_units)
         out["kruskal"].setdefault(BOUNDARIES[r.boundary], {})[f"{r.factor}__{r.value}"] = {
             "p": r.p,
+            "unit_level": r.unit_level,
+            "test": r.test,
             # pairs, not a mapping: the levels keep their order in the sorted file
-            "levels": [[_level(k), m] for k, m in zip(levels, means, strict=True)],
+            "levels": [[_level(k), m, n] for k, m, n in zip(levels, means, units, strict=True)],
         }
     for r in effects[effects["factor"] == "push/pull"].itertuples():
         out["push_pull"].setdefault(r.series, {})[r.value] = {

@@ -104,19 +104,21 @@ def stands_apart(n: Mapping) -> str:
 
 @_of("dissipation")
 def effects(n: Mapping) -> str:
-    """Kruskal-Wallis tests of the series means by factor (``effects.csv``)."""
+    """Kruskal-Wallis tests of the means of the factor's units by level (``effects.csv``)."""
     rows = [
         [
             name,
             test.split("__")[0],
             test.split("__")[1],
-            ", ".join(f"{level}: {show(mean, '.6g')}" for level, mean in e["levels"]),
-            show(e["p"], ".2f"),
+            ", ".join(
+                f"{level}: {show(mean, '.6g')} ({plural(e['unit_level'], units)})" for level, mean, units in e["levels"]
+            ),
+            show(e["p"], ".2f") if e["p"] is not None else e["test"],
         ]
         for key, name in (("two_sided", "two-sided"), ("one_sided", "one-sided"))
         for test, e in n["dissipation"]["effects"]["kruskal"].get(key, {}).items()
     ]
-    return markdown_table(["boundary", "factor", "quantity", "series means by level", "p"], rows)
+    return markdown_table(["boundary", "factor", "quantity", "means by level (units)", "p"], rows)
 
 
 @_of("dissipation")
