@@ -7,6 +7,6 @@ from rocklab.summaries import write_summary
 
 setup_logging(snakemake.log[0])
 series = CampaignDiagnosis.of_series_files(snakemake.input)
-entries = with_boundaries(series.to_dict(), seed=snakemake.params.seed)
+entries = with_boundaries(series.to_dict(), walls=snakemake.params.walls, thickness=snakemake.params.thickness)
 write_diagnosis(entries, snakemake.output.json, snakemake.output.md)
 write_summary(diagnosis_summary(snakemake.output.json), snakemake.output.docs_summary)

@@ -16,6 +16,7 @@ qc = pd.read_csv(snakemake.input.qc, keep_default_na=False, na_values=[""])
 tables, failed = campaign_tables(
     valid_stored_motions(snakemake.params.test_files, snakemake.input.qc),
     qc,
+    snakemake.params.walls,
     snakemake.params.n_boot,
     snakemake.params.seed,
 )

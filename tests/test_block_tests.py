@@ -56,22 +56,36 @@ def test_limestone_blocks():
     assert len(res["groups"]) == 12
     a = res["all"]
     assert a["n_tests"] == 134 and a["verdict"] == []
-    # Eq. 2 gets the trend with slenderness wrong: the stockiest blocks lose less, the slenderest more
+    # the stockiest blocks lose less, the slenderest more; but slenderness varies between 12 block groups,
+    # not 134 trials: over the group means the trend has p = 0.016 (4.5e-5 over trials), short of the
+    # signature's 1 % gate, and the structure tests at group level find no trend left
     st = res["slenderness"]
-    assert st["slope"] > 0 and st["p"] < 1e-3
-    assert any("slenderness" in s for s in a["residual_structure"])
-    # the family affine in Housner's loss removes it: about half of Housner's loss plus ~2 % per impact, no
-    # closed form of the library, but its held-out gain is within the noise of 134 trials: weak evidence
+    assert st["slope"] > 0 and st["n_groups"] == 12 and st["n_trials"] == 134
+    assert 0.01 < st["p"] < 0.03
+    assert not a["residual_structure"] and not a["unexplained"]
+    # the family affine in Housner's loss, folds and resamples by block group: about half to nine tenths of
+    # Housner's loss plus ~2 % per impact, no closed form of the library, its held-out gain within the noise
     (fam,) = a["families"]
     lam, delta = fam["ci95"]["loss_fraction"], fam["ci95"]["loss_constant"]
-    assert lam[1] < 0.9 and 0.005 < delta[0] and delta[1] < 0.05, fam
+    assert lam[1] < 1.0 and 0.005 < delta[0] and delta[1] < 0.05, fam
     assert fam["reduces_to"] == "no closed form of the library" and fam["dbic_vs_base"] < -10
-    assert not fam["discovered"] and "restitution_housner_loss" in a["weak_evidence"] and not a["unexplained"]
+    assert not fam["discovered"] and not a["weak_evidence"]
     assert B.blocks_markdown(res).startswith("# Restitution of the UMinho limestone blocks")
 
 
+def test_the_pooled_blocks_are_resampled_by_block_group():
+    """Slenderness varies between block groups: the pooled problem's units (its folds, its resamples) are
+    the groups, each with every impact of its trials."""
+    trials = B.pooled(B.group_trials(synthetic_events(groups=(4, 8, 12), n_trials=5)))
+    rows = B.by_group(trials)
+    assert len(rows.ids) == 3 and rows.r.shape == (3, 5 * B.N_IMPACTS)
+    assert np.isfinite(rows.r).sum() == np.isfinite(trials.r).sum()
+    assert np.allclose(np.sort(rows.r[np.isfinite(rows.r)]), np.sort(trials.r[np.isfinite(trials.r)]))
+    assert B.BlockProblem(rows).n_tests == 3
+
+
 @pytest.mark.parametrize(
-    "loss_fraction, loss_constant, noise", [(0.6, 0.02, 0.02), (0.6, 0.02, 0.01), (0.8, 0.01, 0.02), (0.8, 0.01, 0.01)]
+    "loss_fraction, loss_constant, noise", [(0.6, 0.02, 0.02), (0.6, 0.02, 0.01), (0.8, 0.01, 0.01)]
 )
 def test_an_impact_law_affine_in_housners_loss_is_discovered(loss_fraction, loss_constant, noise):
     ev = synthetic_events(
@@ -86,3 +100,12 @@ def test_an_impact_law_affine_in_housners_loss_is_discovered(loss_fraction, loss
         assert lo - 0.1 * abs(x) <= x <= hi + 0.1 * abs(x), (k, x, f["params"][k], (lo, hi))
     assert f["heldout_gain"]["vs_base"] > 2 * f["heldout_gain"]["vs_base_se"]
     assert a["families"][0]["discovered"]
+
+
+def test_a_subtle_affine_law_on_six_block_groups_is_not_named():
+    """A fifth of Housner's loss removed and 1 % per impact added, at the noise of the limestone tables: its
+    held-out gain, over six block groups left out in turn, is within their scatter; nothing is named and
+    nothing is flagged as unexplained (with trials as the units it was named)."""
+    ev = synthetic_events(loss_fraction=0.8, loss_constant=0.01, noise=0.02, groups=(4, 6, 8, 10, 12, 15), n_trials=15)
+    a = B.diagnose_blocks(ev, n_boot=20)["all"]
+    assert a["verdict"] == [] and not a["unexplained"]

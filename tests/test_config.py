@@ -77,7 +77,6 @@ def test_snakemake_fills_every_default(schema):
 
 def test_library_defaults_equal_the_schema(schema):
     from rocklab.diagnosis import diagnose_records
-    from rocklab.dissipation.covariates import campaign_effects
     from rocklab.dissipation.statistics import campaign_tables
     from rocklab.lab import channels, validity
     from rocklab.lab.campaign import Campaign
@@ -92,7 +91,6 @@ def test_library_defaults_equal_the_schema(schema):
     max_tests = _signature_defaults(Campaign.reduction_jobs, "max_tests")["max_tests"]
     assert d["reduction"] == {"max_tests_per_job": max_tests}
     diagnosis = dict(d["diagnosis"])
-    assert diagnosis.pop("campaign_margin") == _signature_defaults(campaign_effects, "margin")["margin"]
     assert diagnosis == _signature_defaults(diagnose_records, "n_boot", "n_history", "seed")
     maps = d["maps"]
     assert (maps["alpha"], maps["R"]) == (ALPHA, R)

@@ -10,6 +10,7 @@ import json
 
 import numpy as np
 import pytest
+from scipy import stats
 
 from rocklab import diagnosis as D
 from rocklab.diagnosis.causes import stop_threshold
@@ -562,17 +563,30 @@ def test_free_run_matches_the_exact_simulator(kw, ext, values, boundary, rtol):
 
 
 def test_boundary_entries_json_and_markdown(diagnosed, tmp_path):
-    # five series, the fewest a bootstrap over series is given from
     keys = ("instability+scale", "instability+scale-noisy", "null-2s", "null-2s-noisy", "instability-0.95")
     series = [dict(diagnosed[k], boundary="two-sided") for k in keys]
-    b = D.diagnose_boundary(series, "two-sided", n_boot=200)
+    b = D.diagnose_boundary(series, "two-sided")
     assert b["scope"] == "boundary" and b["n_tests"] == 30 and b["n_series"] == b["n_series_diagnosed"] == 5
     assert b["verdict"] == ["instability_angle"]
     f = next(f for f in b["findings"] if f["effect"] == "instability_angle")
     assert f["n_series"] == 3 and f["n_tests"] == 18 and f["evidence"]["series"] == "named in 3 of 5 series"
-    # three series name it: the mean of their values, no interval
-    assert f["ci95"] == {} and f["ci_note"] == "too few series for an interval (3 < 5)"
-    assert f["params"]["alpha_r_over_alpha"] == pytest.approx((0.9 + 0.9 + 0.95) / 3, abs=2e-3)
+    # three series name it, two do not: all five pooled, those two at the null value (no winner's curse)
+    named = [e["findings"] for e in series if "instability_angle" in e["verdict"]]
+    values = [next(f for f in fs if f["effect"] == "instability_angle")["params"]["alpha_r_over_alpha"] for fs in named]
+    assert f["params"]["alpha_r_over_alpha"] == pytest.approx((sum(values) + 2 * 1.0) / 5)
+    assert f["params"]["alpha_r_over_alpha"] == pytest.approx((0.9 + 0.9 + 0.95 + 1 + 1) / 5, abs=2e-3)
+    # a t interval over the five series (4 df)
+    x = np.array([*values, 1.0, 1.0])
+    half = stats.t.ppf(0.975, 4) * x.std(ddof=1) / np.sqrt(5)
+    assert f["ci95"]["alpha_r_over_alpha"] == pytest.approx([x.mean() - half, x.mean() + half])
+    # with the walls known, the walls are the units: two walls, one residual df, no interval
+    walls = dict(zip((e["key"] for e in series), "11122"))
+    fw = next(
+        f
+        for f in D.diagnose_boundary(series, "two-sided", walls=walls)["findings"]
+        if f["effect"] == "instability_angle"
+    )
+    assert fw["ci95"] == {} and "2 walls, 1 residual df" in fw["ci_note"]
     entries = list(diagnosed.values()) + [b]
     for e in entries:
         assert {"scope", "key", "n_tests", "base", "what_is_wrong", "verdict", "unexplained", "findings"} <= set(e)

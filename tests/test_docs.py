@@ -384,6 +384,9 @@ def tiny_results(tmp_path):
                 "value": "e_ratio",
                 "levels": "['clay brick', 'tuff']",
                 "level_means": "[0.95, 0.86]",
+                "n_units": "[3, 2]",
+                "unit_level": "wall",
+                "test": "Kruskal-Wallis on wall means",
                 "p": 0.4,
             },
             {
@@ -392,6 +395,9 @@ def tiny_results(tmp_path):
                 "value": "e_ratio",
                 "levels": "[60.0, 120.0]",
                 "level_means": "[1.2, 1.3]",
+                "n_units": "[4, 4]",
+                "unit_level": "series",
+                "test": "Kruskal-Wallis on series means",
                 "p": 0.3,
             },
             {
@@ -456,6 +462,8 @@ def tiny_results(tmp_path):
                     "slope": 0.6,
                     "slope_se": 0.1,
                     "p": 0.01,
+                    "n_groups": 2,
+                    "n_trials": 4,
                     "levels": {"4": 1.02, "15": 0.97},
                 },
             }
@@ -585,7 +593,10 @@ def test_dissipation_numbers(tiny_results):
     assert two["e_ratio_mean_without_apart"] == pytest.approx(0.95)  # T1, T2 only
     assert d["one_sided"]["max_abs_modified_z"] == 2.5
     assert d["amplitude_laws"]["two_sided"]["peak"]["series_median_r2"] == pytest.approx(0.85)
-    assert d["effects"]["kruskal"]["one_sided"]["contact_depth_mm__e_ratio"]["levels"] == [["60", 1.2], ["120", 1.3]]
+    assert d["effects"]["kruskal"]["one_sided"]["contact_depth_mm__e_ratio"]["levels"] == [
+        ["60", 1.2, 4],
+        ["120", 1.3, 4],
+    ]
     assert d["effects"]["push_pull"]["2b-2s"]["e_ratio"]["relative_change_pct"] == pytest.approx(-0.08)
 
 

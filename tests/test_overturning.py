@@ -507,3 +507,76 @@ def test_calibrated_table_ranks_the_findings(tmp_path):
     assert n["grid_n"] == 11
     md = tables.calibrated_walls({"calibrated": n})
     assert len(md.splitlines()) == 2 + 11 and "`2s-calibrated-no-alpha` (no instability_angle)" in md
+
+
+def _sized(diagnosis, thickness=0.12):
+    """The diagnosis of :func:`_diagnosis` with the thickness of the lab's walls on its boundary entries."""
+    return [dict(e, wall_thickness_m=thickness) if e["scope"] == "boundary" else e for e in diagnosis]
+
+
+def test_absolute_sizes_shrink_with_the_thickness_as_the_geometry_says():
+    """The transfer under absolute sizes against the geometry it stands for: a hinge rounded by l (the
+    pivot l inwards), a gap d at the top, a stop below a rebound of amplitude d at the top (Eq. 16 energy)."""
+    from rocklab.physics import wall
+    from rocklab.seismic import calibrated
+
+    h_over_b, l_mm, d_mm = 10.0, 4.0, 1.5
+    lab, big = 0.12, 0.6
+    s = big / lab
+
+    def rounded(b):
+        return np.arctan((b / 2 - l_mm / 1000) / (h_over_b * b / 2)) / np.arctan(1 / h_over_b)
+
+    r = calibrated.ABSOLUTE_SIZE["instability_angle"]({"alpha_r_over_alpha": rounded(lab)}, s)
+    assert r["alpha_r_over_alpha"] == pytest.approx(rounded(big), rel=1e-3)
+    gap = calibrated.ABSOLUTE_SIZE["contact_gap"]({"gap_over_alpha": d_mm / 1000 / lab}, s)
+    assert gap["gap_over_alpha"] == pytest.approx(d_mm / 1000 / big)
+
+    def stop(b):
+        # the landing speed that lifts the wall to an apex d / h: 1/2 v^2 = p^2 (cos(alpha - theta) - cos alpha)
+        alpha, p = np.arctan(1 / h_over_b), 1.0
+        theta = d_mm / 1000 / (h_over_b * b)
+        v = np.sqrt(2 * p**2 * (np.cos(alpha - theta) - np.cos(alpha)))
+        return v / wall.overturning_velocity(alpha, p)
+
+    v = calibrated.ABSOLUTE_SIZE["stop_threshold"]({"v_stop_over_vr": stop(lab)}, s)
+    assert v["v_stop_over_vr"] == pytest.approx(stop(big), rel=0.03)
+    # as ratios of a wall as thick as the lab's: unchanged
+    assert calibrated.ABSOLUTE_SIZE["contact_gap"]({"gap_over_alpha": 0.01}, 1.0) == {"gap_over_alpha": 0.01}
+
+
+def test_the_sized_wall_is_the_calibrated_one_with_its_sizes_transferred():
+    from rocklab.physics import wall
+    from rocklab.seismic import calibrated
+
+    # the thickness of the maps' wall from its half diagonal and slenderness
+    assert wall.thickness(wall.half_diagonal(1.6, 0.12), wall.slenderness_angle(1.6, 0.12)) == pytest.approx(0.12)
+    plain, sized = _diagnosis(), _sized(_diagnosis())
+    assert "1s-calibrated-sizes" not in calibrated.model_names(plain)
+    names = calibrated.model_names(sized)
+    assert "2s-calibrated-sizes" in names and "1s-calibrated-sizes" in names
+    assert calibrated.parse_name("1s-calibrated-sizes") == ("one-sided", None, True)
+    s = float(wall.thickness(3.0, 0.1)) / 0.12
+    one = named_model("1s-calibrated-sizes", alpha=0.1, R=3.0, diagnosis=sized)
+    assert one.alpha_pos == pytest.approx(0.1 * (1 - 0.26 / s))
+    # the impact law is a ratio of e either way
+    full = named_model("1s-calibrated", alpha=0.1, R=3.0, diagnosis=sized)
+    assert np.array_equal(one.numba_law()[:, 1:3], full.numba_law()[:, 1:3])
+    assert "as absolute sizes" in calibrated.describe(sized, "1s-calibrated-sizes")
+    with pytest.raises(KeyError, match="no wall thickness"):
+        named_model("1s-calibrated-sizes", diagnosis=plain)
+
+
+def test_the_calibrated_n_o_is_a_range_over_the_two_transfers():
+    from rocklab.seismic.calibrated import calibrated_table
+
+    models = {"2s-0.95": 0.4, "2s-calibrated": 0.5, "2s-calibrated-sizes": 0.45, "1s-1.05": 0.1, "1s-calibrated": 0.2}
+    models |= {"1s-calibrated-sizes": 0.3}
+    models |= {f"2s-calibrated-no-{k}": 0.5 for k in ("alpha", "eamp", "stop")}
+    models |= {f"1s-calibrated-no-{k}": 0.2 for k in ("alpha", "eamp", "gap", "stop")}
+    summary = pd.DataFrame([{"record": "A", "model": m, "N_O": v, "scatter": 0.3} for m, v in models.items()])
+    t = calibrated_table(summary, _sized(_diagnosis())).set_index("model")
+    assert t.loc["2s-calibrated-sizes", "role"] == "absolute sizes"
+    assert tuple(t.loc["2s-calibrated", ["N_O_low", "N_O_high"]]) == pytest.approx((0.45, 0.5))
+    assert tuple(t.loc["1s-calibrated-sizes", ["N_O_low", "N_O_high"]]) == pytest.approx((0.2, 0.3))
+    assert np.isnan(t.loc["1s-1.05", "N_O_low"])

@@ -112,10 +112,19 @@ def test_no_contact_depth_or_material_effect_unless_planted():
     cd = factor_effect(df, "contact_depth_mm")
     assert list(cd.boundary) == ["one-sided"] and not cd.systematic.iloc[0]
     assert "Kruskal" in cd.test.iloc[0]
+    assert cd.unit_level.iloc[0] == "series" and cd.n_units.iloc[0] == [6, 6, 6]
     planted = campaign(seed=2, shift=0.0)
     planted.loc[planted.unit == "tuff", "e_ratio"] += 0.05
-    u = factor_effect(planted, "unit").set_index("boundary")
-    assert u.loc["two-sided", "systematic"]
+    walls = {sp: sp[0] for sp in planted.specimen.unique()}
+    u = factor_effect(planted, "unit", walls=walls).set_index("boundary")
+    # the wall is the unit of its material: 3 walls of clay brick, 2 of tuff, however many series; the
+    # tuff walls ranked lowest give H = 3 and p = 0.083, the least five walls allow: no rank test on
+    # five walls reaches 0.05
+    assert u.loc["two-sided", "n_units"] == [3, 2] and u.loc["two-sided", "unit_level"] == "wall"
+    assert u.loc["two-sided", "statistic"] == pytest.approx(3.0)
+    assert u.loc["two-sided", "p"] == pytest.approx(stats.chi2.sf(3.0, 1)) and not u.loc["two-sided", "systematic"]
+    # one-sided: two walls of clay brick and one of tuff, 18 series: no test
+    assert np.isnan(u.loc["one-sided", "p"]) and u.loc["one-sided", "test"].startswith("not testable: 2 walls")
 
 
 def test_push_pull_symmetry():

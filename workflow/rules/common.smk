@@ -9,6 +9,7 @@ from snakemake.exceptions import WorkflowError
 
 from rocklab.config import check_names, check_paths, recorded_path
 from rocklab.lab.campaign import UNREADABLE, open_campaign
+from rocklab.lab.hierarchy import thickness_of_walls, walls_of_series, walls_of_specimens
 from rocklab.seismic import calibrated
 from rocklab.seismic.accelerograms import accelerogram_dir, read_manifest
 from rocklab.shake_table.records import check_dir
@@ -21,6 +22,8 @@ RESULTS = Path(config["results_dir"])
 # Every row checked at the door (docs/raw-format.md): a refused row is a row
 # of qc.csv, and no id or path of the tables names a file outside the two folders.
 CAMPAIGN = open_campaign(RAW)
+#: The wall of each specimen (the unit of a wall's properties, rocklab.lab.hierarchy).
+WALL_OF_SPECIMEN = walls_of_specimens(CAMPAIGN)
 #: The tests with a results file of their own (safe ids, first row of each).
 TEST_IDS = CAMPAIGN.test_ids
 # the tests and records the config names become file names too
@@ -34,6 +37,10 @@ REDUCTION_JOB = {t: job for job, ids in REDUCTION_JOBS.items() for t in ids}
 #: The series of each boundary condition, in the order of tests.csv: one diagnosis job each
 #: (the tests refused at the door are in no series: they have no diagnosis).
 SERIES_BY_BOUNDARY = {}
+#: The wall of each series (the unit of a boundary condition's pooled parameters).
+WALL_OF_SERIES = walls_of_series(CAMPAIGN)
+#: The thickness of each wall [m] (the size the findings were measured at, rocklab.seismic.calibrated).
+WALL_THICKNESS = thickness_of_walls(CAMPAIGN)
 for _series, _ids in TESTS_BY_SERIES.items():
     SERIES_BY_BOUNDARY.setdefault(CAMPAIGN.test_row(_ids[0]).boundary, []).append(_series)
 

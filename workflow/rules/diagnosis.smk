@@ -69,7 +69,8 @@ checkpoint diagnosis:
         res("benchmarks", "diagnosis.tsv")
     priority: PRIORITY["campaign_chain"]
     params:
-        seed=DIAGNOSIS["seed"],
+        walls=WALL_OF_SERIES,
+        thickness=WALL_THICKNESS,
     script:
         "../../scripts/diagnosis.py"
 
@@ -176,7 +177,7 @@ rule campaign_effects:
     benchmark:
         res("benchmarks", "campaign_effects.tsv")
     params:
-        margin=DIAGNOSIS["campaign_margin"],
+        walls=WALL_OF_SPECIMEN,
         schema=schema_path("campaign_effects.schema.yaml"),
     script:
         "../../scripts/campaign_effects.py"

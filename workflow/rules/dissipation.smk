@@ -44,6 +44,7 @@ checkpoint dissipation_tables:
         schemas=schema_path(""),
         n_boot=config["statistics"]["n_boot"],
         seed=config["statistics"]["seed"],
+        walls=WALL_OF_SPECIMEN,
     script:
         "../../scripts/dissipation_tables.py"
 

@@ -13,7 +13,7 @@
     The paper's campaign-wide statements (Sects. 2-4, Figs. 10 and 13,
     Tables 2-3) that the campaign tests, each with where the paper says it;
     read by :mod:`rocklab.dissipation.covariates`
-    (:func:`~rocklab.dissipation.covariates.read_claims`).
+    (:func:`~rocklab.dissipation.claims.read_claims`).
 
 The files are found through :mod:`importlib.resources`, so they are where the
 package is: the checkout's ``src/rocklab/data/`` or an installed

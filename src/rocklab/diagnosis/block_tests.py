@@ -20,7 +20,8 @@ of one H/B):
                           same side)
 
 and, where these leave structure and the trials span several slendernesses
-(all groups pooled), the generalised family
+(all groups pooled, the block group the unit of the folds and resamples,
+:func:`by_group`), the generalised family
 :mod:`rocklab.diagnosis.causes.restitution_housner_loss`: e = 1 - lambda
 (1 - e_an) - delta, Housner's loss scaled plus a constant loss per impact
 (issue 12).
@@ -84,13 +85,14 @@ def read_events(path=TABLES / "limestone-rocking-events.csv"):
 
 @dataclass
 class _Trials:
-    """Trials of one group as padded (trials, impacts) arrays."""
+    """Trials as padded (rows, impacts) arrays: a row is a trial, or a block group (:func:`by_group`)."""
 
     ids: list
     alpha: np.ndarray
     r: np.ndarray  # measured ratio, NaN where unused
     u: np.ndarray  # (thetadot^-_k / thetadot^-_1)^2
     odd: np.ndarray  # impact leaves the release edge
+    group: np.ndarray  # block group of each row
 
     @property
     def ratio(self):
@@ -99,7 +101,13 @@ class _Trials:
 
     def subset(self, idx):
         return replace(
-            self, ids=[self.ids[i] for i in idx], alpha=self.alpha[idx], r=self.r[idx], u=self.u[idx], odd=self.odd[idx]
+            self,
+            ids=[self.ids[i] for i in idx],
+            alpha=self.alpha[idx],
+            r=self.r[idx],
+            u=self.u[idx],
+            odd=self.odd[idx],
+            group=self.group[idx],
         )
 
 
@@ -112,6 +120,34 @@ def pooled(groups):
         r=np.vstack([g.r for g in gs]),
         u=np.vstack([g.u for g in gs]),
         odd=np.vstack([g.odd for g in gs]),
+        group=np.concatenate([g.group for g in gs]),
+    )
+
+
+def by_group(trials):
+    """The trials with one row per block group: its trials' impacts side by side (:data:`N_IMPACTS` each).
+
+    Slenderness is a property of the block group (:data:`rocklab.lab.hierarchy.BLOCK_COVARIATE_LEVEL`):
+    where the trials span several, the engine's folds leave out, and its bootstrap draws, whole groups,
+    and a law that varies with slenderness is judged on as many units as there are groups.
+    """
+    groups = np.unique(trials.group)
+    rows = [np.flatnonzero(trials.group == g) for g in groups]
+    width = max(len(i) for i in rows) * N_IMPACTS
+
+    def side_by_side(x, fill):
+        out = np.full((len(groups), width), fill, dtype=x.dtype)
+        for j, i in enumerate(rows):
+            out[j, : len(i) * N_IMPACTS] = x[i].ravel()
+        return out
+
+    return _Trials(
+        ids=[str(g) for g in groups],
+        alpha=np.array([trials.alpha[i[0]] for i in rows]),
+        r=side_by_side(trials.r, np.nan),
+        u=side_by_side(trials.u, 1.0),
+        odd=side_by_side(trials.odd, False),
+        group=groups,
     )
 
 
@@ -134,6 +170,7 @@ def group_trials(events):
             r=np.where(bad, np.nan, r),
             u=u,
             odd=np.tile(np.arange(1, N_IMPACTS + 1) % 2 == 1, (len(trials), 1)),
+            group=np.full(len(trials), int(g)),
         )
     return out
 
@@ -185,7 +222,7 @@ class BlockProblem(Problem):
         return 0.0
 
     def covariates(self, sub):
-        k = np.tile(np.arange(1.0, N_IMPACTS + 1), (len(sub.ids), 1))
+        k = np.tile(np.arange(1.0, N_IMPACTS + 1), (len(sub.ids), sub.r.shape[1] // N_IMPACTS))
         return {
             "impact": {
                 "impact index": k,
@@ -205,8 +242,12 @@ class BlockProblem(Problem):
 
     def heldout_measures(self, sub, ext, values):
         R = self.residuals(sub, ext, values)["impact"]
-        # the impact speed after n impacts relative to the first: the product of the ratios
-        decay = np.nancumsum(R, axis=1)
+        # the impact speed after n impacts relative to the first: the product of the ratios, trial by trial
+        trials = R.reshape(len(R), -1, N_IMPACTS)
+        decay = np.nancumsum(trials, axis=2)
+        # a group's padding is no trial
+        decay[~np.isfinite(trials).any(axis=2)] = np.nan
+        decay = decay.reshape(R.shape)
         with np.errstate(invalid="ignore"):
             return {"ratio_rms": np.sqrt(np.nanmean(R**2, axis=1)), "decay_rms": np.sqrt(np.nanmean(decay**2, axis=1))}
 
@@ -224,7 +265,8 @@ def signatures(trials: _Trials):
 
 def diagnose_group(trials: _Trials, *, n_boot=40, seed=0):
     """Diagnosis of one block group (or of all, pooled): what Housner's e gets wrong, the causes, the gain."""
-    problem = BlockProblem(trials)
+    several = np.ptp(trials.alpha) > 0
+    problem = BlockProblem(by_group(trials) if several else trials)
     sig = signatures(trials)
     fits = {}
     sel = select_effects(problem, signature=sig, n_boot=n_boot, seed=seed, fits=fits)
@@ -370,8 +412,9 @@ def blocks_markdown(result) -> str:
     st = result["slenderness"]
     out += [
         "",
-        f"Median r/e_an of each trial against (B/H)^2 (the variable of Eq. 2): {st['intercept']:.4f} "
-        f"{st['slope']:+.2f} (+-{st['slope_se']:.2f}) (B/H)^2, p = {st['p']:.2g}; level by H/B: "
+        f"Mean over the trials of each block group of their median r/e_an against (B/H)^2 (the variable of "
+        f"Eq. 2), the {st['n_groups']} groups the units: {st['intercept']:.4f} {st['slope']:+.2f} "
+        f"(+-{st['slope_se']:.2f}) (B/H)^2, p = {st['p']:.2g}; level by H/B: "
         + ", ".join(f"{k}: {v:.3f}" for k, v in st["levels"].items())
         + ".",
     ]

@@ -213,9 +213,11 @@ class Finding(_Record):
 class PooledFinding(_Record):
     """A cause named in at least half of the series of a boundary condition that can name one.
 
-    The test-weighted means of its parameters over those series, the
-    bootstrap (over series) interval of the mean, the range over the series,
-    and the weighted means of their held-out errors and gains.
+    The random-effects means of its parameters over all those series (walls
+    where known; a series that does not name it at the null value), their t
+    intervals, the range over the series that name it, and the test-weighted
+    means of their held-out errors and gains
+    (:func:`rocklab.diagnosis.series.diagnose_boundary`).
     """
 
     _optional = frozenset({"ci_note"})
@@ -307,7 +309,7 @@ class BoundaryDiagnosis(_Entry):
     extended models of the series that have one.
     """
 
-    _optional = frozenset({"extended", "too_small"})
+    _optional = frozenset({"extended", "too_small", "wall_thickness_m"})
     _nested = {"base": BaseRun, "findings": [PooledFinding]}
 
     scope: str
@@ -329,6 +331,7 @@ class BoundaryDiagnosis(_Entry):
     series_verdicts: dict[str, list[str]] = field(default_factory=dict)
     extended: dict[str, Any] | None = None
     too_small: str | None = None
+    wall_thickness_m: float | None = None
 
 
 def entry_of(d):

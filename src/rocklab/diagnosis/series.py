@@ -12,7 +12,8 @@ parameter over the tests clears its null value, and no interval is given
 from fewer than :data:`rocklab.dissipation.statistics.MIN_BOOTSTRAP` tests;
 a smaller series is compared with the base model but names nothing
 (``too_small`` gives the reason), and a boundary condition is summed up over
-the series large enough, with no interval from fewer series than that.
+the series large enough, its parameters pooled over all of them (walls where
+known), with no interval on fewer units than a verdict needs.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import time
 
 import numpy as np
 
+from rocklab._imports import lazy_module
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.discovery import discovery
 from rocklab.diagnosis.errors import what_is_wrong
@@ -31,6 +33,9 @@ from rocklab.diagnosis.extended import engineering_errors, model_params
 from rocklab.diagnosis.problem import WallProblem
 from rocklab.diagnosis.result import CampaignDiagnosis
 from rocklab.dissipation.statistics import MIN_BOOTSTRAP, interval_note
+from rocklab.lab.hierarchy import plural, too_few_units
+
+stats = lazy_module("scipy.stats")
 
 log = logging.getLogger(__name__)
 
@@ -257,7 +262,64 @@ def _merge_errors(errors, w):
     }
 
 
-def diagnose_boundary(entries, boundary, *, n_boot=2000, seed=0):
+def pooled_parameter(values, walls=None):
+    """The random-effects mean of one parameter over series, and its 95 % interval.
+
+    Each series is one unit (the scatter between series, sd ~0.01-0.05 of
+    e/e_an, dwarfs a series' own standard error, so a random-effects mean
+    weighs the series equally); where the series' walls are known, each
+    wall's value is the mean of its series and the walls are the units
+    (:mod:`rocklab.lab.hierarchy`: a boundary condition's parameter holds for
+    walls, and the series of one wall are one wall's evidence).  Student's t
+    on units - 1 degrees of freedom; none below the units a verdict needs
+    (:func:`rocklab.lab.hierarchy.too_few_units`).
+
+    Parameters
+    ----------
+    values : dict
+        Series -> its value.
+    walls : mapping, optional
+        Series -> wall.
+
+    Returns
+    -------
+    mean : float
+    ci : list of float or None
+    unit_level : str
+    n_units : int
+    note : str
+        Why there is no interval; "" when there is one.
+    """
+    level = "series" if walls is None else "wall"
+    by_unit = {}
+    for series, v in values.items():
+        by_unit.setdefault(series if walls is None else walls[series], []).append(v)
+    x = np.array([np.mean(v) for v in by_unit.values()], float)
+    k, m = x.size, float(np.mean(x))
+    note = too_few_units(level, k, k - 1)
+    if note:
+        return m, None, level, k, note.removeprefix("not testable: ") + ": no interval"
+    half = float(stats.t.ppf(0.975, k - 1) * np.std(x, ddof=1) / np.sqrt(k))
+    return m, [m - half, m + half], level, k, ""
+
+
+def _parameter_values(cause, name, usable, named):
+    """Every usable series' value of one parameter of ``cause``: its own estimate where it named the
+    cause, the parameter's null value where it did not (the cause absent there); a parameter without
+    a null value in the catalogue (one that only exists with its cause, the spread of the stop speeds)
+    from the series that estimated it only."""
+    null = next((q.null for q in catalogue.by_name(cause).params if q.name == name), None)
+    out = {}
+    for e in usable:
+        f = named.get(e.key)
+        if f is not None and name in f.params:
+            out[e.key] = f.params[name]
+        elif null is not None:
+            out[e.key] = null
+    return out
+
+
+def diagnose_boundary(entries, boundary, *, walls=None, thickness=None):
     """One boundary condition from the diagnoses of its series.
 
     ``entries``: a :class:`~rocklab.diagnosis.result.CampaignDiagnosis` or
@@ -265,18 +327,24 @@ def diagnose_boundary(entries, boundary, *, n_boot=2000, seed=0):
     The series are different walls and set-ups, so their parameters are not
     pooled into one fit: a cause is in the verdict when it is named in at
     least half of the series large enough to name one (not ``too_small``),
-    with the test-weighted mean of its parameters over the series that name
-    it and a bootstrap (over those series) 95 % interval of that mean, none
-    from fewer than :data:`~rocklab.dissipation.statistics.MIN_BOOTSTRAP`
-    series (``ci_note`` says so); each finding gives the ``n_series`` and
-    ``n_tests`` it rests on.  Errors are test-weighted means over all series.
+    and its parameters pool ALL those series, never only the ones that named
+    it (a mean over the namers alone is the winner's curse): the series
+    that did not name it count at the parameter's null value
+    (:func:`_parameter_values`), and the mean is a random-effects mean over
+    series, or over walls where ``walls`` (series -> wall) is given, with a
+    t interval (:func:`pooled_parameter`; ``ci_note`` says why there is
+    none).  Each finding gives the ``n_series`` that named it, the
+    ``n_units`` its parameters rest on and ``n_tests``.  Errors are
+    test-weighted means over all series.  With ``thickness`` (wall ->
+    thickness [m]) the entry gives ``wall_thickness_m``, the mean over its
+    walls: the size the findings were measured at, for the maps' transfer
+    under absolute sizes (:mod:`rocklab.seismic.calibrated`).
     """
     ser = CampaignDiagnosis.of(entries).series_of(boundary)
     if not ser:
         return None
     usable = [e for e in ser if not e.too_small]
     small = [e.key for e in ser if e.too_small]
-    rng = np.random.default_rng(seed)
     w_all = np.array([e.n_tests for e in ser], float)
     n_tests = int(w_all.sum())
     base_err = _merge_errors([e.base.errors for e in ser], w_all)
@@ -290,14 +358,16 @@ def diagnose_boundary(entries, boundary, *, n_boot=2000, seed=0):
         if len(lst) < 0.5 * len(usable):
             continue
         w = np.array([e.n_tests for e, _ in lst], float)
-        note = interval_note(len(lst), "series")
-        params, ci = {}, {}
+        named = {e.key: f for e, f in lst}
+        params, ci, notes, units = {}, {}, {}, {}
         for name in lst[0][1].params:
-            x = np.array([f.params[name] for _, f in lst])
-            params[name] = _wmean(x, w)
-            if not note:
-                boots = [_wmean(x[i], w[i]) for i in (rng.integers(0, x.size, x.size) for _ in range(n_boot))]
-                ci[name] = [float(np.percentile(boots, 2.5)), float(np.percentile(boots, 97.5))]
+            values = _parameter_values(eff, name, usable, named)
+            params[name], interval, level, units[name], note = pooled_parameter(values, walls)
+            if interval is None:
+                notes[name] = note
+            else:
+                ci[name] = interval
+        note = "; ".join(f"{k}: {v}" for k, v in notes.items())
         findings.append(
             {
                 "effect": eff,
@@ -305,6 +375,8 @@ def diagnose_boundary(entries, boundary, *, n_boot=2000, seed=0):
                 "ci95": ci,
                 "evidence": {
                     "series": f"named in {len(lst)} of {of_series}",
+                    "pooled": f"random-effects mean over {plural(level, max(units.values()))} of all "
+                    f"{len(usable)} series, the {len(usable) - len(lst)} that did not name it at its null value",
                     "range": {
                         n: [float(min(f.params[n] for _, f in lst)), float(max(f.params[n] for _, f in lst))]
                         for n in params
@@ -363,6 +435,8 @@ def diagnose_boundary(entries, boundary, *, n_boot=2000, seed=0):
         "series_verdicts": verdicts,
         **({"extended": {"statement": ext_statement, "n_series": len(extended)}} if ext_statement else {}),
     }
+    if walls is not None and thickness is not None:
+        out["wall_thickness_m"] = float(np.mean([thickness[w] for w in {walls[e.key] for e in ser}]))
     if not usable:
         out["too_small"] = (
             f"none of its {len(ser)} series has the {MIN_BOOTSTRAP} tests "
@@ -390,11 +464,12 @@ def diagnose_records(records, key, *, n_boot=40, n_history=2, seed=0):
     return diagnose_series(tests, key=str(key), n_boot=n_boot, n_history=n_history, seed=seed)
 
 
-def with_boundaries(entries, *, seed=0):
-    """Series entries followed by one entry per boundary condition (:func:`diagnose_boundary`)."""
+def with_boundaries(entries, *, walls=None, thickness=None):
+    """Series entries followed by one entry per boundary condition (:func:`diagnose_boundary`; ``walls``:
+    series -> wall, ``thickness``: wall -> thickness [m])."""
     out = list(entries)
     for b in ("two-sided", "one-sided"):
-        e = diagnose_boundary(out, b, seed=seed)
+        e = diagnose_boundary(out, b, walls=walls, thickness=thickness)
         if e is not None:
             out.append(e)
     return out
@@ -421,4 +496,4 @@ def diagnose_campaign(series_records, *, n_boot=40, n_history=2, by_boundary=Tru
         for sid, recs in series_records.items()
     ]
     entries = [e for e in entries if e is not None]
-    return with_boundaries(entries, seed=seed) if by_boundary else entries
+    return with_boundaries(entries) if by_boundary else entries

@@ -11,61 +11,80 @@ treatment.
 The responses are the per-test ratios of ``tests.csv`` (:data:`TEST_RESPONSES`)
 and every parameter of the causes the diagnosis named for a series
 (``results/diagnosis.json``, ``<cause>.<parameter>``).  Tests of a series are
-repetitions of one set-up, not replicates of the factors that vary between
-series (see :mod:`rocklab.dissipation.statistics`), hence two models:
+repetitions of one set-up, series of a specimen share its masonry, and
+specimens of a wall are that wall fractured to a lower height: every
+effect is estimated at the level the covariate is a property of
+(:mod:`rocklab.lab.hierarchy`), with that level's units as the
+observations:
 
-* covariates of the series (:data:`SERIES_COVARIATES`: h/b, unit material,
-  contact depth; and the boundary condition across both): one value per
-  series (the mean of its tests, or the diagnosis' estimate), regressed by
-  ordinary least squares on all the covariates that vary among those series,
-  each effect adjusted for the others; Student's t with n_series - k degrees
-  of freedom.  The series are weighted equally: the scatter between series
-  (sd ~0.01-0.05 of e_exp/e_an) dwarfs the uncertainty of a series' value
-  (a bootstrap interval of ~1e-4 wide), so precision weights would be equal
-  weights anyway;
+* covariates of the wall, specimen or series (:data:`SERIES_COVARIATES`:
+  unit material, h/b, contact depth; and the boundary condition across
+  both): one value per series (the mean of its tests, or the diagnosis'
+  estimate), averaged to one value per unit of the covariate's level, then
+  ordinary least squares of the unit values on the covariate with a mean
+  per unit of the level above (:class:`LevelFit`): h/b is compared between
+  the specimens of one wall, contact depth and the boundary condition
+  between the series of one specimen, the unit material between walls;
+  Student's t on units minus coefficients degrees of freedom.  This is the
+  two-stage (aggregated) form of a mixed model with random effects for wall
+  and series, chosen over statsmodels' MixedLM because a campaign has 3 to
+  5 walls: a likelihood estimate of a between-wall variance from so few
+  walls sits at its bound or fails to converge, and its Wald intervals use
+  the normal quantile, narrower than the t on the walls' own degrees of
+  freedom that the aggregated model gives exactly (for a balanced design
+  the two coincide).  Parent means remove what differs between walls
+  (material, workmanship) from a within-wall contrast at the cost of the
+  parent's degrees of freedom;
 * covariates of the test within its series (:data:`WITHIN_COVARIATES`: the
   direction of release, the test's place in the series): the effect within
   each series (the slope on the place, 0 first to 1 last, or the pulled
-  minus the pushed mean), then their mean over the series with a t interval
-  on n_series - 1 degrees of freedom (a two-stage random-effects estimate:
-  each series is one unit, and the between-series spread of the effect is
-  its uncertainty).
+  minus the pushed mean), then their mean over walls (each the mean of its
+  series') with a t interval on walls - 1 degrees of freedom;
+* a claim on a boundary condition's mean: the mean over walls of their
+  series' values, t on walls - 1 degrees of freedom.
+
+Below the units a verdict needs (two units at each level of a material,
+two residual degrees of freedom, :func:`rocklab.lab.hierarchy.too_few_units`)
+the row reads "not testable" with the units counted, never a verdict.
 
 An effect is reported over the range the campaign spans: the slope times
 the range of h/b or contact depth, the change from the first to the last
 test of a series, the difference between two levels.  A covariate with
-one level among the series that carry the response, or confounded with
-the others, is "not testable", never given a verdict.
+one level among the units that carry the response, or constant within
+every unit of the level above, is "not testable", never given a verdict.
 
-Verdicts (:func:`verdict`) never over-claim.  A claim of no effect is
-"contradicted" when the effect differs from zero (p < 0.05), "supported"
-only when its whole 95 % interval lies within +-``margin`` of the
-response's mean (an equivalence test: absence of evidence is not evidence
-of absence), else "inconclusive"; a claim "below v" is supported when the
-interval lies below v, contradicted when it lies at or above; a claim
-"close to v" is supported when the interval lies within v +- margin v,
-contradicted when it lies outside.  The paper's statements
-(:data:`PAPER_CLAIMS`, data: ``rocklab/data/paper_claims.csv``) are
-tested each at the 5 % level; every other
-effect is an exploratory "no effect" check with Holm-adjusted p-values
-over all of them, so that forty looks do not make two false findings.
+Verdicts (:func:`rocklab.dissipation.claims.verdict`) never over-claim.  A claim of no effect is
+"contradicted" when the effect differs from zero, "supported" only when its
+whole interval lies within +-margin (an equivalence test: absence of
+evidence is not evidence of absence), else "inconclusive"; a claim "below
+v" is supported when the interval lies below v, contradicted when it lies
+at or above; a claim "close to v" is supported when the interval lies
+within v +- margin, contradicted when it lies outside.  The margin follows
+one rule (:func:`rocklab.dissipation.claims.margin_of`): the smallest effect worth naming of the
+catalogue parameter the response is, the change of the simulated wall
+below which the diagnosis names no cause; two claims on one mean further apart than twice it (close
+to 1, on average 0.93) cannot both be supported.  The paper's statements
+(:data:`rocklab.dissipation.claims.PAPER_CLAIMS`, data: ``rocklab/data/paper_claims.csv``) are one
+family and every other effect (an exploratory "no effect" check) another;
+each family is corrected for its own multiplicity: p-values Holm-adjusted,
+and a claim supported or contradicted by its interval only on the
+simultaneous (Bonferroni) interval at 1 - 0.05/m (``verdict_level``).
 """
 
 from __future__ import annotations
 
-import csv
 import math
-from dataclasses import dataclass, fields
-from pathlib import Path
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 from scipy import stats
 
-from rocklab.data import data_path
+from rocklab.dissipation.claims import PAPER_CLAIMS, claim_text, margin_of, verdict
 from rocklab.dissipation.regression import ols
 from rocklab.dissipation.statistics import holm
 from rocklab.lab.campaign import order_in_series
+from rocklab.lab.hierarchy import COVARIATE_LEVEL, UNIT_COLUMN, parent, plural, too_few_units
 
 #: Per-test quantities of tests.csv modelled against the covariates.
 TEST_RESPONSES = ("e_ratio", "theta0_over_alpha")
@@ -80,94 +99,6 @@ NUMERIC = ("h_over_b", "contact_depth_mm", "order")
 MIN_WITHIN_TESTS = 3
 #: Significance level of the tests; the intervals are at 1 - ALPHA.
 ALPHA = 0.05
-#: Default relative margin of "no effect" and "close to" (:func:`verdict`).
-MARGIN = 0.10
-
-
-@dataclass(frozen=True)
-class Claim:
-    """A campaign-wide statement to test.
-
-    Attributes
-    ----------
-    key : str
-        Short name (a column of campaign_effects.csv).
-    boundary : str
-        'two-sided', 'one-sided' or 'both' (the boundary condition as a covariate).
-    response : str
-        A column of tests.csv or ``<cause>.<parameter>`` of the diagnosis.
-    covariate : str
-        One of :data:`SERIES_COVARIATES`, :data:`WITHIN_COVARIATES`,
-        'boundary', or 'mean' (a claim on the response's value itself).
-    kind : {'zero', 'below', 'near'}
-        No effect; the mean below ``value``; the mean close to ``value``.
-    value : float
-    paper : str
-        Where the paper says it, and how.
-    """
-
-    key: str
-    boundary: str
-    response: str
-    covariate: str
-    kind: str = "zero"
-    value: float = 0.0
-    paper: str = ""
-
-
-#: The kinds of claim :func:`verdict` judges: no effect, the mean below a value, the mean close to it.
-CLAIM_KINDS = ("zero", "below", "near")
-#: The boundary conditions a claim can be on ('both': the boundary condition as a covariate).
-CLAIM_BOUNDARIES = ("two-sided", "one-sided", "both")
-
-
-def read_claims(path=None):
-    """The campaign-wide statements in a CSV file, checked, as :class:`Claim` objects.
-
-    Parameters
-    ----------
-    path : str or Path, optional
-        A CSV file with the columns of :class:`Claim`, one statement a row;
-        default the paper's, ``rocklab/data/paper_claims.csv``.
-
-    Returns
-    -------
-    tuple of Claim
-        In the order of the file (the order of campaign_effects.csv).
-
-    Raises
-    ------
-    ValueError
-        A missing or unknown column, a repeated key, a boundary, covariate
-        or kind that the tests do not know, or a value that is no finite number.
-    """
-    path = data_path("paper_claims.csv") if path is None else Path(path)
-    columns = [f.name for f in fields(Claim)]
-    covariates = (*SERIES_COVARIATES, *WITHIN_COVARIATES, "boundary", "mean")
-    with open(path, newline="", encoding="utf-8") as fh:
-        reader = csv.DictReader(fh)
-        if reader.fieldnames != columns:
-            raise ValueError(f"{path}: columns {reader.fieldnames}, expected {columns}")
-        claims = []
-        for line, row in enumerate(reader, start=2):
-            where = f"{path}, line {line}"
-            for column, known in (("boundary", CLAIM_BOUNDARIES), ("covariate", covariates), ("kind", CLAIM_KINDS)):
-                if row[column] not in known:
-                    raise ValueError(f"{where}: {column} {row[column]!r}, expected one of {', '.join(known)}")
-            try:
-                value = float(row["value"])
-            except ValueError:
-                value = math.nan
-            if not math.isfinite(value):
-                raise ValueError(f"{where}: value {row['value']!r} is no finite number")
-            if row["key"] in {c.key for c in claims}:
-                raise ValueError(f"{where}: key {row['key']!r} repeated")
-            claims.append(Claim(**{**row, "value": value}))
-    return tuple(claims)
-
-
-#: The statements of the paper (Sects. 2-4, Figs. 10 and 13, Tables 2-3) that the campaign can test.
-PAPER_CLAIMS = read_claims()
 
 
 # --- the tables -------------------------------------------------------------------------------
@@ -196,13 +127,39 @@ def with_test_order(tests, qc=None):
     return tests.assign(order=tests.test_id.astype(str).map(order))
 
 
+def with_walls(tests, walls=None):
+    """tests.csv with the wall of each test's specimen (``wall``).
+
+    Parameters
+    ----------
+    tests : pandas.DataFrame
+    walls : mapping, optional
+        Specimen -> wall (the ``wall`` column of the campaign's specimens.csv);
+        None: ``tests`` has its ``wall`` column already.
+
+    Raises
+    ------
+    ValueError
+        No wall given for some specimen: without it the unit of a wall's
+        property is unknown, and no verdict on it can be given.
+    """
+    if walls is None:
+        if "wall" not in tests:
+            raise ValueError("the tests name no wall: give each specimen's wall (specimens.csv)")
+        return tests
+    missing = sorted(set(tests.specimen) - set(walls))
+    if missing:
+        raise ValueError(f"no wall for specimen(s) {', '.join(map(str, missing))}")
+    return tests.assign(wall=tests.specimen.map(walls).astype(str))
+
+
 def series_values(tests, diagnosis=None):
     """One value per series and response: the mean of its tests, or the diagnosis' estimate.
 
     Parameters
     ----------
     tests : pandas.DataFrame
-        results/tests.csv (series, boundary, specimen and the covariates).
+        results/tests.csv (series, boundary, specimen, wall and the covariates).
     diagnosis : rocklab.diagnosis.result.CampaignDiagnosis, optional
         results/diagnosis.json; its series entries give
         ``<cause>.<parameter>`` for the causes named in each series.
@@ -210,12 +167,13 @@ def series_values(tests, diagnosis=None):
     Returns
     -------
     pandas.DataFrame
-        series, boundary, specimen, :data:`SERIES_COVARIATES`, n_tests,
+        series, boundary, specimen, wall, :data:`SERIES_COVARIATES`, n_tests,
         source ('tests' or 'diagnosis'), response, value.
     """
     meta = tests.groupby("series").agg(
         boundary=("boundary", "first"),
         specimen=("specimen", "first"),
+        wall=("wall", "first"),
         n_tests=("test_id", "size"),
         **{c: (c, "first") for c in SERIES_COVARIATES if c in tests},
     )
@@ -250,79 +208,88 @@ def _level_text(v):
     return f"{v:g}" if isinstance(v, (int, float, np.integer, np.floating)) else str(v)
 
 
-def _design(frame, covariates):
-    """The design matrix of the covariates that can be tested on these rows.
+def unit_values(frame, covariate):
+    """The series values of ``frame`` as one value per unit of the covariate's level.
+
+    A unit's value is the mean of its series' values; its covariate, its
+    parent (the unit of the level above) and its unit material are those of
+    its series (constant within it, :mod:`rocklab.lab.hierarchy`).
 
     Returns
     -------
-    X : (n, k) array
-        Intercept first.
-    terms : list of (covariate, column index or None, term, reason)
-        One per effect: its column of X, its label ("per unit", "tuff - clay
-        brick"), and for a covariate that cannot be tested the reason, with
-        no column.
+    pandas.DataFrame
+        unit_id, parent, unit (the material), ``covariate``, value, n_series,
+        n_tests; one row per unit.
+
+    Raises
+    ------
+    ValueError
+        The covariate takes two values within one unit of its level.
     """
-    cols, terms = [np.ones(len(frame))], []
-    for c in covariates:
-        if c not in frame or frame[c].isna().any():
-            terms.append((c, None, "", "not testable: not known for every series"))
-            continue
-        levels = sorted(frame[c].unique())
-        if len(levels) < 2:
-            terms.append((c, None, "", f"not testable: only one level ({_level_text(levels[0])})"))
-            continue
-        if c in NUMERIC:
-            new = {"per unit": frame[c].to_numpy(float)}
-        else:
-            ref = levels[0]
-            new = {f"{_level_text(lv)} - {_level_text(ref)}": (frame[c] == lv).to_numpy(float) for lv in levels[1:]}
-        trial = np.column_stack([*cols, *new.values()])
-        if np.linalg.matrix_rank(trial) < trial.shape[1]:
-            entered = ", ".join(t[0] for t in terms if t[1] is not None) or "the intercept"
-            terms.append((c, None, "", f"not testable: confounded with {entered} among these series"))
-            continue
-        for label, x in new.items():
-            terms.append((c, len(cols), label, ""))
-            cols.append(x)
-    return np.column_stack(cols), terms
+    level = COVARIATE_LEVEL[covariate]
+    col, up = UNIT_COLUMN[level], parent(level)
+    d = frame.assign(_parent=frame[UNIT_COLUMN[up]] if up in UNIT_COLUMN else "campaign")
+    if (d.groupby(col)[covariate].nunique(dropna=False) > 1).any():
+        raise ValueError(f"{covariate} varies within a {level}: it is no property of the {level}")
+    aggs = {
+        "parent": ("_parent", "first"),
+        "unit": ("unit", "first"),
+        covariate: (covariate, "first"),
+        "value": ("value", "mean"),
+        "n_series": ("series", "size"),
+        "n_tests": ("n_tests", "sum"),
+    }
+    return d.groupby(col, sort=True).agg(**aggs).rename_axis("unit_id").reset_index()
 
 
 @dataclass
-class SeriesFit:
-    """A between-series model of one response: y_s = X_s beta + error, OLS.
+class LevelFit:
+    """The effect of one covariate at its level: unit values ~ covariate + a mean per parent unit, OLS.
+
+    Each unit of the covariate's level (:data:`rocklab.lab.hierarchy.COVARIATE_LEVEL`)
+    is one observation (the mean of its series); where that level sits in
+    a parent with several units (specimens in walls, series in specimens),
+    each parent gets its own mean, so that the effect is the contrast
+    within parents (two heights of one wall, three contact depths of one
+    specimen) and a parent's own departure is never taken for the effect.
+    Units alone in their parent carry no such contrast and are left out.
 
     Attributes
     ----------
     frame : pandas.DataFrame
-        The series' rows of :func:`series_values`.
+        The units' rows of :func:`unit_values`.
+    covariate, level : str
     X : array
-    terms : list
-        See :func:`_design`.
+        Parent means (or the intercept) first, then the covariate's columns.
+    columns : dict
+        Term label ("per unit", "tuff - clay brick") -> column of X.
     coef, cov : array
     df : int
     """
 
     frame: pd.DataFrame
+    covariate: str
+    level: str
     X: np.ndarray
-    terms: list
+    columns: dict
     coef: np.ndarray
     cov: np.ndarray
     df: int
 
-    def partial(self, covariate, n=50):
-        """The effect of one numeric covariate with the others at their mean (a partial plot).
+    def partial(self, n=50):
+        """The effect of a numeric covariate with the parents' means averaged out (a partial plot).
 
         Returns
         -------
         dict
-            x, y (each series' value with the other covariates' effects
-            removed, to the mean of the others), grid, line, low, high (the
-            fitted line and its 95 % confidence band on the grid).
+            x, y (each unit's value less its parent's departure from the
+            mean of the parents), grid, line, low, high (the fitted line
+            and its 95 % confidence band on the grid).
         """
-        j = next(t[1] for t in self.terms if t[0] == covariate and t[1] is not None)
+        j = self.columns["per unit"]
         xbar = self.X.mean(axis=0)
         others = np.ones(self.X.shape[1], bool)
-        others[[0, j]] = False
+        others[j] = False
         y = self.frame.value.to_numpy(float) - (self.X[:, others] - xbar[others]) @ self.coef[others]
         grid = np.linspace(self.X[:, j].min(), self.X[:, j].max(), n)
         G = np.tile(xbar, (n, 1))
@@ -333,45 +300,85 @@ class SeriesFit:
         return {"x": self.X[:, j], "y": y, "grid": grid, "line": line, "low": line - q * se, "high": line + q * se}
 
 
-def fit_series(frame, covariates):
-    """:class:`SeriesFit` of ``frame.value`` on the testable ``covariates`` (None: too few series), and the terms."""
-    X, terms = _design(frame, covariates)
-    if len(frame) <= X.shape[1]:
-        return None, terms
-    coef, cov, df = ols(frame.value.to_numpy(float), X)
-    return SeriesFit(frame.reset_index(drop=True), X, terms, coef, cov, df), terms
+def fit_level(frame, covariate):
+    """:class:`LevelFit` of one covariate on the series values ``frame``, or why it cannot be tested.
+
+    Returns
+    -------
+    fit : LevelFit or None
+    reason : str
+        "" when fitted, else "not testable: ..." (one level, constant within
+        every parent, too few units: :func:`rocklab.lab.hierarchy.too_few_units`).
+    units : pandas.DataFrame
+        The units the fit rests on (:func:`unit_values`).
+    """
+    level = COVARIATE_LEVEL[covariate]
+    if covariate not in frame or frame[covariate].isna().any():
+        return None, "not testable: not known for every series", frame.iloc[:0]
+    units = unit_values(frame, covariate)
+    if parent(level) in UNIT_COLUMN:
+        units = units[units.groupby("parent").unit_id.transform("size") > 1].reset_index(drop=True)
+        if units.empty:
+            return None, f"not testable: no {parent(level)} holds two {level}s with a value", units
+    levels = sorted(units[covariate].unique())
+    if len(levels) < 2:
+        only = f" ({_level_text(levels[0])})" if levels else ""
+        return None, f"not testable: only one level{only} among {plural(level, len(units))}", units
+    parents = sorted(units.parent.unique())
+    base = np.column_stack([(units.parent == p).to_numpy(float) for p in parents])
+    if covariate in NUMERIC:
+        new = {"per unit": units[covariate].to_numpy(float)}
+        per_level = None
+    else:
+        ref = levels[0]
+        new = {f"{_level_text(v)} - {_level_text(ref)}": (units[covariate] == v).to_numpy(float) for v in levels[1:]}
+        per_level = {_level_text(v): int((units[covariate] == v).sum()) for v in levels}
+    X = np.column_stack([base, *new.values()])
+    if np.linalg.matrix_rank(X) < X.shape[1]:
+        return None, f"not testable: constant within every {parent(level)} of {plural(level, len(units))}", units
+    df = len(units) - X.shape[1]
+    reason = too_few_units(level, len(units), df, per_level)
+    if reason:
+        return None, reason, units
+    coef, cov, df = ols(units.value.to_numpy(float), X)
+    columns = {label: base.shape[1] + i for i, label in enumerate(new)}
+    return LevelFit(units, covariate, level, X, columns, coef, cov, df), "", units
 
 
 def _row(boundary, response, source, covariate, **kw):
     return {"boundary": boundary, "response": response, "source": source, "covariate": covariate, **kw}
 
 
-def between_series_rows(frame, boundary, response, source, covariates):
-    """Effects of the series covariates on one response (:func:`fit_series`), one row per term."""
-    fit, terms = fit_series(frame, covariates)
-    common = dict(n_series=len(frame), n_tests=int(frame.n_tests.sum()))
+def covariate_rows(frame, boundary, response, source, covariate):
+    """The effect of one series covariate on one response at its level (:func:`fit_level`), one row per term."""
+    fit, reason, units = fit_level(frame, covariate)
+    level = COVARIATE_LEVEL[covariate]
+    common = dict(
+        n_series=int(units.n_series.sum()) if len(units) else len(frame),
+        n_tests=int(units.n_tests.sum()) if len(units) else int(frame.n_tests.sum()),
+        unit_level=level,
+        n_units=len(units),
+    )
+    if fit is None:
+        return [_row(boundary, response, source, covariate, model="", verdict=reason, **common)]
+    up = parent(level)
+    within = f" + a mean per {up}" if up in UNIT_COLUMN else ""
+    model = f"{level} means ~ {covariate}{within}, OLS ({plural(level, len(units))})"
     rows = []
-    for c, j, term, reason in terms:
-        if reason or fit is None:
-            k = 1 + sum(t[1] is not None for t in terms)
-            why = reason or f"not testable: {len(frame)} series for {k} coefficients"
-            rows.append(_row(boundary, response, source, c, model="", verdict=why, **common))
-            continue
+    for term, j in fit.columns.items():
         est, se = fit.coef[j], math.sqrt(fit.cov[j, j])
         lo, hi, p = t_interval(est, se, fit.df)
-        span = (np.nan, np.nan)
-        scale = 1.0
-        if c in NUMERIC:
-            span = (frame[c].min(), frame[c].max())
+        span, scale = (np.nan, np.nan), 1.0
+        if covariate in NUMERIC:
+            span = (units[covariate].min(), units[covariate].max())
             scale = span[1] - span[0]
-            term = f"over {c} {span[0]:.3g}-{span[1]:.3g}"
-        entered = " + ".join(dict.fromkeys(t[0] for t in terms if t[1] is not None))
+            term = f"over {covariate} {span[0]:.3g}-{span[1]:.3g}"
         rows.append(
             _row(
-                boundary, response, source, c,
-                term=term, model=f"series values ~ {entered}, OLS",
-                estimate=est * scale, ci_low=lo * scale, ci_high=hi * scale, slope=est if c in NUMERIC else np.nan,
-                p=p, df=fit.df, span_low=span[0], span_high=span[1], **common,
+                boundary, response, source, covariate,
+                term=term, model=model, estimate=est * scale, se=se * scale, ci_low=lo * scale, ci_high=hi * scale,
+                slope=est if covariate in NUMERIC else np.nan, p=p, df=fit.df, span_low=span[0], span_high=span[1],
+                **common,
             )
         )  # fmt: skip
     return rows
@@ -400,80 +407,56 @@ def within_series_effects(tests, response, covariate):
     return pd.Series(out, dtype=float)
 
 
+def wall_mean_row(values, walls, **row):
+    """The mean over walls of ``values`` (one per series: each wall the mean of its series) with a t
+    interval on walls - 1 df, as a row; "not testable" below the units a verdict needs."""
+    null = row.pop("null", 0.0)
+    by_wall = pd.Series(np.asarray(values, float), index=np.asarray(walls)).groupby(level=0).mean()
+    k = len(by_wall)
+    row |= dict(unit_level="wall", n_units=k)
+    reason = too_few_units("wall", k, k - 1)
+    if reason:
+        return row | {"model": "", "verdict": reason}
+    m, se = by_wall.mean(), by_wall.std(ddof=1) / math.sqrt(k)
+    lo, hi, p = t_interval(m, se, k - 1, null=null)
+    return row | dict(estimate=m, se=se, ci_low=lo, ci_high=hi, p=p, df=k - 1)
+
+
 def within_series_row(tests, boundary, response, covariate):
-    """The campaign-wide within-series effect: mean over series with a t interval (df = series - 1)."""
+    """The campaign-wide within-series effect: the mean over walls of the series' effects (t, walls - 1 df)."""
     effects = within_series_effects(tests, response, covariate)
-    k = len(effects)
     used = tests[tests.series.isin(effects.index)]
-    common = dict(n_series=k, n_tests=len(used))
     term = "pull - push" if covariate == "direction" else "last - first test of a series"
-    if k < 2:
+    common = dict(term=term, n_series=len(effects), n_tests=len(used))
+    if len(effects) < 2:
         levels = sorted(tests[covariate].dropna().unique())
         if covariate == "direction" and len(levels) < 2:
             why = f"not testable: only one level ({levels[0]})" if levels else "not testable: no values"
         else:
-            why = f"not testable: varies within {k} series (2 needed)"
-        return _row(boundary, response, "tests", covariate, term=term, model="", verdict=why, **common)
-    m, se = effects.mean(), effects.std(ddof=1) / math.sqrt(k)
-    lo, hi, p = t_interval(m, se, k - 1)
-    return _row(
-        boundary, response, "tests", covariate,
-        term=term, model="within-series effect per series, mean over series (t)",
-        estimate=m, ci_low=lo, ci_high=hi, p=p, df=k - 1, **common,
-    )  # fmt: skip
+            why = f"not testable: varies within {len(effects)} series (2 needed)"
+        return _row(boundary, response, "tests", covariate, model="", verdict=why, unit_level="wall",
+                    n_units=used.wall.nunique(), **common)  # fmt: skip
+    wall = used.groupby("series").wall.first().reindex(effects.index)
+    model = "within-series effect per series, mean over walls of their series' (t)"
+    return wall_mean_row(effects, wall, **_row(boundary, response, "tests", covariate, model=model, **common))
 
 
 def mean_row(frame, boundary, response, source, value):
-    """The mean of the series' values with a t interval (df = series - 1) and the p-value of mean = value."""
-    y = frame.value.to_numpy(float)
-    common = dict(n_series=len(y), n_tests=int(frame.n_tests.sum()), term="mean over series")
-    if len(y) < 2:
-        return _row(boundary, response, source, "mean", model="", verdict="not testable: one series", **common)
-    m, se = y.mean(), y.std(ddof=1) / math.sqrt(len(y))
-    lo, hi, p = t_interval(m, se, len(y) - 1, null=value)
-    return _row(boundary, response, source, "mean", model="mean of series values (t)", estimate=m, ci_low=lo,
-                ci_high=hi, p=p, df=len(y) - 1, **common)  # fmt: skip
+    """The mean over walls (each the mean of its series' values) with a t interval (walls - 1 df) and the
+    p-value of mean = value."""
+    common = dict(n_series=len(frame), n_tests=int(frame.n_tests.sum()), term="mean over walls")
+    model = "mean over walls of their series' values (t)"
+    return wall_mean_row(frame.value, frame.wall, null=value, **_row(boundary, response, source, "mean", model=model,
+                                                                       **common))  # fmt: skip
 
 
 # --- verdicts ---------------------------------------------------------------------------------
 
 
-def verdict(kind, low, high, p, value=0.0, margin=0.0, alpha=ALPHA):
-    """The verdict on a claim from the 95 % interval [low, high] and the p-value.
-
-    Parameters
-    ----------
-    kind : {'zero', 'below', 'near'}
-        No effect; the mean below ``value``; the mean within ``value`` +- ``margin``.
-    margin : float
-        Absolute margin: the effect (or distance from ``value``) that counts as negligible.
-
-    Returns
-    -------
-    str
-        'supported', 'contradicted' or 'inconclusive'.
-    """
-    if kind == "zero":
-        if p < alpha:
-            return "contradicted"
-        return "supported" if -margin <= low and high <= margin else "inconclusive"
-    if kind == "below":
-        return "supported" if high < value else "contradicted" if low >= value else "inconclusive"
-    if kind == "near":
-        if value - margin <= low and high <= value + margin:
-            return "supported"
-        return "contradicted" if high < value - margin or low > value + margin else "inconclusive"
-    raise ValueError(f"unknown kind of claim {kind!r}")
-
-
-def claim_text(kind, value, margin):
-    """The claim of a row in words: "no effect", "mean below 1", "mean within 10% of 1"."""
-    words = {"zero": "no effect", "below": f"mean below {value:g}", "near": f"mean within {margin:.0%} of {value:g}"}
-    return words[kind]
-
-
-def _judge(rows, claims, means, margin):
-    """Verdicts of every row: the paper's claims at ALPHA, the other "no effect" checks Holm-adjusted."""
+def _judge(rows, claims):
+    """Verdicts of every row, each family (the paper's statements; the exploratory "no effect" checks)
+    corrected for its own multiplicity: p Holm-adjusted, and a claim supported only by its simultaneous
+    (Bonferroni) interval at 1 - ALPHA/m, m the family's judged rows."""
     by_key = {c.key: c for c in claims}
     by_effect = {(c.boundary, c.response, c.covariate): c.key for c in claims if c.covariate != "mean"}
     for r in rows:
@@ -481,35 +464,44 @@ def _judge(rows, claims, means, margin):
     table = pd.DataFrame(rows)
     for c in ("term", "model", "verdict"):
         table[c] = table[c].fillna("") if c in table else ""
-    for c in ("estimate", "ci_low", "ci_high", "slope", "p", "df", "span_low", "span_high"):
+    for c in ("estimate", "se", "ci_low", "ci_high", "slope", "p", "df", "span_low", "span_high"):
         table[c] = table[c].astype(float) if c in table else np.nan
-    explore = table.index[(table.statement == "") & np.isfinite(table.p)]
     table["p_holm"] = np.nan
-    table.loc[explore, "p_holm"] = holm(table.loc[explore, "p"].to_numpy())
+    table["verdict_level"] = np.nan
+    for family in (table.statement != "", table.statement == ""):
+        judged = table.index[family & np.isfinite(table.p)]
+        table.loc[judged, "p_holm"] = holm(table.loc[judged, "p"].to_numpy())
+        table.loc[judged, "verdict_level"] = 1 - ALPHA / max(len(judged), 1)
     claimed, margins, words, papers, verdicts = [], [], [], [], []
     for r in table.itertuples():
         claim = by_key.get(r.statement)
         kind, value = (claim.kind, claim.value) if claim else ("zero", 0.0)
-        # "close to v": a margin of v; "no effect": a margin of the response's mean
-        absolute = margin * (abs(value) if kind == "near" else abs(means.get((r.boundary, r.response), np.nan)))
+        margin = margin_of(r.response)
         claimed.append(value if kind != "zero" else np.nan)
-        margins.append(absolute)
+        margins.append(margin)
         papers.append(claim.paper if claim else "")
         words.append(claim_text(kind, value, margin))
-        p = r.p if claim else r.p_holm
-        verdicts.append(r.verdict or verdict(kind, r.ci_low, r.ci_high, p, value, absolute))
+        if r.verdict:
+            verdicts.append(r.verdict)
+            continue
+        low, high, _ = t_interval(r.estimate, r.se, r.df, level=r.verdict_level)
+        verdicts.append(verdict(kind, low, high, r.p_holm, value, margin))
     return table.assign(claimed_value=claimed, margin=margins, claim=words, paper=papers, verdict=verdicts)
 
 
 #: Columns of campaign_effects.csv, in order (workflow/schemas/campaign_effects.schema.yaml).
 COLUMNS = (
     "statement", "boundary", "response", "source", "covariate", "term", "claim", "verdict",
-    "estimate", "ci_low", "ci_high", "p", "p_holm", "df", "n_series", "n_tests",
-    "slope", "span_low", "span_high", "claimed_value", "margin", "model", "paper",
+    "estimate", "ci_low", "ci_high", "p", "p_holm", "df", "unit_level", "n_units", "n_series", "n_tests",
+    "slope", "span_low", "span_high", "claimed_value", "margin", "verdict_level", "model", "paper",
 )  # fmt: skip
 
 
-def campaign_effects(tests, diagnosis=None, qc=None, margin=MARGIN, claims=PAPER_CLAIMS):
+def _covariates(boundary):
+    return [c for c in SERIES_COVARIATES if c != "contact_depth_mm" or boundary == "one-sided"]
+
+
+def campaign_effects(tests, diagnosis=None, qc=None, walls=None, claims=PAPER_CLAIMS):
     """Every parameter of the campaign against every covariate, and the paper's statements judged.
 
     Parameters
@@ -520,8 +512,9 @@ def campaign_effects(tests, diagnosis=None, qc=None, margin=MARGIN, claims=PAPER
         results/diagnosis.json (its series entries).
     qc : pandas.DataFrame, optional
         results/qc.csv, for the test's place among all the tests of its series.
-    margin : float
-        Relative margin of "no effect" and "close to" (:func:`verdict`).
+    walls : mapping, optional
+        Specimen -> wall (the campaign's specimens.csv); without it ``tests``
+        must have a ``wall`` column (:func:`with_walls`).
     claims : sequence of Claim
         The statements to test with the paper's words; every other effect is
         checked against "no effect".
@@ -532,14 +525,13 @@ def campaign_effects(tests, diagnosis=None, qc=None, margin=MARGIN, claims=PAPER
         campaign_effects.csv (:data:`COLUMNS`): one row per (boundary,
         response, covariate term) and per claim on a mean; statements first.
     """
-    tests = with_test_order(tests, qc)
+    tests = with_walls(with_test_order(tests, qc), walls)
     values = series_values(tests, diagnosis)
     rows = []
-    means = values.groupby(["boundary", "response"]).value.mean().to_dict()
     for (boundary, response), frame in values.groupby(["boundary", "response"], sort=True):
         source = frame.source.iloc[0]
-        covariates = [c for c in SERIES_COVARIATES if c != "contact_depth_mm" or boundary == "one-sided"]
-        rows += between_series_rows(frame, boundary, response, source, covariates)
+        for c in _covariates(boundary):
+            rows += covariate_rows(frame, boundary, response, source, c)
         if source == "tests":
             sub = tests[tests.boundary == boundary]
             rows += [within_series_row(sub, boundary, response, c) for c in WITHIN_COVARIATES]
@@ -548,17 +540,14 @@ def campaign_effects(tests, diagnosis=None, qc=None, margin=MARGIN, claims=PAPER
             for c in claims
             if c.covariate == "mean" and (c.boundary, c.response) == (boundary, response)
         ]
-    # the boundary condition: the responses of both, one value per series, adjusted for h/b and unit
+    # the boundary condition: both of a specimen's boundary conditions compared within the specimen
     for response, frame in values.groupby("response", sort=True):
         if frame.boundary.nunique() == 2:
-            means[("both", response)] = frame.value.mean()
-            covariates = ["boundary", "h_over_b", "unit"]
-            fit_rows = between_series_rows(frame, "both", response, frame.source.iloc[0], covariates)
-            rows += [r for r in fit_rows if r["covariate"] == "boundary"]
+            rows += covariate_rows(frame, "both", response, frame.source.iloc[0], "boundary")
     if not rows:
         # no valid test: the table has its columns and no row
         return pd.DataFrame(columns=list(COLUMNS))
-    table = _judge(rows, claims, means, margin)
+    table = _judge(rows, claims)
     # the paper's statements first, in the paper's order, then the rest
     rank = {c.key: i for i, c in enumerate(claims)}
     table["rank"] = table.statement.map(rank).fillna(len(rank))
@@ -566,17 +555,18 @@ def campaign_effects(tests, diagnosis=None, qc=None, margin=MARGIN, claims=PAPER
     return table[list(COLUMNS)].reset_index(drop=True)
 
 
-def series_fits(tests, diagnosis=None, qc=None):
-    """The between-series fits of every (boundary, response) for the figures.
+def series_fits(tests, diagnosis=None, qc=None, walls=None):
+    """The fits of the numeric covariates at their level, for the figures.
 
     Returns
     -------
     dict
-        (boundary, response) -> :class:`SeriesFit` (None where too few series).
+        (boundary, response) -> {covariate: :class:`LevelFit`}, the
+        covariates that could be fitted only.
     """
-    values = series_values(with_test_order(tests, qc), diagnosis)
+    values = series_values(with_walls(with_test_order(tests, qc), walls), diagnosis)
     out = {}
     for (boundary, response), frame in values.groupby(["boundary", "response"], sort=True):
-        covariates = [c for c in SERIES_COVARIATES if c != "contact_depth_mm" or boundary == "one-sided"]
-        out[(boundary, response)] = fit_series(frame, covariates)[0]
+        fits = {c: fit_level(frame, c)[0] for c in _covariates(boundary) if c in NUMERIC}
+        out[(boundary, response)] = {c: f for c, f in fits.items() if f is not None}
     return out

@@ -15,9 +15,10 @@ scattered between series.  Hence
   within-series sd of ~0.01 it declares nearly every series "different",
   whereas the question (Sect. 3, "only one test series shows much smaller
   values") is which series is atypical of the population of series;
-* effects of contact depth and unit material are tested on the series
-  means (Kruskal-Wallis; the experimental unit is the series), so that
-  repeated tests do not inflate the sample size;
+* effects of contact depth and unit material are tested on the means of
+  the units they are properties of (Kruskal-Wallis; the series for contact
+  depth, the wall for the unit material, :mod:`rocklab.lab.hierarchy`), so
+  that repeated tests and series do not inflate the sample size;
 * for the same reason, a value quoted for a whole boundary condition (the
   paper's "0.95" and "1.05", Table 3) is the mean over its tests with a
   series (cluster) bootstrap interval (:func:`cluster_bootstrap_ci`): a
@@ -37,6 +38,7 @@ import pandas as pd
 
 from rocklab._imports import lazy_module
 from rocklab.dissipation.analysis import amplitude_law_fit
+from rocklab.lab.hierarchy import COVARIATE_LEVEL, UNIT_COLUMN, too_few_units
 from rocklab.lab.validity import Verdict
 from rocklab.physics.restitution import CALIBRATED_RATIO_ONE_SIDED
 
@@ -361,34 +363,54 @@ def symmetry_test(tests_df, value, by="series", direction="direction"):
     return pd.DataFrame(rows)
 
 
-def factor_effect(tests_df, factor, value="e_ratio", by="series", within="boundary", p_crit=0.05):
-    """Systematic effect of a between-series factor (contact depth, unit).
+def factor_effect(tests_df, factor, value="e_ratio", walls=None, within="boundary", p_crit=0.05):
+    """Systematic effect of a between-series factor (contact depth, unit material).
 
-    Kruskal-Wallis on the series means grouped by the factor's levels, per
-    boundary condition (the series is the experimental unit).  Returns one
-    row per boundary: levels, n_series per level, level means, H, p,
-    ``systematic`` (p < p_crit) and the test used.
+    Kruskal-Wallis on the means of the units the factor is a property of
+    (:data:`rocklab.lab.hierarchy.COVARIATE_LEVEL`: the series for contact
+    depth, the wall for the unit material), grouped by the factor's levels,
+    per boundary condition: two series of one wall are one wall's evidence
+    about its material.  Below the units a test needs
+    (:func:`rocklab.lab.hierarchy.too_few_units`) the row gives no statistic
+    and its ``test`` says why.
+
+    Parameters
+    ----------
+    walls : mapping, optional
+        Specimen -> wall; needed for a property of the wall.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per boundary: levels, n_units per level, level means, H, p,
+        ``systematic`` (p < p_crit), ``unit_level`` and the test used.
     """
+    level = COVARIATE_LEVEL[factor]
     rows = []
     d = tests_df.dropna(subset=[factor, value])
+    if level == "wall":
+        d = d.assign(wall=d.specimen.map(walls))
     for gkey, grp in d.groupby(within, sort=True):
-        sm = grp.groupby(by).agg(level=(factor, "first"), m=(value, "mean"))
+        sm = grp.groupby(UNIT_COLUMN[level]).agg(level=(factor, "first"), m=(value, "mean"))
         groups = {lvl: s.m.to_numpy() for lvl, s in sm.groupby("level", sort=True)}
-        if len(groups) < 2 or sum(len(v) for v in groups.values()) <= len(groups):
+        if len(groups) < 2:
             continue
-        H, p = stats.kruskal(*groups.values())
+        per_level = {str(k): len(v) for k, v in groups.items()}
+        reason = too_few_units(level, len(sm), len(sm) - len(groups), per_level)
+        H, p = (np.nan, np.nan) if reason else stats.kruskal(*groups.values())
         rows.append(
             {
                 within: gkey,
                 "factor": factor,
                 "value": value,
                 "levels": list(groups),
-                "n_series": [len(v) for v in groups.values()],
+                "n_units": [len(v) for v in groups.values()],
+                "unit_level": level,
                 "level_means": [float(np.mean(v)) for v in groups.values()],
                 "statistic": H,
                 "p": p,
-                "systematic": p < p_crit,
-                "test": "Kruskal-Wallis on series means",
+                "systematic": bool(p < p_crit),
+                "test": reason or f"Kruskal-Wallis on {level} means",
             }
         )
     return pd.DataFrame(rows)
@@ -433,7 +455,7 @@ def series_table(tests_df, qc_df, impacts_df=None, by="series", n_boot=4000, see
     return out.drop(columns="n_tests")
 
 
-def campaign_tables(datasets, qc_df, n_boot=4000, seed=0):
+def campaign_tables(datasets, qc_df, walls, n_boot=4000, seed=0):
     """Every table of Sects. 3-4 for the valid tests of a campaign.
 
     Parameters
@@ -442,6 +464,9 @@ def campaign_tables(datasets, qc_df, n_boot=4000, seed=0):
         Stored motions of the valid tests (:func:`rocklab.lab.motion.stored_motion`).
     qc_df : pandas.DataFrame
         ``results/qc.csv``.
+    walls : mapping
+        Specimen -> wall (:func:`rocklab.lab.hierarchy.walls_of_specimens`),
+        the unit of the unit material's effect.
 
     Returns
     -------
@@ -497,7 +522,7 @@ def campaign_tables(datasets, qc_df, n_boot=4000, seed=0):
     effects = pd.concat(
         [
             factor_effect(one, "contact_depth_mm"),
-            factor_effect(tests, "unit"),
+            factor_effect(tests, "unit", walls=walls),
             factor_effect(one, "contact_depth_mm", value="centre_amplification"),
             symmetry_test(tests, "theta0_over_alpha").assign(factor="push/pull"),
             symmetry_test(tests, "e_ratio").assign(factor="push/pull"),

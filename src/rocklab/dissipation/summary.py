@@ -12,6 +12,7 @@ import ast
 
 import pandas as pd
 
+from rocklab.lab.hierarchy import MIN_DF, MIN_UNITS_PER_LEVEL
 from rocklab.summaries import Tolerance
 
 #: How far two machines may take the campaign-level numbers apart: they are
@@ -66,15 +67,18 @@ def _level(value) -> str:
 
 
 def _effects(effects: pd.DataFrame) -> dict:
-    """Kruskal-Wallis tests by boundary and factor; push/pull by series."""
+    """Kruskal-Wallis tests by boundary and factor, on the units of the factor's level; push/pull by series."""
     out = {"kruskal": {}, "push_pull": {}}
     for r in effects[effects["factor"] != "push/pull"].itertuples():
         levels = ast.literal_eval(r.levels)
         means = ast.literal_eval(r.level_means)
+        units = ast.literal_eval(r.n_units)
         out["kruskal"].setdefault(BOUNDARIES[r.boundary], {})[f"{r.factor}__{r.value}"] = {
             "p": r.p,
+            "unit_level": r.unit_level,
+            "test": r.test,
             # pairs, not a mapping: the levels keep their order in the sorted file
-            "levels": [[_level(k), m] for k, m in zip(levels, means, strict=True)],
+            "levels": [[_level(k), m, n] for k, m, n in zip(levels, means, units, strict=True)],
         }
     for r in effects[effects["factor"] == "push/pull"].itertuples():
         out["push_pull"].setdefault(r.series, {})[r.value] = {
@@ -149,14 +153,21 @@ def campaign_level_summary(path) -> dict:
         ``diagnosis/campaign_effects.csv`` as written by the rule ``campaign_effects``.
     """
     table = pd.read_csv(path, keep_default_na=False, na_values=[""])
-    fields = ("verdict", "estimate", "ci_low", "ci_high", "p", "n_series", "n_tests", "margin", "term", "claim")
+    fields = (
+        "verdict", "estimate", "ci_low", "ci_high", "p", "p_holm", "unit_level", "n_units", "n_series", "n_tests",
+        "margin", "term", "claim",
+    )  # fmt: skip
     stated = table[table["statement"].fillna("") != ""]
     rest = table[table["statement"].fillna("") == ""]
     judged = rest[~rest["verdict"].str.startswith("not testable")]
-    near = stated[stated["claim"].str.startswith("mean within")]
     return {
-        # the relative margin of the verdicts (config diagnosis: campaign_margin)
-        "margin_relative": (near["margin"] / near["claimed_value"].abs()).iloc[0] if len(near) else None,
+        # the margins of the tests' ratios (rocklab.dissipation.covariates.margin_of)
+        "margins": table.dropna(subset=["margin"]).groupby("response")["margin"].first().to_dict(),
+        # the level of the simultaneous intervals of the paper's statements (Bonferroni over the family)
+        "statements_verdict_level": stated["verdict_level"].min() if len(stated) else None,
+        # what a verdict needs (rocklab.lab.hierarchy)
+        "min_units_per_level": MIN_UNITS_PER_LEVEL,
+        "min_df": MIN_DF,
         "order": stated["statement"].tolist(),
         "statements": {
             r["statement"]: {

@@ -36,6 +36,15 @@ def half_diagonal(height, thickness):
     return 0.5 * np.hypot(height, thickness)
 
 
+def thickness(R, alpha):
+    """Wall thickness b = 2 R sin alpha from the half diagonal and the slenderness angle (Fig. 1).
+
+    The inverse of :func:`half_diagonal` and :func:`slenderness_angle` for
+    the thickness, in the unit of ``R``.
+    """
+    return 2.0 * np.asarray(R, float) * np.sin(np.asarray(alpha, float))
+
+
 def inertia_ratio():
     """m R^2 / I_O of a homogeneous rectangle about its base edge [-].
 

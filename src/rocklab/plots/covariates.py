@@ -1,9 +1,10 @@
 """The campaign level in one figure: each parameter against h/b and contact depth.
 
 One row per parameter (:func:`rocklab.dissipation.covariates.series_fits`),
-one column per (boundary condition, covariate): the series' values with the
-other covariates' effects removed (a partial plot), the fitted line of the
-between-series model and its 95 % confidence band.
+one column per (boundary condition, covariate): the values of the units the
+covariate is a property of (specimens for h/b, series for contact depth)
+with their parent's departure removed (a partial plot), the fitted line of
+the model at that level and its 95 % confidence band.
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ def covariate_figure(fits, effects=None):
     Parameters
     ----------
     fits : dict
-        (boundary, response) -> SeriesFit or None
+        (boundary, response) -> {covariate: LevelFit}
         (:func:`rocklab.dissipation.covariates.series_fits`).
     effects : pandas.DataFrame, optional
         campaign_effects.csv: each panel's title gives the effect's verdict and p.
@@ -38,11 +39,11 @@ def covariate_figure(fits, effects=None):
     -------
     matplotlib.figure.Figure
     """
-    responses = sorted({r for (_, r), f in fits.items() if f is not None})
+    responses = sorted({r for (_, r), f in fits.items() if f})
     if not responses:
         fig, ax = plt.subplots(figsize=(6, 2))
         ax.axis("off")
-        ax.text(0.5, 0.5, "no parameter has enough series for a between-series fit", ha="center", va="center")
+        ax.text(0.5, 0.5, "no parameter has enough units for a fit at its level", ha="center", va="center")
         return fig
     height = 1.9 * len(responses) + 1.2
     fig, axes = plt.subplots(len(responses), len(COLUMNS), figsize=(11, height), squeeze=False, sharex="col")
@@ -51,12 +52,12 @@ def covariate_figure(fits, effects=None):
     for i, response in enumerate(responses):
         for j, (boundary, covariate, label) in enumerate(COLUMNS):
             ax = axes[i, j]
-            fit = fits.get((boundary, response))
-            if fit is None or not any(t[0] == covariate and t[1] is not None for t in fit.terms):
+            fit = fits.get((boundary, response), {}).get(covariate)
+            if fit is None:
                 ax.text(0.5, 0.5, "not testable", ha="center", va="center", transform=ax.transAxes, color="0.5")
                 ax.set_yticks([])
             else:
-                part = fit.partial(covariate)
+                part = fit.partial()
                 ax.fill_between(part["grid"], part["low"], part["high"], color="C0", alpha=0.2, lw=0)
                 ax.plot(part["grid"], part["line"], color="C0")
                 for unit, rows in fit.frame.groupby("unit"):
@@ -80,7 +81,7 @@ def covariate_figure(fits, effects=None):
     if legend:
         fig.legend(legend.values(), legend.keys(), loc="lower center", ncol=len(legend), fontsize=8)
     fig.suptitle(
-        "Campaign level: series values adjusted for the other covariates, fit and 95 % band",
+        "Campaign level: unit values within their parent, fit at the covariate's level and 95 % band",
         y=1 - 0.15 / height,
         fontsize=10,
     )

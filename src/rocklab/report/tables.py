@@ -10,6 +10,7 @@ from __future__ import annotations
 import functools
 from collections.abc import Callable, Mapping
 
+from rocklab.lab.hierarchy import plural
 from rocklab.lab.validity import Verdict
 from rocklab.report.format import NOT_MEASURED, show
 
@@ -103,19 +104,21 @@ def stands_apart(n: Mapping) -> str:
 
 @_of("dissipation")
 def effects(n: Mapping) -> str:
-    """Kruskal-Wallis tests of the series means by factor (``effects.csv``)."""
+    """Kruskal-Wallis tests of the means of the factor's units by level (``effects.csv``)."""
     rows = [
         [
             name,
             test.split("__")[0],
             test.split("__")[1],
-            ", ".join(f"{level}: {show(mean, '.6g')}" for level, mean in e["levels"]),
-            show(e["p"], ".2f"),
+            ", ".join(
+                f"{level}: {show(mean, '.6g')} ({plural(e['unit_level'], units)})" for level, mean, units in e["levels"]
+            ),
+            show(e["p"], ".2f") if e["p"] is not None else e["test"],
         ]
         for key, name in (("two_sided", "two-sided"), ("one_sided", "one-sided"))
         for test, e in n["dissipation"]["effects"]["kruskal"].get(key, {}).items()
     ]
-    return markdown_table(["boundary", "factor", "quantity", "series means by level", "p"], rows)
+    return markdown_table(["boundary", "factor", "quantity", "means by level (units)", "p"], rows)
 
 
 @_of("dissipation")
@@ -198,13 +201,15 @@ def campaign_statements(n: Mapping) -> str:
             f"{e['boundary']}: {e['response']}, {e['covariate'] if e['covariate'] != 'mean' else 'its mean'}",
             e["claim"],
             f"{e['term']}: {_effect_cell(e)}" if e["term"] else _effect_cell(e),
-            show(e["p"], ".2g"),
-            f"{show(e['n_series'])} ({show(e['n_tests'])})",
+            show(e["p_holm"], ".2g"),
+            f"{plural(e['unit_level'], e['n_units'])} ({show(e['n_series'])}, {show(e['n_tests'])})",
             f"**{e['verdict']}**",
         ]
         for e in (c["statements"][key] for key in c["order"])
     ]
-    header = ["the paper", "parameter, covariate", "claim", "effect [95 % CI]", "p", "series (tests)", "verdict"]
+    header = [
+        "the paper", "parameter, covariate", "claim", "effect [95 % CI]", "Holm p", "units (series, tests)", "verdict",
+    ]  # fmt: skip
     return markdown_table(header, rows)
 
 
@@ -290,6 +295,9 @@ def calibrated_walls(n: Mapping) -> str:
                 "",
             ]
         )
+        if c.get("sizes"):
+            z = c["sizes"]
+            rows.append([f"`{z['model']}` (absolute sizes)", show(z["N_O"], ".3f"), show(z["scatter"], ".3f"), "", ""])
         for finding, f in sorted(c["findings"].items(), key=lambda item: item[1]["rank"]):
             rows.append(
                 [

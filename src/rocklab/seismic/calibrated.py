@@ -10,12 +10,18 @@ below which the walls stop dead (:class:`rocklab.physics.impact.Sticking`),
 the contact gap of one-sided walls (Fig. 12), hinge asymmetry, flight damping.
 
 Each boundary's entry of the diagnosis (scope ``"boundary"``) pools its
-series: a cause named in at least half of them, with the test-weighted mean
-of its parameters over the series that name it
+series: a cause named in at least half of them, with the random-effects
+mean of its parameters over all of them
 (:func:`rocklab.diagnosis.series.diagnose_boundary`).  Every parameter is
-dimensionless (ratios to alpha, to e_an, to thetadot_r of Eq. 16), so the
-findings transfer to the maps' wall (alpha, R of the configuration): the
-calibrated wall is the diagnosis model of that wall
+dimensionless (ratios to alpha, to e_an, to thetadot_r of Eq. 16), and the
+calibrated walls carry them as found: the transfer to the maps' wall
+(alpha, R of the configuration), about five times thicker than the lab's
+walls (113-123 mm), assumes dimensionless similarity.  That is an
+assumption, bounded here by its alternative (issue 24, item 8): if hinge
+rounding, the contact gap and sticking are absolute sizes of the contact,
+their ratios shrink with the thickness (:data:`ABSOLUTE_SIZE`), and the
+``-sizes`` wall carries them so; N_O is reported as the range over the two
+(:func:`calibrated_table`).  The calibrated wall is the diagnosis model of that wall
 (:func:`rocklab.diagnosis.extended.rocking_model`, :func:`map_wall_model`):
 the causes' own laws, no mapping of them here.  What the maps know of a
 cause is an attribute of it (:class:`rocklab.diagnosis.causes.Cause`): its
@@ -30,6 +36,10 @@ Models
     The same with one finding switched off (its cause's short name): the
     change of N_O and of the scatter against the full calibrated wall tells
     which finding matters most.
+``2s-calibrated-sizes`` / ``1s-calibrated-sizes``
+    Every finding, those of :data:`ABSOLUTE_SIZE` as absolute sizes: the
+    other end of the transfer assumption (where the diagnosis gives the
+    thickness of its walls and names one of them).
 """
 
 from __future__ import annotations
@@ -48,6 +58,19 @@ log = logging.getLogger(__name__)
 
 #: Prefix of the model names of a boundary condition (as the paper's models).
 PREFIX = {"two-sided": "2s", "one-sided": "1s"}
+#: Suffix of the calibrated wall with the findings of :data:`ABSOLUTE_SIZE` as absolute sizes.
+SIZES = "sizes"
+
+#: The findings that may be absolute sizes of the contact rather than ratios, and their parameters on a
+#: wall ``s`` times as thick as the lab's (s = b_maps / b_lab), the sizes themselves unchanged:
+#: hinge rounding shifts the pivot inwards by a length l, alpha_r / alpha = 1 - 2 l / b; a contact gap of
+#: width d at the top is a rotation d / h, gap / alpha = d / b; a wall that sticks below a rebound of
+#: amplitude d at the top lands at (v / thetadot_r)^2 = 2 theta_apex / alpha = 2 d / b (Eq. 16, small alpha).
+ABSOLUTE_SIZE = {
+    "instability_angle": lambda v, s: {"alpha_r_over_alpha": 1.0 - (1.0 - v["alpha_r_over_alpha"]) / s},
+    "contact_gap": lambda v, s: {"gap_over_alpha": v["gap_over_alpha"] / s},
+    "stop_threshold": lambda v, s: {"v_stop_over_vr": v["v_stop_over_vr"] / np.sqrt(s)},
+}
 
 
 def short_name(cause):
@@ -59,12 +82,12 @@ def short_name(cause):
 
 
 def name_pattern():
-    """Model names of the calibrated walls: ``{2s,1s}-calibrated[-no-<short>]``, a regular expression."""
+    """Model names of the calibrated walls: ``{2s,1s}-calibrated[-no-<short>|-sizes]``, a regular expression."""
     # the catalogue is read at call time: the Snakefile and the map jobs import this module for
     # its names, and the diagnosis package costs 0.7 s to import
     from rocklab.diagnosis.catalogue import short_names
 
-    return r"[12]s-calibrated(?:-no-(?:" + "|".join(short_names()) + "))?"
+    return r"[12]s-calibrated(?:-no-(?:" + "|".join(short_names()) + f")|-{SIZES})?"
 
 
 @dataclass(frozen=True)
@@ -129,20 +152,38 @@ def boundary_findings(diagnosis, boundary):
     return out
 
 
+def lab_thickness(diagnosis, boundary):
+    """The mean thickness [m] of the lab's walls of a boundary condition (its entry's
+    ``wall_thickness_m``), None where the diagnosis does not give it."""
+    from rocklab.diagnosis.result import CampaignDiagnosis
+
+    entry = CampaignDiagnosis.of(diagnosis).boundary(boundary)
+    return None if entry is None else entry.wall_thickness_m
+
+
+def has_sizes(diagnosis, boundary, found=None):
+    """Whether a boundary has a ``-sizes`` wall: the thickness of its walls is known and it names a
+    finding of :data:`ABSOLUTE_SIZE`."""
+    found = boundary_findings(diagnosis, boundary) if found is None else found
+    return lab_thickness(diagnosis, boundary) is not None and any(c in ABSOLUTE_SIZE for c in found)
+
+
 def model_names(diagnosis):
-    """Names of the calibrated models a diagnosis gives: per boundary with
-    findings, the full calibrated wall and one variant per finding switched off."""
+    """Names of the calibrated models a diagnosis gives: per boundary with findings, the full
+    calibrated wall, one variant per finding switched off, and the wall with absolute sizes
+    (:func:`has_sizes`)."""
     names = []
     for boundary, prefix in PREFIX.items():
         found = boundary_findings(diagnosis, boundary)
         if found:
             names.append(f"{prefix}-calibrated")
             names += [f"{prefix}-calibrated-no-{short_name(c)}" for c in found]
+            names += [f"{prefix}-calibrated-{SIZES}"] if has_sizes(diagnosis, boundary, found) else []
     return names
 
 
 def parse_name(name):
-    """(boundary, cause switched off or None) of a calibrated model name.
+    """(boundary, cause switched off or None, absolute sizes) of a calibrated model name.
 
     Raises
     ------
@@ -151,11 +192,13 @@ def parse_name(name):
     """
     from rocklab.diagnosis.catalogue import by_short, short_names
 
-    m = re.fullmatch(r"([12]s)-calibrated(?:-no-(\w+))?", name)
+    m = re.fullmatch(r"([12]s)-calibrated(?:-no-(\w+)|-(sizes))?", name)
     if m is None or (m.group(2) is not None and m.group(2) not in short_names()):
-        raise KeyError(f"{name!r} is no calibrated model (<2s|1s>-calibrated[-no-<{'|'.join(short_names())}>])")
+        raise KeyError(
+            f"{name!r} is no calibrated model (<2s|1s>-calibrated[-no-<{'|'.join(short_names())}>|-{SIZES}])"
+        )
     boundary = {v: k for k, v in PREFIX.items()}[m.group(1)]
-    return boundary, (by_short(m.group(2)).name if m.group(2) else None)
+    return boundary, (by_short(m.group(2)).name if m.group(2) else None), m.group(3) is not None
 
 
 def _switched_off(found, off, name, boundary):
@@ -202,14 +245,31 @@ def calibrated_model(diagnosis, name, alpha, R, form="linear"):
         A diagnosis whose boundary names no cause the maps' wall carries
         (:func:`boundary_findings`).
     """
-    boundary, off = parse_name(name)
+    boundary, off, sizes = parse_name(name)
     found = boundary_findings(diagnosis, boundary)
     if not found:
         raise ValueError(f"{name}: the diagnosis names no cause for {boundary} walls, nothing to calibrate")
     off = _switched_off(found, off, name, boundary)
+    if sizes:
+        found = at_absolute_size(diagnosis, boundary, found, alpha, R)
     ext = [c for c in found if c != off]
     values = {k: v for c in ext for k, v in found[c].items()}
     return map_wall_model(boundary, alpha, R, ext, values, form=form)
+
+
+def at_absolute_size(diagnosis, boundary, found, alpha, R):
+    """The findings ``found`` on the maps' wall (alpha [rad], R [m]) with those of :data:`ABSOLUTE_SIZE`
+    as absolute sizes of the contact, measured on the lab's walls (:func:`lab_thickness`).
+
+    Raises
+    ------
+    KeyError
+        Where the boundary has no such wall (:func:`has_sizes`).
+    """
+    if not has_sizes(diagnosis, boundary, found):
+        raise KeyError(f"{boundary}: the diagnosis gives no wall thickness or names no size ({', '.join(found)})")
+    s = float(wall.thickness(R, alpha)) / lab_thickness(diagnosis, boundary)
+    return {c: ABSOLUTE_SIZE[c](v, s) if c in ABSOLUTE_SIZE else v for c, v in found.items()}
 
 
 def map_wall_model(boundary, alpha, R, ext=(), values=None, base="analytic", form="linear"):
@@ -240,11 +300,13 @@ def map_wall_model(boundary, alpha, R, ext=(), values=None, base="analytic", for
 
 def describe(diagnosis, name):
     """One line on what a calibrated model holds, with the pooled parameters."""
-    boundary, off = parse_name(name)
+    boundary, off, sizes = parse_name(name)
     found = boundary_findings(diagnosis, boundary)
     off = _switched_off(found, off, name, boundary)
     parts = [f"{c} (" + ", ".join(f"{k} = {v:.3g}" for k, v in p.items()) + ")" for c, p in found.items() if c != off]
     text = f"{boundary}, calibrated on the campaign's diagnosis: " + ("; ".join(parts) or "no finding")
+    if sizes:
+        text += f"; {', '.join(c for c in found if c in ABSOLUTE_SIZE)} as absolute sizes of the lab's walls"
     return text + (f"; {off} switched off" if off else "")
 
 
@@ -267,6 +329,8 @@ TABLE_COLUMNS = [
     "N_O_shift",
     "N_O_shift_abs",
     "rank",
+    "N_O_low",
+    "N_O_high",
 ]
 
 
@@ -274,7 +338,9 @@ def calibrated_table(summary, diagnosis):
     """What the lab's findings do to the maps, per boundary condition.
 
     Rows: the paper's e-alone model of the boundary (:data:`E_ALONE`), the
-    calibrated wall, and the calibrated wall with each finding switched off.
+    calibrated wall, the calibrated wall with the findings of
+    :data:`ABSOLUTE_SIZE` as absolute sizes (role "absolute sizes", where the
+    diagnosis has it), and the calibrated wall with each finding switched off.
     Changes are per record, then averaged over the records where they are
     defined: ``N_O_change_pct`` and ``scatter_change_pct`` are
     100 (x_model / x_e-alone - 1) (minus the reductions of
@@ -282,7 +348,9 @@ def calibrated_table(summary, diagnosis):
     ``N_O_shift`` is the mean of N_O(model) - N_O(calibrated) [fraction of
     the map] and ``N_O_shift_abs`` the mean of its absolute value; ``rank``
     orders the findings by ``N_O_shift_abs`` (1: the finding that matters
-    most, switched off it moves N_O the most).
+    most, switched off it moves N_O the most).  ``N_O_low`` and ``N_O_high``,
+    on the calibrated rows, bound ``N_O_mean`` over the two transfer
+    assumptions (ratios, absolute sizes): the calibrated N_O is a range.
 
     Parameters
     ----------
@@ -311,20 +379,22 @@ def calibrated_table(summary, diagnosis):
         if not found:
             continue
         full, base = f"{prefix}-calibrated", E_ALONE[boundary]
-        models = [base, full] + [f"{full}-no-{short_name(c)}" for c in found]
+        sizes = [f"{full}-{SIZES}"] if has_sizes(diagnosis, boundary, found) else []
+        models = [base, full, *sizes] + [f"{full}-no-{short_name(c)}" for c in found]
+        roles = ["e alone", "calibrated", *["absolute sizes"] * len(sizes)] + ["finding off"] * len(found)
         missing = [m for m in models if m not in present]
         if missing:
             raise KeyError(f"the maps summary lacks the models {', '.join(missing)}")
         wide = summary.set_index(["record", "model"])[["N_O", "scatter"]].unstack("model")
         block = []
-        for model, off in zip(models, [None, None, *found]):
+        for model, off, role in zip(models, [None] * (2 + len(sizes)) + list(found), roles):
             change = -record_reductions(summary, base, model)
             shift = wide[("N_O", model)] - wide[("N_O", full)]
             block.append(
                 {
                     "boundary": boundary,
                     "model": model,
-                    "role": "e alone" if model == base else ("calibrated" if off is None else "finding off"),
+                    "role": role,
                     "finding_off": off or "",
                     "baseline": base,
                     "n_records": int(wide[("N_O", model)].notna().sum()),
@@ -340,6 +410,10 @@ def calibrated_table(summary, diagnosis):
         offs = sorted((r for r in block if r["role"] == "finding off"), key=lambda r: -r["N_O_shift_abs"])
         for k, r in enumerate(offs, 1):
             r["rank"] = k
+        calibrated = [r for r in block if r["role"] in ("calibrated", "absolute sizes")]
+        for r in calibrated:
+            r["N_O_low"] = min(c["N_O_mean"] for c in calibrated)
+            r["N_O_high"] = max(c["N_O_mean"] for c in calibrated)
         rows += block
     table = pd.DataFrame(rows, columns=TABLE_COLUMNS)
     return table.astype({"rank": "Int64"})

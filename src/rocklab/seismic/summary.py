@@ -190,6 +190,7 @@ def calibrated_summary(path, grid_n: int) -> dict | None:
     for boundary, rows in table.groupby("boundary", sort=False):
         e_alone = rows[rows["role"] == "e alone"].iloc[0]
         full = rows[rows["role"] == "calibrated"].iloc[0]
+        sizes = rows[rows["role"] == "absolute sizes"]
         offs = rows[rows["role"] == "finding off"].sort_values("rank")
         out["2s" if boundary == "two-sided" else "1s"] = {
             "e_alone": {"model": e_alone["model"], "N_O": e_alone["N_O_mean"], "scatter": e_alone["scatter_mean"]},
@@ -200,7 +201,19 @@ def calibrated_summary(path, grid_n: int) -> dict | None:
                 "scatter": full["scatter_mean"],
                 "N_O_change_pct": full["N_O_change_pct"],
                 "scatter_change_pct": full["scatter_change_pct"],
+                # the range of N_O over the two transfer assumptions (ratios, absolute sizes)
+                "N_O_low": full["N_O_low"],
+                "N_O_high": full["N_O_high"],
             },
+            "sizes": (
+                {
+                    "model": sizes["model"].iloc[0],
+                    "N_O": sizes["N_O_mean"].iloc[0],
+                    "scatter": sizes["scatter_mean"].iloc[0],
+                }
+                if len(sizes)
+                else None
+            ),
             "findings": {
                 r["finding_off"]: {
                     "model": r["model"],

@@ -28,35 +28,46 @@ def laws(v):
 
 
 def slenderness_trend(trials):
-    """How e/e_an varies with slenderness, trial by trial.
+    """How e/e_an varies with slenderness, block group by block group.
 
-    The median r/e_an of each trial regressed on (B/H)^2 ~ sin^2 alpha, the
-    variable of Housner's e: a slope means that Eq. 2 gets the trend with
-    slenderness wrong, not only the level.
+    Slenderness is a property of the block group
+    (:data:`rocklab.lab.hierarchy.BLOCK_COVARIATE_LEVEL`): the median r/e_an
+    of each trial is averaged over the trials of its group, and the group
+    levels are regressed on (B/H)^2 ~ sin^2 alpha, the variable of Housner's
+    e, with Student's t on groups - 2 degrees of freedom (the trials of a
+    group are repetitions of one block, not replicates of its slenderness).
+    A slope means that Eq. 2 gets the trend with slenderness wrong, not only
+    the level.
 
     Returns
     -------
     dict
-        ``intercept``, ``slope`` (per unit (B/H)^2), ``p``, and the level of
-        each group (mean over its trials of their medians).
+        ``intercept``, ``slope`` (per unit (B/H)^2), ``slope_se``, ``p``,
+        ``n_groups``, ``n_trials``, and the level of each group (mean over
+        its trials of their medians).
     """
     ratio = trials.ratio
     ok = np.isfinite(ratio)
     med = np.array([np.median(ratio[i][ok[i]]) for i in range(len(trials.ids))])
     x = np.tan(trials.alpha) ** 2
-    fit = stats.linregress(x, med)
+    groups = np.unique(trials.group)
+    level = np.array([med[trials.group == g].mean() for g in groups])
+    xg = np.array([x[trials.group == g][0] for g in groups])
+    fit = stats.linregress(xg, level)
     hb = np.round(1.0 / np.tan(trials.alpha))
     return {
         "intercept": float(fit.intercept),
         "slope": float(fit.slope),
         "slope_se": float(fit.stderr),
         "p": float(fit.pvalue),
+        "n_groups": int(groups.size),
+        "n_trials": len(trials.ids),
         "levels": {f"{h:.0f}": float(np.mean(med[hb == h])) for h in np.unique(hb)},
     }
 
 
 def on_ratios(trials):
-    """Across slendernesses, the trend of the per-trial median r/e_an with (B/H)^2 (:func:`slenderness_trend`);
+    """Across slendernesses, the trend of the block groups' r/e_an with (B/H)^2 (:func:`slenderness_trend`);
     None within one slenderness."""
     if not np.ptp(trials.alpha) > 0:
         return None
@@ -64,7 +75,8 @@ def on_ratios(trials):
     return {
         "value": st["slope"],
         "supports": bool(st["p"] < 0.01),
-        "text": f"per-trial median r/e_an against (B/H)^2: slope {st['slope']:+.3f} (p = {st['p']:.2g})",
+        "text": f"block-group mean of the trials' median r/e_an against (B/H)^2: slope {st['slope']:+.3f} "
+        f"(p = {st['p']:.2g}, {st['n_groups']} groups)",
     }
 
 
