@@ -20,6 +20,7 @@ convention implies, or the record is refused.
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -51,6 +52,21 @@ BAND_ORDER = 3
 
 #: Columns of tests.csv the library reads.
 REQUIRED = ("test", "ground_motion", "overturned_sp1", "overturned_sp2", "motion_file")
+
+
+#: A ground-motion name that starts with a PEER NGA record sequence number (RSN).
+_RSN = re.compile(r"^RSN(\d+)(?:_|$)", re.IGNORECASE)
+
+
+def record_of(ground_motion) -> str:
+    """The earthquake record of a ground motion: ``RSN<n>`` where its name carries the RSN, else the name.
+
+    Both horizontal components of a record (``RSN137_TABAS_BAJ-L1.AT2`` and
+    ``..._BAJ-T1.AT2``) are one record: the unit of folds and resamples.
+    """
+    name = str(ground_motion)
+    m = _RSN.match(name)
+    return f"RSN{int(m.group(1))}" if m else name
 
 
 def check_dir(folder, key="shake_table_dir") -> Path:
