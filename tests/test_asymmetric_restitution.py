@@ -4,7 +4,7 @@ against a direct impulse calculation and against Eq. 1 in the symmetric limit.""
 import numpy as np
 import pytest
 
-from rocklab.physics import restitution
+from rocklab.physics import impact, restitution
 
 
 def _impulse_e(b_leave, b_land, h, k, m=2.7):
@@ -65,3 +65,15 @@ def test_the_side_that_dissipates_is_the_far_edge_landed_on():
     # the product over a cycle (one impact each way) is not the symmetric e of either edge squared
     cycle = restitution.two_sided_asymmetric(bp, bm, h, k) * restitution.two_sided_asymmetric(bm, bp, h, k)
     assert cycle == pytest.approx(0.574, abs=1e-3)
+
+
+def test_the_simulators_law_of_an_asymmetric_body_is_that_function_and_eq_1_when_symmetric():
+    law = impact.AsymmetricBody(0.08, 0.2, 0.3, 0.22)
+    e = law.flat(0.3)[:, 0]  # rows: leaving +1, leaving -1
+    assert e[0] == restitution.two_sided_asymmetric(0.08, 0.2, 0.3, 0.22)
+    assert e[1] == restitution.two_sided_asymmetric(0.2, 0.08, 0.3, 0.22)
+    assert law.coefficient(-1.0, -1, 0.3, 4.0) == pytest.approx(e[1])
+    r, alpha = np.hypot(0.1, 0.3), np.arctan2(0.1, 0.3)
+    sym = impact.AsymmetricBody(0.1, 0.1, 0.3, 0.22).flat(alpha)[:, 0]
+    housner = impact.HousnerTwoSided(r**2 / (0.22**2 + r**2)).flat(alpha)[:, 0]
+    np.testing.assert_allclose(sym, housner, rtol=1e-12)

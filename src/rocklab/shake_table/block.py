@@ -179,7 +179,7 @@ def block_model(block: dict, contact_plus_mm=None, contact_minus_mm=None, c=1.0)
     (scale,) = restitution_scale.laws({C.name: c})
     if not isinstance(scale, Restitution):
         raise TypeError(f"restitution_scale's law is {type(scale).__name__}, the block needs a Restitution")
-    rigid = impact.Sided(impact.Constant(k["e_plus"]), impact.Constant(k["e_minus"]))
+    rigid = impact.AsymmetricBody(1e-3 * cp, 1e-3 * cm, block["h_m"], block["k_g_m"])
     law = impact.calibrated(rigid, *scale.factors())
     # alpha sets the rest threshold (REST_TOL thetadot_r): that of the weaker edge.
     return RockingModel(
