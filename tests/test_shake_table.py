@@ -61,6 +61,20 @@ def test_reader_on_the_real_files():
         assert m["pga_g"] == pytest.approx(row.pga_bp_0p1_25hz_g, rel=0.05)
 
 
+def test_geometry_without_what_the_block_reads_is_refused(tmp_path):
+    import json
+
+    (tmp_path / "motions").mkdir()
+    (tmp_path / "tests.csv").write_text("test\n")
+    geo = {s: json.loads(json.dumps(SYNTHETIC_GEOMETRY["S"])) for s in records.SPECIMENS}
+    (tmp_path / "geometry.json").write_text(json.dumps(geo))
+    assert records.read_geometry(tmp_path)["SP1"]["mass_kg"] == 300.0
+    del geo["SP2"]["footprint"]["rocking_2d"]["minus_x_edge"]["I_o_kgm2"]
+    (tmp_path / "geometry.json").write_text(json.dumps(geo))
+    with pytest.raises(ValueError, match="geometry.json: SP2 lacks"):
+        records.read_geometry(tmp_path)
+
+
 def test_a_missing_folder_names_the_config_key(tmp_path):
     with pytest.raises(FileNotFoundError, match="shake_table_dir"):
         records.check_dir(tmp_path / "nowhere")

@@ -112,15 +112,17 @@ def read_tests(folder) -> pd.DataFrame:
 
 
 def read_geometry(folder) -> dict:
-    """geometry.json: per specimen the mass, and ``rocking_2d`` of each footprint edge."""
+    """geometry.json: per specimen the mass, and ``rocking_2d`` of each footprint edge (b, h, R, I_O: the block's)."""
     path = check_dir(folder) / "geometry.json"
     geo = json.loads(path.read_text())
     for s in SPECIMENS:
         try:
-            geo[s]["footprint"]["rocking_2d"]["plus_x_edge"]["alpha_rad"]
-            geo[s]["footprint"]["rocking_2d"]["minus_x_edge"]["alpha_rad"]
+            float(geo[s]["mass_kg"])
+            for edge in ("plus_x_edge", "minus_x_edge"):
+                for key in ("b_m", "h_m", "R_m", "I_o_kgm2"):
+                    float(geo[s]["footprint"]["rocking_2d"][edge][key])
         except (KeyError, TypeError) as exc:
-            raise ValueError(f"{path}: {s} lacks footprint.rocking_2d.plus_x_edge/minus_x_edge ({exc})") from None
+            raise ValueError(f"{path}: {s} lacks mass_kg or rocking_2d.<edge>.b_m/h_m/R_m/I_o_kgm2 ({exc})") from None
     return geo
 
 
