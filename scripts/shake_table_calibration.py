@@ -1,4 +1,4 @@
-"""Snakemake shim: causes fitted to the outcomes, held-out scores against the PGV threshold and DEM."""
+"""Snakemake shim: the contact fitted to the outcomes, held-out scores against the PGV threshold and DEM, transfer."""
 
 import pandas as pd
 import xarray as xr
@@ -14,8 +14,9 @@ setup_logging(snakemake.log[0])
 p = snakemake.params
 geometry = read_geometry(p.folder)
 outcomes = {ds.attrs["specimen"]: ds for ds in map(xr.load_dataset, snakemake.input.outcomes)}
+tests = read_tests(p.folder)
 tables = calibration_tables(
-    read_tests(p.folder),
+    tests,
     pd.read_csv(snakemake.input.motions),
     outcomes,
     {s: specimen_block(geometry, s) for s in outcomes},
@@ -25,4 +26,4 @@ tables = calibration_tables(
 )
 for name, df in tables.items():
     write_table(df, snakemake.output[name], p.schemas[name])
-write_summary(shake_table_summary(snakemake.output, snakemake.input.outcomes), snakemake.output.docs_summary)
+write_summary(shake_table_summary(snakemake.output, snakemake.input.outcomes, tests), snakemake.output.docs_summary)

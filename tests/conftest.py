@@ -82,6 +82,7 @@ OWN_WORKDIR = {
     "test_slurm.py",
     "test_shapes.py",
     "test_report.py",
+    "test_shake_table.py",
 }
 
 

@@ -17,6 +17,7 @@ import pytest
 import yaml
 
 from rocklab.io import validate_table
+from rocklab.physics import restitution
 from rocklab.physics.wall import G
 from rocklab.report import pages, tables
 from rocklab.shake_table import block, calibration, evaluation, records
@@ -58,6 +59,20 @@ def test_reader_on_the_real_files():
     if not row.scaled_pga_is_nominal:
         assert m["pgv_m_s"] == pytest.approx(row.pgv_over_pga_s * row.scaled_pga_g * G, rel=0.25)
         assert m["pga_g"] == pytest.approx(row.pga_bp_0p1_25hz_g, rel=0.05)
+
+
+def test_geometry_without_what_the_block_reads_is_refused(tmp_path):
+    import json
+
+    (tmp_path / "motions").mkdir()
+    (tmp_path / "tests.csv").write_text("test\n")
+    geo = {s: json.loads(json.dumps(SYNTHETIC_GEOMETRY["S"])) for s in records.SPECIMENS}
+    (tmp_path / "geometry.json").write_text(json.dumps(geo))
+    assert records.read_geometry(tmp_path)["SP1"]["mass_kg"] == 300.0
+    del geo["SP2"]["footprint"]["rocking_2d"]["minus_x_edge"]["I_o_kgm2"]
+    (tmp_path / "geometry.json").write_text(json.dumps(geo))
+    with pytest.raises(ValueError, match="geometry.json: SP2 lacks"):
+        records.read_geometry(tmp_path)
 
 
 def test_a_missing_folder_names_the_config_key(tmp_path):
@@ -105,10 +120,17 @@ def test_a_weak_record_is_not_refused_on_a_noisy_sign():
         records.check_sign(+0.9, 0.9)
 
 
-# --- folds ----------------------------------------------------------------------------------
+# --- folds ---------------------------------------------------------------------------------
 
 
-def test_folds_never_share_a_ground_motion_and_are_balanced():
+def test_record_of_joins_the_components_of_a_record():
+    assert records.record_of("RSN137_TABAS_BAJ-L1.AT2") == records.record_of("RSN137_TABAS_BAJ-T1.AT2") == "RSN137"
+    assert records.record_of("RSN1114_KOBE") != records.record_of("RSN1119_KOBE")
+    assert records.record_of("rsn23_SanFracisco") == "RSN23"
+    assert records.record_of("Nepal") == "Nepal"  # no RSN: the name is the record
+
+
+def test_folds_never_share_a_record_and_are_balanced():
     rng = np.random.default_rng(1)
     groups = rng.choice([f"gm{i}" for i in range(30)], 400)
     fold = calibration.folds_by_group(groups, 5)
@@ -120,12 +142,52 @@ def test_folds_never_share_a_ground_motion_and_are_balanced():
         calibration.folds_by_group(["one"] * 5)
 
 
+def test_folds_keep_both_components_of_a_record_together():
+    names = ["RSN40_BORREGO_A-SON033.AT2", "RSN40_BORREGO_A-SON303.AT2", "RSN43_LYTLECREEK", "RSN45_LYTLECREEK"]
+    names += [f"RSN{1000 + i}_X" for i in range(8)]
+    gm = np.repeat(names, 7)
+    fold = calibration.folds_by_group([records.record_of(g) for g in gm], 4)
+    assert np.unique(fold[np.isin(gm, names[:2])]).size == 1
+    # by name alone the two components could land apart: the records are what holds them
+    assert len({records.record_of(n) for n in names}) == len(names) - 1
+
+
 @needs_data
-def test_folds_of_the_real_tests_never_share_a_record():
+def test_folds_of_the_real_tests_never_split_a_record():
     tests = records.read_tests(DATA)
-    groups = tests.ground_motion.to_numpy(str)
-    fold = calibration.folds_by_group(groups, 5)
-    assert pd.DataFrame({"g": groups, "f": fold}).groupby("g").f.nunique().max() == 1
+    tests = tests[tests.motion_file != ""]
+    rec = tests.ground_motion.map(records.record_of).to_numpy(str)
+    fold = calibration.folds_by_group(rec, 5)
+    df = pd.DataFrame({"r": rec, "f": fold, "gm": tests.ground_motion})
+    assert df.groupby("r").f.nunique().max() == 1
+    # the issue's seven records under two component names
+    assert (df.groupby("r").gm.nunique() == 2).sum() == 7
+
+
+# --- the paired interval ----------------------------------------------------------------------
+
+
+def test_paired_interval_covers_a_known_difference_and_excludes_zero():
+    """Per record of 10 tests, a is right on 9; b on 9 in half the records and 7 in the others: 0.1 better."""
+    n_rec, per = 60, 10
+    groups = np.repeat(np.arange(n_rec), per)
+    y = np.tile(np.arange(per) % 2 == 0, n_rec)
+    place = np.tile(np.arange(per), n_rec)
+    right_a = place < 9
+    right_b = place < np.where(groups % 2 == 0, 9, 7)
+    p_a = np.where(right_a == y, 0.9, 0.1)  # says "overturns" where right and y, or wrong and not y
+    p_b = np.where(right_b == y, 0.9, 0.1)
+    assert ((p_a > 0.5) == y).mean() == pytest.approx(0.9)
+    d, lo, hi = calibration.paired_accuracy_difference(y, p_a, p_b, groups, n_boot=2000)
+    assert d == pytest.approx(0.1)
+    assert 0 < lo < 0.1 < hi < 0.2
+    # the interval of a model against itself is a point at zero
+    assert calibration.paired_accuracy_difference(y, p_a, p_a, groups) == (0.0, 0.0, 0.0)
+    # a difference that lives in one record is not carried by resampling tests: it reaches 0
+    p_c = p_a.copy()
+    p_c[groups == 0] = 1 - p_c[groups == 0]
+    _, lo, hi = calibration.paired_accuracy_difference(y, p_a, p_c, groups)
+    assert lo <= 0 <= hi
 
 
 # --- scores ---------------------------------------------------------------------------------
@@ -140,13 +202,27 @@ def test_scores_against_hand_values():
 
 def test_score_table_has_the_schema_and_columns_of_the_issue():
     rng = np.random.default_rng(0)
-    n = 40
-    pred = pd.DataFrame({"specimen": np.repeat(["SP1", "SP2"], n // 2), "observed": rng.random(n) < 0.4})
+    n = 80
+    pred = pd.DataFrame(
+        {
+            "specimen": np.repeat(["SP1", "SP2"], n // 2),
+            "observed": rng.random(n) < 0.4,
+            "record": np.tile(np.repeat([f"RSN{i}" for i in range(8)], 5), 2),
+        }
+    )
     for m in evaluation.MODELS:
         pred[f"p_{m.replace('-', '_')}"] = rng.random(n)
-    table = evaluation.score_table(pred)
-    assert list(table.columns) == ["specimen", "model", "accuracy", "brier", "log_loss", "n_tests"]
+    table = evaluation.score_table(pred, n_boot=200)
+    diffs = [f"diff_vs_{x}{e}" for x in ("pgv", "dem", "nominal") for e in ("", "_lo", "_hi")]
+    assert list(table.columns) == ["specimen", "model", "accuracy", "brier", "log_loss", "n_tests", *diffs]
     assert set(table.model) == set(evaluation.MODELS)
+    cal_rows = table.model == "block-calibrated"
+    assert table.loc[cal_rows, diffs].notna().all().all() and table.loc[~cal_rows, diffs].isna().all().all()
+    assert (table.loc[cal_rows, "diff_vs_pgv_lo"] <= table.loc[cal_rows, "diff_vs_pgv"]).all()
+    # the 0/1 predictors are scored by accuracy alone
+    det = table.model.isin(evaluation.DETERMINISTIC)
+    assert table.loc[det, ["brier", "log_loss"]].isna().all().all()
+    assert table.loc[~det, ["brier", "log_loss"]].notna().all().all()
     validate_table(table, SCHEMAS / "shake_table_scores.schema.yaml")
     with pytest.raises(Exception, match="model"):
         validate_table(table.assign(model="block"), SCHEMAS / "shake_table_scores.schema.yaml")
@@ -163,34 +239,67 @@ def test_logistic_threshold_recovers_a_known_threshold():
 # --- the block and the calibration ----------------------------------------------------------
 
 
+def _edge(b, h, mass, k2):
+    r2 = b**2 + h**2
+    return {"b_m": b, "h_m": h, "R_m": np.sqrt(r2), "I_o_kgm2": mass * (k2 + r2), "alpha_rad": np.arctan2(b, h)}
+
+
+#: A body of 300 kg, its centre of mass 0.3 m up, k_G = 0.2 m, footprint edges 80 mm (+x) and 160 mm (-x) away.
 SYNTHETIC_GEOMETRY = {
     "S": {
         "mass_kg": 300.0,
         "footprint": {
             "rocking_2d": {
-                "plus_x_edge": {"alpha_rad": 0.25, "R_m": 0.30, "I_o_kgm2": 45.0, "p_rad_per_s": 4.5},
-                "minus_x_edge": {"alpha_rad": 0.50, "R_m": 0.34, "I_o_kgm2": 55.0, "p_rad_per_s": 4.4},
+                "plus_x_edge": _edge(0.08, 0.3, 300.0, 0.04),
+                "minus_x_edge": _edge(0.16, 0.3, 300.0, 0.04),
             }
         },
     }
 }
 
 
-def test_the_nominal_block_is_the_geometry_and_housners_e():
+def test_the_block_follows_its_contact_with_the_bodys_own_inertia():
     b = block.specimen_block(SYNTHETIC_GEOMETRY, "S")
-    # Eq. 1 by hand: e = 1 - 2 m R^2 / I_O sin^2 alpha
-    assert b["e_plus"] == pytest.approx(1 - 2 * 300 * 0.3**2 / 45 * np.sin(0.25) ** 2)
-    assert b["e_minus"] == pytest.approx(1 - 2 * 300 * 0.34**2 / 55 * np.sin(0.5) ** 2)
+    assert b["k_g_m"] == pytest.approx(0.2) and b["h_m"] == 0.3
+    assert (b["footprint_plus_mm"], b["footprint_minus_mm"]) == pytest.approx((80.0, 160.0))
+    nominal = block.footprint(b)
+    assert nominal["alpha_plus"] == pytest.approx(np.arctan(0.08 / 0.3))
+    # p = sqrt(m g R / I_O) of each edge, from the body's inertia
+    r = np.hypot(0.16, 0.3)
+    assert nominal["p_minus"] == pytest.approx(np.sqrt(9.81 * r / (0.04 + r**2)), rel=1e-3)
+    # e from angular momentum about the edge landed on: leaving +x lands 160 mm out
+    assert nominal["e_plus"] == pytest.approx(1 - 0.16 * 0.24 / (0.04 + 0.09 + 0.16**2))
+    assert nominal["e_minus"] == pytest.approx(1 - 0.08 * 0.24 / (0.04 + 0.09 + 0.08**2))
+    # a symmetric contact is Eq. 1 with the contact's own m R^2 / I_O
+    sym = block.contact(b, 20.0, 20.0)
+    r2 = 0.02**2 + 0.09
+    assert (
+        sym["e_plus"] == sym["e_minus"] == pytest.approx(restitution.two_sided(np.arctan(0.02 / 0.3), r2 / (0.04 + r2)))
+    )
+    assert sym["e_plus"] > 0.98  # a small contact keeps nearly all the energy
     m = block.block_model(b)
-    assert (m.alpha_pos, m.alpha_minus, m.form) == (0.25, 0.5, "exact")
-    assert m.p == pytest.approx(np.sqrt(4.5 * 4.4))
-    m = block.block_model(b, 0.5, 0.4, 0.9)
-    assert m.alpha_pos == pytest.approx(0.125 * np.exp(0.2)) and m.alpha_minus == pytest.approx(0.25 * np.exp(-0.2))
-    assert m.base_law.flat(m.alpha)[:, 0] == pytest.approx([0.9 * b["e_plus"], 0.9 * b["e_minus"]])
+    assert (m.alpha_pos, m.alpha_minus) == pytest.approx((nominal["alpha_plus"], nominal["alpha_minus"]))
+    assert m.form == "exact" and m.p == pytest.approx(nominal["p"])
+    m = block.block_model(b, 20.0, 40.0, 0.9)
+    k = block.contact(b, 20.0, 40.0)
+    assert (m.alpha_pos, m.alpha_minus) == pytest.approx((np.arctan(0.02 / 0.3), np.arctan(0.04 / 0.3)))
+    assert m.base_law.flat(m.alpha)[:, 0] == pytest.approx([0.9 * k["e_plus"], 0.9 * k["e_minus"]])
+
+
+def test_the_grid_closes_on_the_footprint_and_one_set_of_mm_reads_on_another_specimen():
+    b = block.specimen_block(SYNTHETIC_GEOMETRY, "S")
+    g = block.grid(b)
+    assert g["contact_plus_mm"][0] == 5.0 and g["contact_plus_mm"][-1] == pytest.approx(80.0)
+    assert g["contact_minus_mm"][-1] == pytest.approx(160.0) and np.all(np.diff(g["contact_minus_mm"]) > 0)
+    assert g["c"].max() == 1.0  # no impact gains energy over the rigid one
+    other = {**g, "contact_plus_mm": np.append(g["contact_plus_mm"][:-1], 90.0)}
+    v = {"contact_plus_mm": 80.0, "contact_minus_mm": g["contact_minus_mm"][3], "c": 0.9}
+    on = block.node_on(v, other)
+    assert on["contact_plus_mm"] == 90.0 and on["contact_minus_mm"] == v["contact_minus_mm"] and on["c"] == 0.9
 
 
 def _pulse_records(n=36, seed=0):
-    """Sine pulses of random amplitude, frequency and sign: one 'ground motion' each."""
+    """Sine pulses of random amplitude, frequency and sign: one record each."""
     rng = np.random.default_rng(seed)
     dt, out = 0.01, []
     for _ in range(n):
@@ -200,31 +309,38 @@ def _pulse_records(n=36, seed=0):
     return out, dt
 
 
-def test_calibration_recovers_the_instability_angle_of_outcomes_made_by_the_block():
-    """Outcomes simulated by the block at a known r are fitted back to that r (not to the nominal 1)."""
+def test_calibration_recovers_the_contact_of_outcomes_made_by_the_block():
+    """Outcomes simulated by the block on a known contact are fitted back to it (not to the footprint)."""
     b = block.specimen_block(SYNTHETIC_GEOMETRY, "S")
     grid = {
-        "alpha_r_over_alpha": np.geomspace(0.1, 1.0, 8),
-        "s_alpha": np.array([-0.5, 0.0, 0.5]),
-        "c": np.array([1.0]),
+        "contact_plus_mm": np.array([5.0, 10.0, 20.0, 40.0, 80.0]),
+        "contact_minus_mm": np.array([5.0, 10.0, 20.0, 40.0, 160.0]),
+        "c": np.array([0.9, 1.0]),
     }
     recs, dt = _pulse_records()
     out = block.outcome_grid(recs, [dt] * len(recs), b, np.arange(len(recs)), grid)
-    true = {"alpha_r_over_alpha": grid["alpha_r_over_alpha"][3], "s_alpha": 0.0, "c": 1.0}
+    true = {"contact_plus_mm": 20.0, "contact_minus_mm": 20.0, "c": 1.0}
     y = out.overturned.sel(true).values
     assert 0.2 < y.mean() < 0.8, "the synthetic set must hold both outcomes"
     lik = calibration.OutcomeLikelihood(out.overturned.values, y, grid)
     fit = calibration.calibrate(lik, np.arange(y.size).astype(str), np.arange(y.size), n_boot=30)
-    assert fit["values"]["alpha_r_over_alpha"] == pytest.approx(true["alpha_r_over_alpha"])
-    assert fit["values"]["s_alpha"] == 0.0
-    lo, hi = calibration.intervals(fit["boot"])["alpha_r_over_alpha"]
-    assert lo <= true["alpha_r_over_alpha"] <= hi < 1.0
-    assert calibration.named(block.R, (lo, hi))
+    assert fit["values"]["contact_plus_mm"] == 20.0 and fit["values"]["contact_minus_mm"] == 20.0
+    for name in ("contact_plus_mm", "contact_minus_mm"):
+        lo, hi = calibration.intervals(fit["boot"])[name]
+        assert lo <= 20.0 <= hi < grid[name][-1]
     # the prediction reproduces the outcomes it was fitted to
     assert np.mean((fit["probability"] > 0.5) == y) == 1.0
+    # a node found by its values is the node of those values
+    assert lik.values(lik.node(fit["values"])) == fit["values"]
 
 
 # --- the target, end to end on two ground motions ---------------------------------------------
+
+
+def _own_workdir(tmp_path):
+    """Snakemake options that keep its locks and metadata in the test's own folder, never in the checkout."""
+    (tmp_path / "work").mkdir(exist_ok=True)
+    return ["--snakefile", str(ROOT / "Snakefile"), "--directory", str(tmp_path / "work")]
 
 
 @needs_data
@@ -235,6 +351,7 @@ def test_shake_table_target_end_to_end_on_a_subset(tmp_path):
     cfg.write_text(
         yaml.safe_dump(
             {
+                "raw_dir": str(ROOT / "raw" / "campaign"),
                 "results_dir": str(results),
                 "shake_table_dir": str(DATA),
                 "shake_table": {
@@ -248,15 +365,21 @@ def test_shake_table_target_end_to_end_on_a_subset(tmp_path):
             }
         )
     )
-    cmd = [str(SNAKEMAKE), "shake_table", "--cores", "1", "--quiet", "--directory", str(ROOT), "--configfile", str(cfg)]
-    run = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env={**os.environ, "PYTHONWARNINGS": "ignore"})
+    cmd = [str(SNAKEMAKE), "shake_table", "--cores", "1", "--quiet", "--configfile", str(cfg), *_own_workdir(tmp_path)]
+    run = subprocess.run(
+        cmd, capture_output=True, text=True, cwd=tmp_path / "work", env={**os.environ, "PYTHONWARNINGS": "ignore"}
+    )
     assert run.returncode == 0, run.stderr[-3000:]
     st = results / "shake_table"
     scores = pd.read_csv(st / "scores.csv")
-    assert list(scores.columns) == ["specimen", "model", "accuracy", "brier", "log_loss", "n_tests"]
+    diffs = [f"diff_vs_{x}{e}" for x in ("pgv", "dem", "nominal") for e in ("", "_lo", "_hi")]
+    assert list(scores.columns) == ["specimen", "model", "accuracy", "brier", "log_loss", "n_tests", *diffs]
     assert len(scores) == 8
     pred = pd.read_csv(st / "predictions.csv")
-    assert pred.groupby("ground_motion").fold.nunique().max() == 1
+    assert pred.groupby("record").fold.nunique().max() == 1
+    transfer = pd.read_csv(st / "transfer.csv")
+    assert list(transfer.columns) == ["train", "test", "model", "accuracy", "brier", "log_loss", "n_tests"]
+    assert set(zip(transfer.train, transfer.test)) == {("SP1", "SP2"), ("SP2", "SP1")}
     for name in evaluation.MODELS:
         assert pred[f"p_{name.replace('-', '_')}"].between(0, 1).all()
     for f in ("nominal_errors.csv", "fragility.csv", "parameters.csv", "maps_SP1.nc", "maps_SP2.nc"):
@@ -279,12 +402,12 @@ def test_the_target_stops_naming_the_key_when_the_folder_is_missing(tmp_path):
         str(SNAKEMAKE),
         "shake_table",
         "--dry-run",
-        "--directory",
-        str(ROOT),
+        *_own_workdir(tmp_path),
         "--config",
+        f"raw_dir={ROOT / 'raw' / 'campaign'}",
         f"results_dir={tmp_path / 'results'}",
         f"shake_table_dir={tmp_path / 'nowhere'}",
     ]
-    run = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
+    run = subprocess.run(cmd, capture_output=True, text=True, cwd=tmp_path / "work")
     assert run.returncode != 0
     assert "shake_table_dir" in run.stdout + run.stderr

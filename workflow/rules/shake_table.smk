@@ -7,7 +7,7 @@ from rocklab.shake_table.records import SPECIMENS
 
 ST = config["shake_table"]
 ST_DIR = config["shake_table_dir"]
-ST_TABLES = ("scores", "predictions", "nominal_errors", "fragility", "parameters")
+ST_TABLES = ("scores", "predictions", "nominal_errors", "fragility", "parameters", "transfer")
 
 
 SHAKE_TABLE_OUTPUTS = (

@@ -82,6 +82,33 @@ class HousnerTwoSided(ImpactLaw):
         return (float(restitution.two_sided(alpha, self.mR2_over_Io)), 1.0, 0.0)
 
 
+class AsymmetricBody(ImpactLaw):
+    """The rigid impact of a planar body whose edges are not symmetric about its centre of mass.
+
+    e of leaving edge +1 (theta > 0) for edge -1, and the reverse, from
+    angular momentum about the edge landed on
+    (:func:`rocklab.physics.restitution.two_sided_asymmetric`); Eq. 1 of
+    :class:`HousnerTwoSided` when ``b_plus == b_minus``.
+
+    Parameters
+    ----------
+    b_plus, b_minus : float
+        Horizontal distances [m] from the centre of mass to edges +1 and -1.
+    height : float
+        Height [m] of the centre of mass above the base.
+    gyration_radius : float
+        Radius of gyration [m] about the centre of mass in the rocking plane.
+    """
+
+    def __init__(self, b_plus, b_minus, height, gyration_radius):
+        self.b_plus, self.b_minus = float(b_plus), float(b_minus)
+        self.height, self.gyration_radius = float(height), float(gyration_radius)
+
+    def _triple(self, side, alpha):
+        leave, land = (self.b_plus, self.b_minus) if side > 0 else (self.b_minus, self.b_plus)
+        return (restitution.two_sided_asymmetric(leave, land, self.height, self.gyration_radius), 1.0, 0.0)
+
+
 class OneSided(ImpactLaw):
     """Analytic e_an,1s of one-sided rocking, Eq. 14 (negative: a rebound)."""
 

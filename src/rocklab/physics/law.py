@@ -8,7 +8,7 @@ consumer reads the laws rather than the cause's name:
   from which the exact simulator's :class:`rocklab.simulation.model.RockingModel`
   is derived (:func:`rocklab.diagnosis.model.simulator`) and with it the
   calibrated walls of the maps (:mod:`rocklab.seismic.calibrated`);
-- the shake-table block (:func:`rocklab.shake_table.block.block_model`);
+- the shake-table block (:func:`rocklab.shake_table.block.block_model`: its extra loss, ``restitution_scale``);
 - the limestone block tables (:meth:`rocklab.diagnosis.block_tests.BlockProblem.model_e`).
 
 A law holds the change, not the wall: a factor on what the base model has

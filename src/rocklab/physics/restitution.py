@@ -42,6 +42,44 @@ def two_sided(alpha, mR2_over_Io=None):
     return 1.0 - 2.0 * ratio * np.sin(alpha) ** 2
 
 
+def two_sided_asymmetric(b_leave, b_land, height, gyration_radius):
+    """Coefficient of restitution of an asymmetric planar rigid body, Eq. 1 generalised.
+
+    Angular momentum about the edge the body lands on is conserved through the
+    impact (the impulse acts there).  Before it, the body turns at thetadot^-
+    about the edge it leaves; after it, at thetadot^+ about the new edge:
+
+    (I_G + m h^2 - m b_1 b_2) thetadot^- = (I_G + m h^2 + m b_2^2) thetadot^+,
+
+    so e = thetadot^+ / thetadot^- = 1 - m b_2 (b_1 + b_2) / I_O,new, with
+    I_O,new = I_G + m (h^2 + b_2^2).  For b_1 = b_2 = R sin alpha this is
+    Eq. 1, 1 - 2 (m R^2 / I_O) sin^2 alpha (:func:`two_sided`).
+
+    Parameters
+    ----------
+    b_leave : array_like
+        Horizontal distance b_1 [m] from the centre of mass to the edge the
+        body leaves.
+    b_land : array_like
+        Horizontal distance b_2 [m] from the centre of mass to the edge it
+        lands on.
+    height : array_like
+        Height h [m] of the centre of mass above the base (both edges).
+    gyration_radius : array_like
+        Radius of gyration k_G [m] about the centre of mass in the rocking
+        plane, I_G = m k_G^2.
+
+    Returns
+    -------
+    ndarray or float
+        e [-] of the impact that passes from the edge left to the edge landed on.
+    """
+    b1, b2 = np.asarray(b_leave, float), np.asarray(b_land, float)
+    io_over_m = np.asarray(gyration_radius, float) ** 2 + np.asarray(height, float) ** 2 + b2**2
+    out = 1.0 - b2 * (b1 + b2) / io_over_m
+    return out if out.ndim else float(out)
+
+
 def two_sided_from_slenderness(zeta):
     """Eq. 2 in terms of zeta = h/b: (2 zeta^2 - 1) / (2 (zeta^2 + 1))."""
     z2 = np.asarray(zeta, float) ** 2

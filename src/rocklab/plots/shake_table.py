@@ -12,18 +12,21 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from rocklab.plots.maps import _MAP_COLOURS, _edges
-from rocklab.shake_table.evaluation import MODELS, fragility_table
+from rocklab.shake_table.evaluation import fragility_table
 
 _STYLE = {
-    "block-nominal": dict(color="0.5", ls=":"),
     "block-calibrated": dict(color="C3", ls="-"),
     "pgv-threshold": dict(color="C0", ls="--"),
-    "dem": dict(color="C2", ls="-."),
 }
 
 
 def fragility_curves(predictions):
-    """Held-out probability of overturning against PGA and PGV, with the measured outcomes.
+    """P(overturning) against PGV and PGA per specimen: measured, the calibrated block and the PGV threshold.
+
+    Measured: the overturning rate of each bin, with its 95 % interval over
+    resampled records (:func:`rocklab.shake_table.evaluation.fragility_table`);
+    models: their mean held-out probability in the same bins, and the
+    calibrated block's held-out probability of each test.
 
     Parameters
     ----------
@@ -33,24 +36,22 @@ def fragility_curves(predictions):
     table = fragility_table(predictions)
     specimens = sorted(predictions.specimen.unique())
     fig, axes = plt.subplots(len(specimens), 2, figsize=(11, 3.8 * len(specimens)), squeeze=False)
-    rng = np.random.default_rng(0)
     for row, s in zip(axes, specimens):
         g = predictions[predictions.specimen == s]
-        for ax, measure, col, unit in zip(row, ("pga", "pgv"), ("pga_g", "pgv_m_s"), ("g", "m/s")):
+        for ax, measure, col, unit in zip(row, ("pgv", "pga"), ("pgv_m_s", "pga_g"), ("m/s", "g")):
             x = g[col].to_numpy()
-            y = g.observed.to_numpy(float)
-            ax.scatter(x, y + rng.uniform(-0.03, 0.03, y.size), s=6, c="k", alpha=0.3, label="measured outcome")
-            ax.scatter(x, g.p_block_calibrated, s=6, c="C3", alpha=0.4, label="calibrated block, per test")
+            ax.scatter(x, g.p_block_calibrated, s=5, c="C3", alpha=0.25, label="calibrated block, per test")
             t = table[(table.specimen == s) & (table.measure == measure)]
             mid = np.where(np.isfinite(t.upper), 0.5 * (t.lower + t.upper.fillna(0)), 1.3 * t.lower)
             mid = np.maximum(mid, 0.5 * x.min())
-            ax.plot(mid, t.observed, "ks", ms=6, label="measured rate per bin")
-            for m in MODELS:
-                ax.plot(mid, t[m.replace("-", "_")], marker=".", label=m, **_STYLE[m])
+            err = np.vstack([t.observed - t.observed_lo, t.observed_hi - t.observed])
+            ax.errorbar(mid, t.observed, yerr=err, fmt="ks", ms=5, capsize=3, label="measured rate, 95 % CI (records)")
+            for m in ("block-calibrated", "pgv-threshold"):
+                ax.plot(mid, t[m.replace("-", "_")], marker=".", label=f"{m}, held out", **_STYLE[m])
             ax.set_xscale("log")
             ax.set_xlabel(f"{measure.upper()} ({unit})")
-            ax.set_ylabel("P(overturning), held out")
-            ax.set_ylim(-0.08, 1.08)
+            ax.set_ylabel("P(overturning)")
+            ax.set_ylim(-0.05, 1.05)
             ax.set_title(f"{s}: against {measure.upper()}")
         row[0].legend(fontsize=7, loc="upper left")
     fig.tight_layout()

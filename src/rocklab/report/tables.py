@@ -396,6 +396,11 @@ def shake_table_status(st: Mapping) -> str:
     return "Results of the target `shake_table` (" + "; ".join(parts) + ")."
 
 
+def _probabilistic(v, key) -> str:
+    """A Brier score or log loss, "-" for a 0/1 predictor (scored by accuracy alone)."""
+    return "-" if v[key] is None else show(v[key], ".3f")
+
+
 @_shake_table
 def shake_table_scores(st: Mapping) -> str:
     """Held-out accuracy, Brier score and log loss of every model and specimen."""
@@ -404,14 +409,51 @@ def shake_table_scores(st: Mapping) -> str:
             s,
             f"`{m}`",
             show(v["accuracy"], ".3f"),
-            show(v["brier"], ".3f"),
-            show(v["log_loss"], ".3f"),
+            _probabilistic(v, "brier"),
+            _probabilistic(v, "log_loss"),
             show(v["n_tests"]),
         ]
         for s in st["specimens"]
         for m, v in st[s]["scores"].items()
     ]
     return markdown_table(["specimen", "model", "accuracy", "Brier score", "log loss", "tests"], rows)
+
+
+@_shake_table
+def shake_table_differences(st: Mapping) -> str:
+    """The calibrated block's held-out accuracy minus each other model's, with paired 95 % intervals over records."""
+    rows = []
+    for s in st["specimens"]:
+        v = st[s]["scores"]["block-calibrated"]
+        for key, name in (("pgv", "pgv-threshold"), ("dem", "dem"), ("nominal", "block-nominal")):
+            d, lo, hi = (v[f"diff_vs_{key}{end}"] for end in ("", "_lo", "_hi"))
+            rows.append([s, f"`{name}`", f"{show(d, '+.3f')} [{show(lo, '+.3f')}, {show(hi, '+.3f')}]"])
+    return markdown_table(["specimen", "against", "accuracy difference [95 % CI]"], rows)
+
+
+@_shake_table
+def shake_table_transfer(st: Mapping) -> str:
+    """One replica's fit predicting the other (held out by record), beside the PGV threshold transferred."""
+    rows = [
+        [
+            v["train"],
+            v["test"],
+            show(v["accuracy"], ".3f"),
+            show(v["brier"], ".3f"),
+            show(st["transfer_pgv"][k]["accuracy"], ".3f"),
+            show(st[v["test"]]["scores"]["pgv-threshold"]["accuracy"], ".3f"),
+        ]
+        for k, v in st["transfer"].items()
+    ]
+    header = [
+        "fitted on",
+        "predicting",
+        "block accuracy",
+        "block Brier",
+        "PGV threshold transferred",
+        "PGV threshold fitted there",
+    ]
+    return markdown_table(header, rows)
 
 
 @_shake_table
@@ -443,20 +485,22 @@ def shake_table_nominal(st: Mapping) -> str:
 
 @_shake_table
 def shake_table_parameters(st: Mapping) -> str:
-    """The fitted parameters with their 95 % intervals and whether each names its cause."""
+    """The fitted parameters with their 95 % intervals, whether each departs from the nominal block, grid edges."""
     rows = [
         [
             s,
-            f"`{q['cause']}`",
+            q["cause"],
             name,
-            f"{show(q['value'], '.3g')} [{show(q['ci_low'], '.3g')}, {show(q['ci_high'], '.3g')}]",
+            f"{show(q['value'], '.3g')} [{show(q['ci_low'], '.3g')}, {show(q['ci_high'], '.3g')}] {q['units']}",
             show(q["null"], ".3g"),
-            show(q["named"]) if q["cause"] != "hinge angle (derived)" else "-",
+            show(q["named"]) if "derived" not in q["cause"] else "-",
+            "yes" if q["at_grid_edge"] else "",
         ]
         for s in st["specimens"]
         for name, q in st[s]["parameters"].items()
     ]
-    return markdown_table(["specimen", "cause", "parameter", "value [95 % CI]", "nominal", "named"], rows)
+    header = ["specimen", "what", "parameter", "value [95 % CI]", "nominal", "departs from it", "on its grid's edge"]
+    return markdown_table(header, rows)
 
 
 #: The tables a template may place with ``{{ table("name") }}``.
@@ -483,4 +527,6 @@ TABLES: dict[str, Callable[[Mapping], str]] = {
     "shake_table_scores": shake_table_scores,
     "shake_table_nominal": shake_table_nominal,
     "shake_table_parameters": shake_table_parameters,
+    "shake_table_differences": shake_table_differences,
+    "shake_table_transfer": shake_table_transfer,
 }

@@ -1,26 +1,52 @@
-"""The planar rocking block of each specimen and its outcome under the table records.
+"""The planar rocking block of each specimen on its contact, and its outcome under the table records.
 
-Each specimen is the rocking block of ``geometry.json``'s footprint edges:
-theta > 0 rotates it about its +x edge (rocking angle alpha_+), theta < 0
-about its -x edge (alpha_-), with the exact form of
-:class:`rocklab.simulation.model.RockingModel` and Housner's e of each edge,
-e = 1 - 2 (m R^2 / I_O) sin^2 alpha (Eq. 1, :func:`rocklab.physics.restitution.two_sided`),
-on the hinge being left.  The table acceleration along +x is the model's
-``ag`` (positive towards +theta).
+The contact is one thing
+------------------------
+The bases of both replicas are gently convex (geometry.json, caveats: a
+best-fit plane leaves 3.6 mm rms; within 1 mm of its lowest point the SP1
+scan spans only -47 to +27 mm about the centre of mass), so a specimen does
+not rock on the rim of its 3 mm footprint but on a contact near its lowest
+point.  The block here rocks on two contact edges at horizontal distances
+b_+ and b_- [m] from the centre of mass (towards +x and -x), inset from the
+footprint's edges, with the body's own mass m, centre-of-mass height h and
+moment of inertia I_G = m k_G^2 (the mesh's, geometry.json).  Everything of
+the block follows that one contact:
 
-The causes of the diagnosis catalogue (:data:`CAUSES`) change the block
-by their own laws (:mod:`rocklab.physics.law`, :func:`block_laws`), as they
-change a wall (their parameters are the catalogue's
-:class:`~rocklab.diagnosis.parameters.Param`):
+- rocking angles alpha_+- = atan(b_+- / h), so the uplift threshold is
+  g tan alpha_+- (the exact form of
+  :class:`rocklab.simulation.model.RockingModel`, theta > 0 on the +x edge);
+- frequency parameters p_+- = sqrt(m g R_+- / I_O,+-), I_O,+- = I_G + m R_+-^2
+  (their geometric mean: the model has one p; they differ by under 3 %);
+- the coefficient of restitution of leaving edge +- for edge -+, from
+  angular momentum about the edge landed on
+  (:func:`rocklab.physics.restitution.two_sided_asymmetric`,
+  e = 1 - m b_2 (b_1 + b_2) / I_O,new; Eq. 1 for a symmetric contact).
 
-- ``instability_angle``: both hinges at r times their footprint angle (the
-  rounded base rocks on a smaller contact than the 3 mm footprint);
-- ``hinge_asymmetry``: alpha_+- further times exp(+-s_alpha/2) (its s_e at
-  its null);
-- ``restitution_scale``: e = c e_an on both edges.
+Any loss beyond the rigid impact of that contact is a separate factor c on
+both e (the catalogue's ``restitution_scale`` law, :mod:`rocklab.physics.law`),
+bounded to [:data:`C` lower, 1]: an impact never gains energy over the rigid
+one.  A small contact's own e is close to 1 (0.98-0.996 for 16-40 mm), so a
+large fitted loss shows as c well below 1, not as a contact angle traded
+against a footprint's e.
 
-Limitation: :class:`RockingModel` has one frequency parameter; the block
-takes the geometric mean of the two edges' p (they differ by 3 %).
+This is the model of inset rocking points of precariously balanced rocks
+(Purvance, Anooshehpoor & Brune 2008, Earthquake Engng Struct. Dyn. 37,
+791-808: a PBR rocks about its basal contact points, its fragility set by
+their alpha and p), with Housner's (1963) plastic impact at the new edge
+(the standard rocking model of Lipscombe & Pellegrino 1993, J. Eng. Mech.
+119, 1387-1410) written for a body whose edges are not symmetric about its
+centre of mass; pivots inset from the corners by a rounded base are those
+of Ther & Kollar (2017, Bull. Earthquake Eng. 15, 2305-2319).
+
+Limitation: a flat contact ties the uplift threshold to the
+overturning capacity (both set by alpha); a base of finite curvature, whose
+contact rolls outwards as the block tilts, unties them, but needs an
+equation of motion with a moving contact that the batch engine does not
+have.  The scatter of the contact from test to test
+(:mod:`rocklab.shake_table.calibration`) stands in for it.
+
+Parameters are in physical units (:data:`PARAMS`: mm of contact, c), so one
+set applies to both replicas (:func:`node_on`).
 """
 
 from __future__ import annotations
@@ -32,35 +58,31 @@ import time
 import numpy as np
 import xarray as xr
 
-from rocklab.diagnosis import catalogue
-from rocklab.diagnosis.causes import hinge_asymmetry, instability_angle, restitution_scale
+from rocklab.diagnosis.causes import restitution_scale
+from rocklab.diagnosis.parameters import Param
 from rocklab.physics import impact, restitution
-from rocklab.physics.law import Hinge, Restitution
+from rocklab.physics.law import Restitution
+from rocklab.physics.wall import G
 from rocklab.simulation.batch import ground_batch
 from rocklab.simulation.model import RockingModel
 
 log = logging.getLogger(__name__)
 
-#: The causes' parameters, bounds widened to what the rounded bases need (the
-#: catalogue's bounds are those of the lab walls).
-R = instability_angle.R._replace(lower=0.04, upper=1.0)
-S_ALPHA = hinge_asymmetry.S_ALPHA._replace(lower=-1.5, upper=1.5)
-C = restitution_scale.C._replace(lower=0.8, upper=1.05)
-PARAMS = (R, S_ALPHA, C)
+#: Contact half-widths [mm] from the centre of mass towards +x and -x.  Their
+#: null is the footprint's edge (the nominal block, specimen by specimen), so
+#: the Param's null and upper bound are placeholders that :func:`grid` replaces.
+CONTACT_PLUS = Param("contact_plus_mm", 5.0, np.inf, np.nan)
+CONTACT_MINUS = Param("contact_minus_mm", 5.0, np.inf, np.nan)
+#: The factor on both e beyond the rigid impact of the contact (``restitution_scale``), at most 1.
+C = restitution_scale.C._replace(lower=0.8, upper=1.0)
+PARAMS = (CONTACT_PLUS, CONTACT_MINUS, C)
 
-#: The causes of the block, in the catalogue's order (the order their laws act in).
-CAUSES = tuple(
-    c for c in catalogue.CAUSES if c in (instability_angle.CAUSE, hinge_asymmetry.CAUSE, restitution_scale.CAUSE)
-)
-
-#: Grid of each parameter: every test is simulated once at every node, and
-#: every fit (folds, resamples) reads the outcomes from it.  Each grid holds
-#: the null value (the nominal block).
-GRID = {
-    R.name: np.geomspace(R.lower, R.upper, 20),
-    S_ALPHA.name: np.linspace(S_ALPHA.lower, S_ALPHA.upper, 7),
-    C.name: np.array([0.8, 0.9, 1.0, 1.05]),
-}
+#: Nodes [mm] of the contact half-widths, fixed before any fit: from 5 mm (a
+#: rocking angle of 1 deg at h = 0.29 m) in steps of 2^(1/3), each specimen's
+#: up to its footprint's edge, which closes the axis (:func:`grid`).
+CONTACT_NODES_MM = 5.0 * 2.0 ** (np.arange(18) / 3.0)
+#: Nodes of the extra-loss factor c.
+C_NODES = np.array([0.8, 0.9, 1.0])
 
 #: Longest free motion [s] followed after a record (rocklab.simulation.batch).
 TAIL = 20.0
@@ -70,71 +92,112 @@ SUBSTEPS = 1
 
 
 def specimen_block(geometry: dict, specimen: str) -> dict:
-    """The planar block of one specimen from geometry.json.
+    """The body of one specimen from geometry.json: what the contact does not change.
 
     Returns
     -------
     dict
-        ``alpha_plus``, ``alpha_minus`` [rad] (rocking angles of the +x and
-        -x footprint edges), ``p_plus``, ``p_minus`` [rad/s], ``p`` (their
-        geometric mean), ``e_plus``, ``e_minus`` (Housner's e of each edge
-        with its m R^2 / I_O), ``mass_kg``.
+        ``mass_kg``; ``h_m`` (centre-of-mass height above the lowest point);
+        ``k_g_m`` (radius of gyration about the centre of mass in the rocking
+        plane, from the +x edge's I_O - m R^2); ``footprint_plus_mm``,
+        ``footprint_minus_mm`` (the 3 mm footprint's edges from the centre of
+        mass).
     """
     g = geometry[specimen]
     mass = float(g["mass_kg"])
     edges = g["footprint"]["rocking_2d"]
-    out = {"mass_kg": mass}
-    for key, name in (("plus", "plus_x_edge"), ("minus", "minus_x_edge")):
-        e = edges[name]
-        alpha = float(e["alpha_rad"])
-        out[f"alpha_{key}"] = alpha
-        out[f"p_{key}"] = float(e["p_rad_per_s"])
-        out[f"e_{key}"] = float(restitution.two_sided(alpha, mass * float(e["R_m"]) ** 2 / float(e["I_o_kgm2"])))
+    plus, minus = edges["plus_x_edge"], edges["minus_x_edge"]
+    h = float(plus["h_m"])
+    k2 = float(plus["I_o_kgm2"]) / mass - float(plus["R_m"]) ** 2
+    return {
+        "mass_kg": mass,
+        "h_m": h,
+        "k_g_m": math.sqrt(k2),
+        "footprint_plus_mm": 1e3 * float(plus["b_m"]),
+        "footprint_minus_mm": 1e3 * float(minus["b_m"]),
+    }
+
+
+def contact(block: dict, contact_plus_mm, contact_minus_mm) -> dict:
+    """The rocking block of a body on contact edges ``contact_plus_mm``, ``contact_minus_mm`` [mm] from its COM.
+
+    Returns
+    -------
+    dict
+        ``alpha_plus``, ``alpha_minus`` [rad]; ``p_plus``, ``p_minus`` and
+        their geometric mean ``p`` [rad/s]; ``e_plus``, ``e_minus`` [-], e of
+        the impact on leaving the +x (-x) edge for the other
+        (:func:`rocklab.physics.restitution.two_sided_asymmetric`).
+    """
+    h, k = block["h_m"], block["k_g_m"]
+    b = {"plus": 1e-3 * float(contact_plus_mm), "minus": 1e-3 * float(contact_minus_mm)}
+    out = {}
+    for side, other in (("plus", "minus"), ("minus", "plus")):
+        r2 = b[side] ** 2 + h**2
+        out[f"alpha_{side}"] = math.atan2(b[side], h)
+        out[f"p_{side}"] = math.sqrt(G * math.sqrt(r2) / (k**2 + r2))
+        out[f"e_{side}"] = restitution.two_sided_asymmetric(b[side], b[other], h, k)
     out["p"] = math.sqrt(out["p_plus"] * out["p_minus"])
     return out
 
 
-def block_laws(r=1.0, s_alpha=0.0, c=1.0):
-    """The laws of :data:`CAUSES` at the parameters of :data:`PARAMS`, in the order they act."""
-    values = {R.name: r, S_ALPHA.name: s_alpha, C.name: c}
-    return [law for cause in CAUSES for law in cause.laws(cause.values(values))]
+def footprint(block: dict) -> dict:
+    """:func:`contact` on the footprint's edges: the nominal block."""
+    return contact(block, block["footprint_plus_mm"], block["footprint_minus_mm"])
 
 
-def _under(block, laws):
-    """alpha_+, alpha_- [rad] of the block under ``laws`` and the factors of e on leaving each edge."""
-    a_pos, a_neg, c_pos, c_neg = block["alpha_plus"], block["alpha_minus"], 1.0, 1.0
-    for law in laws:
-        if isinstance(law, Hinge):
-            a_pos, a_neg = law.angles(a_pos, a_neg)
-        elif isinstance(law, Restitution):
-            pos, neg = law.factors()
-            c_pos, c_neg = pos * c_pos, neg * c_neg
-        else:
-            raise NotImplementedError(f"the shake-table block has no {type(law).__name__}")
-    return a_pos, a_neg, c_pos, c_neg
+def grid(block: dict) -> dict:
+    """The parameter grid of a specimen: :data:`CONTACT_NODES_MM` inside its footprint, then its edge; :data:`C_NODES`.
+
+    Every test is simulated once at every node, and every fit (folds,
+    resamples) reads the outcomes from it; the last contact nodes with
+    c = 1 are the nominal block.
+    """
+    out = {}
+    for q, edge in ((CONTACT_PLUS, block["footprint_plus_mm"]), (CONTACT_MINUS, block["footprint_minus_mm"])):
+        inside = CONTACT_NODES_MM[CONTACT_NODES_MM < edge / 2 ** (1 / 6)]
+        out[q.name] = np.append(inside, edge)
+    out[C.name] = C_NODES
+    return out
 
 
-def hinge_angles(block, r=1.0, s_alpha=0.0):
-    """alpha_+, alpha_- [rad] under the instability angle r and the hinge asymmetry s_alpha."""
-    return _under(block, block_laws(r, s_alpha))[:2]
+def node_on(values: dict, grid_: dict) -> dict:
+    """``values`` at the nearest node of ``grid_`` (in ln for the contacts): one parameter set on another specimen."""
+    out = {}
+    for q in PARAMS:
+        nodes = np.asarray(grid_[q.name], float)
+        dist = np.abs(np.log(nodes / values[q.name])) if q is not C else np.abs(nodes - values[q.name])
+        out[q.name] = float(nodes[int(np.argmin(dist))])
+    return out
 
 
-def block_model(block: dict, alpha_r_over_alpha=1.0, s_alpha=0.0, c=1.0) -> RockingModel:
-    """The specimen's :class:`RockingModel` with the causes' parameters (null: the nominal block)."""
-    a_pos, a_neg, c_pos, c_neg = (float(x) for x in _under(block, block_laws(alpha_r_over_alpha, s_alpha, c)))
-    housner = impact.Sided(impact.Constant(block["e_plus"]), impact.Constant(block["e_minus"]))
-    law = impact.calibrated(housner, c_pos, c_neg)
-    # alpha sets the rest threshold (REST_TOL thetadot_r): that of the weaker hinge.
-    return RockingModel(alpha=min(a_pos, a_neg), p=block["p"], alpha_rock=a_pos, alpha_neg=a_neg, impact=law)
+def block_model(block: dict, contact_plus_mm=None, contact_minus_mm=None, c=1.0) -> RockingModel:
+    """The specimen's :class:`RockingModel` on a contact (None: the footprint's edge) with the extra loss c."""
+    cp = block["footprint_plus_mm"] if contact_plus_mm is None else contact_plus_mm
+    cm = block["footprint_minus_mm"] if contact_minus_mm is None else contact_minus_mm
+    k = contact(block, cp, cm)
+    (scale,) = restitution_scale.laws({C.name: c})
+    if not isinstance(scale, Restitution):
+        raise TypeError(f"restitution_scale's law is {type(scale).__name__}, the block needs a Restitution")
+    rigid = impact.AsymmetricBody(1e-3 * cp, 1e-3 * cm, block["h_m"], block["k_g_m"])
+    law = impact.calibrated(rigid, *scale.factors())
+    # alpha sets the rest threshold (REST_TOL thetadot_r): that of the weaker edge.
+    return RockingModel(
+        alpha=min(k["alpha_plus"], k["alpha_minus"]),
+        p=k["p"],
+        alpha_rock=k["alpha_plus"],
+        alpha_neg=k["alpha_minus"],
+        impact=law,
+    )
 
 
-def grid_models(block: dict, grid=None) -> list[RockingModel]:
-    """The block at every node of ``grid`` (default :data:`GRID`), r fastest-last (C order)."""
-    grid = GRID if grid is None else grid
-    return [block_model(block, r, s, c) for r in grid[R.name] for s in grid[S_ALPHA.name] for c in grid[C.name]]
+def grid_models(block: dict, grid_: dict) -> list[RockingModel]:
+    """The block at every node of ``grid_``, in C order of :data:`PARAMS`."""
+    names = [q.name for q in PARAMS]
+    return [block_model(block, a, b, c) for a in grid_[names[0]] for b in grid_[names[1]] for c in grid_[names[2]]]
 
 
-def outcome_grid(inputs, dts, block: dict, tests, grid=None, specimen="") -> xr.Dataset:
+def outcome_grid(inputs, dts, block: dict, tests, grid_=None, specimen="") -> xr.Dataset:
     """Whether the block overturns under each record at every node of the parameter grid.
 
     One batch per record: its histories are the grid's models, run in
@@ -151,16 +214,18 @@ def outcome_grid(inputs, dts, block: dict, tests, grid=None, specimen="") -> xr.
         :func:`specimen_block`.
     tests : sequence of int
         Test numbers (the ``test`` coordinate).
+    grid_ : dict, optional
+        Nodes by parameter name (default :func:`grid` of the block).
 
     Returns
     -------
     xarray.Dataset
-        ``overturned`` (bool) on (test, alpha_r_over_alpha, s_alpha, c), the
-        block in the attributes, ``compute_s``.
+        ``overturned`` (bool) on (test, contact_plus_mm, contact_minus_mm, c),
+        the block in the attributes, ``compute_s``.
     """
-    grid = GRID if grid is None else grid
-    models = grid_models(block, grid)
-    shape = tuple(len(grid[q.name]) for q in PARAMS)
+    grid_ = grid(block) if grid_ is None else grid_
+    models = grid_models(block, grid_)
+    shape = tuple(len(grid_[q.name]) for q in PARAMS)
     over = np.zeros((len(inputs), *shape), bool)
     t0 = time.perf_counter()
     for i, (ag, dt) in enumerate(zip(inputs, dts)):
@@ -169,19 +234,25 @@ def outcome_grid(inputs, dts, block: dict, tests, grid=None, specimen="") -> xr.
         if (i + 1) % 50 == 0 or i + 1 == len(inputs):
             log.info("%s: %d of %d records simulated, %.1f s", specimen, i + 1, len(inputs), time.perf_counter() - t0)
     coords = {"test": ("test", np.asarray(tests, int))}
-    coords.update({q.name: (q.name, np.asarray(grid[q.name], float)) for q in PARAMS})
+    coords.update({q.name: (q.name, np.asarray(grid_[q.name], float)) for q in PARAMS})
     return xr.Dataset(
         {"overturned": (("test", *(q.name for q in PARAMS)), over)},
         coords=coords,
         attrs={
             "specimen": specimen,
-            **{k: v for k, v in block.items()},
+            **block,
             "n_histories": int(over.size),
             "compute_s": time.perf_counter() - t0,
         },
     )
 
 
+def grid_of(outcomes: xr.Dataset) -> dict:
+    """The parameter grid of an outcome grid, by name."""
+    return {q.name: outcomes[q.name].values for q in PARAMS}
+
+
 def nominal(outcomes: xr.Dataset) -> np.ndarray:
-    """The nominal block's outcome per test (every cause at its null)."""
-    return outcomes.overturned.sel({q.name: q.null for q in PARAMS}, method="nearest").values.astype(bool)
+    """The nominal block's outcome per test: the footprint's edges (the last contact nodes), c = 1."""
+    at = {CONTACT_PLUS.name: -1, CONTACT_MINUS.name: -1}
+    return outcomes.overturned.isel(at).sel({C.name: C.null}).values.astype(bool)

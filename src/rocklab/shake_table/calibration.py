@@ -1,33 +1,45 @@
-"""Causes fitted to the outcomes: a Bernoulli likelihood on the simulated grid.
+"""The block's contact fitted to the outcomes: a Bernoulli likelihood on the simulated grid.
 
 The outcome of a test is a scalar (overturned or not), so the block is
-simulated once per test at every node of the causes' grid
+simulated once per test at every node of its grid
 (:func:`rocklab.shake_table.block.outcome_grid`) and every fit afterwards,
 of every fold and every resample, reads that array: no fit simulates again.
 
 Likelihood
 ----------
-The contact of a rounded base varies from test to test (SOURCE.md), so the
-instability angle of a test is taken lognormal about r alpha with a
-log-scatter ``sigma``; with a lapse ``eps`` (an outcome the planar block
-cannot produce, e.g. the out-of-plane coupling) the probability that test i
-overturns is::
+The contact of a convex base varies from test to test (where the block
+lands, chips, dust), so the contact half-widths of a test are taken
+lognormal about the fitted b_+ and b_-, each with a log-scatter ``sigma``;
+with a lapse ``eps`` (an outcome the planar block cannot produce, e.g. the
+out-of-plane coupling) the probability that test i overturns is::
 
-    P_i = eps + (1 - 2 eps) sum_j w_j(r, sigma) O_i(r_j, s_alpha, c)
+    P_i = eps + (1 - 2 eps) sum_jk w_j(b_+, sigma) w_k(b_-, sigma) O_i(b_+j, b_-k, c)
 
-with O_i the simulated outcome at the grid's r_j and w_j the lognormal
-weights over the grid (Gaussian in ln r, normalised; sigma = 0 is the grid
+with O_i the simulated outcome at the grid's nodes and w the lognormal
+weights over the grid (Gaussian in ln b, normalised; sigma = 0 is the grid
 node itself).  The log-likelihood sum_i [y_i ln P_i + (1 - y_i) ln(1 - P_i)]
-is maximised over the grid of (r, s_alpha, c, sigma, eps).
+is maximised over the grid of (b_+, b_-, c, sigma, eps).
+
+What is chosen where
+--------------------
+The grid's bounds and nodes (:mod:`rocklab.shake_table.block`), the nodes
+of sigma and eps (:data:`SIGMAS`, :data:`LAPSES`) are fixed in advance, from
+the geometry and not from the outcomes.  Every value on them (contact, c,
+sigma, eps) is chosen by the likelihood of the training tests only, so a
+held-out score is that of the whole procedure (nested: nothing is chosen on
+the tests it is scored on).
 
 Uncertainty and held-out evaluation
 -----------------------------------
-Ground motions are the unit of resampling and of the folds: the scaled
-copies of one record are not independent tests.  Intervals are percentiles
-of the fits to resampled ground motions (bootstrap); the fragility of a
-test, its probability of overturning, is the mean of P_i over those fits.
-The cross-validation (:func:`folds_by_group`) holds every test of a ground
-motion in one fold.
+Earthquake records are the unit of resampling and of the folds: the scaled
+copies of one record, and its two horizontal components, are not
+independent tests (:func:`rocklab.shake_table.records.record_of`).
+Intervals are percentiles of the fits to resampled records (bootstrap); the
+fragility of a test, its probability of overturning, is the mean of P_i over
+those fits.  The cross-validation (:func:`folds_by_group`) holds every test
+of a record in one fold, and the difference of two predictors' held-out
+accuracies has a paired bootstrap interval over records
+(:func:`paired_accuracy_difference`).
 """
 
 from __future__ import annotations
@@ -38,8 +50,8 @@ from scipy import optimize
 from rocklab.diagnosis.parameters import Param
 from rocklab.shake_table.block import PARAMS
 
-#: Log-scatter of the instability angle from test to test [-] (ln units).
-SIGMA = Param("sigma_ln_alpha", 0.0, 0.8, 0.0, practical=0.05)
+#: Log-scatter of the contact half-widths from test to test [-] (ln units).
+SIGMA = Param("sigma_ln_contact", 0.0, 0.8, 0.0, practical=0.05)
 SIGMAS = np.array([0.0, 0.15, 0.3, 0.5, 0.8])
 
 #: Probability of an outcome the planar block cannot produce [-].
@@ -51,7 +63,7 @@ PROB_CLIP = 1e-6
 
 
 def folds_by_group(groups, k=5):
-    """Fold of every test, all tests of a group (ground motion) in one fold.
+    """Fold of every test, all tests of a group (record) in one fold.
 
     Groups are dealt, largest first, to the fold holding the fewest tests so
     far (ties: the lower fold): balanced and deterministic.
@@ -64,7 +76,7 @@ def folds_by_group(groups, k=5):
     names, counts = np.unique(groups, return_counts=True)
     k = int(min(k, names.size))
     if k < 2:
-        raise ValueError(f"cross-validation needs at least 2 ground motions, got {names.size}")
+        raise ValueError(f"cross-validation needs at least 2 records, got {names.size}")
     load = np.zeros(k, int)
     fold_of = {}
     for i in np.lexsort((names, -counts)):
@@ -74,33 +86,33 @@ def folds_by_group(groups, k=5):
     return np.array([fold_of[g] for g in groups], int)
 
 
-def _kernel(ln_r, sigma):
-    """Weights (centre, node) of the lognormal scatter over the grid of ln r."""
+def _kernel(ln_b, sigma):
+    """Weights (centre, node) of the lognormal scatter over the nodes ``ln_b`` of one contact."""
     if sigma == 0:
-        return np.eye(ln_r.size)
-    w = np.exp(-0.5 * ((ln_r[None, :] - ln_r[:, None]) / sigma) ** 2)
+        return np.eye(ln_b.size)
+    w = np.exp(-0.5 * ((ln_b[None, :] - ln_b[:, None]) / sigma) ** 2)
     return w / w.sum(axis=1, keepdims=True)
 
 
 class OutcomeLikelihood:
-    """Bernoulli log-likelihood of every test at every node of (sigma, eps, r, s_alpha, c).
+    """Bernoulli log-likelihood of every test at every node of (eps, sigma, b_+, b_-, c).
 
     Parameters
     ----------
-    overturned : ndarray of bool, shape (tests, n_r, n_s, n_c)
-        Simulated outcomes on the causes' grid (:func:`~rocklab.shake_table.block.outcome_grid`).
+    overturned : ndarray of bool, shape (tests, n_plus, n_minus, n_c)
+        Simulated outcomes on the block's grid (:func:`~rocklab.shake_table.block.outcome_grid`).
     observed : array_like of bool, shape (tests,)
     grid : dict
-        The grid values by parameter name (r first, as ``overturned``'s axes).
+        The grid values by parameter name (:data:`~rocklab.shake_table.block.PARAMS`, the axes of ``overturned``).
     """
 
     def __init__(self, overturned, observed, grid):
         o = np.asarray(overturned, float)
         self.grid = grid
         self.shape = o.shape[1:]
-        ln_r = np.log(grid[PARAMS[0].name])
-        # smoothed outcome S[sigma, test, r, s, c]
-        smooth = np.stack([np.einsum("cj,tjsk->tcsk", _kernel(ln_r, s), o) for s in SIGMAS])
+        ln_p, ln_m = (np.log(grid[q.name]) for q in PARAMS[:2])
+        # smoothed outcome S[sigma, test, b_+, b_-, c]
+        smooth = np.stack([np.einsum("ai,bj,tijc->tabc", _kernel(ln_p, s), _kernel(ln_m, s), o) for s in SIGMAS])
         self.smooth = smooth.reshape(SIGMAS.size, o.shape[0], -1)
         y = np.asarray(observed, bool)[None, None, :, None]
         p = LAPSES[:, None, None, None] + (1 - 2 * LAPSES[:, None, None, None]) * self.smooth[None]
@@ -121,6 +133,13 @@ class OutcomeLikelihood:
         e, s, g = node
         return LAPSES[e] + (1 - 2 * LAPSES[e]) * self.smooth[s][idx, g]
 
+    def node(self, values: dict):
+        """The node (eps, sigma, flat grid index) of parameters ``values`` given on this grid's nodes."""
+        ijk = tuple(int(np.flatnonzero(np.isclose(self.grid[q.name], values[q.name]))[0]) for q in PARAMS)
+        e = int(np.flatnonzero(np.isclose(LAPSES, values[LAPSE.name]))[0])
+        s = int(np.flatnonzero(np.isclose(SIGMAS, values[SIGMA.name]))[0])
+        return e, s, int(np.ravel_multi_index(ijk, self.shape))
+
     def values(self, node) -> dict:
         """The parameters of ``node`` by name."""
         e, s, g = node
@@ -132,7 +151,7 @@ class OutcomeLikelihood:
 
 
 def resample_weights(groups, idx, n_boot, seed=0):
-    """Bootstrap weights (n_boot, tests): the groups of ``idx`` drawn with replacement, zero elsewhere."""
+    """Bootstrap weights (n_boot, tests): the groups (records) of ``idx`` drawn with replacement, zero elsewhere."""
     groups = np.asarray(groups)
     rng = np.random.default_rng(seed)
     names = np.unique(groups[idx])
@@ -145,14 +164,15 @@ def resample_weights(groups, idx, n_boot, seed=0):
 
 
 def calibrate(lik: OutcomeLikelihood, groups, idx, n_boot=200, seed=0):
-    """Fit on the tests ``idx``, resample their ground motions, predict every test.
+    """Fit on the tests ``idx``, resample their records, predict every test.
 
     Returns
     -------
     dict
         ``values`` (the fit on ``idx``), ``boot`` (list of the resamples'
         values), ``fragility`` (mean P of every test over the resamples),
-        ``probability`` (P of every test at the fit).
+        ``probability`` (P of every test at the fit), ``nodes`` (the
+        resamples' nodes).
     """
     w = np.zeros(len(groups))
     w[idx] = 1.0
@@ -164,7 +184,33 @@ def calibrate(lik: OutcomeLikelihood, groups, idx, n_boot=200, seed=0):
         "boot": [lik.values(n) for n in nodes],
         "fragility": frag,
         "probability": lik.probability(node),
+        "nodes": nodes,
     }
+
+
+def paired_accuracy_difference(y, p_a, p_b, groups, n_boot=2000, seed=0, level=0.95):
+    """Accuracy of ``p_a`` minus that of ``p_b`` on the same tests, with a paired bootstrap interval over groups.
+
+    Both predictors are scored on the same tests (P > 0.5 read as
+    overturning); the groups (records) are drawn with replacement, each
+    bringing all its tests and both predictors' calls on them, so the
+    interval carries the correlation of tests within a record and of the two
+    predictors on a test.
+
+    Returns
+    -------
+    diff, lo, hi : float
+        The difference on the tests as given and the percentile interval at ``level``.
+    """
+    y = np.asarray(y, bool)
+    d = ((np.asarray(p_a) > 0.5) == y).astype(float) - ((np.asarray(p_b) > 0.5) == y).astype(float)
+    names, inv = np.unique(np.asarray(groups), return_inverse=True)
+    per_d, per_n = np.bincount(inv, d, names.size), np.bincount(inv, minlength=names.size).astype(float)
+    draw = np.random.default_rng(seed).integers(0, names.size, (n_boot, names.size))
+    boot = per_d[draw].sum(axis=1) / per_n[draw].sum(axis=1)
+    q = [(1 - level) / 2 * 100, (1 + level) / 2 * 100]
+    lo, hi = np.percentile(boot, q)
+    return float(d.mean()), float(lo), float(hi)
 
 
 def intervals(boot, level=0.95):

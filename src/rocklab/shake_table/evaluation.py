@@ -1,18 +1,24 @@
-"""Held-out comparison of the block, the PGV threshold and the DEM model; what the nominal block gets wrong.
+"""Held-out comparison of the block, the PGV threshold and the DEM model; transfer between replicas.
 
 Every model is scored on the same tests (those with a motion file), each
-predicted by a fit to the other folds (:func:`cross_validate`):
+predicted by a fit to the other folds (:func:`cross_validate`); the folds
+hold every test of an earthquake record (both components, by RSN) together:
 
 - ``block-nominal``: the specimen's footprint block, no parameter fitted;
-- ``block-calibrated``: the causes fitted to the training folds, the
+- ``block-calibrated``: the contact fitted to the training folds, the
   prediction the mean P over resampled fits (fragility);
 - ``pgv-threshold``: a logistic threshold on PGV fitted to the training folds;
 - ``dem``: the source's DEM predictions as given, the stiffness setting the
-  training folds classify best.
+  training folds classify best.  The source chose its settings on these
+  same tests (in sample), so even the training-fold choice flatters it.
 
-A 0/1 predictor (nominal block, DEM) scores as a probability whose lapse is
-its error rate on the training folds
+The nominal block and DEM are 0/1 predictors: they are scored by accuracy
+alone (a Brier score or log loss would score the lapse we give them, not
+them).  As probabilities (the figures, the fragility table) their lapse is
+their error rate on the training folds
 (:func:`rocklab.shake_table.calibration.deterministic_probability`).
+Differences of accuracy carry a paired bootstrap interval over records
+(:func:`rocklab.shake_table.calibration.paired_accuracy_difference`).
 """
 
 from __future__ import annotations
@@ -29,22 +35,44 @@ from rocklab.seismic.indices import map_indices
 from rocklab.seismic.maps import scales
 from rocklab.shake_table import calibration as cal
 from rocklab.shake_table import records
-from rocklab.shake_table.block import CAUSES, PARAMS, block_model, hinge_angles, nominal
+from rocklab.shake_table.block import (
+    CONTACT_MINUS,
+    CONTACT_PLUS,
+    PARAMS,
+    block_model,
+    contact,
+    footprint,
+    grid_of,
+    node_on,
+    nominal,
+)
 from rocklab.simulation.batch import overturning_batch
 
 log = logging.getLogger(__name__)
 
 #: The models of scores.csv, in its order.
 MODELS = ("block-nominal", "block-calibrated", "pgv-threshold", "dem")
+#: The 0/1 predictors: scored by accuracy only.
+DETERMINISTIC = ("block-nominal", "dem")
+#: The models the calibrated block's accuracy is compared with in scores.csv (column suffix, model).
+COMPARED = (("pgv", "pgv-threshold"), ("dem", "dem"), ("nominal", "block-nominal"))
+#: The models of transfer.csv.
+TRANSFERRED = ("block-calibrated", "pgv-threshold")
+#: Bootstrap resamples of the records for the intervals of accuracy differences and binned rates.
+N_BOOT_DIFF = 2000
 
 #: Bins of the tables by PGA [g] and PGV [m/s].
 PGA_BINS = (0.0, 0.1, 0.2, 0.3, 0.5, 0.8, np.inf)
 PGV_BINS = (0.0, 0.05, 0.1, 0.15, 0.2, 0.3, np.inf)
 
-#: Cause of each fitted parameter: the block's causes (:data:`rocklab.shake_table.block.CAUSES`), the
-#: scatter of the first one's (:data:`rocklab.shake_table.calibration.SIGMA`) and the lapse.
-CAUSE_OF = {q.name: c.name for c in CAUSES for q in c.params if q.name in {p.name for p in PARAMS}}
-CAUSE_OF |= {cal.SIGMA.name: f"{CAUSE_OF[PARAMS[0].name]} (scatter)", cal.LAPSE.name: "lapse"}
+#: What each fitted parameter is.
+CAUSE_OF = {
+    CONTACT_PLUS.name: "contact (+x edge)",
+    CONTACT_MINUS.name: "contact (-x edge)",
+    PARAMS[2].name: "restitution_scale (loss beyond the rigid impact)",
+    cal.SIGMA.name: "contact scatter",
+    cal.LAPSE.name: "lapse",
+}
 
 
 def _col(model):
@@ -82,6 +110,16 @@ def scores(y, p) -> dict:
     }
 
 
+def _problem(specimen, tests, motions, outcomes: xr.Dataset):
+    """The tests of ``motions`` with their outcomes, records and the likelihood on the specimen's grid."""
+    df = motions.merge(tests.drop(columns=["ground_motion"]), on="test", how="left")
+    if not np.array_equal(outcomes.test.values, df.test.values):
+        raise ValueError(f"{specimen}: the outcome grid's tests are not those of the motion table")
+    y = df[f"overturned_{specimen.lower()}"].to_numpy(bool)
+    groups = df.ground_motion.map(records.record_of).to_numpy(str)
+    return df, y, groups, cal.OutcomeLikelihood(outcomes.overturned.values, y, grid_of(outcomes))
+
+
 def cross_validate(specimen, tests, motions, outcomes: xr.Dataset, k=5, n_boot=50, seed=0) -> pd.DataFrame:
     """Held-out predictions of the four models for every test with a motion file.
 
@@ -96,25 +134,19 @@ def cross_validate(specimen, tests, motions, outcomes: xr.Dataset, k=5, n_boot=5
         :func:`rocklab.shake_table.block.outcome_grid` of the specimen, on the
         tests of ``motions``.
     k : int
-        Folds (ground motions never split).
+        Folds (records never split).
     n_boot : int
-        Resamples of the training ground motions per fold (the fragility).
+        Resamples of the training records per fold (the fragility).
 
     Returns
     -------
     DataFrame
-        One row per test: specimen, test, ground_motion, fold, observed,
-        pga_g, pgv_m_s, the nominal outcome and ``p_<model>`` for each of
-        :data:`MODELS`.
+        One row per test: specimen, test, ground_motion, record, fold,
+        observed, pga_g, pgv_m_s, the nominal outcome and ``p_<model>`` for
+        each of :data:`MODELS`.
     """
-    df = motions.merge(tests.drop(columns=["ground_motion"]), on="test", how="left")
-    if not np.array_equal(outcomes.test.values, df.test.values):
-        raise ValueError(f"{specimen}: the outcome grid's tests are not those of the motion table")
-    y = df[f"overturned_{specimen.lower()}"].to_numpy(bool)
-    groups = df.ground_motion.to_numpy(str)
+    df, y, groups, lik = _problem(specimen, tests, motions, outcomes)
     fold = cal.folds_by_group(groups, k)
-    grid = {q.name: outcomes[q.name].values for q in PARAMS}
-    lik = cal.OutcomeLikelihood(outcomes.overturned.values, y, grid)
     nom = nominal(outcomes)
     dem = records.dem_columns(tests, specimen)
     out = {m: np.zeros(y.size) for m in MODELS}
@@ -133,7 +165,8 @@ def cross_validate(specimen, tests, motions, outcomes: xr.Dataset, k=5, n_boot=5
         {
             "specimen": specimen,
             "test": df.test,
-            "ground_motion": groups,
+            "ground_motion": df.ground_motion,
+            "record": groups,
             "fold": fold,
             "observed": y,
             "pga_g": df.pga_g,
@@ -146,14 +179,68 @@ def cross_validate(specimen, tests, motions, outcomes: xr.Dataset, k=5, n_boot=5
     )
 
 
-def score_table(predictions: pd.DataFrame) -> pd.DataFrame:
-    """scores.csv: held-out accuracy, Brier score and log loss of every specimen and model."""
-    rows = [
-        {"specimen": s, "model": m, **scores(g.observed, g[f"p_{_col(m)}"])}
-        for s, g in predictions.groupby("specimen", sort=True)
-        for m in MODELS
-    ]
-    return pd.DataFrame(rows, columns=["specimen", "model", "accuracy", "brier", "log_loss", "n_tests"])
+def score_table(predictions: pd.DataFrame, n_boot=N_BOOT_DIFF, seed=0) -> pd.DataFrame:
+    """scores.csv: held-out scores of every specimen and model; the calibrated block's accuracy differences.
+
+    Accuracy for every model; Brier score and log loss for the probabilistic
+    ones (empty for :data:`DETERMINISTIC`).  On the ``block-calibrated``
+    rows, ``diff_vs_<x>`` is its accuracy minus that of each model of
+    :data:`COMPARED` on the same tests, ``_lo``/``_hi`` the 95 % paired
+    bootstrap interval over records (``record``).
+    """
+    diffs = [f"diff_vs_{x}{end}" for x, _ in COMPARED for end in ("", "_lo", "_hi")]
+    rows = []
+    for s, g in predictions.groupby("specimen", sort=True):
+        for m in MODELS:
+            row = {"specimen": s, "model": m, **scores(g.observed, g[f"p_{_col(m)}"])}
+            if m in DETERMINISTIC:
+                row.update(brier=np.nan, log_loss=np.nan)
+            if m == "block-calibrated":
+                for x, other in COMPARED:
+                    d = cal.paired_accuracy_difference(
+                        g.observed, g.p_block_calibrated, g[f"p_{_col(other)}"], g.record, n_boot, seed
+                    )
+                    row.update(dict(zip((f"diff_vs_{x}", f"diff_vs_{x}_lo", f"diff_vs_{x}_hi"), d)))
+            rows.append(row)
+    return pd.DataFrame(rows, columns=["specimen", "model", "accuracy", "brier", "log_loss", "n_tests", *diffs])
+
+
+def transfer_table(tests, motions, outcomes: dict, k=5, n_boot=50, seed=0) -> pd.DataFrame:
+    """transfer.csv: each specimen's fit predicting the other replica, held out by record.
+
+    The replicas shook together under the same records, so the transfer is
+    cross-validated too: in each fold the contact (in mm), c, sigma and the
+    lapse are fitted to one specimen's training folds and predict the other
+    specimen's held-out fold at the same physical values (the nearest node of
+    its grid, :func:`rocklab.shake_table.block.node_on`); the PGV threshold
+    likewise.
+
+    Returns
+    -------
+    DataFrame
+        ``train``, ``test``, ``model`` (:data:`TRANSFERRED`), ``accuracy``,
+        ``brier``, ``log_loss``, ``n_tests``.
+    """
+    names = sorted(outcomes)
+    problems = {s: _problem(s, tests, motions, outcomes[s]) for s in names}
+    rows = []
+    for a in names:
+        for b in names:
+            if a == b:
+                continue
+            _, y_a, groups, lik_a = problems[a]
+            df, y_b, _, lik_b = problems[b]
+            fold = cal.folds_by_group(groups, k)
+            p = {m: np.zeros(y_b.size) for m in TRANSFERRED}
+            for f in range(fold.max() + 1):
+                te, tr = np.flatnonzero(fold == f), np.flatnonzero(fold != f)
+                fit = cal.calibrate(lik_a, groups, tr, n_boot, seed + f)
+                on_b = [lik_b.node({**v, **node_on(v, lik_b.grid)}) for v in fit["boot"]]
+                p["block-calibrated"][te] = np.mean([lik_b.probability(n, te) for n in on_b], axis=0)
+                x50, beta = cal.logistic_threshold(df.pgv_m_s.to_numpy()[tr], y_a[tr])
+                p["pgv-threshold"][te] = cal.logistic_probability(df.pgv_m_s.to_numpy()[te], x50, beta)
+            rows += [{"train": a, "test": b, "model": m, **scores(y_b, p[m])} for m in TRANSFERRED]
+    return pd.DataFrame(rows, columns=["train", "test", "model", "accuracy", "brier", "log_loss", "n_tests"])
 
 
 def onset_edges(peak_plus_g, peak_minus_g, block) -> np.ndarray:
@@ -161,10 +248,12 @@ def onset_edges(peak_plus_g, peak_minus_g, block) -> np.ndarray:
 
     The +x edge needs the table to accelerate towards -x by more than
     g tan alpha_+, the -x edge towards +x by more than g tan alpha_-
-    (:mod:`rocklab.simulation.model`, rocking onset).
+    (:mod:`rocklab.simulation.model`, rocking onset).  ``block``: the
+    body (:func:`rocklab.shake_table.block.specimen_block`), on its footprint.
     """
-    plus = np.asarray(peak_minus_g) > np.tan(block["alpha_plus"])
-    minus = np.asarray(peak_plus_g) > np.tan(block["alpha_minus"])
+    fp = footprint(block)
+    plus = np.asarray(peak_minus_g) > np.tan(fp["alpha_plus"])
+    minus = np.asarray(peak_plus_g) > np.tan(fp["alpha_minus"])
     return np.select([plus & minus, plus, minus], ["both edges", "+x edge", "-x edge"], "neither edge")
 
 
@@ -205,14 +294,27 @@ def nominal_errors(predictions: pd.DataFrame, blocks: dict) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def rate_interval(y, groups, n_boot=N_BOOT_DIFF, seed=0, level=0.95):
+    """Percentile interval of an overturning rate over resampled records (the tests of a record together)."""
+    names, inv = np.unique(np.asarray(groups), return_inverse=True)
+    per_y = np.bincount(inv, np.asarray(y, float), names.size)
+    per_n = np.bincount(inv, minlength=names.size).astype(float)
+    draw = np.random.default_rng(seed).integers(0, names.size, (n_boot, names.size))
+    boot = per_y[draw].sum(axis=1) / per_n[draw].sum(axis=1)
+    lo, hi = np.percentile(boot, [(1 - level) / 2 * 100, (1 + level) / 2 * 100])
+    return float(lo), float(hi)
+
+
 def fragility_table(predictions: pd.DataFrame) -> pd.DataFrame:
-    """Observed overturning rate and every model's mean held-out P by bin of PGA and PGV."""
+    """Measured overturning rate (95 % interval over records), every model's mean held-out P, by bin of PGA and PGV."""
     rows = []
     for s, g in predictions.groupby("specimen", sort=True):
         for measure, col, edges, unit in (("pga", "pga_g", PGA_BINS, "g"), ("pgv", "pgv_m_s", PGV_BINS, "m/s")):
             label, key = _bin_labels(g[col].to_numpy(), edges, unit)
             for k in np.unique(key):
                 m = key == k
+                obs = g.observed.to_numpy(float)[m]
+                lo, hi = rate_interval(obs, g.record.to_numpy()[m])
                 rows.append(
                     {
                         "specimen": s,
@@ -221,7 +323,10 @@ def fragility_table(predictions: pd.DataFrame) -> pd.DataFrame:
                         "lower": edges[k],
                         "upper": edges[k + 1] if np.isfinite(edges[k + 1]) else None,
                         "n_tests": int(m.sum()),
-                        "observed": float(g.observed.to_numpy(float)[m].mean()),
+                        "n_records": int(g.record[m].nunique()),
+                        "observed": float(obs.mean()),
+                        "observed_lo": lo,
+                        "observed_hi": hi,
                         **{_col(x): float(g[f"p_{_col(x)}"].to_numpy()[m].mean()) for x in MODELS},
                     }
                 )
@@ -229,49 +334,79 @@ def fragility_table(predictions: pd.DataFrame) -> pd.DataFrame:
 
 
 def full_fit(specimen, tests, motions, outcomes, n_boot=200, seed=0):
-    """The causes fitted to every test of a specimen, with bootstrap intervals and in-sample fragility."""
-    df = motions.merge(tests.drop(columns=["ground_motion"]), on="test", how="left")
-    y = df[f"overturned_{specimen.lower()}"].to_numpy(bool)
-    grid = {q.name: outcomes[q.name].values for q in PARAMS}
-    lik = cal.OutcomeLikelihood(outcomes.overturned.values, y, grid)
-    groups = df.ground_motion.to_numpy(str)
-    return cal.calibrate(lik, groups, np.arange(y.size), n_boot, seed)
+    """The contact fitted to every test of a specimen, with bootstrap intervals and in-sample fragility."""
+    _, y, groups, lik = _problem(specimen, tests, motions, outcomes)
+    fit = cal.calibrate(lik, groups, np.arange(y.size), n_boot, seed)
+    return {**fit, "grid": lik.grid}
+
+
+def _at_edge(value, nodes) -> bool:
+    return bool(np.isclose(value, np.min(nodes)) or np.isclose(value, np.max(nodes)))
 
 
 def parameter_table(specimen, fit, block) -> pd.DataFrame:
-    """parameters.csv rows: every fitted parameter and the hinge angles [deg] with 95 % intervals."""
+    """parameters.csv rows: the fitted parameters and what follows from the contact, with 95 % intervals.
+
+    The contact half-widths [mm], c, the scatter and the lapse; derived from
+    the contact: the rocking angles [deg] and the rigid e of leaving each
+    edge.  ``null`` is the nominal block's value (the footprint, c = 1, no
+    scatter or lapse); ``at_grid_edge`` says where a value sits on the first
+    or last node of its grid (its interval then ends there too).
+    """
     ci = cal.intervals(fit["boot"])
+    nodes = {**fit["grid"], cal.SIGMA.name: cal.SIGMAS, cal.LAPSE.name: cal.LAPSES}
+    null = {
+        CONTACT_PLUS.name: block["footprint_plus_mm"],
+        CONTACT_MINUS.name: block["footprint_minus_mm"],
+        PARAMS[2].name: PARAMS[2].null,
+        cal.SIGMA.name: cal.SIGMA.null,
+        cal.LAPSE.name: cal.LAPSE.null,
+    }
+    v = fit["values"]
     rows = []
-    for q in (*PARAMS, cal.SIGMA, cal.LAPSE):
+    for name in null:
+        lo, hi = ci[name]
+        if name in (CONTACT_PLUS.name, CONTACT_MINUS.name):
+            named = hi < null[name]  # a contact narrower than the footprint
+        else:
+            named = cal.named(next(q for q in (*PARAMS, cal.SIGMA, cal.LAPSE) if q.name == name), (lo, hi))
         rows.append(
             {
                 "specimen": specimen,
-                "parameter": q.name,
-                "cause": CAUSE_OF[q.name],
-                "value": fit["values"][q.name],
-                "ci_low": ci[q.name][0],
-                "ci_high": ci[q.name][1],
-                "null": q.null,
-                "named": cal.named(q, ci[q.name]),
-                "units": "1",
+                "parameter": name,
+                "cause": CAUSE_OF[name],
+                "value": v[name],
+                "ci_low": lo,
+                "ci_high": hi,
+                "null": null[name],
+                "named": bool(named),
+                "at_grid_edge": _at_edge(v[name], nodes[name]),
+                "units": "mm" if name.endswith("_mm") else "1",
             }
         )
-    v = fit["values"]
-    boot = np.array([hinge_angles(block, b["alpha_r_over_alpha"], b["s_alpha"]) for b in fit["boot"]])
-    for j, edge in enumerate(("plus", "minus")):
-        value = hinge_angles(block, v["alpha_r_over_alpha"], v["s_alpha"])[j]
+    fp = footprint(block)
+
+    def derived(values):
+        k = contact(block, values[CONTACT_PLUS.name], values[CONTACT_MINUS.name])
+        return [np.degrees(k["alpha_plus"]), np.degrees(k["alpha_minus"]), k["e_plus"], k["e_minus"]]
+
+    boot = np.array([derived(b) for b in fit["boot"]])
+    names = ("alpha_plus_deg", "alpha_minus_deg", "e_leaving_plus", "e_leaving_minus")
+    nulls = (np.degrees(fp["alpha_plus"]), np.degrees(fp["alpha_minus"]), fp["e_plus"], fp["e_minus"])
+    for j, (name, value, nv) in enumerate(zip(names, derived(v), nulls)):
         lo, hi = np.percentile(boot[:, j], [2.5, 97.5])
         rows.append(
             {
                 "specimen": specimen,
-                "parameter": f"alpha_{edge}_deg",
-                "cause": "hinge angle (derived)",
-                "value": float(np.degrees(value)),
-                "ci_low": float(np.degrees(lo)),
-                "ci_high": float(np.degrees(hi)),
-                "null": float(np.degrees(block[f"alpha_{edge}"])),
+                "parameter": name,
+                "cause": "from the contact (derived)",
+                "value": float(value),
+                "ci_low": float(lo),
+                "ci_high": float(hi),
+                "null": float(nv),
                 "named": False,
-                "units": "deg",
+                "at_grid_edge": False,
+                "units": "deg" if name.endswith("_deg") else "1",
             }
         )
     return pd.DataFrame(rows)
@@ -285,7 +420,7 @@ def calibrated_map(ag, dt, block, values, record, n=41, lo=0.5, hi=1.5, specimen
     :func:`rocklab.simulation.batch.overturning_batch`; its indices in the
     attributes (:func:`rocklab.seismic.indices.map_indices`).
     """
-    model = block_model(block, values["alpha_r_over_alpha"], values["s_alpha"], values["c"])
+    model = block_model(block, *(values[q.name] for q in PARAMS))
     amp, dur = scales(n, lo, hi), scales(n, lo, hi)
     t0 = time.perf_counter()
     over = overturning_batch(ag, dt, model, amp, dur, substeps=1, tail=20.0)
@@ -323,7 +458,7 @@ def calibration_tables(tests, motions, outcomes: dict, blocks: dict, folds=5, n_
     -------
     dict
         ``scores``, ``predictions``, ``nominal_errors``, ``fragility``,
-        ``parameters`` (DataFrames; see the schemas of workflow/schemas/shake_table_*).
+        ``parameters``, ``transfer`` (DataFrames; see the schemas of workflow/schemas/shake_table_*).
     """
     preds, params = [], []
     for specimen, ds in outcomes.items():
@@ -341,11 +476,12 @@ def calibration_tables(tests, motions, outcomes: dict, blocks: dict, folds=5, n_
         "nominal_errors": nominal_errors(predictions, blocks),
         "fragility": fragility_table(predictions),
         "parameters": pd.concat(params, ignore_index=True),
+        "transfer": transfer_table(tests, motions, outcomes, folds, n_boot_cv, seed),
     }
 
 
 def fitted_values(parameters: pd.DataFrame, specimen: str) -> dict:
-    """The fitted causes' parameters of one specimen from parameters.csv."""
+    """The fitted contact and c of one specimen from parameters.csv."""
     p = parameters[parameters.specimen == specimen].set_index("parameter").value
     return {q.name: float(p[q.name]) for q in PARAMS}
 

@@ -20,6 +20,7 @@ convention implies, or the record is refused.
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -51,6 +52,21 @@ BAND_ORDER = 3
 
 #: Columns of tests.csv the library reads.
 REQUIRED = ("test", "ground_motion", "overturned_sp1", "overturned_sp2", "motion_file")
+
+
+#: A ground-motion name that starts with a PEER NGA record sequence number (RSN).
+_RSN = re.compile(r"^RSN(\d+)(?:_|$)", re.IGNORECASE)
+
+
+def record_of(ground_motion) -> str:
+    """The earthquake record of a ground motion: ``RSN<n>`` where its name carries the RSN, else the name.
+
+    Both horizontal components of a record (``RSN137_TABAS_BAJ-L1.AT2`` and
+    ``..._BAJ-T1.AT2``) are one record: the unit of folds and resamples.
+    """
+    name = str(ground_motion)
+    m = _RSN.match(name)
+    return f"RSN{int(m.group(1))}" if m else name
 
 
 def check_dir(folder, key="shake_table_dir") -> Path:
@@ -96,15 +112,17 @@ def read_tests(folder) -> pd.DataFrame:
 
 
 def read_geometry(folder) -> dict:
-    """geometry.json: per specimen the mass, and ``rocking_2d`` of each footprint edge."""
+    """geometry.json: per specimen the mass, and ``rocking_2d`` of each footprint edge (b, h, R, I_O: the block's)."""
     path = check_dir(folder) / "geometry.json"
     geo = json.loads(path.read_text())
     for s in SPECIMENS:
         try:
-            geo[s]["footprint"]["rocking_2d"]["plus_x_edge"]["alpha_rad"]
-            geo[s]["footprint"]["rocking_2d"]["minus_x_edge"]["alpha_rad"]
+            float(geo[s]["mass_kg"])
+            for edge in ("plus_x_edge", "minus_x_edge"):
+                for key in ("b_m", "h_m", "R_m", "I_o_kgm2"):
+                    float(geo[s]["footprint"]["rocking_2d"][edge][key])
         except (KeyError, TypeError) as exc:
-            raise ValueError(f"{path}: {s} lacks footprint.rocking_2d.plus_x_edge/minus_x_edge ({exc})") from None
+            raise ValueError(f"{path}: {s} lacks mass_kg or rocking_2d.<edge>.b_m/h_m/R_m/I_o_kgm2 ({exc})") from None
     return geo
 
 
