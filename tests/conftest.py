@@ -50,6 +50,13 @@ SLOW = {
         "test_onset_on_the_first_sample",
     },
     "test_campaign.py": {"test_embedded_records_read_as_python_reads_them"},
+    # virtual series simulated and diagnosed: a few seconds each
+    "test_series_inference.py": {
+        "friction",
+        "test_one_test_names_nothing_and_says_why",
+        "test_three_tests_at_100_hz_losing_7_percent_of_e_name_it",
+        "test_a_null_series_of_three_tests_names_nothing",
+    },
 }
 #: Tests that run Snakemake without a ``skipif`` that names it: file -> test names.
 WORKFLOW = {"test_config.py": {"test_every_run_takes_the_workflow_profile"}}
