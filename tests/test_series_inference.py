@@ -21,7 +21,6 @@ from rocklab.diagnosis.evidence import in_series_order
 from rocklab.diagnosis.parameters import Param
 from rocklab.diagnosis.problem import WallProblem
 from rocklab.diagnosis.series import MIN_TESTS_TO_NAME
-from rocklab.lab import virtual_lab as vl
 from rocklab.physics import impact as I
 
 
@@ -100,10 +99,7 @@ def test_three_tests_name_a_gain_only_beyond_their_t_quantile():
 
 def _series_at_100_hz(name, model, seed):
     """Three virtual tests of a two-sided wall sampled at 100 Hz."""
-    make = vl.VirtualTest
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(vl, "VirtualTest", lambda *a, **k: make(*a, **{"fs": 100.0, **k}))
-        return virtual_series(name, "two-sided", model, n=3, seed=seed)
+    return virtual_series(name, "two-sided", model, n=3, seed=seed, fs=100.0)
 
 
 @pytest.mark.parametrize("seed", [1, 4])

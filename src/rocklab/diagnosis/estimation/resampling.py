@@ -26,6 +26,13 @@ from rocklab.dissipation.statistics import MIN_BOOTSTRAP
 optimize = lazy_module("scipy.optimize")
 stats = lazy_module("scipy.stats")
 
+#: No interval is narrower than +- this share of the smallest effect worth naming its parameter's cause
+#: (``Param.practical``): below it the approximations of the model (the derivative filter's bias, the
+#: linearised flights) are of the size of the difference, and on virtual walls of a known truth
+#: (``bench/discovery.py``) the statistical intervals, 1e-6 wide at the lab's noise, missed it by up to a
+#: tenth of it.
+RESOLUTION = 0.25
+
 #: A bootstrap interval narrower than this share of the sandwich interval (:func:`sandwich_intervals`) has
 #: resamples collapsed on a bound or on a kink of the fit, not a precision the tests carry: the sandwich
 #: interval stands instead.  Over tests that vary freely the two differ by their quantiles, some 20 %.
@@ -161,7 +168,9 @@ def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
     whose percentile interval misses its estimate or is narrower than
     :data:`COLLAPSED_BOOTSTRAP` times the sandwich's, the resamples
     collapsed on a bound (a loss in flight fitted at zero: every resample
-    steps onto the bound the full fit stopped short of).
+    steps onto the bound the full fit stopped short of).  Either is widened,
+    within the bounds, to +- :data:`RESOLUTION` times the parameter's
+    smallest effect worth naming about the estimate where it is narrower.
     """
     t0 = time.perf_counter()
     rng = np.random.default_rng(seed)
@@ -177,7 +186,7 @@ def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
             problem.n_tests - 1,
             ", ".join(f"{k} [{a:.4g}, {b:.4g}]" for k, (a, b) in sandwich.items()),
         )
-        return sandwich
+        return _resolved(problem, fitted, sandwich)
     draws = []
     for _ in range(n_boot):
         counts = np.bincount(rng.integers(0, problem.n_tests, problem.n_tests), minlength=problem.n_tests)
@@ -206,7 +215,19 @@ def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
         time.perf_counter() - t0,
         ", ".join(f"{k} [{lo:.4g}, {hi:.4g}]" for k, (lo, hi) in ci.items()),
     )
-    return ci
+    return _resolved(problem, fitted, ci)
+
+
+def _resolved(problem: Problem, fitted: Fit, ci):
+    """The intervals ``ci`` widened to +- :data:`RESOLUTION` times each parameter's practical effect, within
+    its bounds."""
+    out = dict(ci)
+    for q in problem.params(fitted.ext):
+        if q.practical is not None and q.name in out:
+            x, half = fitted.values[q.name], RESOLUTION * q.practical
+            lo, hi = out[q.name]
+            out[q.name] = [max(q.lower, min(lo, x - half)), min(q.upper, max(hi, x + half))]
+    return out
 
 
 def paired_difference(d):
