@@ -54,6 +54,13 @@ SLOW = {
     "test_instruments.py": {"mixed", "test_per_impact_restitution_within_0005_of_the_truth_at_240_and_1000_hz"},
     # one series per instrument and scenario diagnosed once: 16 s
     "test_instruments_diagnosis.py": {"diagnosed"},
+    # virtual series simulated and diagnosed: a few seconds each
+    "test_series_inference.py": {
+        "friction",
+        "test_one_test_names_nothing_and_says_why",
+        "test_three_tests_at_100_hz_losing_7_percent_of_e_name_it",
+        "test_a_null_series_of_three_tests_names_nothing",
+    },
 }
 #: Tests that run Snakemake without a ``skipif`` that names it: file -> test names.
 WORKFLOW = {"test_config.py": {"test_every_run_takes_the_workflow_profile"}}

@@ -14,9 +14,7 @@ from scipy import stats
 
 from rocklab import diagnosis as D
 from rocklab.diagnosis.causes import stop_threshold
-from rocklab.lab import kinematics
 from rocklab.lab import virtual_lab as vl
-from rocklab.lab import virtual_record as vr
 from rocklab.physics import impact as I
 from rocklab.physics import restitution, wall
 from rocklab.simulation.model import RockingModel
@@ -31,61 +29,10 @@ def alpha_of(specimen):
     return float(wall.slenderness_angle(sp.height_mm, sp.thickness_mm))
 
 
-def virtual_series(
-    name,
-    boundary,
-    model,
-    *,
-    n=6,
-    alpha_ratio=1.0,
-    noise_mm=0.002,
-    pull=False,
-    theta0_range=(0.97, 0.998),
-    seed=0,
-    log=None,
-):
-    """Records of ``n`` virtual-lab tests of one series, reduced to theta by the kinematics.
-
-    ``log``: the numbers of the test log of each test (column -> n values), as
-    :func:`rocklab.lab.reduction.log_values` reads tests.csv.
-    """
-    one = boundary == "one-sided"
-    specimen = ONE if one else TWO
-    sp = SPEC.loc[specimen]
-    layout = vr.usual_layout("S", sp.length_mm, sp.height_mm, sp.thickness_mm, one)
-    X, F = vr.transducer_geometry(layout)
-    used = np.r_[np.ones(5), np.zeros(len(layout) - 5)]  # channel 5 monitors, it is no rigid-body input
-    rng = np.random.default_rng(seed)
-    recs = []
-    for i in range(n):
-        direction = "pull" if pull and i % 2 else "push"
-        vt = vl.VirtualTest(
-            f"{name}-{i}",
-            specimen,
-            boundary,
-            direction=direction,
-            contact_depth_mm=120.0 if one else None,
-            alpha_ratio=alpha_ratio,
-            theta0_ratio=float(rng.uniform(*theta0_range)),
-            model=model(i) if callable(model) else dict(model),
-            effects=vr.Effects(noise_mm=noise_mm, hum_mm=noise_mm),
-        )
-        t, E, truth = vl.simulate_virtual_test(vt, sp, layout, rng=rng, t_end=60.0)
-        theta = kinematics.solve_wall_motion(E, X, F, sp.thickness_mm, weights=used)["theta"]
-        recs.append(
-            dict(
-                test_id=vt.test_id,
-                t=t,
-                theta=theta,
-                fs=vt.fs,
-                alpha=truth["alpha"],
-                p=truth["p"],
-                boundary=boundary,
-                direction=direction,
-                log={k: v[i] for k, v in (log or {}).items()},
-            )
-        )
-    return recs
+def virtual_series(name, boundary, model, **kw):
+    """Records of virtual-lab tests of one series (:func:`rocklab.lab.virtual_lab.series_records`) of the
+    slender two-sided or the stocky one-sided specimen."""
+    return vl.series_records(name, SPEC.loc[ONE if boundary == "one-sided" else TWO], boundary, model, **kw)
 
 
 def wearing(rate, c):

@@ -3,8 +3,10 @@
 A campaign of two valid tests used to print a Table 3 cell ``0.949 [nan,
 nan]`` and a diagnosis ``alpha_r_over_alpha = 0.9088 [0.9088, 0.9088]``
 naming causes from two tests; below
-:data:`rocklab.dissipation.statistics.MIN_BOOTSTRAP` units the value comes
-without an interval, marked, and a series names no cause.
+:data:`rocklab.dissipation.statistics.MIN_BOOTSTRAP` units a table's value
+comes without an interval, marked, and a series of two to four tests names a
+cause on the t interval of its few degrees of freedom (issue 24), a series of
+one test none.
 """
 
 import logging
@@ -102,10 +104,23 @@ def series_of():
     return lambda n: virtual_series("small", boundary, model, n=n, seed=3, **kw)
 
 
-def test_a_two_test_series_names_nothing(series_of):
+def test_a_two_test_series_names_its_causes_on_one_degree_of_freedom(series_of):
     e = D.diagnose_records(series_of(2), "tiny", n_boot=10, n_history=0)
-    assert e["n_tests"] == 2 and e["verdict"] == [] and e["findings"] == []
-    assert e["too_small"].startswith("too few tests for an interval (2 < 5)")
+    assert e["n_tests"] == 2 and "too_small" not in e
+    assert e["verdict"] == ["instability_angle", "restitution_scale"]
+    truth = {"alpha_r_over_alpha": 0.9, "c": 0.95}
+    for f in e["findings"]:
+        for k, (lo, hi) in f["ci95"].items():
+            assert lo <= f["params"][k] <= hi and lo <= truth[k] <= hi and f["n_tests"] == 2
+    b = D.diagnose_boundary([e], "two-sided")
+    assert b["verdict"] == e["verdict"] and b["n_series_diagnosed"] == 1 and "too_small" not in b
+    assert all(f["ci_note"] == "too few series for an interval (1 < 5)" for f in b["findings"])
+
+
+def test_a_one_test_series_names_nothing(series_of):
+    e = D.diagnose_records(series_of(1), "tiny", n_boot=10, n_history=0)
+    assert e["n_tests"] == 1 and e["verdict"] == [] and e["findings"] == []
+    assert e["too_small"].startswith("one test: nothing varies between tests")
     assert "extended" not in e and e["sample_test"].startswith("small-")
     b = D.diagnose_boundary([e], "two-sided")
     assert b["verdict"] == [] and b["n_series"] == 1 and b["n_series_diagnosed"] == 0

@@ -197,8 +197,9 @@ def performance_summary(results, checkout=None) -> dict:
         ``jobs`` (jobs, total and longest time per rule or folder of jobs),
         ``n_jobs``, ``total_job_s``, ``shake_table`` (the job times of the
         target ``shake_table``, ``None`` where it did not run) and one entry
-        per benchmark of ``make bench`` (``None`` where it did not run), and
-        ``projection`` (``None`` without ``checkout``).
+        per benchmark of ``make bench`` (``None`` where it did not run;
+        ``discovery``, the diagnosis' calibration, with its series one by one
+        and what each missed), and ``projection`` (``None`` without ``checkout``).
     """
     results = Path(results)
     jobs = _benchmarks(results)
@@ -265,7 +266,40 @@ def performance_summary(results, checkout=None) -> dict:
         else None
     )
     out["shake_table"] = shake_table_times(results)
+    disc = _bench(results, "discovery")
+    out["discovery"] = _discovery(disc) if disc else None
     return out
+
+
+def _miss(cell) -> str:
+    """What a series of ``bench/discovery.py`` got wrong, in words ("" where it was named right)."""
+    if cell["named_right"]:
+        return ""
+    out = []
+    if cell.get("too_small"):
+        out.append(f"too small: {cell['too_small']}")
+    if cell["missing"]:
+        out.append(f"not named: {', '.join(cell['missing'])}")
+    if cell["wrong"]:
+        flag = "flagged unexplained" if cell["unexplained"] else "not flagged"
+        out.append(f"named beside the truth: {', '.join(cell['wrong'])} ({flag})")
+    if cell["outside"]:
+        out.append(f"interval misses the truth: {'; '.join(cell['outside'])}")
+    return "; ".join(out)
+
+
+def _discovery(bench: dict) -> dict:
+    """The calibration of the diagnosis (``bench/discovery.py``): its four rates against their targets, and
+    one row per series with what it missed."""
+    keys = ("n_series", "n_null", "n_caused", "n_params_named", "n_skipped", "design", "wall_s", "workers")
+    keys += ("named_right_rate", "false_name_rate_null", "confident_misname_rate", "coverage_95", "pass")
+    cols = ("cause", "boundary", "fs", "wall", "h_over_b", "n_tests", "n_impacts", "verdict", "named_right")
+    return {
+        **{k: bench[k] for k in keys},
+        "targets": bench["targets"],
+        "missed": [t for t, v in bench["targets"].items() if not v["met"]],
+        "cells": [{**{k: c[k] for k in cols}, "miss": _miss(c)} for c in bench["cells"]],
+    }
 
 
 def _projection(scale, maps, checkout) -> dict:

@@ -47,6 +47,7 @@ from rocklab.diagnosis.causes import restitution_housner_loss
 from rocklab.diagnosis.discovery import discovery, family_against_listed
 from rocklab.diagnosis.estimation import Problem, beyond_the_catalogue, finite_mean, select_effects
 from rocklab.physics import restitution
+from rocklab.physics.impact import bounded_factor
 from rocklab.physics.law import Amplitude, HousnerLoss, Restitution
 
 #: Impacts per trial used (later ones are dominated by the processing noise).
@@ -204,10 +205,10 @@ class BlockProblem(Problem):
                 e = law.restitution(e)
         for law in laws:
             if isinstance(law, Restitution):
-                e = e * law.on_impacts(sub.odd)
+                e = e * bounded_factor(e, law.on_impacts(sub.odd))
         for law in laws:
             if isinstance(law, Amplitude):
-                e = e * np.clip(law.a - law.b * sub.u, 0.0, 1.0 / e)
+                e = e * bounded_factor(e, law.a - law.b * sub.u)
         return e
 
     def residuals(self, sub, ext, values):

@@ -271,7 +271,10 @@ def impact_speeds(v, side, mp: ModelParams, timed=True):
         x = np.asarray(v) / vr
         basis = _law.hats(x)
         g = np.asarray(mp.speed_knots)
-        v_out = v_out * sum(per_test(g[..., j], x) * basis[..., j] for j in range(_law.KNOTS.size))
+        g = sum(per_test(g[..., j], x) * basis[..., j] for j in range(_law.KNOTS.size))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            # within the physical bounds of the impact as a whole: no faster take-off than landing
+            v_out = v_out * _impact.bounded_factor(np.where(v > 0, v_out / v, 0.0), g)
     return v_out, depth, duration, v_in, w
 
 

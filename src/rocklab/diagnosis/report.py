@@ -63,8 +63,10 @@ def diagnosis_markdown(diagnosis) -> str:
         "data carry (parameters, bootstrap 95 % intervals), and the held-out gain. "
         "Method: `rocklab.diagnosis`.",
         "",
-        "Each interval gives the tests it resamples (and, for a boundary condition, the series that name the "
-        f"cause); none is given from fewer than {MIN_BOOTSTRAP}, and a series of fewer tests names no cause.",
+        "Each interval gives the tests it rests on (and, for a boundary condition, the series that name the "
+        f"cause); a series of fewer than {MIN_BOOTSTRAP} tests has the cluster-robust t interval of its few "
+        "degrees of freedom in place of the bootstrap, a series of one test names no cause, and a boundary "
+        f"condition gives no interval from fewer than {MIN_BOOTSTRAP} series.",
         "",
     ]
     diagnosis = CampaignDiagnosis.of(diagnosis)

@@ -7,13 +7,16 @@ carry (:func:`rocklab.diagnosis.estimation.selection.select_effects` on a
 after selection and states the gain; :func:`diagnose_boundary` sums the
 series of a boundary condition up.  Method: docs/diagnosis-method.md.
 
-Small samples: a cause is named only where the bootstrap interval of its
-parameter over the tests clears its null value, and no interval is given
-from fewer than :data:`rocklab.dissipation.statistics.MIN_BOOTSTRAP` tests;
-a smaller series is compared with the base model but names nothing
-(``too_small`` gives the reason), and a boundary condition is summed up over
-the series large enough, its parameters pooled over all of them (walls where
-known), with no interval on fewer units than a verdict needs.
+Small samples: a cause is named only where the 95 % interval of its
+parameter over the tests clears its null value: a bootstrap over tests, or
+from fewer than :data:`rocklab.dissipation.statistics.MIN_BOOTSTRAP` tests
+the cluster-robust t interval on their few degrees of freedom
+(:func:`rocklab.diagnosis.estimation.resampling.parameter_intervals`), wide
+as three tests make it.  A series of one test is compared with the base
+model but names nothing (``too_small``: nothing varies between tests to
+measure the noise of a parameter by), and a boundary condition is summed up
+over the series large enough, its parameters pooled over all of them (walls
+where known), with no interval on fewer units than a verdict needs.
 """
 
 from __future__ import annotations
@@ -32,12 +35,14 @@ from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_t
 from rocklab.diagnosis.extended import engineering_errors, model_params
 from rocklab.diagnosis.problem import WallProblem
 from rocklab.diagnosis.result import CampaignDiagnosis
-from rocklab.dissipation.statistics import MIN_BOOTSTRAP, interval_note
 from rocklab.lab.hierarchy import plural, too_few_units
 
 stats = lazy_module("scipy.stats")
 
 log = logging.getLogger(__name__)
+
+#: Tests a series needs to name a cause: an interval over tests needs two to vary.
+MIN_TESTS_TO_NAME = 2
 
 
 def base_name(boundary):
@@ -86,9 +91,9 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
     dict
         One entry of results/diagnosis.json; each finding carries
         ``n_tests``, the tests its interval rests on.  With fewer than
-        :data:`~rocklab.dissipation.statistics.MIN_BOOTSTRAP` tests of two
-        impacts or more the entry compares the base model only, names no
-        cause and says why in ``too_small``.
+        :data:`MIN_TESTS_TO_NAME` tests of two impacts or more the entry
+        compares the base model only, names no cause and says why in
+        ``too_small``.
     """
     t0 = time.perf_counter()
     tests = [t if isinstance(t, MeasuredTest) else measured_test(t) for t in tests]
@@ -123,9 +128,9 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         "n_impacts": int(sum(t.n_impacts for t in tests)),
         "base": base,
     }
-    if len(tests) < MIN_BOOTSTRAP:
+    if len(tests) < MIN_TESTS_TO_NAME:
         why = (
-            f"{interval_note(len(tests))}, "
+            f"one test: nothing varies between tests to give an interval ({MIN_TESTS_TO_NAME} tests at least), "
             "and a cause is named only where the interval of its parameter clears its null value"
         )
         log.warning("%s %s is too small to name a cause: %s", scope, key, why)
@@ -439,7 +444,7 @@ def diagnose_boundary(entries, boundary, *, walls=None, thickness=None):
         out["wall_thickness_m"] = float(np.mean([thickness[w] for w in {walls[e.key] for e in ser}]))
     if not usable:
         out["too_small"] = (
-            f"none of its {len(ser)} series has the {MIN_BOOTSTRAP} tests "
+            f"none of its {len(ser)} series has the {MIN_TESTS_TO_NAME} tests "
             "of two impacts or more a series needs to name one"
         )
     log.info(

@@ -9,7 +9,9 @@ or not, the instrument effects and faults of :mod:`rocklab.lab.virtual_record`);
 (``docs/raw-format.md``) plus ``truth.csv``, so that each stage of the
 reduction can be tested on data in which effects were hidden on purpose;
 :func:`expected_verdict` is the verdict the lab's rules must give a test;
-:func:`default_plan` is a campaign that looks like the real one.  Every
+:func:`default_plan` is a campaign that looks like the real one;
+:func:`series_records` gives the records of one series reduced to theta,
+as the diagnosis reads them, without writing a campaign.  Every
 effect is a knob that can be switched off, and everything is driven by one
 seed.
 
@@ -45,6 +47,7 @@ from rocklab.lab.virtual_record import (
     Effects,
     Fault,
     record_from_motion,
+    transducer_geometry,
     usual_layout,
     write_record,
 )
@@ -280,6 +283,88 @@ def simulate_virtual_test(test: VirtualTest, specimen, layout, rng=None, t_end=4
         }
     )
     return t, E, truth
+
+
+def series_records(
+    name,
+    specimen,
+    boundary,
+    model,
+    *,
+    n=6,
+    fs=400.0,
+    alpha_ratio=1.0,
+    noise_mm=0.002,
+    pull=False,
+    theta0_range=(0.97, 0.998),
+    contact_depth_mm=120.0,
+    seed=0,
+    log=None,
+    t_end=60.0,
+):
+    """Records of ``n`` virtual tests of one series, reduced to theta by the kinematics.
+
+    The records :func:`rocklab.diagnosis.diagnose_records` reads, made
+    without a campaign on disk: each test simulated
+    (:func:`simulate_virtual_test`, noise and hum of ``noise_mm`` on every
+    channel) in the usual layout of ``specimen`` (a row of specimens.csv
+    with its name), and theta solved from the five rigid-body channels.
+
+    Parameters
+    ----------
+    model : dict or callable
+        ``VirtualTest.model``, or test index -> model (a law that changes
+        between tests).
+    fs : float
+        Sampling rate [Hz].
+    pull : bool
+        Every other test released towards the other hinge (two-sided).
+    theta0_range : tuple
+        Release rotation over the rocking angle, drawn uniformly per test.
+    contact_depth_mm : float
+        One-sided walls only.
+    log : dict, optional
+        The numbers of the test log of each test (column -> n values), as
+        :func:`rocklab.lab.reduction.log_values` reads tests.csv.
+    """
+    from rocklab.lab import kinematics
+
+    one = boundary == "one-sided"
+    layout = usual_layout("S", specimen["length_mm"], specimen["height_mm"], specimen["thickness_mm"], one)
+    X, F = transducer_geometry(layout)
+    used = np.r_[np.ones(5), np.zeros(len(layout) - 5)]  # channel 5 monitors, it is no rigid-body input
+    rng = np.random.default_rng(seed)
+    recs = []
+    for i in range(n):
+        direction = "pull" if pull and i % 2 else "push"
+        vt = VirtualTest(
+            f"{name}-{i}",
+            str(specimen.name),
+            boundary,
+            direction=direction,
+            contact_depth_mm=contact_depth_mm if one else None,
+            fs=fs,
+            alpha_ratio=alpha_ratio,
+            theta0_ratio=float(rng.uniform(*theta0_range)),
+            model=model(i) if callable(model) else dict(model),
+            effects=Effects(noise_mm=noise_mm, hum_mm=noise_mm),
+        )
+        t, E, truth = simulate_virtual_test(vt, specimen, layout, rng=rng, t_end=t_end)
+        theta = kinematics.solve_wall_motion(E, X, F, specimen["thickness_mm"], weights=used)["theta"]
+        recs.append(
+            dict(
+                test_id=vt.test_id,
+                t=t,
+                theta=theta,
+                fs=vt.fs,
+                alpha=truth["alpha"],
+                p=truth["p"],
+                boundary=boundary,
+                direction=direction,
+                log={k: v[i] for k, v in (log or {}).items()},
+            )
+        )
+    return recs
 
 
 def _effects_on(e: Effects):

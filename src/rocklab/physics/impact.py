@@ -23,6 +23,18 @@ Laws that the numba engines can evaluate expose :meth:`ImpactLaw.flat`: for
 each side a triple ``(e0, a, b)`` meaning
 ``e = e0 * clip(a - b (|thetadot^-| / thetadot_r)^2, 0, 1/|e0|)``, with
 ``thetadot_r`` of Eq. 16.  Constant laws have ``a = 1, b = 0``.
+
+Physical bounds, one convention for every law (:func:`bounded_factor`): a
+law that multiplies a base e by a factor (a scale, Eq. 17's bracket, a law
+of the impact speed, :mod:`rocklab.physics.law`) is its own closed form at
+every speed, those past the speeds it was fitted on included (it is not
+held at the value of the fastest impact fitted), with the factor clipped to
+[0, 1/|e_base|]: e keeps the sign of the base law (a fitted law extrapolated
+to fast impacts never turns a rebound into a pass-through, it stops the
+wall: Eq. 17 of the one-sided walls reaches e = 0 past 1.5 thetadot_r) and
+|e| <= 1 (an impact never creates energy).  The diagnosis' one-step model
+(:func:`rocklab.diagnosis.model.impact_speeds`), the limestone blocks, the
+exact simulators and the calibrated maps read their laws through it.
 """
 
 from __future__ import annotations
@@ -35,17 +47,23 @@ from rocklab.physics import restitution
 from rocklab.physics.wall import overturning_velocity
 
 
-def amplitude_factor(e0, a, b, thetadot_before, alpha, p):
-    """a - b (thetadot^-/thetadot_r)^2 clipped to [0, 1/|e0|] (the bracket of Eq. 17).
+def bounded_factor(e0, factor):
+    """A law's factor on the base e ``e0`` (signed) within the physical bounds: clipped to [0, 1/|e0|] [-].
 
-    The lower clip keeps the sign of e (a fitted law extrapolated to large
-    velocities must not turn a rebound into a pass-through); the upper clip
-    keeps |e| <= 1, so an impact never creates energy.
+    The one convention of every impact law, at any speed (module
+    docstring): the lower clip keeps the sign of e (a fitted law
+    extrapolated to large velocities must not turn a rebound into a
+    pass-through); the upper clip keeps |e0 factor| <= 1, so an impact never
+    creates energy.
     """
-    ratio = np.abs(thetadot_before) / overturning_velocity(alpha, p)
-    factor = a - b * ratio**2
     hi = np.where(np.abs(e0) > 0, 1.0 / np.maximum(np.abs(e0), 1e-300), np.inf)
     return np.clip(factor, 0.0, hi)
+
+
+def amplitude_factor(e0, a, b, thetadot_before, alpha, p):
+    """a - b (thetadot^-/thetadot_r)^2 within the bounds of :func:`bounded_factor` (the bracket of Eq. 17)."""
+    ratio = np.abs(thetadot_before) / overturning_velocity(alpha, p)
+    return bounded_factor(e0, a - b * ratio**2)
 
 
 class ImpactLaw:
@@ -55,7 +73,7 @@ class ImpactLaw:
         """Signed e = thetadot^+ / thetadot^- [-] (see module docstring)."""
         e0, a, b = self._triple(side, alpha)
         if a == 1.0 and b == 0.0:
-            return e0 * np.ones_like(np.asarray(thetadot_before, float))
+            return e0 * bounded_factor(e0, np.ones_like(np.asarray(thetadot_before, float)))
         return e0 * amplitude_factor(e0, a, b, thetadot_before, alpha, p)
 
     def flat(self, alpha):
@@ -156,7 +174,8 @@ class Scaled(ImpactLaw):
         self.law, self.c = law, float(c)
 
     def coefficient(self, thetadot_before, side, alpha, p):
-        return self.c * self.law.coefficient(thetadot_before, side, alpha, p)
+        e = self.law.coefficient(thetadot_before, side, alpha, p)
+        return e * bounded_factor(e, self.c)
 
     def _triple(self, side, alpha):
         e0, a, b = self.law._triple(side, alpha)

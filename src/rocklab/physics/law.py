@@ -19,6 +19,13 @@ laws of several causes compose by acting in turn, in the catalogue's order
 (:data:`rocklab.diagnosis.catalogue.CAUSES`): factors multiply, a term or a
 rule is that of the last law to set it.  Null values leave the base model
 as it is.
+
+Beyond the speeds it was fitted on, every law is its own closed form
+(Eq. 17's parabola, the last segment of :class:`SpeedFactor` continued),
+never held flat, and every law of e is within the physical bounds of
+:func:`rocklab.physics.impact.bounded_factor`: e keeps the sign of the base
+law and |e| <= 1.  A loss in flight only takes energy (its parameters are
+not negative, :class:`FlightLoss`).
 """
 
 from __future__ import annotations
@@ -61,14 +68,14 @@ class Restitution:
 @dataclass(frozen=True)
 class HousnerLoss:
     """e = 1 - fraction (1 - |e_an|) - constant, with the sign of e_an: a fraction of the loss
-    Eq. 2 gives the slenderness plus a constant loss per impact (issue 12)."""
+    Eq. 2 gives the slenderness plus a constant loss per impact (issue 12); |e| within [0, 1]."""
 
     fraction: float = 1.0
     constant: float = 0.0
 
     def restitution(self, e_an):
         """The base e [-] from the analytic one, ``e_an`` (array_like, signed)."""
-        return np.sign(e_an) * (1.0 - self.fraction * (1.0 - np.abs(e_an)) - self.constant)
+        return np.sign(e_an) * np.clip(1.0 - self.fraction * (1.0 - np.abs(e_an)) - self.constant, 0.0, 1.0)
 
 
 @dataclass(frozen=True)
@@ -83,7 +90,8 @@ class Amplitude:
 @dataclass(frozen=True)
 class SpeedFactor:
     """e times g(thetadot^-/thetadot_r), g piecewise linear between its values ``knots`` at
-    :data:`KNOTS` (flat beyond them, :func:`hats`): a law of the impact speed no closed form
+    :data:`KNOTS` (its last segment continued beyond them, :func:`hats`; e within the bounds of
+    :func:`rocklab.physics.impact.bounded_factor`): a law of the impact speed no closed form
     dictates.  No simulator law: the closed forms of a flight only."""
 
     knots: tuple = (1.0, 1.0, 1.0, 1.0)
@@ -94,9 +102,16 @@ KNOTS = np.array([0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0])
 
 
 def hats(x):
-    """Piecewise-linear basis at :data:`KNOTS` of speeds x [thetadot_r], shape (..., knots); flat beyond them."""
-    x = np.clip(np.asarray(x, float), KNOTS[0], KNOTS[-1])[..., None]
-    return np.maximum(1.0 - np.abs(x - KNOTS) / (KNOTS[1] - KNOTS[0]), 0.0)
+    """Piecewise-linear basis at :data:`KNOTS` of speeds x [thetadot_r], shape (..., knots).
+
+    Beyond the last knot the last segment goes on (the convention of every
+    law past its fitted speeds, module docstring); speeds are not negative.
+    """
+    x = np.maximum(np.asarray(x, float), KNOTS[0])[..., None]
+    h = KNOTS[1] - KNOTS[0]
+    inside = np.maximum(1.0 - np.abs(np.minimum(x, KNOTS[-1]) - KNOTS) / h, 0.0)
+    past = np.maximum(x - KNOTS[-1], 0.0) / h
+    return inside + past * np.r_[np.zeros(KNOTS.size - 2), -1.0, 1.0]
 
 
 @dataclass(frozen=True)

@@ -368,6 +368,31 @@ def performance_stages(n: Mapping) -> str:
     return markdown_table(header, rows)
 
 
+@_of("performance")
+def discovery_cells(n: Mapping) -> str:
+    """The series of ``bench/discovery.py`` one by one: the hidden cause, the design's factors, the verdict and
+    what it missed, or that it was not measured."""
+    d = n["performance"].get("discovery")
+    if d is None:
+        return "Not measured: `make bench` has not run on these results (`results/bench/discovery.json`)."
+    rows = [
+        [
+            c["cause"],
+            c["boundary"],
+            show(c["fs"], ".0f"),
+            f"{c['wall']} ({show(c['h_over_b'], '.1f')})",
+            show(c["n_tests"]),
+            show(c["n_impacts"]),
+            ", ".join(c["verdict"]) or "none",
+            "yes" if c["named_right"] else "no",
+            c["miss"],
+        ]
+        for c in d["cells"]
+    ]
+    header = ["hidden", "boundary", "Hz", "wall (h/b)", "tests", "impacts", "verdict", "right", "what it missed"]
+    return markdown_table(header, rows)
+
+
 #: What the shake-table page says where the target was not run.
 NOT_RUN = (
     "Not run: the target `shake_table` has not run on these results "
@@ -523,6 +548,7 @@ TABLES: dict[str, Callable[[Mapping], str]] = {
     "maps_comparison": maps_comparison,
     "performance_jobs": performance_jobs,
     "performance_stages": performance_stages,
+    "discovery_cells": discovery_cells,
     "shake_table_status": shake_table_status,
     "shake_table_scores": shake_table_scores,
     "shake_table_nominal": shake_table_nominal,

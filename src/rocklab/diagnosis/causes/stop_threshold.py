@@ -20,13 +20,14 @@ from rocklab.diagnosis.errors import engineering_rows
 from rocklab.diagnosis.evidence import TestStack
 from rocklab.diagnosis.model import next_flight
 from rocklab.diagnosis.parameters import Param
-from rocklab.dissipation.statistics import MIN_BOOTSTRAP, interval_note
+from rocklab.dissipation.statistics import MIN_BOOTSTRAP
 from rocklab.lab.motion import odd_samples
 from rocklab.physics.flight import landing_speed, quarter_period
 from rocklab.physics.law import Stop
 from rocklab.physics.wall import overturning_velocity
 
 signal = lazy_module("scipy.signal")
+stats = lazy_module("scipy.stats")
 
 NAME = "stop_threshold"
 V_STOP = Param("v_stop_over_vr", 0.0, 1.0, 0.0)
@@ -165,7 +166,9 @@ def threshold(tests, mp, *, n_boot=200, seed=0, min_tests=3):
     Each test brackets its own stop speed (:func:`stop_speeds`, a bracket as
     narrow as e); the series' threshold is the geometric mean of the bracket
     centres, with a bootstrap (over tests) 95 % interval and the test-to-test
-    spread of log speed (Fig. 18's scatter of the number of cycles).  Where
+    spread of log speed (Fig. 18's scatter of the number of cycles); from
+    fewer than :data:`~rocklab.dissipation.statistics.MIN_BOOTSTRAP` stops
+    the t interval of the mean log speed on their few degrees of freedom.  Where
     the brackets share a common part, one threshold fits every wall: the
     estimate is that part's geometric centre and the interval spans it
     (:func:`bracket_centre`, also used for the tests left out).  Gain:
@@ -178,8 +181,7 @@ def threshold(tests, mp, *, n_boot=200, seed=0, min_tests=3):
     -------
     dict or None
         None when fewer than ``min_tests`` tests (or half of them) show a
-        stop; otherwise ``v_stop_over_vr``, ``ci95`` (None from fewer than
-        :data:`~rocklab.dissipation.statistics.MIN_BOOTSTRAP` stops), ``spread_log``,
+        stop; otherwise ``v_stop_over_vr``, ``ci95``, ``spread_log``,
         ``n_observed``, held-out rms errors ``n_impacts_rms`` and
         ``duration_pct_rms`` as (base, with threshold), and ``named`` (the
         held-out error in the number of impacts at least halved).
@@ -191,11 +193,16 @@ def threshold(tests, mp, *, n_boot=200, seed=0, min_tests=3):
         return None
     lo, hi = lo[ok], hi[ok]
     x = 0.5 * (np.log(lo) + np.log(hi))
-    rng = np.random.default_rng(seed)
-    boots = np.exp([rng.choice(x, x.size).mean() for _ in range(n_boot)])
-    ci = [float(np.percentile(boots, 2.5)), float(np.percentile(boots, 97.5))] if x.size >= MIN_BOOTSTRAP else None
+    if x.size >= MIN_BOOTSTRAP:
+        rng = np.random.default_rng(seed)
+        boots = np.exp([rng.choice(x, x.size).mean() for _ in range(n_boot)])
+        ci = [float(np.percentile(boots, 2.5)), float(np.percentile(boots, 97.5))]
+    else:
+        # too few stops to resample: Student's t on their few degrees of freedom (issue 24)
+        half = float(stats.t.ppf(0.975, x.size - 1)) * float(x.std(ddof=1)) / math.sqrt(x.size)
+        ci = [float(np.exp(x.mean() - half)), float(np.exp(x.mean() + half))]
     centre, common = bracket_centre(lo, hi)
-    if common and ci is not None:
+    if common:
         # one threshold fits every wall: it is known only within the common
         # bracket, however alike the walls' brackets are
         ci = [min(ci[0], float(np.max(lo))), max(ci[1], float(np.min(hi)))]
@@ -226,11 +233,12 @@ def threshold(tests, mp, *, n_boot=200, seed=0, min_tests=3):
 def finding(stop):
     """The entry of :func:`rocklab.diagnosis.series.diagnose_series` for a threshold of :func:`threshold`."""
     (n0, n1), (d0, d1) = stop["n_impacts_rms"], stop["duration_pct_rms"]
-    note = interval_note(stop["n_observed"])
+    n = stop["n_observed"]
+    note = f"t interval of {n} stops ({n - 1} degrees of freedom)" if n < MIN_BOOTSTRAP else ""
     return {
         "effect": NAME,
         "params": {"v_stop_over_vr": stop["v_stop_over_vr"], "spread_log": stop["spread_log"]},
-        "ci95": {"v_stop_over_vr": stop["ci95"]} if stop["ci95"] is not None else {},
+        "ci95": {"v_stop_over_vr": stop["ci95"]},
         "n_tests": stop["n_observed"],
         **({"ci_note": note} if note else {}),
         "evidence": {

@@ -14,7 +14,7 @@ module            holds
 ``problem``       :class:`Problem`, what a problem hands the engine
 ``noise``         the noise model of a residual group, the deviance under it
 ``fitting``       :func:`fit` (iteratively reweighted least squares), its linearisation
-``resampling``    :func:`heldout` (K-fold), :func:`parameter_intervals` (bootstrap)
+``resampling``    :func:`heldout` (K-fold), :func:`parameter_intervals` (bootstrap or sandwich)
 ``structure``     :func:`structure`, the residual structure a model leaves
 ``selection``     :func:`select_effects`, :func:`beyond_the_catalogue`
 ================  ==================================================================

@@ -1,11 +1,14 @@
-"""Tests left out and tests resampled: held-out deviance and bootstrap intervals.
+"""Tests left out and tests resampled: held-out deviance and parameter intervals.
 
 Both refit by one Gauss-Newton step from the fit of all tests, over the
 linearisation of :func:`rocklab.diagnosis.estimation.fitting.linearised`: the
 K folds of :func:`heldout` and the resamples of whole tests of
-:func:`parameter_intervals`.  The paired per-test comparison of two models'
-held-out deviances is :func:`paired_gain`, and a per-test measure is summed
-up over the tests by :func:`finite_mean`.
+:func:`parameter_intervals`, which falls back on the cluster-robust t
+interval of the same linearisation (:func:`sandwich_intervals`) where the
+tests are too few to resample or the resamples collapse on a bound.  The
+paired per-test comparison of two models' held-out deviances is
+:func:`paired_gain`, and a per-test measure is summed up over the tests by
+:func:`finite_mean`.
 """
 
 import logging
@@ -18,8 +21,22 @@ from rocklab._imports import lazy_module
 from rocklab.diagnosis.estimation.fitting import Fit, fit, linearised
 from rocklab.diagnosis.estimation.noise import deviance, finite_residuals, group_variances
 from rocklab.diagnosis.estimation.problem import Problem
+from rocklab.dissipation.statistics import MIN_BOOTSTRAP
 
 optimize = lazy_module("scipy.optimize")
+stats = lazy_module("scipy.stats")
+
+#: No interval is narrower than +- this share of the smallest effect worth naming its parameter's cause
+#: (``Param.practical``): below it the approximations of the model (the derivative filter's bias, the
+#: linearised flights) are of the size of the difference, and on virtual walls of a known truth
+#: (``bench/discovery.py``) the statistical intervals, 1e-6 wide at the lab's noise, missed it by up to a
+#: tenth of it.
+RESOLUTION = 0.25
+
+#: A bootstrap interval narrower than this share of the sandwich interval (:func:`sandwich_intervals`) has
+#: resamples collapsed on a bound or on a kink of the fit, not a precision the tests carry: the sandwich
+#: interval stands instead.  Over tests that vary freely the two differ by their quantiles, some 20 %.
+COLLAPSED_BOOTSTRAP = 0.5
 
 log = logging.getLogger(__name__)
 
@@ -87,26 +104,89 @@ def heldout(problem: Problem, ext, fitted: Fit | None = None):
     return {"deviance": dev, **meas}
 
 
+def sandwich_intervals(names, x0, lo, hi, A, y, level=0.95):
+    """Cluster-robust (by test) t intervals of the parameters from the linearisation of a fit.
+
+    The least-squares problem of the fit, linearised test by test (``A``,
+    ``y`` of :func:`~rocklab.diagnosis.estimation.fitting.linearised`), is
+    solved without its bounds; its covariance is the sandwich
+    B^-1 M B^-1 with B = sum A_i^T A_i and M the sum over tests of the
+    outer products of their scores A_i^T u_i at that solution, with the
+    small-sample correction CR1, G / (G - 1) (N - 1) / (N - K), of G tests,
+    N observations and K parameters (statsmodels' cluster covariance with
+    ``use_correction=True``).  The interval is x0 +- t se with Student's t on
+    G - 1 degrees of freedom (the tests are the units that vary: 4.30 for
+    three tests), cut at the parameter's bounds: at a bound it is one-sided,
+    from the bound, and always holds the estimate x0.  A direction the tests
+    do not fix (B singular) gives the parameter its whole range.
+
+    Returns
+    -------
+    dict
+        name -> [low, high].
+    """
+    G = len(A)
+    full = np.concatenate(A)
+    N, K = full.shape
+    B = full.T @ full
+    dx = np.linalg.lstsq(full, np.concatenate(y), rcond=None)[0]
+    scores = np.array([a.T @ (b - a @ dx) for a, b in zip(A, y)])
+    Binv = np.linalg.pinv(B)
+    cov = G / max(G - 1, 1) * (N - 1) / max(N - K, 1) * Binv @ (scores.T @ scores) @ Binv
+    se = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    # a direction B does not see is not fixed by the tests: its whole range
+    seen = np.diag(B) > 0
+    seen &= np.abs(np.diag(Binv @ B)) > 0.5
+    t = float(stats.t.ppf(0.5 + level / 2, max(G - 1, 1)))
+    half = np.where(seen & np.isfinite(se), t * se, np.inf)
+    return {
+        k: [float(max(x0[i] + lo[i], x0[i] - half[i])), float(min(x0[i] + hi[i], x0[i] + half[i]))]
+        for i, k in enumerate(names)
+    }
+
+
 def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
-    """Percentile 95 % intervals of the parameters, whole tests resampled (bootstrap over tests).
+    """95 % intervals of the parameters: whole tests resampled (bootstrap over tests), or the sandwich.
 
     Each resample is fitted by one Gauss-Newton step from the full fit
     (the estimating-function bootstrap of Hu & Kalbfleisch 2000, within the
     bounds): the residuals of every test and their derivatives are computed
     once, at the full fit, with the weights of its noise model
     (:func:`~rocklab.diagnosis.estimation.fitting.linearised`), and a
-    resample weighs each test by the times it was drawn.  The resamples
+    resample weighs each test by the times it was drawn; the interval is the
+    2.5-97.5 % percentiles of the resamples.  The resamples
     differ from the full fit by a few times its standard errors, where the
     residuals are linear in the parameters to well below those errors (the refit of every resample with its own noise
     model, the engine's former bootstrap, gives the same intervals to a few
     per cent of their width at twenty times the cost:
     tests/test_diagnosis_engine.py).
+
+    The cluster-robust t interval of the same linearisation
+    (:func:`sandwich_intervals`) stands instead where the percentiles say
+    nothing: with fewer than :data:`~rocklab.dissipation.statistics.MIN_BOOTSTRAP`
+    tests (three tests give ten distinct resamples), and for a parameter
+    whose percentile interval misses its estimate or is narrower than
+    :data:`COLLAPSED_BOOTSTRAP` times the sandwich's, the resamples
+    collapsed on a bound (a loss in flight fitted at zero: every resample
+    steps onto the bound the full fit stopped short of).  Either is widened,
+    within the bounds, to +- :data:`RESOLUTION` times the parameter's
+    smallest effect worth naming about the estimate where it is narrower.
     """
     t0 = time.perf_counter()
     rng = np.random.default_rng(seed)
     if not fitted.values:
         return {}
     names, x0, lo, hi, A, y = linearised(problem, problem.subset(np.arange(problem.n_tests)), fitted)
+    sandwich = sandwich_intervals(names, x0, lo, hi, A, y)
+    if problem.n_tests < MIN_BOOTSTRAP:
+        log.info(
+            "sandwich intervals of %s on %d tests (t on %d degrees of freedom): %s",
+            "+".join(fitted.ext),
+            problem.n_tests,
+            problem.n_tests - 1,
+            ", ".join(f"{k} [{a:.4g}, {b:.4g}]" for k, (a, b) in sandwich.items()),
+        )
+        return _resolved(problem, fitted, sandwich)
     draws = []
     for _ in range(n_boot):
         counts = np.bincount(rng.integers(0, problem.n_tests, problem.n_tests), minlength=problem.n_tests)
@@ -116,7 +196,17 @@ def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
         yb = np.concatenate([y[i] * c for i, c in zip(drawn, root)])
         draws.append(x0 + optimize.lsq_linear(Ab, yb, bounds=(lo, hi)).x)
     d = np.array(draws).reshape(len(draws), len(names))
-    ci = {k: [float(np.percentile(d[:, i], 2.5)), float(np.percentile(d[:, i], 97.5))] for i, k in enumerate(names)}
+    ci = {}
+    for i, k in enumerate(names):
+        b = [float(np.percentile(d[:, i], 2.5)), float(np.percentile(d[:, i], 97.5))]
+        s = sandwich[k]
+        # a margin of rounding: a fit at its bound and percentiles a step of lsq_linear's tolerance inside it
+        tol = 1e-9 * (hi[i] - lo[i])
+        outside = x0[i] < b[0] - tol or x0[i] > b[1] + tol
+        collapsed = outside or b[1] - b[0] < COLLAPSED_BOOTSTRAP * (s[1] - s[0])
+        if collapsed:
+            log.info("bootstrap of %s collapsed (%.4g not in [%.4g, %.4g]): the sandwich interval", k, x0[i], *b)
+        ci[k] = s if collapsed else b
     log.info(
         "bootstrap of %s: %d resamples of %d tests in %.1f s: %s",
         "+".join(fitted.ext),
@@ -125,7 +215,19 @@ def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
         time.perf_counter() - t0,
         ", ".join(f"{k} [{lo:.4g}, {hi:.4g}]" for k, (lo, hi) in ci.items()),
     )
-    return ci
+    return _resolved(problem, fitted, ci)
+
+
+def _resolved(problem: Problem, fitted: Fit, ci):
+    """The intervals ``ci`` widened to +- :data:`RESOLUTION` times each parameter's practical effect, within
+    its bounds."""
+    out = dict(ci)
+    for q in problem.params(fitted.ext):
+        if q.practical is not None and q.name in out:
+            x, half = fitted.values[q.name], RESOLUTION * q.practical
+            lo, hi = out[q.name]
+            out[q.name] = [max(q.lower, min(lo, x - half)), min(q.upper, max(hi, x + half))]
+    return out
 
 
 def paired_difference(d):

@@ -1,0 +1,327 @@
+"""Benchmark: calibration of the whole diagnosis on virtual series with a known truth (issue 24).
+
+    python bench/discovery.py --out results/bench [--budget-s 840] [--workers 2]
+
+The virtual lab (:func:`rocklab.lab.virtual_lab.series_records`) writes
+series that hide one cause of the catalogue or one member of a family, or
+nothing (nulls), on each boundary condition it applies to (two-sided,
+one-sided without a gap, one-sided with a gap of 0.03 alpha, the gap then
+part of the truth), sampled at 100, 200, 400 or 1000 Hz, on a stocky wall
+(h/b about 4), the paper's (1a, h/b 9.6) or a slender one (2a, h/b 14.4),
+of 3, 5 or 10 tests; :func:`rocklab.diagnosis.diagnose_series` (the
+workflow's n_boot) diagnoses each.  The full cross (some 1,300 series) does
+not fit the time budget: the design is fractional and balanced, every
+(cause, boundary) cell and each null cell of (boundary, rate) gets one
+combination of rate, slenderness and size from a fixed shuffle of their 36,
+so each level of each factor appears about equally often.  Seeds are fixed
+(the series' index).  Series still waiting when ``--budget-s`` has passed
+are not run (``n_skipped`` says how many).
+
+Writes ``<out>/discovery.json``: ``named_right_rate`` (the verdict is the
+hidden causes, each true parameter inside its 95 % interval),
+``false_name_rate_null`` (a cause named on a null series, the gap of a
+wall with a gap aside),
+``confident_misname_rate`` (a cause that is not hidden named without the
+``unexplained`` flag), ``coverage_95`` (share of the true parameters of the
+hidden causes named inside their 95 % intervals), ``n_series``, the
+targets and whether each is met, and ``cells`` (one row per series: its
+factors, verdict, what missed).  Exit status 1 where a target is missed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from rocklab.diagnosis import diagnose_records, jsonable
+from rocklab.lab import virtual_lab as vl
+from rocklab.physics import impact as I
+from rocklab.physics import restitution, wall
+
+TARGETS = {
+    "named_right_rate": (0.95, None),
+    "false_name_rate_null": (None, 0.05),
+    "confident_misname_rate": (None, 0.0),
+    "coverage_95": (0.90, 0.98),
+}
+RATES = (100.0, 200.0, 400.0, 1000.0)
+SIZES = (3, 5, 10)
+_SPEC = vl.DEFAULT_SPECIMENS.set_index("specimen")
+#: Stocky (h/b 4), the paper's slender clay wall (h/b 9.6), the most slender one (h/b 14.4).
+WALLS = {
+    "stocky": pd.Series({"length_mm": 1130.0, "height_mm": 492.0, "thickness_mm": 123.0}, name="st"),
+    "paper": _SPEC.loc["1a"],
+    "slender": _SPEC.loc["2a"],
+}
+BOUNDARIES = ("two-sided", "one-sided", "one-sided-gap")
+GAP = 0.03  # gap over alpha of the walls with a gap
+
+
+def _scaled_by_test(base, c, drift, n):
+    """e = c e_base exp(drift (i / (n - 1) - 1/2)) in test i of n: a restitution that drifts between tests."""
+    return lambda i: {"impact": I.Scaled(base, c * math.exp(drift * (i / max(n - 1, 1) - 0.5)))}
+
+
+def _by_speed(g):
+    """e = e_an,2s g(thetadot^- / thetadot_r): a law of the impact speed (the family restitution_speed)."""
+
+    def e(thetadot, side, alpha, p):
+        return restitution.two_sided(alpha) * g(abs(thetadot) / wall.overturning_velocity(alpha, p))
+
+    return I.Custom(e)
+
+
+def _sticking(v_stick, c):
+    """e = c e_an,2s, but a landing slower than v_stick thetadot_r sticks (e = 0)."""
+
+    def e(thetadot, side, alpha, p):
+        fast = abs(thetadot) > v_stick * wall.overturning_velocity(alpha, p)
+        return c * restitution.two_sided(alpha) if fast else 0.0
+
+    return I.Custom(e)
+
+
+def scenario(cause, boundary, alpha, n):
+    """(simulator model, series keywords, truth {cause: {parameter: value}}) of a hidden cause on a boundary.
+
+    ``boundary`` one-sided-gap: the wall swings through a gap of
+    :data:`GAP` alpha, its calibration that of the transverse impact.
+    """
+    one = boundary != "two-sided"
+    gap = boundary == "one-sided-gap"
+    base_key = "transverse_impact" if gap else "impact"
+    base = I.Transverse() if gap else (I.OneSided() if one else I.HousnerTwoSided())
+    model = {"gap": GAP * alpha} if gap else ({} if one else {"impact": base})
+    truth = {"contact_gap": {"gap_over_alpha": GAP}} if gap else {}
+    kw = {}
+    c = 1.2 if one else 0.93
+    if cause == "null":
+        pass
+    elif cause == "restitution_scale":
+        model[base_key] = I.Scaled(base, c)
+        truth[cause] = {"c": c}
+    elif cause == "restitution_amplitude":
+        a, b = (1.2, 0.5) if one else (0.97, 0.06)
+        model[base_key] = I.AmplitudeLaw(base, a, b)
+        truth[cause] = {"a": a, "b": b}
+    elif cause == "instability_angle":
+        kw["alpha_ratio"] = 0.75 if one else 0.9
+        truth[cause] = {"alpha_r_over_alpha": kw["alpha_ratio"]}
+    elif cause == "flight_damping":
+        model["flight_damping"] = 0.01
+        truth[cause] = {"zeta": 0.01}
+    elif cause == "hinge_asymmetry":
+        # e_+ = e_an, e_- = 0.96 e_an: e_an sqrt(0.96) exp(+-s_e/2), a scale beside the asymmetry
+        model["impact"] = I.Sided(base, I.Scaled(base, 0.96))
+        truth[cause] = {"s_alpha": 0.0, "s_e": -math.log(0.96)}
+        truth["restitution_scale"] = {"c": math.sqrt(0.96)}
+    elif cause == "restitution_drift":
+        law = _scaled_by_test(base, c, 0.15, n)
+        return (
+            lambda i: {**model, base_key: law(i)["impact"]},
+            kw,
+            {**truth, cause: {"c": c, "drift": 0.15}},
+        )
+    elif cause == "instability_amplitude":
+        model["hinge_rounding"] = 0.3
+        kw["alpha_ratio"] = 0.9
+        truth[cause] = {"alpha_r_over_alpha": 0.9, "rounding": 0.3}
+    elif cause == "restitution_speed":
+        model["impact"] = _by_speed(lambda x: 0.9 + 0.1 * x)
+        truth[cause] = {f"g{j}": 0.9 + 0.1 * j / 3 for j in range(4)}
+    elif cause == "flight_loss[friction]":
+        model["hinge_friction"] = 0.02 * alpha
+        kw["theta0_range"] = (0.85, 0.95)  # released below alpha - mu: friction would hold it at rest
+        truth["flight_loss"] = {"zeta": 0.0, "mu_over_alpha": 0.02, "kappa_alpha": 0.0}
+    elif cause == "flight_loss[drag]":
+        model["flight_drag"] = 0.06 / alpha
+        truth["flight_loss"] = {"zeta": 0.0, "mu_over_alpha": 0.0, "kappa_alpha": 0.06}
+    elif cause == "stop_threshold":
+        model["impact"] = _sticking(0.15, 0.95)
+        truth["restitution_scale"] = {"c": 0.95}
+        truth[cause] = {"v_stop_over_vr": 0.15}
+    else:
+        raise ValueError(f"no scenario for {cause}")
+    return model, kw, truth
+
+
+#: Hidden causes by boundary condition: every listed cause and family member the boundary carries.
+CAUSES = {
+    "two-sided": (
+        "restitution_scale",
+        "restitution_amplitude",
+        "instability_angle",
+        "flight_damping",
+        "hinge_asymmetry",
+        "restitution_drift",
+        "instability_amplitude",
+        "restitution_speed",
+        "flight_loss[friction]",
+        "flight_loss[drag]",
+        "stop_threshold",
+    ),
+    "one-sided": (
+        "restitution_scale",
+        "restitution_amplitude",
+        "instability_angle",
+        "flight_damping",
+        "restitution_drift",
+        "flight_loss[friction]",
+    ),
+    "one-sided-gap": ("restitution_scale", "restitution_amplitude", "instability_angle", "flight_damping"),
+}
+
+
+def design(seed=0):
+    """The fractional design: one row per series (cause, boundary, rate, wall, size, seed)."""
+    combos = [(fs, w, n) for fs in RATES for w in WALLS for n in SIZES]
+    order = np.random.default_rng(seed).permutation(len(combos))
+    cells = [(c, b) for b in BOUNDARIES for c in CAUSES[b]]
+    # nulls: every boundary at every rate, slenderness and size rotating
+    cells += [("null", b) for b in BOUNDARIES for _ in RATES]
+    rows = []
+    for i, (cause, boundary) in enumerate(cells):
+        fs, w, n = combos[order[i % len(combos)]]
+        if cause == "null":
+            fs = RATES[i % len(RATES)]
+        rows.append({"cause": cause, "boundary": boundary, "fs": fs, "wall": w, "n_tests": n, "seed": i})
+    return rows
+
+
+def _inside(ci, x):
+    return ci is not None and len(ci) == 2 and ci[0] <= x <= ci[1]
+
+
+def score(entry, truth):
+    """What a diagnosis got right of a hidden truth (the per-cell row's outcome)."""
+    named = set(entry["verdict"])
+    hidden = set(truth)
+    found = {f["effect"]: f for f in entry["findings"]}
+    covered, missed = 0, []
+    for cause in hidden & named:
+        for k, x in truth[cause].items():
+            ok = _inside(found[cause].get("ci95", {}).get(k), x)
+            covered += ok
+            if not ok:
+                missed.append(f"{cause}.{k} = {x:g} outside {found[cause].get('ci95', {}).get(k)}")
+    n_params = sum(len(truth[c]) for c in hidden & named)
+    wrong = sorted(named - hidden)
+    return {
+        "verdict": sorted(named),
+        "unexplained": bool(entry["unexplained"]),
+        "named_right": named == hidden and not missed,
+        "missing": sorted(hidden - named),
+        "wrong": wrong,
+        "confident_misname": bool(wrong) and not entry["unexplained"],
+        "params_covered": int(covered),
+        "params_named": int(n_params),
+        "outside": missed,
+        "too_small": entry.get("too_small"),
+    }
+
+
+def run_cell(row, n_boot):
+    """Simulate and diagnose one series of the design; its row with the outcome and the times."""
+    t0 = time.perf_counter()
+    sp = WALLS[row["wall"]]
+    alpha = float(wall.slenderness_angle(sp["height_mm"], sp["thickness_mm"]))
+    boundary = "two-sided" if row["boundary"] == "two-sided" else "one-sided"
+    model, kw, truth = scenario(row["cause"], row["boundary"], alpha, row["n_tests"])
+    name = f"{row['cause']}-{row['boundary']}-{row['seed']}"
+    recs = vl.series_records(name, sp, boundary, model, n=row["n_tests"], fs=row["fs"], seed=row["seed"], **kw)
+    t1 = time.perf_counter()
+    entry = diagnose_records(recs, name, n_boot=n_boot, n_history=0, seed=0)
+    if entry is None:
+        entry = {"verdict": [], "findings": [], "unexplained": False, "too_small": "no test of two impacts"}
+    out = {**row, "h_over_b": float(sp["height_mm"] / sp["thickness_mm"]), **score(jsonable(entry), truth)}
+    out["n_impacts"] = int(entry.get("n_impacts", 0))
+    return out | {"simulate_s": t1 - t0, "diagnose_s": time.perf_counter() - t1}
+
+
+def rates(cells):
+    """The four measures of calibration over the cells run, and the counts they rest on."""
+    df = pd.DataFrame(cells)
+    null = df[df.cause == "null"]
+    caused = df[df.cause != "null"]
+    named = int(df.params_named.sum())
+    return {
+        "n_series": len(df),
+        "n_null": len(null),
+        "n_caused": len(caused),
+        "named_right_rate": float(caused.named_right.mean()) if len(caused) else None,
+        # the gap of a null wall with a gap is its truth, not a false name
+        "false_name_rate_null": float((null.wrong.map(len) > 0).mean()) if len(null) else None,
+        "confident_misname_rate": float(df.confident_misname.mean()) if len(df) else None,
+        "coverage_95": float(df.params_covered.sum() / named) if named else None,
+        "n_params_named": named,
+    }
+
+
+def _met(value, bounds):
+    lo, hi = bounds
+    return value is not None and (lo is None or value >= lo) and (hi is None or value <= hi)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, default=Path("results/bench"))
+    ap.add_argument("--budget-s", type=float, default=840.0)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--n-boot", type=int, default=40)
+    args = ap.parse_args()
+    t0 = time.perf_counter()
+    rows = design()
+    cells, skipped = [], []
+    with ProcessPoolExecutor(args.workers) as pool:
+        pending = {pool.submit(run_cell, row, args.n_boot): row for row in rows[: args.workers]}
+        queue = rows[args.workers :]
+        while pending:
+            done = next(as_completed(pending))
+            pending.pop(done)
+            cells.append(done.result())
+            c = cells[-1]
+            print(
+                f"{c['cause']:24s} {c['boundary']:14s} {c['fs']:5.0f} Hz {c['wall']:8s} {c['n_tests']:2d} tests: "
+                f"{','.join(c['verdict']) or '-'}{' right' if c['named_right'] else ''} "
+                f"({c['simulate_s'] + c['diagnose_s']:.0f} s)",
+                flush=True,
+            )
+            if queue and time.perf_counter() - t0 < args.budget_s:
+                nxt = queue.pop(0)
+                pending[pool.submit(run_cell, nxt, args.n_boot)] = nxt
+            elif queue:
+                skipped, queue = queue, []
+    cells.sort(key=lambda c: c["seed"])
+    result = rates(cells)
+    result["targets"] = {
+        k: {"low": lo, "high": hi, "met": _met(result[k], (lo, hi))} for k, (lo, hi) in TARGETS.items()
+    }
+    result["pass"] = all(t["met"] for t in result["targets"].values()) and not skipped
+    result["design"] = (
+        "fractional: each (cause, boundary) cell and each null (boundary, rate) cell once, with one of the "
+        f"{len(RATES) * len(WALLS) * len(SIZES)} combinations of rate, slenderness and size from a fixed shuffle"
+    )
+    result["n_skipped"] = len(skipped)
+    result["wall_s"] = time.perf_counter() - t0
+    result["workers"] = args.workers
+    result["n_boot"] = args.n_boot
+    result["cells"] = cells
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "discovery.json").write_text(json.dumps(jsonable(result), indent=1))
+    print(
+        f"{result['n_series']} series in {result['wall_s']:.0f} s: named right {result['named_right_rate']}, "
+        f"false names on nulls {result['false_name_rate_null']}, confident misnames "
+        f"{result['confident_misname_rate']}, coverage {result['coverage_95']}"
+    )
+    return 0 if result["pass"] else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
