@@ -1,7 +1,7 @@
-"""Snakemake shim: results/diagnosis/<boundary>.json, the entries of the series of a boundary condition.
+"""Snakemake shim: results/diagnosis/<job>.json, the entries of the series of a diagnosis job.
 
 The series are read and diagnosed one at a time, so that the job's memory is
-that of its largest series, not of the boundary condition's whole campaign.
+that of its largest series, not of all the job's tests.
 """
 
 from pathlib import Path

@@ -13,7 +13,7 @@ diagnosis = CampaignDiagnosis.from_json(snakemake.input.diagnosis)
 out = Path(snakemake.output.series)
 out.mkdir(parents=True, exist_ok=True)
 written = {}  # figure -> its file: Figs. 14-15 are series' figures, copied, not drawn again
-for name, fig in series_figures(diagnosis, snakemake.input.tests).items():
+for name, fig in series_figures(diagnosis, snakemake.params.tests).items():
     path = Path(snakemake.output[name]) if name in ("fig14", "fig15") else out / f"{name}.png"
     path.parent.mkdir(parents=True, exist_ok=True)  # discovered/<series>: the forms found beyond the catalogue
     if fig in written:

@@ -11,6 +11,10 @@ Kinds (markers, registered in pyproject.toml; ``make test`` runs them all):
 
 The kind is given here, by file and test, not in the test files: a test that
 runs Snakemake (its ``skipif`` names snakemake) is a workflow test wherever it is.
+
+Workflow tests run at once on several workers: each gives Snakemake a working
+directory of its own (``--directory``, for its locks and metadata), never the
+checkout, save dry runs, which take no lock.
 """
 
 import shutil
@@ -80,32 +84,9 @@ def test_kind(item):
     return kind
 
 
-#: Files whose Snakemake runs have a working directory of their own (``--directory`` a temporary folder).
-OWN_WORKDIR = {
-    "test_workflow.py",
-    "test_instruments_workflow.py",
-    "test_interrupt.py",
-    "test_install.py",
-    "test_slurm.py",
-    "test_shapes.py",
-    "test_report.py",
-    "test_shake_table.py",
-}
-
-
-def runs_in_checkout(item):
-    """Whether a test runs Snakemake with the checkout as its working directory."""
-    name = item.path.name
-    return name not in OWN_WORKDIR and test_kind(item) == "workflow" and hasattr(item.module, "SNAKEMAKE")
-
-
 def pytest_collection_modifyitems(items):
     for item in items:
         item.add_marker(test_kind(item))
-        # one worker runs them one after the other (--dist loadgroup): two
-        # Snakemake runs in one folder race on .snakemake/locks
-        if runs_in_checkout(item):
-            item.add_marker(pytest.mark.xdist_group("checkout"))
 
 
 def pytest_terminal_summary(terminalreporter):

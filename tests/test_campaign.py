@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rocklab.lab.campaign import open_campaign, series_id
+from rocklab.lab.campaign import UNREADABLE, open_campaign, series_id
 from rocklab.lab.raw_format import RawFormatError
 from rocklab.lab.records import read_record
 
@@ -166,4 +166,24 @@ def test_reduction_jobs_pack_whole_specimens(max_tests):
         assert len(ids) <= max_tests or len(held) == 1
         assert name == (f"specimen-{held[0]}" if len(held) == 1 else f"specimens-{held[0]}+{held[-1]}")
     if max_tests >= len(flat):
+        assert len(jobs) == 1
+
+
+@pytest.mark.parametrize("max_tests", [1, 40, 150, 10_000])
+def test_diagnosis_jobs_pack_whole_series(max_tests):
+    """Every series in exactly one job, in the order of tests.csv; a job holds whole
+    consecutive series up to ``max_tests`` tests, or one larger series alone."""
+    campaign = open_campaign(Path(__file__).resolve().parents[1] / "raw" / "campaign")
+    groups = {s: ids for s, ids in campaign.reduction_groups().items() if s != UNREADABLE}
+    jobs = campaign.diagnosis_jobs(max_tests)
+    assert [s for series in jobs.values() for s in series] == list(groups)
+    for name, series in jobs.items():
+        n = sum(len(groups[s]) for s in series)
+        assert n <= max_tests or len(series) == 1
+        assert name == (f"series-{series[0]}" if len(series) == 1 else f"series-{series[0]}+{series[-1]}")
+    # a pack closes only where the next series would take it past max_tests
+    packs = list(jobs.values())
+    for first, second in zip(packs, packs[1:]):
+        assert sum(len(groups[s]) for s in [*first, second[0]]) > max_tests
+    if max_tests >= sum(map(len, groups.values())):
         assert len(jobs) == 1

@@ -91,6 +91,7 @@ def test_library_defaults_equal_the_schema(schema):
     max_tests = _signature_defaults(Campaign.reduction_jobs, "max_tests")["max_tests"]
     assert d["reduction"] == {"max_tests_per_job": max_tests}
     diagnosis = dict(d["diagnosis"])
+    assert diagnosis.pop("max_tests_per_job") == _signature_defaults(Campaign.diagnosis_jobs, "max_tests")["max_tests"]
     assert diagnosis == _signature_defaults(diagnose_records, "n_boot", "n_history", "seed")
     maps = d["maps"]
     assert (maps["alpha"], maps["R"]) == (ALPHA, R)

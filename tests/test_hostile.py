@@ -456,11 +456,14 @@ def test_names_in_the_config_must_be_inputs(section, key, value):
 
 
 @pytest.mark.skipif(not SNAKEMAKE.exists(), reason="snakemake not installed beside this interpreter")
-def test_the_workflow_never_reads_or_writes_outside_its_folders(tmp_path):
+def test_the_workflow_never_reads_or_writes_outside_its_folders(tmp_path, tmp_path_factory):
     """Several attacks at once through the workflow, to the QC table.
 
     The file outside the campaign is a named pipe: opening it would block
     the run (and the timeout would fail the test), stat-ing it does not.
+    Snakemake's working directory (its locks and metadata) is a folder of
+    the test's own outside ``tmp_path``, so that the watched tree holds only
+    the campaign and the results.
     """
     box = tmp_path / "a" / "b"
     folder, results = box / "campaign", box / "results"
@@ -475,9 +478,11 @@ def test_the_workflow_never_reads_or_writes_outside_its_folders(tmp_path):
     config = tmp_path / "a" / "config.yaml"
     config.write_text("figures: {fig9_specimen: 1a}\n")
     before = tree_state(tmp_path)
-    cmd = [str(SNAKEMAKE), str(results / "qc.csv"), "--cores", "2", "--quiet", "--directory", str(ROOT)]
-    cmd += ["--configfile", str(config), "--config", f"raw_dir={folder}", f"results_dir={results}"]
-    run = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, timeout=600)
+    workdir = tmp_path_factory.mktemp("workdir")
+    cmd = [str(SNAKEMAKE), str(results / "qc.csv"), "--cores", "2", "--quiet"]
+    cmd += ["--snakefile", str(ROOT / "Snakefile"), "--directory", str(workdir), "--configfile", str(config)]
+    cmd += ["--config", f"raw_dir={folder}", f"results_dir={results}"]
+    run = subprocess.run(cmd, capture_output=True, text=True, cwd=workdir, timeout=600)
     assert run.returncode == 0, run.stderr[-3000:]
     qc = pd.read_csv(results / "qc.csv", dtype=str, keep_default_na=False)
     assert {p.name for p in (results / "tests").iterdir()} == {f"{t}.nc" for t in [*GOOD, "X0002", "X0003"]}
@@ -487,7 +492,7 @@ def test_the_workflow_never_reads_or_writes_outside_its_folders(tmp_path):
     assert after == before, {
         k: (before.get(k), after.get(k)) for k in set(before) | set(after) if before.get(k) != after.get(k)
     }
-    assert not list(tmp_path.rglob("*pwned*")) and not list(ROOT.rglob("*pwned*"))
+    assert not [p for d in (tmp_path, workdir, ROOT) for p in d.rglob("*pwned*")]
     refused = qc.set_index("test_id").reject_detail
     assert "not a safe name" in refused["../../../pwned"]
     assert "leaves the campaign folder" in refused["X0002"] and "leaves the campaign folder" in refused["X0003"]

@@ -297,19 +297,16 @@ def test_slurm_profile_dry_run(tmp_path):
 @pytest.mark.skipif(not SNAKEMAKE.exists(), reason="snakemake not installed beside this interpreter")
 def test_workflow_maps_one_record(tmp_path):
     cfg = tmp_path / "maps.yaml"
-    cfg.write_text(f"results_dir: {tmp_path / 'out'}\nmaps:\n  records: [Pac164]\n  n: 3\n  chunks: 2\n  threads: 1\n")
-    cmd = [
-        str(SNAKEMAKE),
-        "maps",
-        "--cores",
-        "2",
-        "--quiet",
-        "all",
-        "--configfile",
-        str(ROOT / "config" / "config.yaml"),
-        str(cfg),
-    ]
-    run = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env={**os.environ, "PYTHONWARNINGS": "ignore"})
+    cfg.write_text(
+        f"raw_dir: {ROOT / 'raw' / 'campaign'}\nresults_dir: {tmp_path / 'out'}\n"
+        "maps:\n  records: [Pac164]\n  n: 3\n  chunks: 2\n  threads: 1\n"
+    )
+    # a working directory of its own (Snakemake's locks and metadata): other workflow tests run at once
+    work = tmp_path / "work"
+    work.mkdir()
+    cmd = [str(SNAKEMAKE), "maps", "--cores", "2", "--quiet", "all", "--snakefile", str(ROOT / "Snakefile")]
+    cmd += ["--directory", str(work), "--configfile", str(ROOT / "config" / "config.yaml"), str(cfg)]
+    run = subprocess.run(cmd, capture_output=True, text=True, cwd=work, env={**os.environ, "PYTHONWARNINGS": "ignore"})
     assert run.returncode == 0, run.stderr[-3000:]
     out = tmp_path / "out"
     summary = pd.read_csv(out / "maps" / "summary.csv")

@@ -1,6 +1,6 @@
-# Paths, the campaign's test list, its jobs (reduction, diagnosis per
-# boundary condition), the per-test parameters that decide when a test must
-# be reduced again, the targets and the rules' input functions.
+# Paths, the campaign's test list, its jobs (reduction, diagnosis), the
+# per-test parameters that decide when a test must be reduced again, the
+# targets and the rules' input functions.
 import functools
 import re
 from pathlib import Path
@@ -34,20 +34,13 @@ TESTS_BY_SERIES = {k: v for k, v in CAMPAIGN.reduction_groups().items() if k != 
 REDUCTION_JOBS = CAMPAIGN.reduction_jobs(config["reduction"]["max_tests_per_job"])
 #: The reduction job of each test.
 REDUCTION_JOB = {t: job for job, ids in REDUCTION_JOBS.items() for t in ids}
-#: The series of each boundary condition, in the order of tests.csv: one diagnosis job each
+#: The series of each diagnosis job: whole series packed up to diagnosis.max_tests_per_job tests
 #: (the tests refused at the door are in no series: they have no diagnosis).
-SERIES_BY_BOUNDARY = {}
 #: The wall of each series (the unit of a boundary condition's pooled parameters).
 WALL_OF_SERIES = walls_of_series(CAMPAIGN)
 #: The thickness of each wall [m] (the size the findings were measured at, rocklab.seismic.calibrated).
 WALL_THICKNESS = thickness_of_walls(CAMPAIGN)
-for _series, _ids in TESTS_BY_SERIES.items():
-    SERIES_BY_BOUNDARY.setdefault(CAMPAIGN.test_row(_ids[0]).boundary, []).append(_series)
-
-
-def tests_of_boundary(boundary):
-    """The tests of a boundary condition's series, series by series."""
-    return [t for s in SERIES_BY_BOUNDARY[boundary] for t in TESTS_BY_SERIES[s]]
+DIAGNOSIS_JOBS = CAMPAIGN.diagnosis_jobs(config["diagnosis"]["max_tests_per_job"])
 
 
 # Scheduling: on few cores Snakemake starts the selectable jobs of highest
@@ -59,6 +52,27 @@ def tests_of_boundary(boundary):
 # reduction and leave the diagnosis to the end.  Of the figures the
 # diagnosis' (about 11 s) starts first: last, it ran alone on one core.
 PRIORITY = {"campaign_chain": 20, "maps": 10, "longest_figures": 5}
+#: The diagnosis job of each series.
+DIAGNOSIS_JOB = {s: job for job, series in DIAGNOSIS_JOBS.items() for s in series}
+_SERIES_OF_TEST = {t: s for s, ids in TESTS_BY_SERIES.items() for t in ids}
+
+
+def diagnosis_priority(job):
+    """A diagnosis job's priority in the campaign's chain: the more tests, the sooner.
+
+    The largest series of a large campaign take longest, and the last job
+    to start ends the diagnosis: the largest first, the others fill the
+    other cores.  Between the chain's priority and the next integer.
+    """
+    n = sum(len(TESTS_BY_SERIES[s]) for s in DIAGNOSIS_JOBS[job])
+    return PRIORITY["campaign_chain"] + n / (len(_SERIES_OF_TEST) + 1)
+
+
+def reduction_priority(job):
+    """A reduction job's priority: that of the largest diagnosis job that waits for it
+    (:func:`diagnosis_priority`), so that the largest series are reduced first."""
+    waiting = {DIAGNOSIS_JOB[_SERIES_OF_TEST[t]] for t in REDUCTION_JOBS[job] if t in _SERIES_OF_TEST}
+    return max(map(diagnosis_priority, waiting), default=PRIORITY["campaign_chain"])
 
 
 def res(*parts):
@@ -234,22 +248,6 @@ def fig20_sample_test(wildcards):
     tests = checkpoints.dissipation_tables.get().output.tests
     test_id = FIG20_SAMPLE or fig20_sample(pd.read_csv(tests))
     return [res("tests", f"{test_id}.nc")] if test_id else []
-
-
-def diagnosis_samples():
-    """The sample test of every diagnosed series (the tests the figures draw), once the diagnosis has run,
-    and every test of a series with a form discovered beyond the catalogue (drawn against them all)."""
-
-    def inputs(wildcards):
-        # here, not at the top: the diagnosis package is read once the checkpoint has run, not at every start
-        from rocklab.diagnosis.result import CampaignDiagnosis
-
-        diagnosis = CampaignDiagnosis.from_json(checkpoints.diagnosis.get().output.json)
-        ids = diagnosis.sample_tests
-        ids |= {t for e in diagnosis.series if e.discovered for t in TESTS_BY_SERIES[e.key]}
-        return sorted(res("tests", f"{t}.nc") for t in ids)
-
-    return inputs
 
 
 def map_path(record, model):

@@ -1,6 +1,6 @@
 # Stage 4: model diagnosis (issue 6) - what the base simulation gets wrong,
 # which physical extensions the data carry, and the gain on held-out tests:
-# one job per boundary condition writing each series' diagnosis, then the
+# jobs of whole series writing each series' diagnosis, then the
 # boundary conditions summed up over the series;
 # Figs. 14-15 per series; the restitution of the UMinho limestone blocks.
 
@@ -23,29 +23,32 @@ DIAGNOSIS_OUTPUTS = [
 LIMESTONE_OUTPUTS = [res("limestone_diagnosis.json"), res("report", "limestone_diagnosis.html")]
 
 
-# One job per boundary condition (SERIES_BY_BOUNDARY, common.smk), not per
-# series: a job spends 2 s starting Python and importing the library, as long
-# as diagnosing a small series, so 26 per-series jobs spent some 50 s of the
-# embedded campaign's diagnosis on start-up.  It writes the entries of its
-# series, in the order of tests.csv, to one file.
+# Whole series packed into jobs of at most diagnosis.max_tests_per_job tests
+# (DIAGNOSIS_JOBS, common.smk): a job spends 2 s starting Python and importing
+# the library, as long as diagnosing a small series, so 26 per-series jobs
+# spent some 50 s of the embedded campaign's diagnosis on start-up; a large
+# series is a job of its own, so that a large campaign's series run side by
+# side (one job per boundary condition held the two-sided series, most of
+# the diagnosis, on one core).  It writes the entries of its series, in the
+# order of tests.csv, to one file.
 rule diagnose_series:
     input:
-        lambda wildcards: reduced_inputs(tests_of_boundary(wildcards.boundary)),
+        lambda wildcards: reduced_inputs([t for s in DIAGNOSIS_JOBS[wildcards.job] for t in TESTS_BY_SERIES[s]]),
     output:
-        res("diagnosis", "{boundary}.json"),
+        res("diagnosis", "{job}.json"),
     log:
-        res("logs", "diagnosis", "{boundary}.log"),
+        res("logs", "diagnosis", "{job}.log"),
     benchmark:
-        res("benchmarks", "diagnosis", "{boundary}.tsv")
+        res("benchmarks", "diagnosis", "{job}.tsv")
     wildcard_constraints:
-        boundary=one_of(SERIES_BY_BOUNDARY),
-    priority: PRIORITY["campaign_chain"]
+        job=one_of(DIAGNOSIS_JOBS),
+    priority: lambda wildcards: diagnosis_priority(wildcards.job)
     params:
-        series=lambda wildcards: SERIES_BY_BOUNDARY[wildcards.boundary],
+        series=lambda wildcards: DIAGNOSIS_JOBS[wildcards.job],
         # the tests of each series, each with its own QC verdict, read
         # series by series: the job holds one series' tests at a time
         tests=lambda wildcards: {
-            s: [res("tests", f"{t}.nc") for t in TESTS_BY_SERIES[s]] for s in SERIES_BY_BOUNDARY[wildcards.boundary]
+            s: [res("tests", f"{t}.nc") for t in TESTS_BY_SERIES[s]] for s in DIAGNOSIS_JOBS[wildcards.job]
         },
         n_boot=DIAGNOSIS["n_boot"],
         n_history=DIAGNOSIS["n_history"],
@@ -56,7 +59,7 @@ rule diagnose_series:
 
 checkpoint diagnosis:
     input:
-        expand(rules.diagnose_series.output, boundary=SERIES_BY_BOUNDARY),
+        expand(rules.diagnose_series.output, job=DIAGNOSIS_JOBS),
     output:
         json=report_item(
             res("diagnosis.json"), "diagnosis_json", "diagnosis", "diagnosis.json, for programs", "Summary"
@@ -89,10 +92,13 @@ rule diagnosis_pages:
         "../../scripts/report_pages.py"
 
 
+# Each series' sample test, and every test of a series with a form discovered
+# beyond the catalogue, are read by the job (params): they are no input, the
+# diagnosis (written after every reduction job) stands for them, and Snakemake
+# would stat thousands of files at each scheduling round of a large campaign.
 rule diagnosis_figures:
     input:
         diagnosis=rules.diagnosis.output.json,
-        tests=diagnosis_samples(),
     output:
         fig14=report_figure("14", "diagnosis", "two-sided, models against the test", "Summary"),
         fig15=report_figure("15", "diagnosis", "one-sided, models against the test", "Summary"),
@@ -110,6 +116,8 @@ rule diagnosis_figures:
     benchmark:
         res("benchmarks", "diagnosis_figures.tsv")
     priority: PRIORITY["longest_figures"]
+    params:
+        tests={s: [res("tests", f"{t}.nc") for t in ids] for s, ids in TESTS_BY_SERIES.items()},
     script:
         "../../scripts/diagnosis_figures.py"
 

@@ -28,7 +28,7 @@ rule reduce:
         res("benchmarks", "reduce", "{job}.tsv")
     wildcard_constraints:
         job=one_of(REDUCTION_JOBS),
-    priority: PRIORITY["campaign_chain"]
+    priority: lambda wildcards: reduction_priority(wildcards.job)
     params:
         tests=lambda wildcards: {t: test_params(t) for t in REDUCTION_JOBS[wildcards.job]},
         netcdf=lambda wildcards: [res("tests", f"{t}.nc") for t in REDUCTION_JOBS[wildcards.job]],

@@ -390,7 +390,7 @@ class CampaignDiagnosis(_Document):
 
     @classmethod
     def of_series_files(cls, paths):
-        """The series of a campaign from its boundary conditions' files (results/diagnosis/<boundary>.json),
+        """The series of a campaign from its diagnosis jobs' files (results/diagnosis/<job>.json),
         ordered by series as diagnosis.json lists them (the files interleave them)."""
         joined = cls.joined(cls.from_json(path) for path in paths)
         return cls(sorted(joined.entries, key=lambda e: e.key))

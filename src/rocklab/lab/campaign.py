@@ -408,6 +408,21 @@ def _row_problem(root, row, known_spec, known_setup) -> str | None:
     return campaign_file(Path(root), row.file)[1]
 
 
+def consecutive_packs(sizes: dict, max_tests: int) -> list:
+    """Keys of ``sizes`` (key -> its tests) in their order, packed while a pack holds at most
+    ``max_tests`` tests; a key of more tests is a pack of its own.  Lists of keys."""
+    packs, pack, n = [], [], 0
+    for key, size in sizes.items():
+        if pack and n + size > max_tests:
+            packs.append(pack)
+            pack, n = [], 0
+        pack.append(key)
+        n += size
+    if pack:
+        packs.append(pack)
+    return packs
+
+
 @dataclass
 class Campaign:
     """A campaign folder: its three tables and where its records are."""
@@ -469,28 +484,43 @@ class Campaign:
         by_specimen = {}
         for ids in groups.values():
             by_specimen.setdefault(self.test_row(ids[0]).specimen, []).extend(ids)
-        jobs, pack = {}, []
-
-        def close_pack():
-            if pack:
-                name = f"specimen-{pack[0]}" if len(pack) == 1 else f"specimens-{pack[0]}+{pack[-1]}"
-                jobs[name] = [t for specimen in pack for t in by_specimen[specimen]]
-                pack.clear()
-
-        for specimen, ids in by_specimen.items():
+        jobs = {}
+        for pack in consecutive_packs({s: len(ids) for s, ids in by_specimen.items()}, max_tests):
+            ids = by_specimen[pack[0]]
             if len(ids) > max_tests:
-                close_pack()
                 n_parts = -(-len(ids) // max_tests)
                 for k, part in enumerate(np.array_split(np.asarray(ids, dtype=object), n_parts), start=1):
-                    jobs[f"specimen-{specimen}-part{k}"] = list(part)
+                    jobs[f"specimen-{pack[0]}-part{k}"] = list(part)
                 continue
-            if sum(len(by_specimen[s]) for s in pack) + len(ids) > max_tests:
-                close_pack()
-            pack.append(specimen)
-        close_pack()
+            name = f"specimen-{pack[0]}" if len(pack) == 1 else f"specimens-{pack[0]}+{pack[-1]}"
+            jobs[name] = [t for specimen in pack for t in by_specimen[specimen]]
         if refused:
             jobs[UNREADABLE] = refused
         return jobs
+
+    def diagnosis_jobs(self, max_tests: int = TESTS_PER_JOB) -> dict:
+        """The series of each diagnosis job: whole series, in the order of tests.csv.
+
+        A job spends about 2 s starting Python and importing the library, as
+        long as diagnosing a small series, so consecutive series share a job
+        while it holds at most ``max_tests`` tests; a larger series is a job
+        of its own (a series is diagnosed as one), so that the large series
+        of a large campaign run side by side on the cores.  The tests
+        refused at the door are in no series: they have no diagnosis.
+
+        Returns
+        -------
+        dict
+            Job name to series: ``series-<key>`` for one series,
+            ``series-<first>+<last>`` for the series from ``first`` to
+            ``last`` in the order of tests.csv (``+`` is in no series key).
+        """
+        if max_tests < 1:
+            raise ValueError(f"max_tests must be at least 1, got {max_tests}")
+        groups = self.reduction_groups()
+        groups.pop(UNREADABLE, None)
+        packs = consecutive_packs({s: len(ids) for s, ids in groups.items()}, max_tests)
+        return {f"series-{p[0]}" if len(p) == 1 else f"series-{p[0]}+{p[-1]}": p for p in packs}
 
     @cached_property
     def _first_row(self) -> dict:

@@ -193,18 +193,19 @@ def discovery_figure(tests, entry):
     return fig
 
 
-def series_figures(diagnosis, test_paths):
+def series_figures(diagnosis, tests_by_series):
     """Figs. 14-15 for the sample test of every series of results/diagnosis.json.
 
     Parameters
     ----------
     diagnosis : rocklab.diagnosis.result.CampaignDiagnosis or path
         results/diagnosis.json.
-    test_paths : sequence of path
-        Reduced tests (``results/tests/<test_id>.nc``): at least the sample
-        test of every series, and every test of a series with a form
-        discovered beyond the catalogue (:func:`discovery_figure`), each
-        with its stored motion (:func:`rocklab.lab.motion.write_test_with_motion`).
+    tests_by_series : mapping
+        Series id -> its reduced tests (``results/tests/<test_id>.nc``, each
+        with its stored motion, :func:`rocklab.lab.motion.write_test_with_motion`).
+        Of a series the sample test is read, and every test where the series
+        has a form discovered beyond the catalogue (:func:`discovery_figure`):
+        each file once, whatever the number of series.
 
     Returns
     -------
@@ -216,16 +217,16 @@ def series_figures(diagnosis, test_paths):
         two-sided and one-sided series, as the paper's figures (a note when
         the campaign has none).
     """
-    paths = {Path(p).stem: p for p in test_paths}
     diagnosis = CampaignDiagnosis.of(diagnosis)
     out = {}
     for e in diagnosis.series:
+        paths = {Path(p).stem: p for p in tests_by_series[e.key]}
         test_id = e.sample_test
         motion = {test_id: read_motion(paths[test_id])}
         (recs,) = records_by_series([read_dataset(paths[test_id], ("theta",))], motion).values()
         out[e.key] = history_figure(measured_test(recs[0]), e)
         if e.discovered:
-            out[f"discovered/{e.key}"] = discovery_figure(_series_tests(e.key, paths), e)
+            out[f"discovered/{e.key}"] = discovery_figure(_series_tests(paths), e)
     for name, boundary in (("fig14", "two-sided"), ("fig15", "one-sided")):
         own = diagnosis.series_of(boundary)
         out[name] = out[max(own, key=lambda e: e.n_tests).key] if own else _empty(boundary)
@@ -345,11 +346,10 @@ def family_figure(result, events):
     return fig
 
 
-def _series_tests(key, paths):
-    """The valid tests of series ``key`` among ``paths`` (stem -> path) as the diagnosis read them."""
-    datasets = [ds for ds in valid_tests(paths.values(), variables=("theta",)) if ds.attrs.get("series") == key]
-    ids = [ds.attrs["test_id"] for ds in datasets]
-    stored = {t: read_motion(paths[t]) for t in ids}
+def _series_tests(paths):
+    """The valid tests of one series, ``paths`` (stem -> path) its tests, as the diagnosis read them."""
+    datasets = list(valid_tests(sorted(paths.values()), variables=("theta",)))
+    stored = {ds.attrs["test_id"]: read_motion(paths[ds.attrs["test_id"]]) for ds in datasets}
     (recs,) = records_by_series(datasets, stored).values()
     return in_series_order([t for t in map(measured_test, recs) if t.n_impacts >= 2])
 
