@@ -17,20 +17,22 @@ two-sided walls reach on average (Sect. 3: 91 % of alpha), through the exact
 simulator (:func:`rocklab.diagnosis.model.simulator`,
 :func:`rocklab.simulation.reference.simulate_free`).  The tolerance
 (:data:`DURATION_TOLERANCE`, 5 %) is the change of duration an assessment
-would act on; the lab's durations scatter by more within a series (Fig. 19), so
-an effect below the margin is one no repetition of a test could show
-either.  A wall that overturns or never comes to rest has changed its
+would act on, and of the order of the scatter of the durations of one
+series' tests (Fig. 19): an effect below it is hard to tell from a
+repetition of the test.  A wall that overturns or never comes to rest has changed its
 outcome by more than any tolerance.  A statement on one boundary
 condition takes the margin of its wall, one on the boundary condition as
 a covariate the smaller of the two; each is the smaller over the two
 directions from the parameter's reference value (its null; for the
 restitution scale the calibrated ratio).  A parameter the simulator carries no law of
-(a law of the impact speed, a change of Housner's base e), or whose whole
-range changes the duration less than the tolerance, has no margin: no
-statement of no effect on it is supported.
+(a law of the impact speed), or whose whole range changes the duration less
+than the tolerance (a drift, on a wall in the middle of its series), has no
+margin: no statement of no effect on it is supported.  One whose smallest
+departure from the null changes the outcome has a margin of zero (a contact
+gap: inside it the wall rocks two-sided).
 
 The margins are computed once for every parameter of the catalogue
-(:func:`margin_table`, a few minutes) and shipped as
+(:func:`margin_table`, about a minute) and shipped as
 ``rocklab/data/claim_margins.csv``; ``python -m rocklab.dissipation.claims``
 writes it again after a change of the catalogue, the simulator or the rule.
 With one margin per quantity, two claims on one mean further apart than
