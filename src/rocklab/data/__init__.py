@@ -14,6 +14,13 @@
     Tables 2-3) that the campaign tests, each with where the paper says it;
     read by :mod:`rocklab.dissipation.covariates`
     (:func:`~rocklab.dissipation.claims.read_claims`).
+``claim_margins.csv``
+    The equivalence margin of every parameter of the diagnosis catalogue in
+    each boundary condition: the smallest change that changes the reference
+    wall's simulated free-rocking duration by 5 %; written by
+    ``python -m rocklab.dissipation.claims``
+    (:func:`~rocklab.dissipation.claims.margin_table`), read by
+    :func:`~rocklab.dissipation.claims.margin_of`.
 
 The files are found through :mod:`importlib.resources`, so they are where the
 package is: the checkout's ``src/rocklab/data/`` or an installed

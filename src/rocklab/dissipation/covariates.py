@@ -60,10 +60,10 @@ evidence is not evidence of absence), else "inconclusive"; a claim "below
 v" is supported when the interval lies below v, contradicted when it lies
 at or above; a claim "close to v" is supported when the interval lies
 within v +- margin, contradicted when it lies outside.  The margin follows
-one rule (:func:`rocklab.dissipation.claims.margin_of`): the smallest effect worth naming of the
-catalogue parameter the response is, the change of the simulated wall
-below which the diagnosis names no cause; two claims on one mean further apart than twice it (close
-to 1, on average 0.93) cannot both be supported.  The paper's statements
+one rule (:func:`rocklab.dissipation.claims.margin_of`): the smallest change of the catalogue
+parameter the response is that changes the simulated free-rocking duration of the reference wall of
+the row's boundary condition by 5 % (:func:`rocklab.dissipation.claims.outcome_margin`); two claims
+on one mean further apart than twice it (close to 1, on average 0.93) cannot both be supported.  The paper's statements
 (:data:`rocklab.dissipation.claims.PAPER_CLAIMS`, data: ``rocklab/data/paper_claims.csv``) are one
 family and every other effect (an exploratory "no effect" check) another;
 each family is corrected for its own multiplicity: p-values Holm-adjusted,
@@ -476,7 +476,7 @@ def _judge(rows, claims):
     for r in table.itertuples():
         claim = by_key.get(r.statement)
         kind, value = (claim.kind, claim.value) if claim else ("zero", 0.0)
-        margin = margin_of(r.response)
+        margin = margin_of(r.response, r.boundary)
         claimed.append(value if kind != "zero" else np.nan)
         margins.append(margin)
         papers.append(claim.paper if claim else "")

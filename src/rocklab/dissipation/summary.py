@@ -12,6 +12,7 @@ import ast
 
 import pandas as pd
 
+from rocklab.dissipation.claims import margin_rule
 from rocklab.lab.hierarchy import MIN_DF, MIN_UNITS_PER_LEVEL
 from rocklab.summaries import Tolerance
 
@@ -161,8 +162,12 @@ def campaign_level_summary(path) -> dict:
     rest = table[table["statement"].fillna("") == ""]
     judged = rest[~rest["verdict"].str.startswith("not testable")]
     return {
-        # the margins of the tests' ratios (rocklab.dissipation.covariates.margin_of)
-        "margins": table.dropna(subset=["margin"]).groupby("response")["margin"].first().to_dict(),
+        # the margins by boundary condition and response (rocklab.dissipation.claims.margin_of) and their rule
+        "margins": {
+            b: g.groupby("response")["margin"].first().to_dict()
+            for b, g in table.dropna(subset=["margin"]).groupby("boundary")
+        },
+        "margin_rule": margin_rule(),
         # the level of the simultaneous intervals of the paper's statements (Bonferroni over the family)
         "statements_verdict_level": stated["verdict_level"].min() if len(stated) else None,
         # what a verdict needs (rocklab.lab.hierarchy)
