@@ -267,7 +267,7 @@ def score(entry, truth):
         "outside": missed,
         "too_small": entry.get("too_small"),
         "not_identifiable": bool(entry.get("too_small")) or bool(unseen),
-        "why_not_identifiable": entry.get("too_small") or "; ".join(f"{c}: {blind[c]}" for c in unseen),
+        "why_not_identifiable": entry.get("too_small") or "; ".join(blind[c] for c in unseen),
     }
 
 
