@@ -111,6 +111,9 @@ def test_a_two_test_series_names_its_causes_on_one_degree_of_freedom(series_of):
     # a drift between tests is a slope over tests: two tests cannot carry it, and the entry says so
     assert list(e["not_identifiable"]) == ["restitution_drift"]
     assert e["not_identifiable"]["restitution_drift"].endswith("needs 4 of them, the series has 2")
+    assert "Not identifiable in this series, its absence from the verdict says nothing: restitution_drift (a drift" in (
+        D.diagnosis_markdown([e])
+    )
     truth = {"alpha_r_over_alpha": 0.9, "c": 0.95}
     for f in e["findings"]:
         for k, (lo, hi) in f["ci95"].items():
