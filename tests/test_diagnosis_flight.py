@@ -268,3 +268,38 @@ def test_the_closed_form_a_family_reduces_to():
     assert CAUSE.closed_form(v, ci) == "no closed form of the library"  # a mixture
     ci = {"zeta": (0.0, 0.01), "mu_over_alpha": (0.0, 0.01), "kappa_alpha": (0.0, 1e-4)}
     assert CAUSE.closed_form(v, ci).startswith("undecided between flight_damping")
+
+
+def _flights(apex_over_alpha, alpha=0.12, loss=0.01):
+    """Observed-like flights of one test: apexes over alpha, each losing ``loss`` of its speed."""
+    from types import SimpleNamespace
+
+    A = np.array([apex_over_alpha]) * alpha
+    va = np.full(A.shape, 0.5)
+    S = SimpleNamespace(A=A, va=va, vb=va * (1.0 - loss))
+    return SimpleNamespace(S=S, big=np.ones(A.shape, bool), alpha=np.array([[alpha]]), tests=[None])
+
+
+def test_a_viscous_loss_on_short_flights_is_not_identifiable():
+    from rocklab.diagnosis.causes import flight_damping as FD
+
+    n = FD.MIN_LONG_FLIGHTS + 1
+    # the last flight has no next impact: n long flights give n - 1 losses
+    long = _flights(np.full(n + 1, FD.LONG_FLIGHT + 0.1))
+    assert FD.short_flights_only(long) == ""
+    short = _flights(np.r_[np.full(n, FD.LONG_FLIGHT - 0.01), 0.9, 0.9])
+    why = FD.short_flights_only(short)
+    assert why.startswith(f"1 flights above {FD.LONG_FLIGHT:g} alpha") and "lower e" in why
+
+
+def test_a_named_viscous_loss_whose_form_cannot_be_read_is_structure_left():
+    from rocklab.diagnosis.problem import WallProblem
+
+    recs = virtual_series("fl", "two-sided", {"flight_damping": 0.01}, n=3, seed=1)
+    problem = WallProblem([D.measured_test(r) for r in recs])
+    assert problem.signature.get("flight_loss")
+    assert not [s for s in problem.form_structure(("flight_damping",)) if "untested" in s]
+    problem._sig = {k: v for k, v in problem.signature.items() if k != "flight_loss"}
+    assert problem.form_structure(("flight_damping",)) == [
+        "flight_damping: its form is untested, the signature of flight_loss cannot be read in these tests"
+    ]

@@ -109,6 +109,12 @@ def test_a_two_test_series_names_its_causes_on_one_degree_of_freedom(series_of):
     e = D.diagnose_records(series_of(2), "tiny", n_boot=10, n_history=0)
     assert e["n_tests"] == 2 and "too_small" not in e
     assert e["verdict"] == ["instability_angle", "restitution_scale"]
+    # a drift between tests is a slope over tests: two tests cannot carry it, and the entry says so
+    assert list(e["not_identifiable"]) == ["restitution_drift"]
+    assert e["not_identifiable"]["restitution_drift"].endswith("needs 4 of them, the series has 2")
+    assert "Not identifiable in this series, its absence from the verdict says nothing: restitution_drift (a drift" in (
+        D.diagnosis_markdown([e])
+    )
     truth = {"alpha_r_over_alpha": 0.9, "c": 0.95}
     for f in e["findings"]:
         for k, (lo, hi) in f["ci95"].items():
@@ -130,6 +136,21 @@ def test_a_one_test_series_names_nothing(series_of):
     assert "explains the data" not in b["what_is_wrong"]
     md = D.diagnosis_markdown([e, b])
     assert md.count("**Verdict: too small to name a cause**") == 2 and "[" not in md
+
+
+def test_a_drift_needs_two_residual_degrees_of_freedom_of_tests(series_of):
+    from rocklab.diagnosis.causes import restitution_drift
+    from rocklab.diagnosis.series import not_identifiable
+    from rocklab.lab.hierarchy import MIN_DF
+
+    tests = [D.measured_test(r) for r in series_of(1)]
+    assert restitution_drift.MIN_TESTS == MIN_DF + 2
+    for n in range(1, 6):
+        blind = not_identifiable(tests * n)
+        assert ("restitution_drift" in blind) == (n < restitution_drift.MIN_TESTS)
+        # every other cause is seen at every impact, a viscous loss on the long flights (of a few tests)
+        assert set(blind) <= {"restitution_drift", "flight_damping"} and ("flight_damping" in blind) == (n == 1)
+    assert not not_identifiable(tests * 2, named=["restitution_drift"])
 
 
 @pytest.fixture(scope="module")
@@ -160,6 +181,7 @@ class _Collect(logging.Handler):
 def test_a_normal_series_names_its_causes_with_their_counts(diagnosed_six):
     e, _ = diagnosed_six
     assert "too_small" not in e and set(e["verdict"]) >= {"instability_angle", "restitution_scale"}
+    assert "not_identifiable" not in e
     for f in e["findings"]:
         if f["effect"] != "stop_threshold":
             assert f["n_tests"] == 6 and f["ci95"]

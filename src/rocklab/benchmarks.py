@@ -272,13 +272,14 @@ def performance_summary(results, checkout=None) -> dict:
 
 
 def _miss(cell) -> str:
-    """What a series of ``bench/discovery.py`` got wrong, in words ("" where it was named right)."""
+    """What a series of ``bench/discovery.py`` got wrong, in words ("" where it was named right); a series
+    whose design cannot carry its hidden cause says so and why."""
     if cell["named_right"]:
         return ""
     out = []
-    if cell.get("too_small"):
-        out.append(f"too small: {cell['too_small']}")
-    if cell["missing"]:
+    if cell["not_identifiable"]:
+        out.append(f"not identifiable: {cell['why_not_identifiable']}")
+    elif cell["missing"]:
         out.append(f"not named: {', '.join(cell['missing'])}")
     if cell["wrong"]:
         flag = "flagged unexplained" if cell["unexplained"] else "not flagged"
@@ -289,10 +290,13 @@ def _miss(cell) -> str:
 
 
 def _discovery(bench: dict) -> dict:
-    """The calibration of the diagnosis (``bench/discovery.py``): its four rates against their targets, and
-    one row per series with what it missed."""
-    keys = ("n_series", "n_null", "n_caused", "n_params_named", "n_skipped", "design", "wall_s", "workers")
+    """The calibration of the diagnosis (``bench/discovery.py``): its four rates against their targets, each
+    with its binomial interval, the series whose design cannot carry their cause, and one row per series
+    with what it missed."""
+    keys = ("n_series", "n_null", "n_caused", "n_not_identifiable", "not_identifiable", "n_params_named")
+    keys += ("n_params_covered_by_floor", "n_skipped", "design", "design_seed", "wall_s", "workers")
     keys += ("named_right_rate", "false_name_rate_null", "confident_misname_rate", "coverage_95", "pass")
+    keys += ("named_right_ci95", "false_name_ci95", "confident_misname_ci95", "coverage_ci95")
     cols = ("cause", "boundary", "fs", "wall", "h_over_b", "n_tests", "n_impacts", "verdict", "named_right")
     return {
         **{k: bench[k] for k in keys},

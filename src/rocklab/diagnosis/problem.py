@@ -47,12 +47,16 @@ class WallProblem(Problem):
     def form_structure(self, ext):
         """What a family's signature says the model ``ext`` misses: its listed member of the wrong
         form (``against_member``), or no member at all (``unmodelled``); the flight-loss curve of
-        :mod:`rocklab.diagnosis.causes.flight_loss`."""
+        :mod:`rocklab.diagnosis.causes.flight_loss`.  A named member whose form only its family's
+        signature checks (:attr:`~rocklab.diagnosis.causes.Cause.checks_form`) and that signature
+        unreadable: its form is untested."""
         out = []
         for c in self.causes:
             sig = self.signature.get(c.name) or {}
             if c.family in ext and sig.get("against_member"):
                 out.append(sig["against_member"])
+            elif c.family in ext and c.checks_form and not sig:
+                out.append(f"{c.family}: its form is untested, the signature of {c.name} cannot be read in these tests")
             elif c.family and not {c.name, c.family} & set(ext) and sig.get("unmodelled"):
                 out.append(sig["unmodelled"])
         return out

@@ -99,6 +99,12 @@ def diagnosis_markdown(diagnosis) -> str:
                 + "; ".join(weak.values())
             )
         out += [line, ""]
+        if not pooled and e.not_identifiable:
+            out += [
+                "Not identifiable in this series, its absence from the verdict says nothing: "
+                + "; ".join(f"{k} ({why})" for k, why in e.not_identifiable.items()),
+                "",
+            ]
         if e.findings:
             out += [
                 "| effect | parameters | 95% CI | held-out deviance/obs "

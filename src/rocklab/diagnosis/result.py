@@ -272,10 +272,13 @@ class SeriesDiagnosis(_Entry):
     A series too small to name a cause (``too_small`` says why) has no
     ``signatures``, ``heldout`` nor ``extended``; ``listed_verdict`` and
     ``listed_params`` are the causes of the catalogue alone where a form
-    beyond it was tried.
+    beyond it was tried; ``not_identifiable`` the causes its design cannot
+    carry, and why (:func:`rocklab.diagnosis.series.not_identifiable`).
     """
 
-    _optional = frozenset({"too_small", "listed_verdict", "listed_params", "signatures", "heldout", "extended"})
+    _optional = frozenset(
+        {"too_small", "not_identifiable", "listed_verdict", "listed_params", "signatures", "heldout", "extended"}
+    )
     _nested = {"base": BaseRun, "findings": [Finding]}
 
     scope: str
@@ -287,6 +290,7 @@ class SeriesDiagnosis(_Entry):
     what_is_wrong: str | None = None
     too_small: str | None = None
     verdict: list[str] = field(default_factory=list)
+    not_identifiable: dict[str, str] | None = None
     unexplained: bool = False
     residual_structure: list[str] = field(default_factory=list)
     findings: list[Finding] = field(default_factory=list)

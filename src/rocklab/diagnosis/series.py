@@ -31,7 +31,7 @@ from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.discovery import discovery
 from rocklab.diagnosis.errors import what_is_wrong
 from rocklab.diagnosis.estimation import beyond_the_catalogue, finite_mean, select_effects
-from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_test
+from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_test, observe
 from rocklab.diagnosis.extended import engineering_errors, model_params
 from rocklab.diagnosis.problem import WallProblem
 from rocklab.diagnosis.result import CampaignDiagnosis
@@ -71,6 +71,37 @@ def _heldout_summary(ho):
     }
 
 
+def not_identifiable(tests, named=()):
+    """The causes of the catalogue that the design of a series cannot carry, and why.
+
+    Each cause says where the tests cannot tell it from the noise or from
+    another cause whatever its size (:attr:`rocklab.diagnosis.causes.Cause.not_identifiable`:
+    a drift between three tests, a viscous loss on short flights only); its
+    absence from the verdict is then no evidence against it.  A rule of the
+    design, known before any fit.
+
+    Parameters
+    ----------
+    tests : list of MeasuredTest
+        The tests of the series that the diagnosis uses (two impacts or more).
+    named : iterable of str
+        The causes the series names: those are carried, whatever the rule says.
+
+    Returns
+    -------
+    dict
+        Cause -> why, in words; empty where every cause of the boundary can be named.
+    """
+    ob = observe(tests)
+    causes = catalogue.for_boundary(tests[0].boundary, families=True)
+    out = {}
+    for c in causes:
+        why = c.not_identifiable(ob) if c.not_identifiable is not None and c.name not in named else ""
+        if why:
+            out[c.name] = why
+    return out
+
+
 def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, seed=0):
     """Diagnosis of one series: base model, what it gets wrong, causes, gain.
 
@@ -93,7 +124,9 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         ``n_tests``, the tests its interval rests on.  With fewer than
         :data:`MIN_TESTS_TO_NAME` tests of two impacts or more the entry
         compares the base model only, names no cause and says why in
-        ``too_small``.
+        ``too_small``; otherwise ``not_identifiable`` (only where some cause
+        is, :func:`not_identifiable`) names the causes its design cannot
+        carry, whose absence from the verdict says nothing.
     """
     t0 = time.perf_counter()
     tests = [t if isinstance(t, MeasuredTest) else measured_test(t) for t in tests]
@@ -196,10 +229,12 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         verdict_text = "none of the candidate causes is carried by the data"
     else:
         verdict_text = ""
+    blind = not_identifiable(tests, [f["effect"] for f in findings])
     entry = {
         **head,
         "what_is_wrong": (verdict_text + ": " if verdict_text else "") + statement,
         "verdict": [f["effect"] for f in findings],
+        **({"not_identifiable": blind} if blind else {}),
         "unexplained": unexplained,
         "residual_structure": structure,
         "findings": findings,

@@ -95,6 +95,18 @@ class Cause:
         A cause the maps' wall cannot carry as found: ``(member, why)``, the
         cause of the catalogue that carries it instead (None: none, it is
         left off) and why.
+    checks_form : bool
+        Families: the signature is the only check of the form of the listed
+        member (:attr:`family`), read on part of the flights; where the
+        member is named and the signature cannot be read, the member's form
+        is untested, and the diagnosis says so as structure left
+        (:meth:`rocklab.diagnosis.problem.WallProblem.form_structure`).
+    not_identifiable : callable, optional
+        ``not_identifiable(observed) -> str``: why the tests of a series
+        (:class:`rocklab.diagnosis.evidence.Observed`) cannot tell the cause
+        from the noise or from another cause by their design, whatever its
+        size ("" where they can); its absence from a verdict is then no
+        evidence against it (:func:`rocklab.diagnosis.series.not_identifiable`).
     """
 
     name: str
@@ -114,6 +126,8 @@ class Cause:
     on_ratios: Callable | None = None
     short: str | None = None
     on_the_maps: tuple[str | None, str] | None = None
+    checks_form: bool = False
+    not_identifiable: Callable | None = None
 
     def holds(self, ci, name, value):
         """Whether the 95 % interval ``ci`` of parameter ``name`` holds ``value`` (to its practical margin)."""

@@ -15,6 +15,12 @@ stats = lazy_module("scipy.stats")
 
 ZETA = Param("zeta", 0.0, 0.2, 0.0, practical=2e-4)
 
+#: Flights above this fraction of alpha: the filter's windows stay within one half of them.
+LONG_FLIGHT = 0.3
+
+#: Fewest long flights the flight-loss curve is read on.
+MIN_LONG_FLIGHTS = 5
+
 
 def laws(v):
     return (FlightLoss(v["zeta"]),)
@@ -41,6 +47,41 @@ def signature(ob):
     }
 
 
+def long_flights(ob):
+    """Apex, take-off speed and relative speed loss of the flights the filter reads within one half.
+
+    Returns
+    -------
+    A, v, loss : ndarray
+        Flat arrays over the flights after an impact with apex above
+        :data:`LONG_FLIGHT` alpha and a next impact: apex [rad], take-off
+        speed [rad/s], 1 - next impact speed / take-off speed.
+    """
+    S = ob.S
+    with np.errstate(invalid="ignore", divide="ignore"):
+        loss = 1.0 - S.vb[:, 1:] / S.va[:, :-1]
+    A = S.A[:, :-1]
+    ok = np.isfinite(loss) & ob.big[:, :-1] & (A > LONG_FLIGHT * ob.alpha) & np.isfinite(S.va[:, :-1])
+    return A[ok], S.va[:, :-1][ok], loss[ok]
+
+
+def short_flights_only(ob):
+    """Why the flights of a series cannot tell a loss in flight from a lower e ("" where they can).
+
+    The derivative filter moves the loss of a flight shorter than its
+    windows into the measured e (:func:`rocklab.diagnosis.evidence.filter_loss_bias`):
+    only flights above :data:`LONG_FLIGHT` alpha show it apart, and the
+    curve needs :data:`MIN_LONG_FLIGHTS` of them.
+    """
+    n = long_flights(ob)[0].size
+    if n >= MIN_LONG_FLIGHTS:
+        return ""
+    return (
+        f"{n} flights above {LONG_FLIGHT:g} alpha ({MIN_LONG_FLIGHTS} needed): on shorter flights the derivative "
+        "filter reads a loss in flight as a lower e"
+    )
+
+
 def starts(sig):
     return {"zeta": max(sig.get(CAUSE.name, {}).get("zeta", 0.0), 1e-4)}
 
@@ -52,5 +93,6 @@ CAUSE = Cause(
     laws=laws,
     signature=signature,
     starts=starts,
+    not_identifiable=short_flights_only,
     short="zeta",
 )

@@ -24,6 +24,7 @@ import numpy as np
 
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import Cause, flight_damping
+from rocklab.diagnosis.causes.flight_damping import LONG_FLIGHT, MIN_LONG_FLIGHTS, long_flights
 from rocklab.diagnosis.parameters import Param
 from rocklab.physics.flight import speed_loss, takeoff_speed
 from rocklab.physics.law import FlightLoss
@@ -33,9 +34,6 @@ stats = lazy_module("scipy.stats")
 
 MU = Param("mu_over_alpha", 0.0, 0.2, 0.0, practical=5e-4)
 KAPPA = Param("kappa_alpha", 0.0, 2.0, 0.0, practical=1e-3)
-
-#: Flights above this fraction of alpha: the filter's windows stay within one half of them.
-LONG_FLIGHT = 0.3
 
 #: Log ratio of the residual sums of the flight-loss curve, viscous over the best member, that
 #: says the listed viscous loss has the wrong form (chi^2 of one degree of freedom at p = 1e-3).
@@ -54,24 +52,6 @@ MEMBERS = (
 
 def laws(v):
     return (FlightLoss(v["zeta"], v["mu_over_alpha"], v["kappa_alpha"]),)
-
-
-def long_flights(ob):
-    """Apex, take-off speed and relative speed loss of the flights the filter reads within one half.
-
-    Returns
-    -------
-    A, v, loss : ndarray
-        Flat arrays over the flights after an impact with apex above
-        :data:`LONG_FLIGHT` alpha and a next impact: apex [rad], take-off
-        speed [rad/s], 1 - next impact speed / take-off speed.
-    """
-    S = ob.S
-    with np.errstate(invalid="ignore", divide="ignore"):
-        loss = 1.0 - S.vb[:, 1:] / S.va[:, :-1]
-    A = S.A[:, :-1]
-    ok = np.isfinite(loss) & ob.big[:, :-1] & (A > LONG_FLIGHT * ob.alpha) & np.isfinite(S.va[:, :-1])
-    return A[ok], S.va[:, :-1][ok], loss[ok]
 
 
 def member_curves(A, v, alpha, p):
@@ -113,7 +93,7 @@ def signature(ob):
     signature, a median over all flights, can miss a drag.
     """
     A, v, loss = long_flights(ob)
-    if v.size < 5 or np.ptp(loss) == 0:
+    if v.size < MIN_LONG_FLIGHTS or np.ptp(loss) == 0:
         return None
     alpha, p = float(np.median(ob.alpha)), float(np.median(ob.p))
     w = stats.wilcoxon(loss, alternative="greater")
@@ -235,6 +215,9 @@ CAUSE = Cause(
     family=flight_damping.CAUSE.name,
     closed_form=closed_form,
     curve=curve,
+    # short flights move their loss into the measured e (module docstring): a viscous loss named on too few
+    # long flights may be a lower e, a lower rocking angle or a dry friction alike
+    checks_form=True,
     on_the_maps=(
         flight_damping.CAUSE.name,
         "its viscous member, zeta: the maps' numba engine does not simulate dry friction or drag in flight "

@@ -20,12 +20,17 @@ import numpy as np
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import Cause, restitution_scale
 from rocklab.diagnosis.parameters import Param
+from rocklab.lab.hierarchy import MIN_DF
 from rocklab.physics.law import Restitution
 
 stats = lazy_module("scipy.stats")
 
 D = Param("drift", -1.0, 1.0, 0.0, practical=0.005)
 NAME = "restitution_drift"
+#: A drift is a slope over tests: the test is its unit, and the slope of n per-test medians has n - 2 degrees
+#: of freedom, of which a verdict needs :data:`rocklab.lab.hierarchy.MIN_DF` (with three tests the 95 % t
+#: quantile is 12.7: no drift of the lab's size can clear it).
+MIN_TESTS = MIN_DF + 2
 
 
 def column_of(name):
@@ -52,7 +57,7 @@ def _cause(column, others=()):
         med = np.array([np.median(ob.ratio[i][ob.ok[i]]) if ob.ok[i].any() else np.nan for i in range(len(ob.tests))])
         order = _place(ob.tests, column)
         ok = np.isfinite(med)
-        if ok.sum() < 4 or np.ptp(order[ok]) == 0:
+        if ok.sum() < MIN_TESTS or np.ptp(order[ok]) == 0:
             return None
         fit = stats.linregress(order[ok], np.log(med[ok]))
         return {
@@ -84,7 +89,14 @@ def _cause(column, others=()):
         family=restitution_scale.CAUSE.name,
         closed_form=closed_form,
         short="drift",
+        not_identifiable=too_few_tests,
     )
+
+
+def too_few_tests(ob):
+    """Why the tests of a series cannot carry a drift between them ("" where they can)."""
+    n = len(ob.tests)
+    return f"a drift is a slope over tests and needs {MIN_TESTS} of them, the series has {n}" if n < MIN_TESTS else ""
 
 
 @lru_cache(maxsize=64)

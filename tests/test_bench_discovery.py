@@ -1,0 +1,86 @@
+"""The scoring of bench/discovery.py: what counts as named right, not identifiable, a confident misname."""
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+from rocklab.benchmarks import _discovery
+
+_spec = importlib.util.spec_from_file_location("discovery", Path(__file__).parents[1] / "bench" / "discovery.py")
+discovery = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(discovery)
+
+
+def entry(verdict, findings=(), unexplained=False, **kw):
+    return {"verdict": list(verdict), "findings": list(findings), "unexplained": unexplained, **kw}
+
+
+def test_the_binomial_interval_meets_its_closed_forms_at_the_ends():
+    n = 36
+    # none or all of n: the one-sided Clopper-Pearson bound is (alpha / 2)^(1/n)
+    assert discovery.binomial_interval(0, n) == pytest.approx([0.0, 1 - 0.025 ** (1 / n)])
+    assert discovery.binomial_interval(n, n) == pytest.approx([0.025 ** (1 / n), 1.0])
+    lo, hi = discovery.binomial_interval(18, n)
+    assert lo < 0.5 < hi and hi - 0.5 == pytest.approx(0.5 - lo)
+    assert discovery.binomial_interval(0, 0) is None
+
+
+def test_a_series_that_says_its_cause_is_not_identifiable_is_counted_apart():
+    truth = {"restitution_drift": {"c": 0.93, "drift": 0.15}}
+    why = "a drift is a slope over tests and needs 4 of them, the series has 3"
+    s = discovery.score(entry([], not_identifiable={"restitution_drift": why}), truth)
+    assert s["not_identifiable"] and s["why_not_identifiable"] == why and not s["named_right"]
+    silent = discovery.score(entry([]), truth)
+    assert not silent["not_identifiable"] and silent["missing"] == ["restitution_drift"]
+    small = discovery.score(entry([], too_small="one test"), truth)
+    assert small["not_identifiable"] and small["why_not_identifiable"] == "one test"
+
+
+def test_a_wrong_name_is_confident_unless_flagged():
+    truth = {"flight_damping": {"zeta": 0.01}}
+    finding = {"effect": "restitution_scale", "params": {"c": 0.97}, "ci95": {"c": [0.96, 0.98]}}
+    assert discovery.score(entry(["restitution_scale"], [finding]), truth)["confident_misname"]
+    assert not discovery.score(entry(["restitution_scale"], [finding], unexplained=True), truth)["confident_misname"]
+
+
+def test_coverage_counts_the_bounds_the_resolution_floor_set():
+    from rocklab.diagnosis.causes import restitution_scale
+
+    half = discovery.RESOLUTION * restitution_scale.C.practical
+    truth = {"restitution_scale": {"c": 0.95}}
+    floored = {"effect": "restitution_scale", "params": {"c": 0.95 - 0.5 * half}}
+    floored["ci95"] = {"c": [0.95 - 0.6 * half, 0.95 + 0.5 * half]}
+    s = discovery.score(entry(["restitution_scale"], [floored]), truth)
+    assert s["named_right"] and s["params_covered"] == 1 and s["params_covered_by_floor"] == 1
+    wide = {**floored, "ci95": {"c": [0.9, 1.0]}}
+    assert discovery.score(entry(["restitution_scale"], [wide]), truth)["params_covered_by_floor"] == 0
+
+
+def test_the_rates_leave_the_not_identifiable_out_of_the_named_right_rate():
+    row = {"boundary": "two-sided", "fs": 400.0, "wall": "paper", "n_tests": 3}
+    scale = {"restitution_scale": {}}
+    cells = [
+        {**row, "cause": "restitution_scale", **discovery.score(entry(["restitution_scale"]), scale)},
+        {**row, "cause": "restitution_drift", **discovery.score(entry([], too_small="one test"), {"x": {}})},
+        {**row, "cause": "null", **discovery.score(entry(["stop_threshold"]), {})},
+    ]
+    r = discovery.rates(cells)
+    assert r["named_right_rate"] == 1.0 and r["n_not_identifiable"] == 1
+    assert r["not_identifiable"] == ["restitution_drift (two-sided, 400 Hz, paper, 3 tests): one test"]
+    assert r["false_name_rate_null"] == 1.0 and r["confident_misname_rate"] == pytest.approx(1 / 3)
+    bench = {
+        **r,
+        **{k: 0 for k in ("n_skipped", "wall_s", "workers", "design_seed")},
+        "design": "d",
+        "pass": False,
+        "targets": {"named_right_rate": {"met": True}, "coverage_95": {"met": False}},
+        "cells": [{**c, "h_over_b": 9.6, "n_impacts": 10} for c in cells],
+    }
+    d = _discovery(bench)
+    assert d["missed"] == ["coverage_95"]
+    assert [c["miss"] for c in d["cells"]] == [
+        "",
+        "not identifiable: one test",
+        "named beside the truth: stop_threshold (not flagged)",
+    ]
