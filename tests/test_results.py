@@ -105,15 +105,16 @@ def test_the_campaign_diagnosis_is_made_again_from_its_series_files(tmp_path):
     """What the diagnosis checkpoint does (scripts/diagnosis.py): the same bytes as `make run` wrote."""
     from rocklab.diagnosis import with_boundaries, write_diagnosis
     from rocklab.lab.campaign import open_campaign
-    from rocklab.lab.hierarchy import walls_of_series
+    from rocklab.lab.hierarchy import thickness_of_walls, walls_of_series
 
     campaign, md = embedded("diagnosis.json", "diagnosis.md")
     if not series_files():
         pytest.skip("no results/diagnosis/<job>.json here")
     config = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
-    walls = walls_of_series(open_campaign(ROOT / config["raw_dir"]))
+    lab = open_campaign(ROOT / config["raw_dir"])
     series = R.CampaignDiagnosis.of_series_files(series_files())
-    write_diagnosis(with_boundaries(series.to_dict(), walls=walls), tmp_path / "d.json", tmp_path / "d.md")
+    entries = with_boundaries(series.to_dict(), walls=walls_of_series(lab), thickness=thickness_of_walls(lab))
+    write_diagnosis(entries, tmp_path / "d.json", tmp_path / "d.md")
     assert (tmp_path / "d.json").read_bytes() == campaign.read_bytes()
     assert (tmp_path / "d.md").read_bytes() == md.read_bytes()
 
