@@ -155,6 +155,28 @@ def loss_deceleration(thetadot, p, zeta=0.0, mu=0.0, kappa=0.0, sign=np.sign):
     return 2.0 * zeta * p * thetadot + mu * p**2 * sign(thetadot) + kappa * thetadot * abs(thetadot)
 
 
+def _exponential_moments(A, a, c):
+    """int_0^A sin(a - s) e^(c s) ds, int_0^A cos(a - s) e^(c s) ds and int_0^A e^(c s) ds, closed forms.
+
+    d/ds [e^(c s) (c sin(a - s) + cos(a - s))] = (1 + c^2) e^(c s) sin(a - s), and
+    likewise with c cos(a - s) - sin(a - s) for the cosine; each difference between
+    0 and A is written through expm1(c A) and sin(A/2), which keep their relative
+    precision for the short flights of a wall at rest.
+    """
+    A, a, c = (np.asarray(x, float) for x in (A, a, c))
+    h = 0.5 * A
+    sh, ch, sm, cm = np.sin(h), np.cos(h), np.sin(a - h), np.cos(a - h)
+    # sin and cos of a - A from those of a - A/2 and A/2
+    sA, cA = sm * ch - cm * sh, cm * ch + sm * sh
+    m = np.expm1(c * A)
+    q = 1.0 + c**2
+    sin_m = (m * (c * sA + cA) + 2.0 * sh * (sm - c * cm)) / q
+    cos_m = (m * (c * cA - sA) + 2.0 * sh * (c * sm + cm)) / q
+    with np.errstate(invalid="ignore", divide="ignore"):
+        one = np.where(c == 0.0, A, m / np.where(c == 0.0, 1.0, c))
+    return sin_m, cos_m, one
+
+
 def _work(A, a, p, mu, kappa, rise):
     """int_0^A p^2 (sin(a - s) +- mu) exp(+-2 kappa s) ds [rad^2/s^2] (+ on the rise, - on the fall).
 
@@ -162,13 +184,11 @@ def _work(A, a, p, mu, kappa, rise):
     rise d(thetadot^2/2)/dtheta = -p^2 (sin(a - theta) + mu) - kappa thetadot^2,
     linear in thetadot^2, so the take-off energy that reaches the apex A is
     this integral (and on the fall the landing energy from A, with the signs
-    of mu and kappa turned).  The integrand is smooth: Gauss-Legendre.
+    of mu and kappa turned), in closed form (:func:`_exponential_moments`).
     """
     sgn = 1.0 if rise else -1.0
-    A, a, p, mu, kappa = (np.asarray(x, float)[..., None] for x in np.broadcast_arrays(A, a, p, mu, kappa))
-    s = A * _GL_S
-    f = (np.sin(a - s) + sgn * mu) * np.exp(sgn * 2.0 * kappa * s)
-    return p[..., 0] ** 2 * A[..., 0] * np.sum(_GL_W * f, axis=-1)
+    sin_m, _, one = _exponential_moments(A, a, sgn * 2.0 * np.asarray(kappa, float))
+    return p**2 * (sin_m + sgn * np.asarray(mu, float) * one)
 
 
 def _rise_slope(A, a, p, mu, kappa, k):
@@ -178,9 +198,7 @@ def _rise_slope(A, a, p, mu, kappa, k):
     below a), k int_0^A p^2 cos(a - s) exp(2 kappa s) ds.
     """
     a = flight_angle(A, a, k)
-    A_, a_, kappa_ = (np.asarray(x, float)[..., None] for x in np.broadcast_arrays(A, a, kappa))
-    s = A_ * _GL_S
-    d_angle = A_[..., 0] * np.sum(_GL_W * np.cos(a_ - s) * np.exp(2.0 * kappa_ * s), axis=-1)
+    _, d_angle, _ = _exponential_moments(A, a, 2.0 * np.asarray(kappa, float))
     return p**2 * ((np.sin(a - A) + mu) * np.exp(2.0 * kappa * A) + np.where(A < a, k, 0.0) * d_angle)
 
 
@@ -212,6 +230,40 @@ def landing_speed(A, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):
     return np.where(np.sin(a - A) > mu, np.sqrt(2.0 * np.maximum(E, 0.0)), 0.0)
 
 
+def _apex_with_losses(E, A, a, p, zeta, mu, kappa, k):
+    """:func:`apex_after` with dry friction or drag: Newton on the rise's balance from the undamped apex A.
+
+    Each flight's Newton passes stop at its own root (a step of less than
+    :data:`_NEWTON_TOL` of a): the flights still moving are the only ones
+    computed, and the padding of a stack of tests (NaN) none.
+    """
+    args = np.broadcast_arrays(*(np.asarray(x, float) for x in (E, A, a, p, zeta, mu, kappa, k)))
+    shape = args[0].shape
+    E, A, a, p, zeta, mu, kappa, k = (x.ravel() for x in args)
+    out = A.copy()
+    # the instability rotation rocks on the hinge's own angle whatever k (flight_angle(a, a, k) = a)
+    over = E >= _work(a, a, p, mu, kappa, rise=True) + _viscous(zeta, p, a, a)
+    out[over] = a[over]
+    live = np.flatnonzero(~over & np.isfinite(E) & np.isfinite(A))
+    # Newton from the undamped apex, above the damped one, kept inside the bracket [lo, hi] of
+    # the root (the work grows with A, convex or concave with the drag: a bare step may leave it)
+    E, A, a, p, zeta, mu, kappa, k = (x[live] for x in (E, A, a, p, zeta, mu, kappa, k))
+    lo, hi = np.zeros_like(A), A.copy()
+    for _ in range(_NEWTON_MAX):
+        af = flight_angle(A, a, k)
+        g = _work(A, af, p, mu, kappa, rise=True) + _viscous(zeta, p, A, af) - E
+        lo, hi = np.where(g < 0.0, A, lo), np.where(g > 0.0, A, hi)
+        step = A - g / np.maximum(_rise_slope(A, a, p, mu, kappa, k), 1e-12 * p**2)
+        step = np.where((step > lo) & (step < hi), step, 0.5 * (lo + hi))
+        moving = np.abs(step - A) > _NEWTON_TOL * a
+        out[live] = step
+        live = live[moving]
+        if not live.size:
+            break
+        E, A, a, p, zeta, mu, kappa, k, lo, hi = (x[moving] for x in (E, step, a, p, zeta, mu, kappa, k, lo, hi))
+    return out.reshape(shape)
+
+
 def apex_after(v, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):
     """Apex [rad] reached on hinge a by a wall leaving theta = 0 at |thetadot| = v, with the losses in flight.
 
@@ -230,24 +282,7 @@ def apex_after(v, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):
 
     A = rise(E)
     if _some(mu) or _some(kappa):
-        a_, p_, mu_, kappa_ = np.broadcast_arrays(a, p, mu, kappa)
-        # the instability rotation rocks on the hinge's own angle whatever k (flight_angle(a, a, k) = a)
-        over = E >= _work(a_, a_, p_, mu_, kappa_, rise=True) + _viscous(zeta, p, a_, a_)
-        # Newton from the undamped apex, above the damped one, kept inside the bracket [lo, hi] of
-        # the root (the work grows with A, convex or concave with the drag: a bare step may leave it)
-        A, lo = np.broadcast_arrays(A, 0.0 * E)
-        hi = A
-        for _ in range(_NEWTON_MAX):
-            af = flight_angle(A, a, k)
-            g = _work(A, af, p, mu, kappa, rise=True) + _viscous(zeta, p, A, af) - E
-            lo, hi = np.where(g < 0.0, A, lo), np.where(g > 0.0, A, hi)
-            step = A - g / np.maximum(_rise_slope(A, a, p, mu, kappa, k), 1e-12 * p**2)
-            step = np.where((step > lo) & (step < hi), step, 0.5 * (lo + hi))
-            done = np.all(np.abs(step - A) <= _NEWTON_TOL * a)
-            A = step
-            if done:
-                break
-        return np.where(over, a, A)
+        return _apex_with_losses(E, A, a, p, zeta, mu, kappa, k)
     if _some(zeta):
         # the loss of the rise depends on the apex it reaches: a few fixed-point passes
         for _ in range(3):
