@@ -110,15 +110,35 @@ def apex(E, a, p):
     return np.where(c >= 1.0, a, a - np.arccos(np.minimum(c, 1.0)))
 
 
+def _on_flights(integral, A, a, p):
+    """``integral`` (a quadrature of flat arrays) of the flights of apex A on hinge a, broadcast.
+
+    Computed on the flights only: a stack of tests is padded with NaN (NaN
+    here, as the quadrature gives it) or, read as 0, with flights of no
+    apex (0: both integrals from 0 to A).
+    """
+    args = np.broadcast_arrays(*(np.asarray(x, float) for x in (A, a, p)))
+    shape = args[0].shape
+    A, a, p = (x.ravel() for x in args)
+    out = A * a * p * 0.0
+    flown = np.flatnonzero(np.isfinite(out) & (A != 0.0))
+    out[flown] = integral(A[flown], a[flown], p[flown])
+    return out.reshape(shape)[()]
+
+
 def path_integral(A, a, p):
     """int_0^A |thetadot| dtheta of the undamped flight with apex A on hinge a [rad^2/s].
 
     The energy a viscous loss -2 zeta p thetadot takes over half a flight is
     2 zeta p times this (first order in zeta).
     """
-    A, a = np.asarray(A, float)[..., None], np.asarray(a, float)[..., None]
+    return _on_flights(_path_nodes, A, a, p)
+
+
+def _path_nodes(A, a, p):
+    A, a, p = A[:, None], a[:, None], p[:, None]
     th = A * (1.0 - _GL_S**2)
-    f = np.sqrt(np.maximum(2.0 * np.asarray(p)[..., None] ** 2 * (np.cos(a - A) - np.cos(a - th)), 0.0))
+    f = np.sqrt(np.maximum(2.0 * p**2 * (np.cos(a - A) - np.cos(a - th)), 0.0))
     return np.sum(_GL_W * f * 2.0 * A * _GL_S, axis=-1)
 
 
@@ -128,13 +148,16 @@ def quarter_period(A, a, p):
     int_0^A dtheta / |thetadot|; Housner's arccosh(1/(1 - A/a)) / p is its
     small-alpha limit.
     """
-    A, a, p = np.broadcast_arrays(np.asarray(A, float), np.asarray(a, float), np.asarray(p, float))
-    Ac = np.minimum(A, a * (1 - 1e-9))[..., None]
-    ac = a[..., None]
+    return _on_flights(_quarter_period_nodes, A, a, p)
+
+
+def _quarter_period_nodes(A, a, p):
+    Ac = np.minimum(A, a * (1 - 1e-9))[:, None]
+    ac = a[:, None]
     s = _GL_S
     th = Ac * (1.0 - s**2)
     # thetadot^2 = 2 p^2 [cos(a - A) - cos(a - th)] vanishes like s^2: the ratio stays finite
-    num = 2.0 * p[..., None] ** 2 * (np.cos(ac - Ac) - np.cos(ac - th))
+    num = 2.0 * p[:, None] ** 2 * (np.cos(ac - Ac) - np.cos(ac - th))
     g = np.sqrt(np.maximum(num, 1e-300)) / np.maximum(s, 1e-300)
     return np.sum(_GL_W * 2.0 * Ac / g, axis=-1)
 
@@ -191,15 +214,31 @@ def _work(A, a, p, mu, kappa, rise):
     return p**2 * (sin_m + sgn * np.asarray(mu, float) * one)
 
 
-def _rise_slope(A, a, p, mu, kappa, k):
-    """d/dA of the rise's :func:`_work` on the angle :func:`flight_angle` of its own apex [rad/s^2].
+def _rise_balance(A, a, p, zeta, mu, kappa, k):
+    """The rise's take-off energy to the apex A (:func:`_work` and the viscous loss) and its d/dA [rad^2/s^2, rad/s^2].
 
-    The integrand at A plus, the angle moving with the apex (d a / d A = k
-    below a), k int_0^A p^2 cos(a - s) exp(2 kappa s) ds.
+    On the angle :func:`flight_angle` of the apex: the integrand at A plus,
+    the angle moving with the apex (d a / d A = k below a), k int_0^A p^2
+    cos(a - s) exp(2 kappa s) ds; the viscous loss 2 zeta p
+    :func:`path_integral` grows with A by 2 zeta p^3 sin(a - A) times the
+    quarter period (the time the undamped flight takes, int dtheta /
+    |thetadot|), on the same nodes (its change with the angle, k times a
+    term of the order of zeta, is left out: a slope for Newton's passes).
     """
     a = flight_angle(A, a, k)
-    _, d_angle, _ = _exponential_moments(A, a, 2.0 * np.asarray(kappa, float))
-    return p**2 * ((np.sin(a - A) + mu) * np.exp(2.0 * kappa * A) + np.where(A < a, k, 0.0) * d_angle)
+    sin_m, cos_m, one = _exponential_moments(A, a, 2.0 * kappa)
+    energy = p**2 * (sin_m + mu * one)
+    slope = p**2 * ((np.sin(a - A) + mu) * np.exp(2.0 * kappa * A) + np.where(A < a, k, 0.0) * cos_m)
+    if _some(zeta):
+        A_, a_, p_ = A[..., None], a[..., None], p[..., None]
+        th = A_ * (1.0 - _GL_S**2)
+        # thetadot^2 on the nodes, shared by the path and the time
+        v2 = np.maximum(2.0 * p_**2 * (np.cos(a_ - A_) - np.cos(a_ - th)), 0.0)
+        v = np.sqrt(v2)
+        energy = energy + 2.0 * zeta * p * np.sum(_GL_W * v * 2.0 * A_ * _GL_S, axis=-1)
+        time = np.sum(_GL_W * 2.0 * A_ * _GL_S / np.maximum(v, 1e-300), axis=-1)
+        slope = slope + 2.0 * zeta * p**3 * np.sin(a - A) * time
+    return energy, slope
 
 
 # apex_after's Newton passes on the losses' work: at most, and the step [of the hinge's angle] that ends them
@@ -241,19 +280,21 @@ def _apex_with_losses(E, A, a, p, zeta, mu, kappa, k):
     shape = args[0].shape
     E, A, a, p, zeta, mu, kappa, k = (x.ravel() for x in args)
     out = A.copy()
+    live = np.flatnonzero(np.isfinite(E) & np.isfinite(A))
+    E, A, a, p, zeta, mu, kappa, k = (x[live] for x in (E, A, a, p, zeta, mu, kappa, k))
     # the instability rotation rocks on the hinge's own angle whatever k (flight_angle(a, a, k) = a)
     over = E >= _work(a, a, p, mu, kappa, rise=True) + _viscous(zeta, p, a, a)
-    out[over] = a[over]
-    live = np.flatnonzero(~over & np.isfinite(E) & np.isfinite(A))
+    out[live[over]] = a[over]
+    live = live[~over]
     # Newton from the undamped apex, above the damped one, kept inside the bracket [lo, hi] of
     # the root (the work grows with A, convex or concave with the drag: a bare step may leave it)
-    E, A, a, p, zeta, mu, kappa, k = (x[live] for x in (E, A, a, p, zeta, mu, kappa, k))
+    E, A, a, p, zeta, mu, kappa, k = (x[~over] for x in (E, A, a, p, zeta, mu, kappa, k))
     lo, hi = np.zeros_like(A), A.copy()
     for _ in range(_NEWTON_MAX):
-        af = flight_angle(A, a, k)
-        g = _work(A, af, p, mu, kappa, rise=True) + _viscous(zeta, p, A, af) - E
+        energy, slope = _rise_balance(A, a, p, zeta, mu, kappa, k)
+        g = energy - E
         lo, hi = np.where(g < 0.0, A, lo), np.where(g > 0.0, A, hi)
-        step = A - g / np.maximum(_rise_slope(A, a, p, mu, kappa, k), 1e-12 * p**2)
+        step = A - g / np.maximum(slope, 1e-12 * p**2)
         step = np.where((step > lo) & (step < hi), step, 0.5 * (lo + hi))
         moving = np.abs(step - A) > _NEWTON_TOL * a
         out[live] = step
@@ -273,7 +314,7 @@ def apex_after(v, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):
     ``k``: the hinge's angle depends on the amplitude (:func:`flight_angle`),
     so the apex and the angle of the flight are solved together (the
     undamped apex by :func:`_apex_on_flight_angle`, the losses' work on the
-    angle of the apex each Newton pass reaches, :func:`_rise_slope`).
+    angle of the apex each Newton pass reaches, :func:`_rise_balance`).
     """
     E = 0.5 * np.asarray(v, float) ** 2
 
