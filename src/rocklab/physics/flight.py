@@ -4,9 +4,13 @@ A flight is the free motion between two impacts on one hinge of rocking
 angle ``a``: from theta = 0 up to an apex A and back.  Energies are per unit
 polar moment I_O (rad^2/s^2); the exact (nonlinear) forms are integrated by
 Gauss-Legendre quadrature after a substitution that keeps the integrands
-smooth, the linearised ones are Housner's (1963) closed forms.  Vectorised
-over tests and impacts; the diagnosis, the dissipation analysis and the
-tests of the simulators all take their flights from here.
+smooth, the work of dry friction and drag is in closed form, the linearised
+ones are Housner's (1963) closed forms.  Vectorised over tests and impacts,
+computed on the flights only (a stack of tests is padded with NaN), each
+Newton solve flight by flight: a fit of the losses in flight evaluates them
+on every flight of a series thousands of times.  The diagnosis, the
+dissipation analysis and the tests of the simulators all take their flights
+from here.
 """
 
 from __future__ import annotations
