@@ -36,3 +36,34 @@ def test_quarter_period_linear_against_housner_and_the_linear_simulator():
     assert quarter_period_linear(0.99, w) == pytest.approx(P * h.impacts.t.iloc[0], rel=1e-6)
     assert quarter_period_linear(0.99, w) < quarter_period_linear(0.99)
     assert np.isnan(quarter_period_linear(1.2))
+
+
+@pytest.mark.parametrize("c", [0.0, 1e-9, -3.0, 25.0])
+@pytest.mark.parametrize("A", [1e-6, 0.02, 0.149])
+def test_the_work_of_the_losses_is_its_integral(A, c):
+    from scipy.integrate import quad
+
+    from rocklab.physics.flight import _exponential_moments
+
+    sin_m, cos_m, one = _exponential_moments(A, ALPHA, c)
+    for got, f in [
+        (sin_m, lambda s: np.sin(ALPHA - s) * np.exp(c * s)),
+        (cos_m, lambda s: np.cos(ALPHA - s) * np.exp(c * s)),
+        (one, lambda s: np.exp(c * s)),
+    ]:
+        assert got == pytest.approx(quad(f, 0.0, A, epsabs=0.0, epsrel=1e-13)[0], rel=1e-11)
+
+
+def test_the_apex_after_losses_is_that_of_each_flight_alone_and_nan_stays_nan():
+    from rocklab.physics.flight import apex_after, takeoff_speed
+
+    A = np.array([[0.01, 0.05, np.nan], [0.1, 0.0, np.nan]]) * np.ones((2, 3))
+    a, p = np.array([[ALPHA], [0.9 * ALPHA]]), np.array([[P], [1.1 * P]])
+    loss = {"zeta": 0.02, "mu": 0.01 * ALPHA, "kappa": 0.5 / ALPHA, "k": 0.2}
+    v = takeoff_speed(A, a, p, **loss)
+    stacked = apex_after(v, a, p, **loss)
+    alone = np.array([[apex_after(v[i, j], a[i, 0], p[i, 0], **loss) for j in range(3)] for i in range(2)])
+    np.testing.assert_array_equal(np.isnan(stacked), np.isnan(A))
+    np.testing.assert_allclose(stacked, alone, rtol=1e-12, atol=0.0)
+    # the balance solved: the apex each take-off speed was made for
+    np.testing.assert_allclose(stacked[np.isfinite(A)], A[np.isfinite(A)], rtol=1e-9, atol=1e-15)

@@ -4,9 +4,13 @@ A flight is the free motion between two impacts on one hinge of rocking
 angle ``a``: from theta = 0 up to an apex A and back.  Energies are per unit
 polar moment I_O (rad^2/s^2); the exact (nonlinear) forms are integrated by
 Gauss-Legendre quadrature after a substitution that keeps the integrands
-smooth, the linearised ones are Housner's (1963) closed forms.  Vectorised
-over tests and impacts; the diagnosis, the dissipation analysis and the
-tests of the simulators all take their flights from here.
+smooth, the work of dry friction and drag is in closed form, the linearised
+ones are Housner's (1963) closed forms.  Vectorised over tests and impacts,
+computed on the flights only (a stack of tests is padded with NaN), each
+Newton solve flight by flight: a fit of the losses in flight evaluates them
+on every flight of a series thousands of times.  The diagnosis, the
+dissipation analysis and the tests of the simulators all take their flights
+from here.
 """
 
 from __future__ import annotations
@@ -110,15 +114,35 @@ def apex(E, a, p):
     return np.where(c >= 1.0, a, a - np.arccos(np.minimum(c, 1.0)))
 
 
+def _on_flights(integral, A, a, p):
+    """``integral`` (a quadrature of flat arrays) of the flights of apex A on hinge a, broadcast.
+
+    Computed on the flights only: a stack of tests is padded with NaN (NaN
+    here, as the quadrature gives it) or, read as 0, with flights of no
+    apex (0: both integrals from 0 to A).
+    """
+    args = np.broadcast_arrays(*(np.asarray(x, float) for x in (A, a, p)))
+    shape = args[0].shape
+    A, a, p = (x.ravel() for x in args)
+    out = A * a * p * 0.0
+    flown = np.flatnonzero(np.isfinite(out) & (A != 0.0))
+    out[flown] = integral(A[flown], a[flown], p[flown])
+    return out.reshape(shape)[()]
+
+
 def path_integral(A, a, p):
     """int_0^A |thetadot| dtheta of the undamped flight with apex A on hinge a [rad^2/s].
 
     The energy a viscous loss -2 zeta p thetadot takes over half a flight is
     2 zeta p times this (first order in zeta).
     """
-    A, a = np.asarray(A, float)[..., None], np.asarray(a, float)[..., None]
+    return _on_flights(_path_nodes, A, a, p)
+
+
+def _path_nodes(A, a, p):
+    A, a, p = A[:, None], a[:, None], p[:, None]
     th = A * (1.0 - _GL_S**2)
-    f = np.sqrt(np.maximum(2.0 * np.asarray(p)[..., None] ** 2 * (np.cos(a - A) - np.cos(a - th)), 0.0))
+    f = np.sqrt(np.maximum(2.0 * p**2 * (np.cos(a - A) - np.cos(a - th)), 0.0))
     return np.sum(_GL_W * f * 2.0 * A * _GL_S, axis=-1)
 
 
@@ -128,13 +152,16 @@ def quarter_period(A, a, p):
     int_0^A dtheta / |thetadot|; Housner's arccosh(1/(1 - A/a)) / p is its
     small-alpha limit.
     """
-    A, a, p = np.broadcast_arrays(np.asarray(A, float), np.asarray(a, float), np.asarray(p, float))
-    Ac = np.minimum(A, a * (1 - 1e-9))[..., None]
-    ac = a[..., None]
+    return _on_flights(_quarter_period_nodes, A, a, p)
+
+
+def _quarter_period_nodes(A, a, p):
+    Ac = np.minimum(A, a * (1 - 1e-9))[:, None]
+    ac = a[:, None]
     s = _GL_S
     th = Ac * (1.0 - s**2)
     # thetadot^2 = 2 p^2 [cos(a - A) - cos(a - th)] vanishes like s^2: the ratio stays finite
-    num = 2.0 * p[..., None] ** 2 * (np.cos(ac - Ac) - np.cos(ac - th))
+    num = 2.0 * p[:, None] ** 2 * (np.cos(ac - Ac) - np.cos(ac - th))
     g = np.sqrt(np.maximum(num, 1e-300)) / np.maximum(s, 1e-300)
     return np.sum(_GL_W * 2.0 * Ac / g, axis=-1)
 
@@ -155,6 +182,28 @@ def loss_deceleration(thetadot, p, zeta=0.0, mu=0.0, kappa=0.0, sign=np.sign):
     return 2.0 * zeta * p * thetadot + mu * p**2 * sign(thetadot) + kappa * thetadot * abs(thetadot)
 
 
+def _exponential_moments(A, a, c):
+    """int_0^A sin(a - s) e^(c s) ds, int_0^A cos(a - s) e^(c s) ds and int_0^A e^(c s) ds, closed forms.
+
+    d/ds [e^(c s) (c sin(a - s) + cos(a - s))] = (1 + c^2) e^(c s) sin(a - s), and
+    likewise with c cos(a - s) - sin(a - s) for the cosine; each difference between
+    0 and A is written through expm1(c A) and sin(A/2), which keep their relative
+    precision for the short flights of a wall at rest.
+    """
+    A, a, c = (np.asarray(x, float) for x in (A, a, c))
+    h = 0.5 * A
+    sh, ch, sm, cm = np.sin(h), np.cos(h), np.sin(a - h), np.cos(a - h)
+    # sin and cos of a - A from those of a - A/2 and A/2
+    sA, cA = sm * ch - cm * sh, cm * ch + sm * sh
+    m = np.expm1(c * A)
+    q = 1.0 + c**2
+    sin_m = (m * (c * sA + cA) + 2.0 * sh * (sm - c * cm)) / q
+    cos_m = (m * (c * cA - sA) + 2.0 * sh * (c * sm + cm)) / q
+    with np.errstate(invalid="ignore", divide="ignore"):
+        one = np.where(c == 0.0, A, m / np.where(c == 0.0, 1.0, c))
+    return sin_m, cos_m, one
+
+
 def _work(A, a, p, mu, kappa, rise):
     """int_0^A p^2 (sin(a - s) +- mu) exp(+-2 kappa s) ds [rad^2/s^2] (+ on the rise, - on the fall).
 
@@ -162,26 +211,38 @@ def _work(A, a, p, mu, kappa, rise):
     rise d(thetadot^2/2)/dtheta = -p^2 (sin(a - theta) + mu) - kappa thetadot^2,
     linear in thetadot^2, so the take-off energy that reaches the apex A is
     this integral (and on the fall the landing energy from A, with the signs
-    of mu and kappa turned).  The integrand is smooth: Gauss-Legendre.
+    of mu and kappa turned), in closed form (:func:`_exponential_moments`).
     """
     sgn = 1.0 if rise else -1.0
-    A, a, p, mu, kappa = (np.asarray(x, float)[..., None] for x in np.broadcast_arrays(A, a, p, mu, kappa))
-    s = A * _GL_S
-    f = (np.sin(a - s) + sgn * mu) * np.exp(sgn * 2.0 * kappa * s)
-    return p[..., 0] ** 2 * A[..., 0] * np.sum(_GL_W * f, axis=-1)
+    sin_m, _, one = _exponential_moments(A, a, sgn * 2.0 * np.asarray(kappa, float))
+    return p**2 * (sin_m + sgn * np.asarray(mu, float) * one)
 
 
-def _rise_slope(A, a, p, mu, kappa, k):
-    """d/dA of the rise's :func:`_work` on the angle :func:`flight_angle` of its own apex [rad/s^2].
+def _rise_balance(A, a, p, zeta, mu, kappa, k):
+    """The rise's take-off energy to the apex A (:func:`_work` and the viscous loss) and its d/dA [rad^2/s^2, rad/s^2].
 
-    The integrand at A plus, the angle moving with the apex (d a / d A = k
-    below a), k int_0^A p^2 cos(a - s) exp(2 kappa s) ds.
+    On the angle :func:`flight_angle` of the apex: the integrand at A plus,
+    the angle moving with the apex (d a / d A = k below a), k int_0^A p^2
+    cos(a - s) exp(2 kappa s) ds; the viscous loss 2 zeta p
+    :func:`path_integral` grows with A by 2 zeta p^3 sin(a - A) times the
+    quarter period (the time the undamped flight takes, int dtheta /
+    |thetadot|), on the same nodes (its change with the angle, k times a
+    term of the order of zeta, is left out: a slope for Newton's passes).
     """
     a = flight_angle(A, a, k)
-    A_, a_, kappa_ = (np.asarray(x, float)[..., None] for x in np.broadcast_arrays(A, a, kappa))
-    s = A_ * _GL_S
-    d_angle = A_[..., 0] * np.sum(_GL_W * np.cos(a_ - s) * np.exp(2.0 * kappa_ * s), axis=-1)
-    return p**2 * ((np.sin(a - A) + mu) * np.exp(2.0 * kappa * A) + np.where(A < a, k, 0.0) * d_angle)
+    sin_m, cos_m, one = _exponential_moments(A, a, 2.0 * kappa)
+    energy = p**2 * (sin_m + mu * one)
+    slope = p**2 * ((np.sin(a - A) + mu) * np.exp(2.0 * kappa * A) + np.where(A < a, k, 0.0) * cos_m)
+    if _some(zeta):
+        A_, a_, p_ = A[..., None], a[..., None], p[..., None]
+        th = A_ * (1.0 - _GL_S**2)
+        # thetadot^2 on the nodes, shared by the path and the time
+        v2 = np.maximum(2.0 * p_**2 * (np.cos(a_ - A_) - np.cos(a_ - th)), 0.0)
+        v = np.sqrt(v2)
+        energy = energy + 2.0 * zeta * p * np.sum(_GL_W * v * 2.0 * A_ * _GL_S, axis=-1)
+        time = np.sum(_GL_W * 2.0 * A_ * _GL_S / np.maximum(v, 1e-300), axis=-1)
+        slope = slope + 2.0 * zeta * p**3 * np.sin(a - A) * time
+    return energy, slope
 
 
 # apex_after's Newton passes on the losses' work: at most, and the step [of the hinge's angle] that ends them
@@ -212,6 +273,42 @@ def landing_speed(A, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):
     return np.where(np.sin(a - A) > mu, np.sqrt(2.0 * np.maximum(E, 0.0)), 0.0)
 
 
+def _apex_with_losses(E, A, a, p, zeta, mu, kappa, k):
+    """:func:`apex_after` with dry friction or drag: Newton on the rise's balance from the undamped apex A.
+
+    Each flight's Newton passes stop at its own root (a step of less than
+    :data:`_NEWTON_TOL` of a): the flights still moving are the only ones
+    computed, and the padding of a stack of tests (NaN) none.
+    """
+    args = np.broadcast_arrays(*(np.asarray(x, float) for x in (E, A, a, p, zeta, mu, kappa, k)))
+    shape = args[0].shape
+    E, A, a, p, zeta, mu, kappa, k = (x.ravel() for x in args)
+    out = A.copy()
+    live = np.flatnonzero(np.isfinite(E) & np.isfinite(A))
+    E, A, a, p, zeta, mu, kappa, k = (x[live] for x in (E, A, a, p, zeta, mu, kappa, k))
+    # the instability rotation rocks on the hinge's own angle whatever k (flight_angle(a, a, k) = a)
+    over = E >= _work(a, a, p, mu, kappa, rise=True) + _viscous(zeta, p, a, a)
+    out[live[over]] = a[over]
+    live = live[~over]
+    # Newton from the undamped apex, above the damped one, kept inside the bracket [lo, hi] of
+    # the root (the work grows with A, convex or concave with the drag: a bare step may leave it)
+    E, A, a, p, zeta, mu, kappa, k = (x[~over] for x in (E, A, a, p, zeta, mu, kappa, k))
+    lo, hi = np.zeros_like(A), A.copy()
+    for _ in range(_NEWTON_MAX):
+        energy, slope = _rise_balance(A, a, p, zeta, mu, kappa, k)
+        g = energy - E
+        lo, hi = np.where(g < 0.0, A, lo), np.where(g > 0.0, A, hi)
+        step = A - g / np.maximum(slope, 1e-12 * p**2)
+        step = np.where((step > lo) & (step < hi), step, 0.5 * (lo + hi))
+        moving = np.abs(step - A) > _NEWTON_TOL * a
+        out[live] = step
+        live = live[moving]
+        if not live.size:
+            break
+        E, A, a, p, zeta, mu, kappa, k, lo, hi = (x[moving] for x in (E, step, a, p, zeta, mu, kappa, k, lo, hi))
+    return out.reshape(shape)
+
+
 def apex_after(v, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):
     """Apex [rad] reached on hinge a by a wall leaving theta = 0 at |thetadot| = v, with the losses in flight.
 
@@ -221,7 +318,7 @@ def apex_after(v, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):
     ``k``: the hinge's angle depends on the amplitude (:func:`flight_angle`),
     so the apex and the angle of the flight are solved together (the
     undamped apex by :func:`_apex_on_flight_angle`, the losses' work on the
-    angle of the apex each Newton pass reaches, :func:`_rise_slope`).
+    angle of the apex each Newton pass reaches, :func:`_rise_balance`).
     """
     E = 0.5 * np.asarray(v, float) ** 2
 
@@ -230,24 +327,7 @@ def apex_after(v, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):
 
     A = rise(E)
     if _some(mu) or _some(kappa):
-        a_, p_, mu_, kappa_ = np.broadcast_arrays(a, p, mu, kappa)
-        # the instability rotation rocks on the hinge's own angle whatever k (flight_angle(a, a, k) = a)
-        over = E >= _work(a_, a_, p_, mu_, kappa_, rise=True) + _viscous(zeta, p, a_, a_)
-        # Newton from the undamped apex, above the damped one, kept inside the bracket [lo, hi] of
-        # the root (the work grows with A, convex or concave with the drag: a bare step may leave it)
-        A, lo = np.broadcast_arrays(A, 0.0 * E)
-        hi = A
-        for _ in range(_NEWTON_MAX):
-            af = flight_angle(A, a, k)
-            g = _work(A, af, p, mu, kappa, rise=True) + _viscous(zeta, p, A, af) - E
-            lo, hi = np.where(g < 0.0, A, lo), np.where(g > 0.0, A, hi)
-            step = A - g / np.maximum(_rise_slope(A, a, p, mu, kappa, k), 1e-12 * p**2)
-            step = np.where((step > lo) & (step < hi), step, 0.5 * (lo + hi))
-            done = np.all(np.abs(step - A) <= _NEWTON_TOL * a)
-            A = step
-            if done:
-                break
-        return np.where(over, a, A)
+        return _apex_with_losses(E, A, a, p, zeta, mu, kappa, k)
     if _some(zeta):
         # the loss of the rise depends on the apex it reaches: a few fixed-point passes
         for _ in range(3):
