@@ -24,6 +24,9 @@ stats = lazy_module("scipy.stats")
 
 log = logging.getLogger(__name__)
 
+#: BIC drop that is strong evidence for one model over another (Kass & Raftery 1995): what a cause needs to enter.
+BIC_MARGIN = 10.0
+
 
 def _improves(d):
     """Whether paired per-test improvements ``d`` are beyond the noise.
@@ -44,8 +47,21 @@ def _improves(d):
 
 
 def _null_excluded(problem, effect, ci):
-    """Whether some parameter of ``effect`` stays clear of its null by a practical margin."""
+    """Whether some parameter of ``effect`` stays clear of its null by a practical margin.
+
+    A generalised family (a cause with a ``family``) is judged on the
+    parameters its listed member lacks, the form it adds: where those sit at
+    their null the fit is the listed member, which is a candidate of its own.
+    Its shared parameters move with its own ones (the rounding of a hinge
+    moves the angle of the flights released at alpha_r), so a form too small
+    to name could otherwise carry the family in by a shared parameter.
+    """
+    by_name = {c.name: c for c in problem.causes}
+    member = getattr(by_name[effect], "family", None)
+    shared = {q.name for q in by_name[member].params} if member in by_name else set()
     for q in problem.params((effect,)):
+        if q.name in shared:
+            continue
         if q.practical is not None and q.name in ci:
             lo, hi = ci[q.name]
             if lo > q.null + q.practical or hi < q.null - q.practical:
@@ -54,7 +70,15 @@ def _null_excluded(problem, effect, ci):
 
 
 def select_effects(
-    problem: Problem, *, signature=None, n_boot=40, max_effects=4, seed=0, bic_margin=10.0, families=False, fits=None
+    problem: Problem,
+    *,
+    signature=None,
+    n_boot=40,
+    max_effects=4,
+    seed=0,
+    bic_margin=BIC_MARGIN,
+    families=False,
+    fits=None,
 ):
     """Greedy forward selection of the causes the data carry, with removal tests.
 
@@ -256,3 +280,50 @@ def beyond_the_catalogue(problem: Problem, sel, *, signature, n_boot=40, seed=0,
         return {**sel, "weak": {**sel["weak"], **weak}}
     log.info("discovered: %s", ", ".join(named))
     return {**wide, "catalogue": sel}
+
+
+def stand_ins(problem: Problem, sel, hidden, *, fits=None, bic_margin=BIC_MARGIN):
+    """The named causes that a cause the design cannot identify may stand in for.
+
+    A cause the series' design cannot tell from the noise or from another
+    cause (``hidden``: :func:`rocklab.diagnosis.series.not_identifiable`) is
+    never named, so a named cause whose effect it could produce is named
+    without the evidence to exclude it.  The catalogue's own models decide
+    which, on this series: a named cause ``Y`` may stand in for ``X`` where
+    the model with ``X`` in ``Y``'s place is not worse by the strong
+    evidence a cause needs to enter (its BIC not above the chosen model's
+    by ``bic_margin``).
+
+    Parameters
+    ----------
+    problem : Problem
+    sel : dict
+        The selection (:func:`select_effects` or :func:`beyond_the_catalogue`).
+    hidden : mapping
+        Cause -> why the design cannot identify it.
+    fits : dict, optional
+        Fits by causes, shared with the selection.
+
+    Returns
+    -------
+    dict
+        Named cause -> {cause it may stand in for: why that one is not identifiable}; only causes that may.
+    """
+    fits = {} if fits is None else fits
+    current = tuple(sel["effects"])
+    bic = sel["fit"].bic
+    out = {}
+    for x, why in hidden.items():
+        if x not in problem.candidates(True):
+            continue
+        for y in current:
+            ext = problem.combine(tuple(e for e in current if e != y), x)
+            if ext is None:
+                continue
+            if ext not in fits:
+                fits[ext] = fit(problem, np.arange(problem.n_tests), ext)
+            dbic = fits[ext].bic - bic
+            log.info("%s in place of %s: BIC %+.1f", x, y, dbic)
+            if dbic < bic_margin:
+                out.setdefault(y, {})[x] = why
+    return out
