@@ -105,7 +105,7 @@ def select_effects(
         ``ci`` (parameter intervals), ``base``/``final`` held-out results,
         ``steps`` (the held-out result after each entry), ``rejected``
         (effect -> reason), ``structure`` (what the chosen model leaves) and
-        ``weak`` (candidates turned down that would remove all of it).
+        ``weak`` (candidates turned down that would remove all of it, none that did worse held out).
     """
     all_idx = np.arange(problem.n_tests)
     signature = signature or {}
@@ -137,6 +137,8 @@ def select_effects(
     cur_ho = heldout(problem, current)
     base_ho = cur_ho
     steps, rejected, ci = {}, {}, {}
+    # candidates that predicted the tests left out worse than the model they would join: no evidence for them
+    worse_held_out = set()
     for stage in range(1, max_effects + 1):
         # candidates in the order of their information criterion; the held-out test and the
         # bootstrap, the costly steps, only until one passes
@@ -172,6 +174,10 @@ def select_effects(
             gain, se = paired_difference(d)
             if not _improves(d):
                 rejected[eff] = f"held-out deviance gain {gain:.3g} within the noise (standard error {se:.2g})"
+                if gain <= 0:
+                    worse_held_out.add(eff)
+                else:
+                    worse_held_out.discard(eff)
                 log.info("stage %d: %s (BIC %+.1f) rejected: %s", stage, eff, dbic, rejected[eff])
                 continue
             c = parameter_intervals(problem, f, n_boot=n_boot, seed=seed)
@@ -213,10 +219,13 @@ def select_effects(
                 ci = parameter_intervals(problem, f, n_boot=n_boot, seed=seed) if ext else {}
     found = structure(problem, all_idx, current, cur_fit.values)
     # structure that a candidate turned down by the held-out test or the bootstrap would remove
-    # is weak evidence for it, not something outside the catalogue
+    # is weak evidence for it, not something outside the catalogue; one that did worse held out
+    # removes it by fitting the noise of the tests it was fitted on, and is no evidence
     weak = {}
     if found:
         for eff in candidates:
+            if eff in worse_held_out:
+                continue
             ext = problem.combine(current, eff) if eff not in current else None
             if ext is not None and ext != current and signature.get(eff, {}).get("supports", True):
                 f = fit_of(ext)
