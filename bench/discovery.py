@@ -28,7 +28,8 @@ and ``not_identifiable`` list the others, where the diagnosis says
 ``false_name_rate_null`` (a cause named on a null series, the gap of a
 wall with a gap aside),
 ``confident_misname_rate`` (a cause that is not hidden named without the
-``unexplained`` flag), ``coverage_95`` (share of the true parameters of the
+``unexplained`` flag nor the caveat ``may_stand_in_for``: a cause the design cannot identify may be what
+it carries), ``coverage_95`` (share of the true parameters of the
 hidden causes named inside their 95 % intervals;
 ``n_params_covered_by_floor`` of them where the interval's bound on the
 truth's side is the resolution floor), each with its Clopper-Pearson 95 %
@@ -252,6 +253,8 @@ def score(entry, truth):
                 missed.append(f"{cause}.{k} = {x:g} outside {ci}")
     n_params = sum(len(truth[c]) for c in hidden & named)
     wrong = sorted(named - hidden)
+    # a wrong cause named with the caveat that it may stand in for one the design cannot identify is flagged
+    caveat = {c: sorted(found.get(c, {}).get("may_stand_in_for") or {}) for c in wrong}
     blind = entry.get("not_identifiable") or {}
     unseen = sorted(c for c in hidden - named if c in blind)
     return {
@@ -260,7 +263,8 @@ def score(entry, truth):
         "named_right": named == hidden and not missed,
         "missing": sorted(hidden - named),
         "wrong": wrong,
-        "confident_misname": bool(wrong) and not entry["unexplained"],
+        "may_stand_in_for": {c: v for c, v in caveat.items() if v},
+        "confident_misname": any(not v for v in caveat.values()) and not entry["unexplained"],
         "params_covered": int(covered),
         "params_covered_by_floor": int(floored),
         "params_named": int(n_params),

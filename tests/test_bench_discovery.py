@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from rocklab.benchmarks import _discovery
+from rocklab.benchmarks import _discovery, _miss
 
 _spec = importlib.util.spec_from_file_location("discovery", Path(__file__).parents[1] / "bench" / "discovery.py")
 discovery = importlib.util.module_from_spec(_spec)
@@ -42,6 +42,24 @@ def test_a_wrong_name_is_confident_unless_flagged():
     finding = {"effect": "restitution_scale", "params": {"c": 0.97}, "ci95": {"c": [0.96, 0.98]}}
     assert discovery.score(entry(["restitution_scale"], [finding]), truth)["confident_misname"]
     assert not discovery.score(entry(["restitution_scale"], [finding], unexplained=True), truth)["confident_misname"]
+
+
+def test_a_wrong_name_that_may_stand_in_for_a_hidden_cause_is_not_confident():
+    truth = {"flight_damping": {"zeta": 0.01}}
+    why = "2 flights above 0.3 alpha (5 needed)"
+    scale = {"effect": "restitution_scale", "params": {"c": 0.97}, "ci95": {"c": [0.96, 0.98]}}
+    caveat = {**scale, "may_stand_in_for": {"flight_damping": why}}
+    blind = {"not_identifiable": {"flight_damping": why}}
+    s = discovery.score(entry(["restitution_scale"], [caveat], **blind), truth)
+    assert not s["confident_misname"] and s["may_stand_in_for"] == {"restitution_scale": ["flight_damping"]}
+    assert s["not_identifiable"] and s["wrong"] == ["restitution_scale"]
+    # a second wrong name without the caveat is still confident
+    angle = {"effect": "instability_angle", "params": {"alpha_r_over_alpha": 0.99}, "ci95": {}}
+    both = discovery.score(entry(["restitution_scale", "instability_angle"], [caveat, angle], **blind), truth)
+    assert both["confident_misname"]
+    row = {"cause": "flight_damping", "boundary": "one-sided-gap", "fs": 400.0, "wall": "paper", "n_tests": 10}
+    assert "restitution_scale (may stand in for flight_damping" in _miss({**row, **s})
+    assert "instability_angle (not flagged)" in _miss({**row, **both})
 
 
 def test_coverage_counts_the_bounds_the_resolution_floor_set():

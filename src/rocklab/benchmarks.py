@@ -282,8 +282,10 @@ def _miss(cell) -> str:
     elif cell["missing"]:
         out.append(f"not named: {', '.join(cell['missing'])}")
     if cell["wrong"]:
-        flag = "flagged unexplained" if cell["unexplained"] else "not flagged"
-        out.append(f"named beside the truth: {', '.join(cell['wrong'])} ({flag})")
+        stand = cell["may_stand_in_for"]
+        flag = {c: "flagged unexplained" if cell["unexplained"] else "not flagged" for c in cell["wrong"]}
+        flag |= {c: f"may stand in for {', '.join(v)}, which the design cannot identify" for c, v in stand.items()}
+        out.append("named beside the truth: " + "; ".join(f"{c} ({why})" for c, why in flag.items()))
     if cell["outside"]:
         out.append(f"interval misses the truth: {'; '.join(cell['outside'])}")
     return "; ".join(out)

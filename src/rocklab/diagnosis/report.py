@@ -105,6 +105,13 @@ def diagnosis_markdown(diagnosis) -> str:
                 + "; ".join(f"{k} ({why})" for k, why in e.not_identifiable.items()),
                 "",
             ]
+        stand = [] if pooled else [f for f in e.findings if f.may_stand_in_for]
+        if stand:
+            out += [
+                "Named with a caveat, the model with a cause this series cannot identify in its place fits as "
+                "well: " + "; ".join(f"{f.effect} may stand in for {', '.join(f.may_stand_in_for)}" for f in stand),
+                "",
+            ]
         if e.findings:
             out += [
                 "| effect | parameters | 95% CI | held-out deviance/obs "

@@ -188,10 +188,15 @@ class Finding(_Record):
     they rest on, the evidence in words, the held-out errors of the model
     with the cause and their gain over the base model; a form discovered
     beyond the catalogue (a family) also says what it reduces to and its
-    gain against the listed causes.
+    gain against the listed causes.  ``may_stand_in_for`` names the causes
+    the series' design cannot identify whose effect this one may carry
+    (:func:`rocklab.diagnosis.estimation.selection.stand_ins`), each with why
+    it cannot be identified: the cause is then named with that caveat.
     """
 
-    _optional = frozenset({"ci_note", "discovered", "family", "reduces_to", "best_listed", "heldout_gain", "curve"})
+    _optional = frozenset(
+        {"ci_note", "may_stand_in_for", "discovered", "family", "reduces_to", "best_listed", "heldout_gain", "curve"}
+    )
 
     effect: str
     params: dict[str, float | None] = field(default_factory=dict)
@@ -201,6 +206,7 @@ class Finding(_Record):
     evidence: dict[str, str] = field(default_factory=dict)
     error_heldout: dict[str, float | None] = field(default_factory=dict)
     gain: dict[str, float | None] = field(default_factory=dict)
+    may_stand_in_for: dict[str, str] | None = None
     discovered: bool | None = None
     family: str | None = None
     reduces_to: str | None = None

@@ -30,7 +30,7 @@ from rocklab._imports import lazy_module
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.discovery import discovery
 from rocklab.diagnosis.errors import what_is_wrong
-from rocklab.diagnosis.estimation import beyond_the_catalogue, finite_mean, select_effects
+from rocklab.diagnosis.estimation import beyond_the_catalogue, finite_mean, select_effects, stand_ins
 from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_test, observe
 from rocklab.diagnosis.extended import engineering_errors, model_params
 from rocklab.diagnosis.problem import WallProblem
@@ -230,6 +230,10 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
     else:
         verdict_text = ""
     blind = not_identifiable(tests, [f["effect"] for f in findings])
+    # a cause the design cannot identify is never named: a named cause whose effect it could produce is
+    # named with that caveat, not with confidence
+    for y, xs in stand_ins(problem, sel, blind, fits=fits).items():
+        next(f for f in findings if f["effect"] == y)["may_stand_in_for"] = xs
     entry = {
         **head,
         "what_is_wrong": (verdict_text + ": " if verdict_text else "") + statement,

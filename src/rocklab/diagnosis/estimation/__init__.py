@@ -16,7 +16,7 @@ module            holds
 ``fitting``       :func:`fit` (iteratively reweighted least squares), its linearisation
 ``resampling``    :func:`heldout` (K-fold), :func:`parameter_intervals` (bootstrap or sandwich)
 ``structure``     :func:`structure`, the residual structure a model leaves
-``selection``     :func:`select_effects`, :func:`beyond_the_catalogue`
+``selection``     :func:`select_effects`, :func:`beyond_the_catalogue`, :func:`stand_ins`
 ================  ==================================================================
 
 Progress goes to the modules' loggers: each candidate with its BIC, held-out
@@ -29,7 +29,7 @@ from rocklab.diagnosis.estimation.fitting import Fit, fit
 from rocklab.diagnosis.estimation.noise import noise_variance
 from rocklab.diagnosis.estimation.problem import Problem
 from rocklab.diagnosis.estimation.resampling import finite_mean, heldout, paired_gain, parameter_intervals
-from rocklab.diagnosis.estimation.selection import beyond_the_catalogue, select_effects
+from rocklab.diagnosis.estimation.selection import beyond_the_catalogue, select_effects, stand_ins
 from rocklab.diagnosis.estimation.structure import structure, within_slope
 
 __all__ = [
@@ -43,6 +43,7 @@ __all__ = [
     "paired_gain",
     "parameter_intervals",
     "select_effects",
+    "stand_ins",
     "structure",
     "within_slope",
 ]

@@ -24,6 +24,9 @@ stats = lazy_module("scipy.stats")
 
 log = logging.getLogger(__name__)
 
+#: BIC drop that is strong evidence for one model over another (Kass & Raftery 1995): what a cause needs to enter.
+BIC_MARGIN = 10.0
+
 
 def _improves(d):
     """Whether paired per-test improvements ``d`` are beyond the noise.
@@ -44,8 +47,21 @@ def _improves(d):
 
 
 def _null_excluded(problem, effect, ci):
-    """Whether some parameter of ``effect`` stays clear of its null by a practical margin."""
+    """Whether some parameter of ``effect`` stays clear of its null by a practical margin.
+
+    A generalised family (a cause with a ``family``) is judged on the
+    parameters its listed member lacks, the form it adds: where those sit at
+    their null the fit is the listed member, which is a candidate of its own.
+    Its shared parameters move with its own ones (the rounding of a hinge
+    moves the angle of the flights released at alpha_r), so a form too small
+    to name could otherwise carry the family in by a shared parameter.
+    """
+    by_name = {c.name: c for c in problem.causes}
+    member = getattr(by_name[effect], "family", None)
+    shared = {q.name for q in by_name[member].params} if member in by_name else set()
     for q in problem.params((effect,)):
+        if q.name in shared:
+            continue
         if q.practical is not None and q.name in ci:
             lo, hi = ci[q.name]
             if lo > q.null + q.practical or hi < q.null - q.practical:
@@ -54,7 +70,15 @@ def _null_excluded(problem, effect, ci):
 
 
 def select_effects(
-    problem: Problem, *, signature=None, n_boot=40, max_effects=4, seed=0, bic_margin=10.0, families=False, fits=None
+    problem: Problem,
+    *,
+    signature=None,
+    n_boot=40,
+    max_effects=4,
+    seed=0,
+    bic_margin=BIC_MARGIN,
+    families=False,
+    fits=None,
 ):
     """Greedy forward selection of the causes the data carry, with removal tests.
 
@@ -81,7 +105,7 @@ def select_effects(
         ``ci`` (parameter intervals), ``base``/``final`` held-out results,
         ``steps`` (the held-out result after each entry), ``rejected``
         (effect -> reason), ``structure`` (what the chosen model leaves) and
-        ``weak`` (candidates turned down that would remove all of it).
+        ``weak`` (candidates turned down that would remove all of it, none that did worse held out).
     """
     all_idx = np.arange(problem.n_tests)
     signature = signature or {}
@@ -113,6 +137,8 @@ def select_effects(
     cur_ho = heldout(problem, current)
     base_ho = cur_ho
     steps, rejected, ci = {}, {}, {}
+    # candidates that predicted the tests left out worse than the model they would join: no evidence for them
+    worse_held_out = set()
     for stage in range(1, max_effects + 1):
         # candidates in the order of their information criterion; the held-out test and the
         # bootstrap, the costly steps, only until one passes
@@ -148,6 +174,10 @@ def select_effects(
             gain, se = paired_difference(d)
             if not _improves(d):
                 rejected[eff] = f"held-out deviance gain {gain:.3g} within the noise (standard error {se:.2g})"
+                if gain <= 0:
+                    worse_held_out.add(eff)
+                else:
+                    worse_held_out.discard(eff)
                 log.info("stage %d: %s (BIC %+.1f) rejected: %s", stage, eff, dbic, rejected[eff])
                 continue
             c = parameter_intervals(problem, f, n_boot=n_boot, seed=seed)
@@ -189,10 +219,13 @@ def select_effects(
                 ci = parameter_intervals(problem, f, n_boot=n_boot, seed=seed) if ext else {}
     found = structure(problem, all_idx, current, cur_fit.values)
     # structure that a candidate turned down by the held-out test or the bootstrap would remove
-    # is weak evidence for it, not something outside the catalogue
+    # is weak evidence for it, not something outside the catalogue; one that did worse held out
+    # removes it by fitting the noise of the tests it was fitted on, and is no evidence
     weak = {}
     if found:
         for eff in candidates:
+            if eff in worse_held_out:
+                continue
             ext = problem.combine(current, eff) if eff not in current else None
             if ext is not None and ext != current and signature.get(eff, {}).get("supports", True):
                 f = fit_of(ext)
@@ -256,3 +289,50 @@ def beyond_the_catalogue(problem: Problem, sel, *, signature, n_boot=40, seed=0,
         return {**sel, "weak": {**sel["weak"], **weak}}
     log.info("discovered: %s", ", ".join(named))
     return {**wide, "catalogue": sel}
+
+
+def stand_ins(problem: Problem, sel, hidden, *, fits=None, bic_margin=BIC_MARGIN):
+    """The named causes that a cause the design cannot identify may stand in for.
+
+    A cause the series' design cannot tell from the noise or from another
+    cause (``hidden``: :func:`rocklab.diagnosis.series.not_identifiable`) is
+    never named, so a named cause whose effect it could produce is named
+    without the evidence to exclude it.  The catalogue's own models decide
+    which, on this series: a named cause ``Y`` may stand in for ``X`` where
+    the model with ``X`` in ``Y``'s place is not worse by the strong
+    evidence a cause needs to enter (its BIC not above the chosen model's
+    by ``bic_margin``).
+
+    Parameters
+    ----------
+    problem : Problem
+    sel : dict
+        The selection (:func:`select_effects` or :func:`beyond_the_catalogue`).
+    hidden : mapping
+        Cause -> why the design cannot identify it.
+    fits : dict, optional
+        Fits by causes, shared with the selection.
+
+    Returns
+    -------
+    dict
+        Named cause -> {cause it may stand in for: why that one is not identifiable}; only causes that may.
+    """
+    fits = {} if fits is None else fits
+    current = tuple(sel["effects"])
+    bic = sel["fit"].bic
+    out = {}
+    for x, why in hidden.items():
+        if x not in problem.candidates(True):
+            continue
+        for y in current:
+            ext = problem.combine(tuple(e for e in current if e != y), x)
+            if ext is None:
+                continue
+            if ext not in fits:
+                fits[ext] = fit(problem, np.arange(problem.n_tests), ext)
+            dbic = fits[ext].bic - bic
+            log.info("%s in place of %s: BIC %+.1f", x, y, dbic)
+            if dbic < bic_margin:
+                out.setdefault(y, {})[x] = why
+    return out
