@@ -26,7 +26,6 @@ import time
 
 import numpy as np
 
-from rocklab._imports import lazy_module
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.discovery import discovery
 from rocklab.diagnosis.errors import what_is_wrong
@@ -35,9 +34,8 @@ from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_t
 from rocklab.diagnosis.extended import engineering_errors, model_params
 from rocklab.diagnosis.problem import WallProblem
 from rocklab.diagnosis.result import CampaignDiagnosis
-from rocklab.lab.hierarchy import plural, too_few_units
-
-stats = lazy_module("scipy.stats")
+from rocklab.dissipation.statistics import mean_over_units, t_interval
+from rocklab.lab.hierarchy import plural
 
 log = logging.getLogger(__name__)
 
@@ -335,16 +333,12 @@ def pooled_parameter(values, walls=None):
         Why there is no interval; "" when there is one.
     """
     level = "series" if walls is None else "wall"
-    by_unit = {}
-    for series, v in values.items():
-        by_unit.setdefault(series if walls is None else walls[series], []).append(v)
-    x = np.array([np.mean(v) for v in by_unit.values()], float)
-    k, m = x.size, float(np.mean(x))
-    note = too_few_units(level, k, k - 1)
+    units = [s if walls is None else walls[s] for s in values]
+    m, se, k, note = mean_over_units(list(values.values()), units, level)
     if note:
         return m, None, level, k, note.removeprefix("not testable: ") + ": no interval"
-    half = float(stats.t.ppf(0.975, k - 1) * np.std(x, ddof=1) / np.sqrt(k))
-    return m, [m - half, m + half], level, k, ""
+    lo, hi, _ = t_interval(m, se, k - 1)
+    return m, [float(lo), float(hi)], level, k, ""
 
 
 def _parameter_values(cause, name, usable, named):

@@ -82,7 +82,7 @@ from scipy import stats
 
 from rocklab.dissipation.claims import PAPER_CLAIMS, claim_text, margin_of, verdict
 from rocklab.dissipation.regression import ols
-from rocklab.dissipation.statistics import holm
+from rocklab.dissipation.statistics import holm, mean_over_units, t_interval
 from rocklab.lab.campaign import order_in_series
 from rocklab.lab.hierarchy import COVARIATE_LEVEL, UNIT_COLUMN, parent, plural, too_few_units
 
@@ -194,14 +194,6 @@ def series_values(tests, diagnosis=None):
 
 
 # --- the models -------------------------------------------------------------------------------
-
-
-def t_interval(est, se, df, level=1 - ALPHA, null=0.0):
-    """Two-sided Student's t interval of ``est`` and the p-value of ``est = null``."""
-    if se == 0:
-        return est, est, 1.0 if est == null else 0.0
-    q = stats.t.ppf(0.5 + level / 2, df)
-    return est - q * se, est + q * se, float(2 * stats.t.sf(abs(est - null) / se, df))
 
 
 def _level_text(v):
@@ -411,13 +403,10 @@ def wall_mean_row(values, walls, **row):
     """The mean over walls of ``values`` (one per series: each wall the mean of its series) with a t
     interval on walls - 1 df, as a row; "not testable" below the units a verdict needs."""
     null = row.pop("null", 0.0)
-    by_wall = pd.Series(np.asarray(values, float), index=np.asarray(walls)).groupby(level=0).mean()
-    k = len(by_wall)
+    m, se, k, reason = mean_over_units(values, walls, "wall")
     row |= dict(unit_level="wall", n_units=k)
-    reason = too_few_units("wall", k, k - 1)
     if reason:
         return row | {"model": "", "verdict": reason}
-    m, se = by_wall.mean(), by_wall.std(ddof=1) / math.sqrt(k)
     lo, hi, p = t_interval(m, se, k - 1, null=null)
     return row | dict(estimate=m, se=se, ci_low=lo, ci_high=hi, p=p, df=k - 1)
 

@@ -86,6 +86,40 @@ MIN_BOOTSTRAP = 5
 NOTE_MARKS = "†‡§¶"
 
 
+def t_interval(est, se, df, level=0.95, null=0.0):
+    """Two-sided Student's t interval of ``est`` and the p-value of ``est = null``."""
+    if se == 0:
+        return est, est, 1.0 if est == null else 0.0
+    q = stats.t.ppf(0.5 + level / 2, df)
+    return est - q * se, est + q * se, float(2 * stats.t.sf(abs(est - null) / se, df))
+
+
+def mean_over_units(values, units, level):
+    """The mean over units of ``level`` of ``values``, each unit the mean of its values
+    (a wall the mean of its series), and its standard error on units - 1 df.
+
+    Parameters
+    ----------
+    values : sequence of float
+    units : sequence
+        The unit of each value.
+    level : str
+        The level of the units (:data:`rocklab.lab.hierarchy.LEVELS`).
+
+    Returns
+    -------
+    mean, se : float
+    n_units : int
+    reason : str
+        Why no verdict or interval rests on these units
+        (:func:`rocklab.lab.hierarchy.too_few_units`); "" when it can.
+    """
+    by_unit = pd.Series(np.asarray(values, float), index=np.asarray(units)).groupby(level=0).mean()
+    k = len(by_unit)
+    se = float(by_unit.std(ddof=1) / np.sqrt(k)) if k > 1 else np.nan
+    return float(by_unit.mean()), se, k, too_few_units(level, k, k - 1)
+
+
 def interval_note(n, unit="tests"):
     """Why a value resting on ``n`` ``unit`` has no bootstrap interval; "" when it has one."""
     return f"too few {unit} for an interval ({n} < {MIN_BOOTSTRAP})" if n < MIN_BOOTSTRAP else ""

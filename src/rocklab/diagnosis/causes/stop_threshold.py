@@ -20,14 +20,13 @@ from rocklab.diagnosis.errors import engineering_rows
 from rocklab.diagnosis.evidence import TestStack
 from rocklab.diagnosis.model import next_flight
 from rocklab.diagnosis.parameters import Param
-from rocklab.dissipation.statistics import MIN_BOOTSTRAP
+from rocklab.dissipation.statistics import MIN_BOOTSTRAP, t_interval
 from rocklab.lab.motion import odd_samples
 from rocklab.physics.flight import landing_speed, quarter_period
 from rocklab.physics.law import Stop
 from rocklab.physics.wall import overturning_velocity
 
 signal = lazy_module("scipy.signal")
-stats = lazy_module("scipy.stats")
 
 NAME = "stop_threshold"
 V_STOP = Param("v_stop_over_vr", 0.0, 1.0, 0.0)
@@ -199,8 +198,8 @@ def threshold(tests, mp, *, n_boot=200, seed=0, min_tests=3):
         ci = [float(np.percentile(boots, 2.5)), float(np.percentile(boots, 97.5))]
     else:
         # too few stops to resample: Student's t on their few degrees of freedom (issue 24)
-        half = float(stats.t.ppf(0.975, x.size - 1)) * float(x.std(ddof=1)) / math.sqrt(x.size)
-        ci = [float(np.exp(x.mean() - half)), float(np.exp(x.mean() + half))]
+        lo_x, hi_x, _ = t_interval(x.mean(), x.std(ddof=1) / math.sqrt(x.size), x.size - 1)
+        ci = [float(np.exp(lo_x)), float(np.exp(hi_x))]
     centre, common = bracket_centre(lo, hi)
     if common:
         # one threshold fits every wall: it is known only within the common
