@@ -140,9 +140,11 @@ def clustered_mean(values, units, level):
     The cluster-robust standard error with the bias reduction CR2 of Bell &
     McCaffrey (2002), and its degrees of freedom by Imbens & Kolesar (2016):
     the mean over tests weighs a wall by its tests, w_j = n_j / N, and with
-    few, unequal walls the usual CR1 error on walls - 1 df is too small (on
-    the campaign's two-sided walls, 19-69 tests each, a 95 % interval
-    covers about 91 %; one wall of 60 tests beside three of 5, 62 %).  For
+    few, unequal walls the usual CR1 error on walls - 1 df is too small
+    (simulated walls that scatter five times more than their tests: on the
+    campaign's two-sided walls, 13-69 tests each, a 95 % interval covers
+    about 91 %, on one wall of 60 tests beside three of 5, 62 %; CR2 on
+    these df, 95 %).  For
     the mean (an intercept-only least squares)
 
         se^2 = sum_j w_j^2 (m_j - mean)^2 / (1 - w_j),
@@ -275,7 +277,7 @@ def boundary_summary(tests_df, columns, walls, by="series", within="boundary"):
                     "n_tests": len(d),
                     "n_series": d[by].nunique(),
                     "n_walls": k,
-                    "mean": d[c].mean(),
+                    "mean": m,
                     "sd": d[c].std(ddof=1),
                     "series_sd": d.groupby(by)[c].mean().std(ddof=1),
                     "ci_low": lo,
