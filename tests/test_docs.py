@@ -316,7 +316,7 @@ def tiny_results(tmp_path):
             },
         ],
     )
-    stats = {"n_tests": 3, "n_series": 2, "sd": 0.1, "series_sd": 0.1}
+    stats = {"n_tests": 3, "n_series": 2, "n_walls": 2, "sd": 0.1, "series_sd": 0.1, "df": 1.5, "ci_note": ""}
     _write(
         r / "summary.csv",
         [{"boundary": "two-sided", "quantity": "e_ratio", "mean": 0.92, "ci_low": 0.86, "ci_high": 0.96, **stats}],
@@ -587,7 +587,17 @@ def test_dissipation_numbers(tiny_results):
     d = numbers_of(tiny_results)["dissipation"]
     assert d["eq10_eq11_max_abs_diff"] == pytest.approx(3e-4)
     two = d["two_sided"]
-    assert two["e_ratio"] == {"mean": 0.92, "ci_low": 0.86, "ci_high": 0.96, "n_tests": 3, "n_series": 2}
+    assert two["e_ratio"] == {
+        "mean": 0.92,
+        "ci_low": 0.86,
+        "ci_high": 0.96,
+        "n_tests": 3,
+        "n_series": 2,
+        "n_walls": 2,
+        "df": 1.5,
+        "ci_note": "",
+    }
+    assert d["min_walls_interval"] == 3
     assert two["table3"]["e_ratio_complete"]["paper"] is None
     assert two["stands_apart"] == [{"series": "3a-2s", "e_ratio_mean": 0.86, "modified_z": -9.0}]
     assert two["e_ratio_mean_without_apart"] == pytest.approx(0.95)  # T1, T2 only

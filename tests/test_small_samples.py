@@ -26,7 +26,6 @@ from rocklab.dissipation.statistics import (
     TABLE3_WINDOWS,
     bootstrap_ci,
     boundary_summary,
-    cluster_bootstrap_ci,
     series_stats,
     table3,
     table3_markdown,
@@ -35,10 +34,11 @@ from rocklab.lab.campaign import open_campaign
 
 
 def ratio_table(n_by_series, boundary="two-sided", seed=0):
-    """tests.csv-like rows: ``n`` tests of each series, ratios around 0.95."""
+    """tests.csv-like rows: ``n`` tests of each series, ratios around 0.95; each series a specimen of its
+    own (its wall: :func:`own_walls`)."""
     rng = np.random.default_rng(seed)
     rows = [
-        {"series": s, "boundary": boundary, "e_ratio": 0.95 + 0.01 * rng.standard_normal()}
+        {"series": s, "specimen": s, "boundary": boundary, "e_ratio": 0.95 + 0.01 * rng.standard_normal()}
         for s, n in n_by_series.items()
         for _ in range(n)
     ]
@@ -48,14 +48,16 @@ def ratio_table(n_by_series, boundary="two-sided", seed=0):
     return df
 
 
+def own_walls(df):
+    """Each specimen a wall of its own."""
+    return {sp: f"wall {sp}" for sp in df.specimen}
+
+
 def test_the_minimum_is_where_a_bootstrap_starts():
     x = np.linspace(0.9, 1.0, MIN_BOOTSTRAP)
     assert np.isnan(bootstrap_ci(x[:-1])).all()
     lo, hi = bootstrap_ci(x)
     assert lo < x.mean() < hi
-    groups = np.arange(MIN_BOOTSTRAP)
-    assert np.isnan(cluster_bootstrap_ci(x[:-1], groups[:-1])).all()
-    assert np.isfinite(cluster_bootstrap_ci(x, groups)).all()
 
 
 def test_a_two_test_series_has_its_mean_and_no_interval():
@@ -78,23 +80,23 @@ def test_a_quantity_short_of_tests_is_named_in_the_note():
 def test_table3_of_two_tests_is_marked_not_nan():
     """The issue's campaign: two valid tests, one series of each boundary condition."""
     df = pd.concat([ratio_table({"a-2s": 1}), ratio_table({"b-1s": 1}, "one-sided")], ignore_index=True)
-    t3 = table3(df)
+    t3 = table3(df, own_walls(df))
     assert t3.ci_low.isna().all() and t3.ci_high.isna().all()
-    assert set(t3.ci_note) == {"too few series for an interval (1 < 5)"}
-    assert (t3.n_tests == 1).all() and (t3.n_series == 1).all()
+    assert set(t3.ci_note) == {"1 wall, 0 residual df (2 needed): no interval"}
+    assert (t3.n_tests == 1).all() and (t3.n_series == 1).all() and (t3.n_walls == 1).all()
     md = table3_markdown(t3)
     assert "nan" not in md and "[" not in md
     assert md.count("†") == 7  # six values and the note
-    assert md.endswith("† too few series for an interval (1 < 5)")
-    assert f"{df.e_ratio[0]:.3f}† (1 test, 1 series)" in md
+    assert md.endswith("† 1 wall, 0 residual df (2 needed): no interval")
+    assert f"{df.e_ratio[0]:.3f}† (1 test, 1 series, 1 wall)" in md
 
 
 def test_a_normal_boundary_gives_intervals_with_their_counts():
     df = ratio_table({f"s{i}": 4 + i for i in range(6)})
-    b = boundary_summary(df, ["e_ratio"]).iloc[0]
-    assert b.n_tests == sum(4 + i for i in range(6)) and b.n_series == 6 and b.ci_note == ""
-    md = table3_markdown(table3(df))
-    cell = f"{b['mean']:.3f} [{b.ci_low:.3f}, {b.ci_high:.3f}] ({b.n_tests} tests, 6 series)"
+    b = boundary_summary(df, ["e_ratio"], own_walls(df)).iloc[0]
+    assert b.n_tests == sum(4 + i for i in range(6)) and b.n_series == 6 and b.n_walls == 6 and b.ci_note == ""
+    md = table3_markdown(table3(df, own_walls(df)))
+    cell = f"{b['mean']:.3f} [{b.ci_low:.3f}, {b.ci_high:.3f}] ({b.n_tests} tests, 6 series, 6 walls)"
     assert cell in md and "†" not in md
 
 
@@ -238,7 +240,7 @@ def test_a_three_test_campaign_says_its_sample_is_too_small(tiny_campaign, tmp_p
     run = subprocess.run(cmd, capture_output=True, text=True, cwd=work, env={**os.environ, "PYTHONWARNINGS": "ignore"})
     assert run.returncode == 0, run.stderr[-3000:]
     t3 = (results / "table3.md").read_text()
-    assert "nan" not in t3 and "[" not in t3 and "too few series for an interval (1 < 5)" in t3
+    assert "nan" not in t3 and "[" not in t3 and "0 residual df (2 needed): no interval" in t3
     series = pd.read_csv(results / "series.csv")
     assert series.e_ratio_ci_low.isna().all() and (series.ci_note == "too few tests for an interval (1 < 5)").all()
     md = (results / "diagnosis.md").read_text()

@@ -7,8 +7,8 @@
 DISSIPATION_PAGES = {
     "tests": ("tests.csv, every valid test", "tests.schema.yaml"),
     "series": ("series.csv, every series", "series.schema.yaml"),
-    "table3": ("table3.csv, Table 3", None),
-    "summary": ("summary.csv, by boundary condition", None),
+    "table3": ("table3.csv, Table 3", "table3.schema.yaml"),
+    "summary": ("summary.csv, by boundary condition", "summary.schema.yaml"),
     "amplitude_laws": ("amplitude_laws.csv, Eqs. 15 and 17", None),
     "effects": ("effects.csv, the factors between series", None),
 }

@@ -38,13 +38,19 @@ SUMMARY_QUANTITIES = (
 
 
 def _stats(row) -> dict:
-    """Mean and 95 % interval of one row of ``summary.csv`` or ``table3.csv``."""
+    """Mean and 95 % interval (on walls, :func:`rocklab.dissipation.statistics.boundary_summary`) of one row
+    of ``summary.csv`` or ``table3.csv``, the units it rests on, and why it has no interval ("" when it has)."""
+    note = row["ci_note"]
     return {
         "mean": row["mean"],
         "ci_low": row["ci_low"],
         "ci_high": row["ci_high"],
         "n_tests": row["n_tests"],
         "n_series": row["n_series"],
+        "n_walls": row["n_walls"],
+        "df": row["df"],
+        # an empty note reads back from the CSV as NaN
+        "ci_note": note if isinstance(note, str) else "",
     }
 
 
@@ -105,8 +111,8 @@ def dissipation_summary(tables) -> dict:
     -------
     dict
         Per boundary (``two_sided``, ``one_sided``) the quantities of
-        :data:`SUMMARY_QUANTITIES` (mean, 95 % interval, tests, series),
-        Table 3 against the paper, the series that stand apart; the largest
+        :data:`SUMMARY_QUANTITIES` (mean, 95 % interval on walls, tests, series, walls),
+        Table 3 against the paper, the series that stand apart; the fewest walls of an interval, the largest
         difference of Eqs. 10 and 11, the amplitude laws (Eqs. 15, 17) and
         the factors' effects.
     """
@@ -139,6 +145,8 @@ def dissipation_summary(tables) -> dict:
             "max_abs_modified_z": s["modified_z"].abs().max(),
             "e_ratio_mean_without_apart": kept["e_ratio"].mean() if len(apart) else None,
         }
+    # the fewest walls of a t interval (rocklab.lab.hierarchy.too_few_units: MIN_DF residual df)
+    out["min_walls_interval"] = MIN_DF + 1
     out["eq10_eq11_max_abs_diff"] = (tests["e_exp_eq10"] - tests["e_exp_eq11"]).abs().max()
     out["amplitude_laws"] = _laws(pd.read_csv(tables["laws"]), series)
     out["effects"] = _effects(pd.read_csv(tables["effects"]))

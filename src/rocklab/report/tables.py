@@ -67,25 +67,29 @@ def qc_series(n: Mapping) -> str:
 
 @_of("dissipation")
 def table3(n: Mapping) -> str:
-    """Table 3 of the paper: e_exp/e_an by window, both boundary conditions and the paper."""
+    """Table 3 of the paper: e_exp/e_an by window (mean over tests, 95 % interval on walls), both boundary
+    conditions and the paper; a value without an interval says why."""
     columns = ["e_ratio_complete", "e_ratio_without_first_half_cycle", "e_ratio_first_half_cycle"]
     header = [
         "boundary",
-        "tests (series)",
+        "tests (series, walls)",
         "whole history",
         "disregarding the first half cycle",
         "first half cycle only",
     ]
+
+    def cell(stats):
+        note = stats.get("ci_note")
+        return f"{show(stats.get('mean'), '.3f')} ({note})" if note else _interval(stats, ".3f")
+
     rows, paper = [], None
     for key, name in (("one_sided", "one-sided"), ("two_sided", "two-sided")):
         t3 = n["dissipation"][key]["table3"]
         if not t3:
             continue
         first = t3.get(columns[0], {})
-        rows.append(
-            [name, f"{show(first.get('n_tests'))} ({show(first.get('n_series'))})"]
-            + [_interval(t3.get(c, {}), ".3f") for c in columns]
-        )
+        counts = ", ".join(show(first.get(k)) for k in ("n_series", "n_walls"))
+        rows.append([name, f"{show(first.get('n_tests'))} ({counts})"] + [cell(t3.get(c, {})) for c in columns])
         if all(t3.get(c, {}).get("paper") is not None for c in columns):
             paper = [f"{name}, paper", ""] + [show(t3[c]["paper"]) for c in columns]
     return markdown_table(header, rows + ([paper] if paper else []))
