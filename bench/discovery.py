@@ -245,6 +245,14 @@ def _widened_by_systematic(cause, name, x, estimate, ci, parts):
     return False
 
 
+def _by_how_much(cause, name, x, ci):
+    """How far the truth ``x`` lies outside ``ci``, in units of its cause's smallest effect worth naming."""
+    q = next(q for q in catalogue.by_name(cause).params if q.name == name)
+    if q.practical is None or ci is None or len(ci) != 2:
+        return ""
+    return f" by {max(ci[0] - x, x - ci[1]) / q.practical:.2g} of the smallest effect worth naming"
+
+
 def score(entry, truth, parts=()):
     """What a diagnosis got right of a hidden truth (the per-cell row's outcome).
 
@@ -268,7 +276,7 @@ def score(entry, truth, parts=()):
             covered += ok
             widened += ok and _widened_by_systematic(cause, k, x, found[cause].get("params", {}).get(k), ci, parts)
             if not ok:
-                missed.append(f"{cause}.{k} = {x:g} outside {ci}")
+                missed.append(f"{cause}.{k} = {x:g} outside {ci}{_by_how_much(cause, k, x, ci)}")
     n_params = sum(len(truth[c]) for c in hidden & named)
     wrong = sorted(named - hidden)
     # a wrong cause named with the caveat that it may stand in for one the design cannot identify is flagged

@@ -78,6 +78,10 @@ def test_coverage_counts_the_truths_held_by_the_systematic_part_only():
     assert discovery.score(entry(["restitution_scale"], [found_held]), truth, held)["params_widened_by_systematic"] == 0
     # no logged part gives the interval: nothing counted
     assert discovery.score(entry(["restitution_scale"], [found]), truth)["params_widened_by_systematic"] == 0
+    # a miss says by how much, in units of the smallest effect worth naming (0.005 for c)
+    missed = {**found, "ci95": {"c": [0.9525, 0.96]}}
+    (outside,) = discovery.score(entry(["restitution_scale"], [missed]), truth)["outside"]
+    assert outside.endswith("by 0.5 of the smallest effect worth naming")
 
 
 def test_the_rates_leave_the_not_identifiable_out_of_the_named_right_rate():
