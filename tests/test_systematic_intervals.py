@@ -79,6 +79,25 @@ def test_the_systematic_uncertainty_follows_the_offset_and_vanishes_with_it(n_te
     assert _u_sys(0.02, n_tests=n_tests) > _u_sys(0.005, n_tests=n_tests) > _u_sys(0.0, n_tests=n_tests)
 
 
+class SampledView(TwoViews):
+    """The second group read on a grid of step ``dt``, at the grid point before: biased by -dt / 2."""
+
+    def __init__(self, dt, **kw):
+        super().__init__(0.0, **kw)
+        if dt > 0:
+            self.y["b"] = np.floor(self.y["b"] / dt) * dt
+
+
+def test_the_systematic_uncertainty_grows_with_a_coarser_sampling_and_vanishes_with_it():
+    def u(dt):
+        problem = SampledView(dt)
+        return float(systematic_uncertainty(by_group(problem, _fitted(problem))[-1])[0])
+
+    assert u(0.02) > u(0.01) > u(0.0)
+    # the noise dithers the grid: the bias is dt / 2, each group pulls by a quarter of it
+    assert u(0.01) == pytest.approx(0.01 / 2 / (2 * np.sqrt(2)), rel=0.3)
+
+
 def test_one_group_has_no_systematic_part():
     problem = TwoViews(0.02)
     problem.y = {"a": problem.y["a"]}
