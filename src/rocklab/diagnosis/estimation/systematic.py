@@ -34,7 +34,7 @@ each fit from its own data; no constant is set on a benchmark.  What it
 cannot see: an error that moves every group alike, or one of a group that
 alone fixes a parameter (its pull is then nothing); the noise of the
 residuals enters the pulls too, so with the statistical part it is counted
-twice (an interval at most sqrt(2) too wide where the noise dominates).
+twice (where the noise dominates, an interval some sqrt(2) too wide).
 A problem of one residual group has no second view: its systematic part is
 zero.
 """
