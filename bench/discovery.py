@@ -31,8 +31,9 @@ wall with a gap aside),
 ``unexplained`` flag nor the caveat ``may_stand_in_for``: a cause the design cannot identify may be what
 it carries), ``coverage_95`` (share of the true parameters of the
 hidden causes named inside their 95 % intervals;
-``n_params_covered_by_floor`` of them where the interval's bound on the
-truth's side is the resolution floor), each with its Clopper-Pearson 95 %
+``n_params_widened_by_systematic`` of them that the statistical interval
+alone missed and its systematic part,
+:mod:`rocklab.diagnosis.estimation.systematic`, holds), each with its Clopper-Pearson 95 %
 interval over the series or parameters it rests on, ``n_series``, the
 targets and whether each is met, and ``cells`` (one row per series: its
 factors, verdict, what missed).  Exit status 1 where a target is missed.
@@ -42,6 +43,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import math
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -52,7 +54,7 @@ import pandas as pd
 
 from rocklab._imports import lazy_module
 from rocklab.diagnosis import catalogue, diagnose_records, jsonable
-from rocklab.diagnosis.estimation.resampling import RESOLUTION
+from rocklab.diagnosis.estimation import systematic
 from rocklab.lab import virtual_lab as vl
 from rocklab.physics import impact as I
 from rocklab.physics import restitution, wall
@@ -218,21 +220,45 @@ def _inside(ci, x):
     return ci is not None and len(ci) == 2 and ci[0] <= x <= ci[1]
 
 
-def _set_by_floor(cause, name, x, estimate, ci):
-    """Whether the bound of ``ci`` on the side of the truth ``x`` is the resolution floor about ``estimate``
-    (:data:`rocklab.diagnosis.estimation.resampling.RESOLUTION` times the parameter's smallest effect worth
-    naming): the statistical interval was narrower there, and the floor alone may have covered the truth."""
-    q = next((q for q in catalogue.by_name(cause).params if q.name == name), None)
-    if q is None or q.practical is None or estimate is None:
-        return False
-    half = RESOLUTION * q.practical
-    bound = ci[1] if x >= estimate else ci[0]
-    floor = min(q.upper, estimate + half) if x >= estimate else max(q.lower, estimate - half)
-    return math.isclose(bound, floor, rel_tol=1e-9, abs_tol=1e-12)
+class _Intervals(logging.Handler):
+    """The statistical intervals and systematic uncertainties the diagnosis of a series logs
+    (:func:`rocklab.diagnosis.estimation.resampling.parameter_intervals`), in the order it logs them."""
+
+    def __init__(self):
+        super().__init__(logging.INFO)
+        self.parts = []
+
+    def emit(self, record):
+        if hasattr(record, "statistical"):
+            self.parts.append((record.statistical, record.systematic))
 
 
-def score(entry, truth):
+def _widened_by_systematic(cause, name, x, estimate, ci, parts):
+    """Whether the truth ``x`` lies in the interval ``ci`` of ``estimate`` only by its systematic part: the
+    statistical interval that, widened by its systematic uncertainty, is ``ci`` misses ``x``."""
+    q = next(q for q in catalogue.by_name(cause).params if q.name == name)
+    for stat, u in reversed(parts):
+        if name in stat and estimate is not None:
+            wide = systematic.widened(stat[name], estimate, q.lower, q.upper, u[name])
+            if np.allclose(wide, ci, rtol=1e-9, atol=1e-12):
+                return not _inside(stat[name], x)
+    return False
+
+
+def _by_how_much(cause, name, x, ci):
+    """How far the truth ``x`` lies outside ``ci``, in units of its cause's smallest effect worth naming."""
+    q = next(q for q in catalogue.by_name(cause).params if q.name == name)
+    if q.practical is None or ci is None or len(ci) != 2:
+        return ""
+    return f" by {max(ci[0] - x, x - ci[1]) / q.practical:.2g} of the smallest effect worth naming"
+
+
+def score(entry, truth, parts=()):
     """What a diagnosis got right of a hidden truth (the per-cell row's outcome).
+
+    ``parts``: the (statistical intervals, systematic uncertainties) the
+    diagnosis logged (:class:`_Intervals`), to count the truths its intervals
+    hold by their systematic part only.
 
     A series whose design the diagnosis declares unable to carry its hidden
     cause (``too_small``, or the cause in its ``not_identifiable``, and not
@@ -242,15 +268,15 @@ def score(entry, truth):
     named = set(entry["verdict"])
     hidden = set(truth)
     found = {f["effect"]: f for f in entry["findings"]}
-    covered, floored, missed = 0, 0, []
+    covered, widened, missed = 0, 0, []
     for cause in hidden & named:
         for k, x in truth[cause].items():
             ci = found[cause].get("ci95", {}).get(k)
             ok = _inside(ci, x)
             covered += ok
-            floored += ok and _set_by_floor(cause, k, x, found[cause].get("params", {}).get(k), ci)
+            widened += ok and _widened_by_systematic(cause, k, x, found[cause].get("params", {}).get(k), ci, parts)
             if not ok:
-                missed.append(f"{cause}.{k} = {x:g} outside {ci}")
+                missed.append(f"{cause}.{k} = {x:g} outside {ci}{_by_how_much(cause, k, x, ci)}")
     n_params = sum(len(truth[c]) for c in hidden & named)
     wrong = sorted(named - hidden)
     # a wrong cause named with the caveat that it may stand in for one the design cannot identify is flagged
@@ -266,7 +292,7 @@ def score(entry, truth):
         "may_stand_in_for": {c: v for c, v in caveat.items() if v},
         "confident_misname": any(not v for v in caveat.values()) and not entry["unexplained"],
         "params_covered": int(covered),
-        "params_covered_by_floor": int(floored),
+        "params_widened_by_systematic": int(widened),
         "params_named": int(n_params),
         "outside": missed,
         "too_small": entry.get("too_small"),
@@ -287,10 +313,20 @@ def run_cell(row, n_boot):
         name, sp, boundary, model, n=row["n_tests"], fs=row["fs"], seed=row["seed"], t_end=RECORD_S, **kw
     )
     t1 = time.perf_counter()
-    entry = diagnose_records(recs, name, n_boot=n_boot, n_history=0, seed=0)
+    logger = logging.getLogger("rocklab.diagnosis.estimation.resampling")
+    parts = _Intervals()
+    logger.addHandler(parts)
+    level = logger.level
+    logger.setLevel(logging.INFO)
+    try:
+        entry = diagnose_records(recs, name, n_boot=n_boot, n_history=0, seed=0)
+    finally:
+        logger.removeHandler(parts)
+        logger.setLevel(level)
     if entry is None:
         entry = {"verdict": [], "findings": [], "unexplained": False, "too_small": "no test of two impacts"}
-    out = {**row, "h_over_b": float(sp["height_mm"] / sp["thickness_mm"]), **score(jsonable(entry), truth)}
+    scored = score(jsonable(entry), truth, parts.parts)
+    out = {**row, "h_over_b": float(sp["height_mm"] / sp["thickness_mm"]), **scored}
     out["n_impacts"] = int(entry.get("n_impacts", 0))
     return out | {"simulate_s": t1 - t0, "diagnose_s": time.perf_counter() - t1}
 
@@ -340,7 +376,7 @@ def rates(cells):
         "coverage_95": covered / named if named else None,
         "coverage_ci95": binomial_interval(covered, named),
         "n_params_named": named,
-        "n_params_covered_by_floor": int(df.params_covered_by_floor.sum()),
+        "n_params_widened_by_systematic": int(df.params_widened_by_systematic.sum()),
     }
 
 

@@ -62,17 +62,26 @@ def test_a_wrong_name_that_may_stand_in_for_a_hidden_cause_is_not_confident():
     assert "instability_angle (not flagged)" in _miss({**row, **both})
 
 
-def test_coverage_counts_the_bounds_the_resolution_floor_set():
-    from rocklab.diagnosis.causes import restitution_scale
+def test_coverage_counts_the_truths_held_by_the_systematic_part_only():
+    from rocklab.diagnosis.estimation.systematic import widened
 
-    half = discovery.RESOLUTION * restitution_scale.C.practical
     truth = {"restitution_scale": {"c": 0.95}}
-    floored = {"effect": "restitution_scale", "params": {"c": 0.95 - 0.5 * half}}
-    floored["ci95"] = {"c": [0.95 - 0.6 * half, 0.95 + 0.5 * half]}
-    s = discovery.score(entry(["restitution_scale"], [floored]), truth)
-    assert s["named_right"] and s["params_covered"] == 1 and s["params_covered_by_floor"] == 1
-    wide = {**floored, "ci95": {"c": [0.9, 1.0]}}
-    assert discovery.score(entry(["restitution_scale"], [wide]), truth)["params_covered_by_floor"] == 0
+    stat, u = [0.9504, 0.9506], 0.0003
+    ci = widened(stat, 0.9505, 0.2, 2.0, u)
+    found = {"effect": "restitution_scale", "params": {"c": 0.9505}, "ci95": {"c": ci}}
+    parts = [({"c": [0.9, 1.0]}, {"c": 0.0}), ({"c": stat}, {"c": u})]
+    s = discovery.score(entry(["restitution_scale"], [found]), truth, parts)
+    assert s["named_right"] and s["params_covered"] == 1 and s["params_widened_by_systematic"] == 1
+    # a statistical interval that holds the truth on its own
+    held = [({"c": [0.949, 0.951]}, {"c": u})]
+    found_held = {**found, "ci95": {"c": widened([0.949, 0.951], 0.9505, 0.2, 2.0, u)}}
+    assert discovery.score(entry(["restitution_scale"], [found_held]), truth, held)["params_widened_by_systematic"] == 0
+    # no logged part gives the interval: nothing counted
+    assert discovery.score(entry(["restitution_scale"], [found]), truth)["params_widened_by_systematic"] == 0
+    # a miss says by how much, in units of the smallest effect worth naming (0.005 for c)
+    missed = {**found, "ci95": {"c": [0.9525, 0.96]}}
+    (outside,) = discovery.score(entry(["restitution_scale"], [missed]), truth)["outside"]
+    assert outside.endswith("by 0.5 of the smallest effect worth naming")
 
 
 def test_the_rates_leave_the_not_identifiable_out_of_the_named_right_rate():

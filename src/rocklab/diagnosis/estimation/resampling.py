@@ -5,7 +5,9 @@ linearisation of :func:`rocklab.diagnosis.estimation.fitting.linearised`: the
 K folds of :func:`heldout` and the resamples of whole tests of
 :func:`parameter_intervals`, which falls back on the cluster-robust t
 interval of the same linearisation (:func:`sandwich_intervals`) where the
-tests are too few to resample or the resamples collapse on a bound.  The
+tests are too few to resample or the resamples collapse on a bound, and
+adds the systematic part that no resample of tests sees
+(:mod:`rocklab.diagnosis.estimation.systematic`).  The
 paired per-test comparison of two models' held-out deviances is
 :func:`paired_gain`, and a per-test measure is summed up over the tests by
 :func:`finite_mean`.
@@ -21,17 +23,11 @@ from rocklab._imports import lazy_module
 from rocklab.diagnosis.estimation.fitting import Fit, fit, linearised
 from rocklab.diagnosis.estimation.noise import deviance, finite_residuals, group_variances
 from rocklab.diagnosis.estimation.problem import Problem
+from rocklab.diagnosis.estimation.systematic import by_group, systematic_uncertainty, widened
 from rocklab.dissipation.statistics import MIN_BOOTSTRAP
 
 optimize = lazy_module("scipy.optimize")
 stats = lazy_module("scipy.stats")
-
-#: No interval is narrower than +- this share of the smallest effect worth naming its parameter's cause
-#: (``Param.practical``): below it the approximations of the model (the derivative filter's bias, the
-#: linearised flights) are of the size of the difference, and on virtual walls of a known truth
-#: (``bench/discovery.py``) the statistical intervals, 1e-6 wide at the lab's noise, missed it by up to a
-#: tenth of it.
-RESOLUTION = 0.25
 
 #: A bootstrap interval narrower than this share of the sandwich interval (:func:`sandwich_intervals`) has
 #: resamples collapsed on a bound or on a kink of the fit, not a precision the tests carry: the sandwich
@@ -168,15 +164,20 @@ def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
     whose percentile interval misses its estimate or is narrower than
     :data:`COLLAPSED_BOOTSTRAP` times the sandwich's, the resamples
     collapsed on a bound (a loss in flight fitted at zero: every resample
-    steps onto the bound the full fit stopped short of).  Either is widened,
-    within the bounds, to +- :data:`RESOLUTION` times the parameter's
-    smallest effect worth naming about the estimate where it is narrower.
+    steps onto the bound the full fit stopped short of).
+
+    Either is then widened by the systematic standard uncertainty of the
+    parameter, the pulls of the residual groups on it in quadrature
+    (:func:`~rocklab.diagnosis.estimation.systematic.systematic_uncertainty`):
+    each side's half-width h becomes sqrt(h^2 + (1.96 u_sys)^2), within the
+    bounds, and the interval always holds its estimate
+    (:func:`~rocklab.diagnosis.estimation.systematic.widened`).
     """
     t0 = time.perf_counter()
     rng = np.random.default_rng(seed)
     if not fitted.values:
         return {}
-    names, x0, lo, hi, A, y = linearised(problem, problem.subset(np.arange(problem.n_tests)), fitted)
+    names, x0, lo, hi, A, y, groups = by_group(problem, fitted)
     sandwich = sandwich_intervals(names, x0, lo, hi, A, y)
     if problem.n_tests < MIN_BOOTSTRAP:
         log.info(
@@ -186,7 +187,7 @@ def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
             problem.n_tests - 1,
             ", ".join(f"{k} [{a:.4g}, {b:.4g}]" for k, (a, b) in sandwich.items()),
         )
-        return _resolved(problem, fitted, sandwich)
+        return _with_systematic(problem, fitted, sandwich, groups)
     draws = []
     for _ in range(n_boot):
         counts = np.bincount(rng.integers(0, problem.n_tests, problem.n_tests), minlength=problem.n_tests)
@@ -215,18 +216,24 @@ def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
         time.perf_counter() - t0,
         ", ".join(f"{k} [{lo:.4g}, {hi:.4g}]" for k, (lo, hi) in ci.items()),
     )
-    return _resolved(problem, fitted, ci)
+    return _with_systematic(problem, fitted, ci, groups)
 
 
-def _resolved(problem: Problem, fitted: Fit, ci):
-    """The intervals ``ci`` widened to +- :data:`RESOLUTION` times each parameter's practical effect, within
-    its bounds."""
-    out = dict(ci)
-    for q in problem.params(fitted.ext):
-        if q.practical is not None and q.name in out:
-            x, half = fitted.values[q.name], RESOLUTION * q.practical
-            lo, hi = out[q.name]
-            out[q.name] = [max(q.lower, min(lo, x - half)), min(q.upper, max(hi, x + half))]
+def _with_systematic(problem: Problem, fitted: Fit, ci, groups):
+    """The statistical intervals ``ci`` widened by the systematic uncertainty of each parameter, within its
+    bounds (:func:`~rocklab.diagnosis.estimation.systematic.widened`)."""
+    u = dict(zip(fitted.values, systematic_uncertainty(groups)))
+    out = {
+        q.name: widened(ci[q.name], fitted.values[q.name], q.lower, q.upper, u[q.name])
+        for q in problem.params(fitted.ext)
+        if q.name in ci
+    }
+    log.info(
+        "intervals of %s, statistical and systematic: %s",
+        "+".join(fitted.ext),
+        ", ".join(f"{k} [{a:.4g}, {b:.4g}] u_sys {u[k]:.2g}" for k, (a, b) in ci.items()),
+        extra={"effects": tuple(fitted.ext), "statistical": dict(ci), "systematic": u},
+    )
     return out
 
 

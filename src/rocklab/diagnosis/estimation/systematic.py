@@ -1,0 +1,140 @@
+"""The systematic error of a fit's parameters: how far each residual group pulls them.
+
+The intervals of :mod:`rocklab.diagnosis.estimation.resampling` resample
+whole tests, so they hold what varies between tests and nothing that every
+test shares.  An error of the measurement chain or of the model's
+approximations is of the second kind: for a wall, the derivative filter's
+bias on the impact velocities, an impact instant read to a fraction of a
+sample, a flight fitted by its linearisation; at the lab's noise the
+statistical intervals are some 1e-6 wide and such errors are larger.  Each
+residual group of a problem sees its own part of the physics through its own
+part of the chain (a wall's velocities through the derivative filter,
+apexes through the local fits of the flights, flight and gap times through
+the impact instants: :mod:`rocklab.diagnosis.evidence`), so an error of one
+part makes the groups disagree, and the fit settles where their pulls
+balance.  The pull of group g on the parameters is
+
+    d_g = B^-1 A_g^T y_g,        B = sum over groups of A_g^T A_g,
+
+with A_g, y_g the group's weighted derivatives and minus its weighted
+residuals at the fit (:func:`~rocklab.diagnosis.estimation.fitting.linearised`):
+the step the estimate takes when the group's observations are moved onto the
+model, the share of the estimate that rests on the group's misfit.  The pulls
+of all groups sum to zero at an optimum inside the bounds; each is the
+systematic standard uncertainty a group's error gives the parameters, the
+groups' errors independent (different parts of the chain), so
+
+    u_sys = sqrt(sum over groups of d_g^2)             (per parameter),
+
+and the 95 % interval is the statistical one widened on each side to
+sqrt(h^2 + (z u_sys)^2), h its half-width on that side, z = 1.96 the normal
+quantile of the level (:func:`widened`): the statistical and the systematic
+parts added in quadrature (GUM, JCGM 100:2008, Sect. 5).  It is computed for
+each fit from its own data; no constant is set on a benchmark.  What it
+cannot see: an error that moves every group alike, or one of a group that
+alone fixes a parameter (its pull is then nothing); the noise of the
+residuals enters the pulls too, so with the statistical part it is counted
+twice (where the noise dominates, an interval some sqrt(2) too wide).
+A problem of one residual group has no second view: its systematic part is
+zero.
+"""
+
+import logging
+
+import numpy as np
+
+from rocklab._imports import lazy_module
+from rocklab.diagnosis.estimation.fitting import Fit, linearised
+from rocklab.diagnosis.estimation.problem import Problem
+
+stats = lazy_module("scipy.stats")
+
+log = logging.getLogger(__name__)
+
+
+class _Groups(Problem):
+    """``problem`` seen through some of its residual groups, its residuals computed once per point.
+
+    The linearisation of each group (:func:`by_group`) evaluates the residuals at the same points:
+    the memo makes that one evaluation for all groups, as one linearisation of all of them.
+    """
+
+    def __init__(self, problem: Problem, groups, memo):
+        self.problem, self.groups, self.memo = problem, set(groups), memo
+        self.n_tests, self.causes = problem.n_tests, problem.causes
+
+    def subset(self, idx):
+        return self.problem.subset(idx)
+
+    def noise(self, sub):
+        return self.problem.noise(sub)
+
+    def params(self, ext):
+        return self.problem.params(ext)
+
+    def residuals(self, sub, ext, values):
+        key = (id(sub), tuple(ext), tuple(values.items()))
+        if key not in self.memo:
+            self.memo[key] = self.problem.residuals(sub, ext, values)
+        return {g: r for g, r in self.memo[key].items() if g in self.groups}
+
+
+def by_group(problem: Problem, fitted: Fit):
+    """The linearisation of ``fitted`` over all tests, group by group.
+
+    Returns
+    -------
+    names : list of str
+    x0, lo, hi : ndarray
+        As :func:`~rocklab.diagnosis.estimation.fitting.linearised`.
+    A, y : list of ndarray
+        Per test, the rows of every group (the linearisation of all groups).
+    groups : dict
+        Group -> (A_g, y_g), its rows stacked over the tests.
+    """
+    every = problem.subset(np.arange(problem.n_tests))
+    memo = {}
+    parts = {g: linearised(_Groups(problem, [g], memo), every, fitted) for g in fitted.var}
+    names, x0, lo, hi = next(iter(parts.values()))[:4]
+    A = [np.concatenate([p[4][i] for p in parts.values()]) for i in range(problem.n_tests)]
+    y = [np.concatenate([p[5][i] for p in parts.values()]) for i in range(problem.n_tests)]
+    groups = {g: (np.concatenate(p[4]), np.concatenate(p[5])) for g, p in parts.items()}
+    return names, x0, lo, hi, A, y, groups
+
+
+def pulls(groups):
+    """The pull of each residual group on the parameters (module docstring), group -> ndarray."""
+    B = sum(a.T @ a for a, _ in groups.values())
+    Binv = np.linalg.pinv(B)
+    return {g: Binv @ (a.T @ b) for g, (a, b) in groups.items()}
+
+
+def systematic_uncertainty(groups):
+    """The systematic standard uncertainty of each parameter: the pulls of the groups in quadrature.
+
+    Parameters
+    ----------
+    groups : dict
+        Group -> (A_g, y_g), as :func:`by_group` returns them.
+
+    Returns
+    -------
+    ndarray
+        One per parameter [its unit]; zeros for a single group.
+    """
+    d = np.array(list(pulls(groups).values()))
+    return np.sqrt(np.sum(d**2, axis=0))
+
+
+def widened(ci, x0, lower, upper, u_sys, level=0.95):
+    """The interval ``ci`` of an estimate ``x0`` with a systematic standard uncertainty ``u_sys`` added.
+
+    Each side's half-width h becomes sqrt(h^2 + (z u_sys)^2), z the normal
+    quantile of ``level`` (1.96 at 95 %), cut at the bounds [lower, upper];
+    the result always holds ``x0`` (a side that missed it starts from it).
+    """
+    z = float(stats.norm.ppf(0.5 + level / 2))
+    lo, hi = ci
+    below = np.hypot(max(x0 - lo, 0.0), z * u_sys)
+    above = np.hypot(max(hi - x0, 0.0), z * u_sys)
+    return [float(max(lower, x0 - below)), float(min(upper, x0 + above))]

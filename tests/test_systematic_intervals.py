@@ -1,0 +1,127 @@
+"""The systematic part of the parameter intervals (issue 24, item 7): the pulls of the residual groups.
+
+Two groups of observations of one mean, the second offset by a systematic
+error delta that every test shares: resampling tests cannot see it, the
+pulls of the groups can (closed form: two groups alike, the fit halfway,
+each pulls it by delta / 4: u_sys = delta / (2 sqrt 2)), and the interval
+then holds the truth that the statistical interval misses.
+"""
+
+import numpy as np
+import pytest
+
+from rocklab.diagnosis.estimation import Problem, fit
+from rocklab.diagnosis.estimation.fitting import linearised
+from rocklab.diagnosis.estimation.resampling import parameter_intervals, sandwich_intervals
+from rocklab.diagnosis.estimation.systematic import by_group, systematic_uncertainty, widened
+from rocklab.diagnosis.parameters import Param
+
+TRUTH = 0.3
+
+
+class _Mean:
+    name = "mean"
+    params = (Param("m", 0.0, 1.0, 0.0, practical=0.01),)
+    replaces = ()
+
+
+class TwoViews(Problem):
+    """Tests that see a mean m through two groups of k observations, the second offset by ``delta``."""
+
+    causes = (_Mean(),)
+
+    def __init__(self, delta, n_tests=6, k=30, noise=0.01, seed=0):
+        rng = np.random.default_rng(seed)
+        shape = (n_tests, k)
+        self.y = {
+            "a": TRUTH + noise * rng.standard_normal(shape),
+            "b": TRUTH + delta + noise * rng.standard_normal(shape),
+        }
+        self.n_tests = n_tests
+
+    def subset(self, idx):
+        return {g: y[np.asarray(idx)] for g, y in self.y.items()}
+
+    def residuals(self, sub, ext, values):
+        return {g: values.get("m", 0.0) - y for g, y in sub.items()}
+
+    def noise(self, sub):
+        return {g: np.ones_like(y) for g, y in sub.items()}
+
+
+def _fitted(problem):
+    return fit(problem, np.arange(problem.n_tests), ("mean",))
+
+
+def _u_sys(delta, **kw):
+    problem = TwoViews(delta, **kw)
+    return float(systematic_uncertainty(by_group(problem, _fitted(problem))[-1])[0])
+
+
+def test_the_linearisation_by_group_is_the_linearisation_of_all_groups():
+    problem = TwoViews(0.01)
+    f = _fitted(problem)
+    names, x0, lo, hi, A, y, groups = by_group(problem, f)
+    ref = linearised(problem, problem.subset(np.arange(problem.n_tests)), f)
+    assert names == ref[0]
+    for a, b in zip(A + y, ref[4] + ref[5]):
+        np.testing.assert_array_equal(a, b)
+    assert sum(a.shape[0] for a, _ in groups.values()) == sum(a.shape[0] for a in A)
+
+
+@pytest.mark.parametrize("n_tests", [3, 6])
+def test_the_systematic_uncertainty_follows_the_offset_and_vanishes_with_it(n_tests):
+    # halfway between two groups alike, each pulls the fit by delta / 4 (to the noise's share of the weights)
+    for delta in (0.02, 0.01):
+        assert _u_sys(delta, n_tests=n_tests) == pytest.approx(delta / (2 * np.sqrt(2)), rel=0.2)
+    # without an offset, only the noise of the group means: sigma / sqrt(observations)
+    assert _u_sys(0.0, n_tests=n_tests) < 0.01 / np.sqrt(n_tests * 30)
+    assert _u_sys(0.02, n_tests=n_tests) > _u_sys(0.005, n_tests=n_tests) > _u_sys(0.0, n_tests=n_tests)
+
+
+class SampledView(TwoViews):
+    """The second group read on a grid of step ``dt``, at the grid point before: biased by -dt / 2."""
+
+    def __init__(self, dt, **kw):
+        super().__init__(0.0, **kw)
+        if dt > 0:
+            self.y["b"] = np.floor(self.y["b"] / dt) * dt
+
+
+def test_the_systematic_uncertainty_grows_with_a_coarser_sampling_and_vanishes_with_it():
+    def u(dt):
+        problem = SampledView(dt)
+        return float(systematic_uncertainty(by_group(problem, _fitted(problem))[-1])[0])
+
+    assert u(0.02) > u(0.01) > u(0.0)
+    # the noise dithers the grid: the bias is dt / 2, each group pulls by a quarter of it
+    assert u(0.01) == pytest.approx(0.01 / 2 / (2 * np.sqrt(2)), rel=0.3)
+
+
+def test_one_group_has_no_systematic_part():
+    problem = TwoViews(0.02)
+    problem.y = {"a": problem.y["a"]}
+    assert systematic_uncertainty(by_group(problem, _fitted(problem))[-1]) == pytest.approx([0.0], abs=1e-12)
+
+
+def test_the_interval_holds_a_truth_that_the_statistical_interval_misses():
+    problem = TwoViews(0.01)
+    f = _fitted(problem)
+    names, x0, lo, hi, A, y, _ = by_group(problem, f)
+    statistical = sandwich_intervals(names, x0, lo, hi, A, y)["m"]
+    assert not statistical[0] <= TRUTH <= statistical[1]
+    a, b = parameter_intervals(problem, f, n_boot=40)["m"]
+    assert a <= TRUTH <= b and a <= f.values["m"] <= b
+    # no wider than the statistical part and 1.96 times the pulls of the offset in quadrature
+    assert b - f.values["m"] < 1.96 * 0.01 / (2 * np.sqrt(2)) + (statistical[1] - statistical[0])
+
+
+def test_a_widened_interval_holds_its_estimate_within_the_bounds():
+    assert widened([0.2, 0.4], 0.3, 0.0, 1.0, 0.0) == pytest.approx([0.2, 0.4])
+    # a side that missed the estimate starts from it
+    lo, hi = widened([0.31, 0.4], 0.3, 0.0, 1.0, 0.0)
+    assert lo == pytest.approx(0.3) and hi == pytest.approx(0.4)
+    lo, hi = widened([0.0, 0.001], 0.0, 0.0, 1.0, 0.01)
+    assert lo == 0.0 and hi == pytest.approx(np.hypot(0.001, 1.96 * 0.01), rel=1e-3)
+    assert widened([0.99, 1.0], 1.0, 0.0, 1.0, 0.5) == pytest.approx([1.0 - np.hypot(0.01, 1.96 * 0.5), 1.0], rel=1e-3)
+    assert widened([0.2, 0.4], 0.3, 0.0, 1.0, 10.0) == [0.0, 1.0]
