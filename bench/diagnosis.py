@@ -26,9 +26,7 @@ import pandas as pd
 import yaml
 
 from rocklab.config import SCHEMA, schema_defaults
-from rocklab.diagnosis import diagnose_records, jsonable, records_by_series, with_boundaries
-from rocklab.io import valid_tests
-from rocklab.lab.motion import read_motion
+from rocklab.diagnosis import diagnose_records, jsonable, stored_records, with_boundaries
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -41,10 +39,8 @@ def main():
     cfg = schema_defaults(yaml.safe_load((ROOT / SCHEMA).read_text()))["diagnosis"]
     cfg |= (yaml.safe_load((ROOT / "config" / "config.yaml").read_text()) or {}).get("diagnosis", {})
     tests = args.results / "tests"
-    datasets = list(valid_tests(sorted(tests.glob("*.nc"))))
-    motions = {ds.attrs["test_id"]: read_motion(tests / f"{ds.attrs['test_id']}.nc") for ds in datasets}
     series, entries = {}, []
-    for key, records in records_by_series(datasets, motions).items():
+    for key, records in stored_records(sorted(tests.glob("*.nc"))).items():
         t0, c0 = time.perf_counter(), time.process_time()
         entry = diagnose_records(records, key, n_boot=cfg["n_boot"], n_history=cfg["n_history"], seed=cfg["seed"])
         series[key] = {

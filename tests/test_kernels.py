@@ -4,6 +4,7 @@ import numpy as np
 
 from rocklab.diagnosis.estimation import noise
 from rocklab.kernels import compile_kernels
+from rocklab.physics import flight
 from rocklab.simulation import engine
 
 
@@ -18,3 +19,17 @@ def test_compile_kernels_covers_the_diagnosis_and_the_engine():
     assert s0 > 0 and s1 >= 0
     assert set(noise._profile.signatures) == before["profile"]
     assert set(engine.batch_kernel.signatures) == before["engine"]
+
+
+def test_compile_kernels_covers_the_flights_of_a_fit():
+    compile_kernels()
+    kernels = [flight._newton_apex, flight._path_nodes, flight._quarter_period_nodes, flight._moments_of]
+    before = [set(f.signatures) for f in kernels]
+    assert all(before)
+    # a padded (tests, impacts) stack as the diagnosis passes it, per-flight losses as broadcast scalars
+    A = np.array([[0.03, 0.02, np.nan], [0.05, 0.01, 0.005]])
+    a, p = np.full_like(A, 0.1), 2.0
+    v = flight.landing_speed(A, a, p, zeta=0.02, mu=0.01, kappa=0.2, k=0.1)
+    assert np.isfinite(flight.apex_after(v, a, p, zeta=0.02, mu=0.01, kappa=0.2, k=0.1)[1]).all()
+    flight.quarter_period(A, a, p)
+    assert [set(f.signatures) for f in kernels] == before

@@ -24,6 +24,7 @@ import glob
 import logging
 import os
 import tempfile
+import zlib
 from datetime import UTC, datetime
 from numbers import Number
 from pathlib import Path
@@ -80,6 +81,12 @@ def cf_attrs(title, source) -> dict:
 #: the patterns zlib finds in readings of a few decimals (transducer
 #: elongations: a third of their size without it, two thirds with it).
 COMPRESSION = {"zlib": True, "complevel": 1, "shuffle": False}
+#: A variable whose first :data:`COMPRESSION_PROBE` bytes zlib cannot bring
+#: below this share of their size is stored uncompressed: the rotations
+#: solved at full precision keep 85-95 % of their size and took a quarter of
+#: the time of writing a reduced test.
+COMPRESSION_WORTH = 0.8
+COMPRESSION_PROBE = 8192
 
 
 #: Attributes by which xarray encodes or decodes a variable (masking,
@@ -107,7 +114,8 @@ def write_netcdf(ds, path, groups=None):
     :func:`read_dataset`'s ``group``): its variables and attributes, less
     ``Conventions`` and ``history``, which CF keeps in the root group.
 
-    Numbers are compressed (:data:`COMPRESSION`), floats with ``_FillValue``
+    Numbers are compressed (:data:`COMPRESSION`) where it pays
+    (:data:`COMPRESSION_WORTH`), floats with ``_FillValue``
     NaN; booleans are stored as int8 with ``dtype = "bool"``; text as
     character arrays, which every netCDF tool and CF-1.8 read (cfchecker
     rejects the netCDF-4 string type); ``xarray.open_dataset`` gives them
@@ -189,8 +197,17 @@ def _stored_variable(var):
         return var.dims, data.astype(np.int8), {**attrs, "dtype": "bool"}, None, {}
     if kind in "iu" or data.dtype in (np.float32, np.float64):
         fill = data.dtype.type(np.nan) if kind == "f" else None
-        return var.dims, data, attrs, fill, COMPRESSION if data.ndim else {}
+        return var.dims, data, attrs, fill, COMPRESSION if data.ndim and _compresses(data) else {}
     return None
+
+
+def _compresses(data):
+    """Whether zlib at :data:`COMPRESSION`'s level is worth its time on ``data`` (:data:`COMPRESSION_WORTH`)."""
+    # from the middle: a record's first and last samples are often the wall at rest, which any coder packs
+    flat = np.ascontiguousarray(data).reshape(-1)
+    start = max(0, (flat.size - COMPRESSION_PROBE // data.itemsize) // 2)
+    probe = flat[start : start + COMPRESSION_PROBE // data.itemsize].tobytes()
+    return len(zlib.compress(probe, COMPRESSION["complevel"])) < COMPRESSION_WORTH * len(probe)
 
 
 def _write_variables(stored, attrs, tmp, path, groups=None):
@@ -237,7 +254,11 @@ def _set_attributes(obj, attrs, where):
 def _write_with_xarray(ds, tmp, group=None):
     """:func:`write_netcdf`'s encoding through ``xarray.Dataset.to_netcdf``
     (into ``group`` of the file ``tmp`` already holds, if given)."""
-    encoding = {name: dict(COMPRESSION) for name, var in ds.variables.items() if var.dtype.kind in "fiu" and var.ndim}
+    encoding = {
+        name: dict(COMPRESSION)
+        for name, var in ds.variables.items()
+        if var.dtype.kind in "fiu" and var.ndim and _compresses(var.values)
+    }
     text = {name: var.astype(str) for name, var in ds.variables.items() if var.dtype.kind in "OU"}
     encoding.update({name: {"dtype": "S1"} for name in text})
     # one assign, a shallow copy: the caller's dataset is left as it is
@@ -317,29 +338,43 @@ def read_dataset(path, variables=None, group=None):
     return _read(path, variables, group=group)
 
 
-def _read(path, variables=None, keep=None, group=None):
-    """:func:`read_dataset`; None where ``keep(global attributes)`` is false."""
+def _read(path, variables=None, keep=None, group=None, also=None):
+    """:func:`read_dataset`; None where ``keep(global attributes)`` is false.
+
+    ``also``: a group read from the same open file (all its variables), the
+    result then the pair (dataset, that group): opening a reduced test's
+    file costs netCDF-C more than reading its motion.
+    """
     import netCDF4
-    import xarray as xr
 
     with netCDF4.Dataset(path) as root:
-        if group is not None and group not in root.groups:
-            raise KeyError(f"{path}: no group {group}")
-        nc = root if group is None else root.groups[group]
-        attrs = _attributes(nc)
-        if keep is not None and not keep(attrs):
-            return None
-        wanted = list(nc.variables) if variables is None else list(variables)
-        missing = [name for name in wanted if name not in nc.variables]
-        if missing:
-            raise KeyError(f"{path}: no variable {', '.join(missing)}")
-        dims = {dim for name in wanted for dim in nc.variables[name].dimensions}
-        names = [n for n, v in nc.variables.items() if n in wanted or (n in dims and v.dimensions == (n,))]
-        decoded = {name: _decoded_variable(nc.variables[name]) for name in names}
-        if any(v is None for v in decoded.values()) or "coordinates" in attrs:
-            # from this handle: netCDF-C can crash on a file opened twice at once
-            ds = xr.open_dataset(xr.backends.NetCDF4DataStore(root, group=group))
-            return (ds if variables is None else ds[wanted]).load()
+        ds = _from_handle(root, path, variables, keep, group)
+        if ds is None or also is None:
+            return ds
+        return ds, _from_handle(root, path, None, None, also)
+
+
+def _from_handle(root, path, variables, keep, group):
+    """:func:`_read` of one group (the root if None) of the open file ``root``."""
+    import xarray as xr
+
+    if group is not None and group not in root.groups:
+        raise KeyError(f"{path}: no group {group}")
+    nc = root if group is None else root.groups[group]
+    attrs = _attributes(nc)
+    if keep is not None and not keep(attrs):
+        return None
+    wanted = list(nc.variables) if variables is None else list(variables)
+    missing = [name for name in wanted if name not in nc.variables]
+    if missing:
+        raise KeyError(f"{path}: no variable {', '.join(missing)}")
+    dims = {dim for name in wanted for dim in nc.variables[name].dimensions}
+    names = [n for n, v in nc.variables.items() if n in wanted or (n in dims and v.dimensions == (n,))]
+    decoded = {name: _decoded_variable(nc.variables[name]) for name in names}
+    if any(v is None for v in decoded.values()) or "coordinates" in attrs:
+        # from this handle: netCDF-C can crash on a file opened twice at once
+        ds = xr.open_dataset(xr.backends.NetCDF4DataStore(root, group=group))
+        return (ds if variables is None else ds[wanted]).load()
     # xarray's order: the data variables, then the coordinates
     coords = {name: var for name, var in decoded.items() if var.dims == (name,)}
     return xr.Dataset({n: v for n, v in decoded.items() if n not in coords}, coords, attrs)
@@ -423,26 +458,28 @@ def valid_test_ids(qc_path) -> list:
     return qc.test_id[qc.valid.astype(str) == "True"].tolist()
 
 
-def load_datasets(paths, keep=None, variables=None, group=None):
+def load_datasets(paths, keep=None, variables=None, group=None, also=None):
     """Yield the netCDF files at ``paths`` (their ``group`` if given) loaded
     into memory (files closed, :func:`read_dataset`), those for whose
-    attributes ``keep(attrs)`` is true if given."""
+    attributes ``keep(attrs)`` is true if given; with ``also``, each as the
+    pair (dataset, its group ``also``), both from one open of the file."""
     for path in paths:
-        ds = _read(path, variables, keep, group)
+        ds = _read(path, variables, keep, group, also)
         if ds is not None:
             yield ds
 
 
-def valid_tests(paths, qc_path=None, variables=None, group=None):
+def valid_tests(paths, qc_path=None, variables=None, group=None, also=None):
     """Yield the reduced datasets of the valid tests, loaded.
 
     Valid: marked so in ``qc.csv``, or without it by the test's own verdict
     (its ``valid`` attribute, of which qc.csv is made), so that a job over
     a few tests need not depend on the QC of the whole campaign.
     ``variables``: those to load (:func:`read_dataset`), all if None;
-    ``group``: the group of each file to read (its attributes carry ``valid``).
+    ``group``: the group of each file to read (its attributes carry ``valid``);
+    ``also``: a group read with it, each test then a pair (:func:`load_datasets`).
     """
     if qc_path is None:
-        return load_datasets(paths, lambda attrs: int(attrs.get("valid", 0)), variables, group)
+        return load_datasets(paths, lambda attrs: int(attrs.get("valid", 0)), variables, group, also)
     valid = set(valid_test_ids(qc_path))
-    return load_datasets((p for p in paths if Path(p).stem in valid), variables=variables, group=group)
+    return load_datasets((p for p in paths if Path(p).stem in valid), variables=variables, group=group, also=also)

@@ -13,10 +13,16 @@ import numpy as np
 def compile_kernels():
     """Compile every numba kernel of the library into numba's on-disk cache,
     with the argument types of the library's own calls: the overturning
-    engine (:func:`rocklab.simulation.batch.compile_kernels`) and the
-    diagnosis's noise model (:func:`rocklab.diagnosis.estimation.noise.noise_variance`)."""
+    engine (:func:`rocklab.simulation.batch.compile_kernels`), the
+    diagnosis's noise model (:func:`rocklab.diagnosis.estimation.noise.noise_variance`)
+    and the flights' quadratures and Newton passes (:mod:`rocklab.physics.flight`)."""
     from rocklab.diagnosis.estimation.noise import noise_variance
+    from rocklab.physics import flight
     from rocklab.simulation.batch import compile_kernels as compile_engine
 
     compile_engine()
     noise_variance(np.array([0.1, -0.2, 0.05, 0.3, -0.1]), np.array([0.5, 1.0, 2.0, 0.2, 0.1]))
+    # every compiled path: the quadratures, dry friction with drag and a viscous loss on a rounded hinge
+    A, a, p = np.array([0.02, 0.05]), np.array([0.1, 0.1]), np.array([2.0, 2.0])
+    flight.quarter_period(A, a, p)
+    flight.apex_after(flight.landing_speed(A, a, p), a, p, zeta=0.01, mu=0.01, kappa=0.1, k=0.1)

@@ -27,7 +27,14 @@ module             holds
 from rocklab.diagnosis.catalogue import CAUSES, signatures
 from rocklab.diagnosis.errors import engineering_rows, what_is_wrong
 from rocklab.diagnosis.estimation import Problem, finite_mean, parameter_intervals, select_effects
-from rocklab.diagnosis.evidence import MeasuredTest, TestStack, measured_test, records_by_series, residuals
+from rocklab.diagnosis.evidence import (
+    MeasuredTest,
+    TestStack,
+    measured_test,
+    records_by_series,
+    residuals,
+    stored_records,
+)
 from rocklab.diagnosis.extended import engineering_errors, model_params, rocking_model, simulate_measured
 from rocklab.diagnosis.model import free_run
 from rocklab.diagnosis.report import diagnosis_markdown, write_diagnosis
@@ -73,6 +80,7 @@ __all__ = [
     "model_params",
     "parameter_intervals",
     "records_by_series",
+    "stored_records",
     "residuals",
     "rocking_model",
     "select_effects",

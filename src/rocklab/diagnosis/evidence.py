@@ -17,8 +17,9 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from rocklab.diagnosis.model import ModelParams, impact_speeds, log_columns, release
+from rocklab.io import valid_tests
 from rocklab.lab.campaign import order_in_series
-from rocklab.lab.motion import extract_motion
+from rocklab.lab.motion import MOTION_GROUP, extract_motion, motion_from_dataset
 from rocklab.physics import restitution
 from rocklab.physics.flight import apex_after, landing_speed, quarter_period, speed_loss
 from rocklab.physics.wall import overturning_velocity
@@ -237,6 +238,21 @@ def records_by_series(datasets, motions=None):
             }
         )
     return dict(sorted(out.items()))
+
+
+def stored_records(paths, qc_path=None):
+    """:func:`records_by_series` of the valid reduced tests at ``paths``, with the motions stored in them.
+
+    Each file (``results/tests/<test_id>.nc``) is opened once for its
+    rotation and its motion group (:func:`rocklab.lab.motion.write_test_with_motion`):
+    netCDF-C spends longer opening a reduced test than reading both.  Valid
+    as :func:`rocklab.io.valid_tests` says (``qc_path``, or each test's own verdict).
+    """
+    datasets, motions = [], {}
+    for ds, motion in valid_tests(paths, qc_path, variables=("theta",), also=MOTION_GROUP):
+        datasets.append(ds)
+        motions[ds.attrs["test_id"]] = motion_from_dataset(motion)
+    return records_by_series(datasets, motions)
 
 
 # ---------------------------------------------------------------------------

@@ -45,6 +45,7 @@ reduction's time was the writing of a second file): the :class:`Motion`
 (:data:`TEST_ATTRS`), and the channel-5 amplification of Fig. 20b
 (:func:`stored_motion`).  The dissipation tables, the diagnosis and its
 figures read it back (:func:`read_stored_motion`, :func:`read_motion`,
+:func:`rocklab.diagnosis.evidence.stored_records`, with the rotation in one open,
 :func:`valid_stored_motions`) instead of extracting the motion again.
 
 All angles are returned as magnitudes of the rotation measured on the side

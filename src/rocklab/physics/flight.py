@@ -8,13 +8,19 @@ smooth, the work of dry friction and drag is in closed form, the linearised
 ones are Housner's (1963) closed forms.  Vectorised over tests and impacts,
 computed on the flights only (a stack of tests is padded with NaN), each
 Newton solve flight by flight: a fit of the losses in flight evaluates them
-on every flight of a series thousands of times.  The diagnosis, the
+on every flight of a series thousands of times, so the quadratures and the
+Newton passes are compiled loops over the flights (numba), each flight's
+sum over the nodes in the order :func:`numpy.sum` takes (the results are
+those of the array forms, to the last bit).  The diagnosis, the
 dissipation analysis and the tests of the simulators all take their flights
 from here.
 """
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 
 # 8 points: the flight integrals, made smooth by their substitutions, to 1e-8
@@ -139,11 +145,25 @@ def path_integral(A, a, p):
     return _on_flights(_path_nodes, A, a, p)
 
 
+@numba.njit(cache=True)
+def _sum8(r):
+    """Sum of 8 nodes in :func:`numpy.sum`'s pairwise order."""
+    return ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
+
+
+@numba.njit(cache=True)
 def _path_nodes(A, a, p):
-    A, a, p = A[:, None], a[:, None], p[:, None]
-    th = A * (1.0 - _GL_S**2)
-    f = np.sqrt(np.maximum(2.0 * p**2 * (np.cos(a - A) - np.cos(a - th)), 0.0))
-    return np.sum(_GL_W * f * 2.0 * A * _GL_S, axis=-1)
+    out = np.empty(A.size)
+    r = np.empty(_GL_S.size)
+    for i in range(A.size):
+        c0 = math.cos(a[i] - A[i])
+        pp = 2.0 * (p[i] * p[i])
+        for j in range(_GL_S.size):
+            th = A[i] * (1.0 - _GL_S[j] * _GL_S[j])
+            f = math.sqrt(max(pp * (c0 - math.cos(a[i] - th)), 0.0))
+            r[j] = _GL_W[j] * f * 2.0 * A[i] * _GL_S[j]
+        out[i] = _sum8(r)
+    return out
 
 
 def quarter_period(A, a, p):
@@ -155,15 +175,22 @@ def quarter_period(A, a, p):
     return _on_flights(_quarter_period_nodes, A, a, p)
 
 
+@numba.njit(cache=True)
 def _quarter_period_nodes(A, a, p):
-    Ac = np.minimum(A, a * (1 - 1e-9))[:, None]
-    ac = a[:, None]
-    s = _GL_S
-    th = Ac * (1.0 - s**2)
-    # thetadot^2 = 2 p^2 [cos(a - A) - cos(a - th)] vanishes like s^2: the ratio stays finite
-    num = 2.0 * p[:, None] ** 2 * (np.cos(ac - Ac) - np.cos(ac - th))
-    g = np.sqrt(np.maximum(num, 1e-300)) / np.maximum(s, 1e-300)
-    return np.sum(_GL_W * 2.0 * Ac / g, axis=-1)
+    out = np.empty(A.size)
+    r = np.empty(_GL_S.size)
+    for i in range(A.size):
+        Ac = min(A[i], a[i] * (1 - 1e-9))
+        c0 = math.cos(a[i] - Ac)
+        pp = 2.0 * (p[i] * p[i])
+        for j in range(_GL_S.size):
+            s = _GL_S[j]
+            th = Ac * (1.0 - s * s)
+            # thetadot^2 = 2 p^2 [cos(a - A) - cos(a - th)] vanishes like s^2: the ratio stays finite
+            g = math.sqrt(max(pp * (c0 - math.cos(a[i] - th)), 1e-300)) / max(s, 1e-300)
+            r[j] = _GL_W[j] * 2.0 * Ac / g
+        out[i] = _sum8(r)
+    return out
 
 
 def loss_deceleration(thetadot, p, zeta=0.0, mu=0.0, kappa=0.0, sign=np.sign):
@@ -182,6 +209,26 @@ def loss_deceleration(thetadot, p, zeta=0.0, mu=0.0, kappa=0.0, sign=np.sign):
     return 2.0 * zeta * p * thetadot + mu * p**2 * sign(thetadot) + kappa * thetadot * abs(thetadot)
 
 
+@numba.njit(cache=True)
+def _moments(A, a, c):
+    """:func:`_exponential_moments` of one flight."""
+    h = 0.5 * A
+    sh, ch, sm, cm = math.sin(h), math.cos(h), math.sin(a - h), math.cos(a - h)
+    # sin and cos of a - A from those of a - A/2 and A/2
+    sA, cA = sm * ch - cm * sh, cm * ch + sm * sh
+    m = math.expm1(c * A)
+    q = 1.0 + c * c
+    sin_m = (m * (c * sA + cA) + 2.0 * sh * (sm - c * cm)) / q
+    cos_m = (m * (c * cA - sA) + 2.0 * sh * (c * sm + cm)) / q
+    return sin_m, cos_m, (A if c == 0.0 else m / c)
+
+
+@numba.njit(cache=True)
+def _moments_of(A, a, c, sin_m, cos_m, one):
+    for i in range(A.size):
+        sin_m[i], cos_m[i], one[i] = _moments(A[i], a[i], c[i])
+
+
 def _exponential_moments(A, a, c):
     """int_0^A sin(a - s) e^(c s) ds, int_0^A cos(a - s) e^(c s) ds and int_0^A e^(c s) ds, closed forms.
 
@@ -190,18 +237,11 @@ def _exponential_moments(A, a, c):
     0 and A is written through expm1(c A) and sin(A/2), which keep their relative
     precision for the short flights of a wall at rest.
     """
-    A, a, c = (np.asarray(x, float) for x in (A, a, c))
-    h = 0.5 * A
-    sh, ch, sm, cm = np.sin(h), np.cos(h), np.sin(a - h), np.cos(a - h)
-    # sin and cos of a - A from those of a - A/2 and A/2
-    sA, cA = sm * ch - cm * sh, cm * ch + sm * sh
-    m = np.expm1(c * A)
-    q = 1.0 + c**2
-    sin_m = (m * (c * sA + cA) + 2.0 * sh * (sm - c * cm)) / q
-    cos_m = (m * (c * cA - sA) + 2.0 * sh * (c * sm + cm)) / q
-    with np.errstate(invalid="ignore", divide="ignore"):
-        one = np.where(c == 0.0, A, m / np.where(c == 0.0, 1.0, c))
-    return sin_m, cos_m, one
+    args = np.broadcast_arrays(*(np.asarray(x, float) for x in (A, a, c)))
+    shape = args[0].shape
+    out = [np.empty(args[0].size) for _ in range(3)]
+    _moments_of(*(np.ascontiguousarray(x).ravel() for x in args), *out)
+    return tuple(x.reshape(shape)[()] for x in out)
 
 
 def _work(A, a, p, mu, kappa, rise):
@@ -218,7 +258,8 @@ def _work(A, a, p, mu, kappa, rise):
     return p**2 * (sin_m + sgn * np.asarray(mu, float) * one)
 
 
-def _rise_balance(A, a, p, zeta, mu, kappa, k):
+@numba.njit(cache=True)
+def _rise_balance(A, a, p, zeta, mu, kappa, k, viscous):
     """The rise's take-off energy to the apex A (:func:`_work` and the viscous loss) and its d/dA [rad^2/s^2, rad/s^2].
 
     On the angle :func:`flight_angle` of the apex: the integrand at A plus,
@@ -228,20 +269,25 @@ def _rise_balance(A, a, p, zeta, mu, kappa, k):
     quarter period (the time the undamped flight takes, int dtheta /
     |thetadot|), on the same nodes (its change with the angle, k times a
     term of the order of zeta, is left out: a slope for Newton's passes).
+    One flight; ``viscous``: whether any flight of the solve has a viscous loss.
     """
-    a = flight_angle(A, a, k)
-    sin_m, cos_m, one = _exponential_moments(A, a, 2.0 * kappa)
-    energy = p**2 * (sin_m + mu * one)
-    slope = p**2 * ((np.sin(a - A) + mu) * np.exp(2.0 * kappa * A) + np.where(A < a, k, 0.0) * cos_m)
-    if _some(zeta):
-        A_, a_, p_ = A[..., None], a[..., None], p[..., None]
-        th = A_ * (1.0 - _GL_S**2)
-        # thetadot^2 on the nodes, shared by the path and the time
-        v2 = np.maximum(2.0 * p_**2 * (np.cos(a_ - A_) - np.cos(a_ - th)), 0.0)
-        v = np.sqrt(v2)
-        energy = energy + 2.0 * zeta * p * np.sum(_GL_W * v * 2.0 * A_ * _GL_S, axis=-1)
-        time = np.sum(_GL_W * 2.0 * A_ * _GL_S / np.maximum(v, 1e-300), axis=-1)
-        slope = slope + 2.0 * zeta * p**3 * np.sin(a - A) * time
+    if k != 0.0:
+        a = a - k * (a - min(A, a))
+    sin_m, cos_m, one = _moments(A, a, 2.0 * kappa)
+    p2 = p * p
+    energy = p2 * (sin_m + mu * one)
+    slope = p2 * ((math.sin(a - A) + mu) * math.exp(2.0 * kappa * A) + (k if A < a else 0.0) * cos_m)
+    if viscous:
+        c0, pp = math.cos(a - A), 2.0 * p2
+        path, time = np.empty(_GL_S.size), np.empty(_GL_S.size)
+        for j in range(_GL_S.size):
+            th = A * (1.0 - _GL_S[j] * _GL_S[j])
+            # thetadot^2 on the nodes, shared by the path and the time
+            v = math.sqrt(max(pp * (c0 - math.cos(a - th)), 0.0))
+            path[j] = _GL_W[j] * v * 2.0 * A * _GL_S[j]
+            time[j] = _GL_W[j] * 2.0 * A * _GL_S[j] / max(v, 1e-300)
+        energy = energy + 2.0 * zeta * p * _sum8(path)
+        slope = slope + 2.0 * zeta * math.pow(p, 3.0) * math.sin(a - A) * _sum8(time)
     return energy, slope
 
 
@@ -293,20 +339,32 @@ def _apex_with_losses(E, A, a, p, zeta, mu, kappa, k):
     # Newton from the undamped apex, above the damped one, kept inside the bracket [lo, hi] of
     # the root (the work grows with A, convex or concave with the drag: a bare step may leave it)
     E, A, a, p, zeta, mu, kappa, k = (x[~over] for x in (E, A, a, p, zeta, mu, kappa, k))
-    lo, hi = np.zeros_like(A), A.copy()
-    for _ in range(_NEWTON_MAX):
-        energy, slope = _rise_balance(A, a, p, zeta, mu, kappa, k)
-        g = energy - E
-        lo, hi = np.where(g < 0.0, A, lo), np.where(g > 0.0, A, hi)
-        step = A - g / np.maximum(slope, 1e-12 * p**2)
-        step = np.where((step > lo) & (step < hi), step, 0.5 * (lo + hi))
-        moving = np.abs(step - A) > _NEWTON_TOL * a
-        out[live] = step
-        live = live[moving]
-        if not live.size:
-            break
-        E, A, a, p, zeta, mu, kappa, k, lo, hi = (x[moving] for x in (E, step, a, p, zeta, mu, kappa, k, lo, hi))
+    out[live] = _newton_apex(E, A, a, p, zeta, mu, kappa, k, _some(zeta))
     return out.reshape(shape)
+
+
+@numba.njit(cache=True)
+def _newton_apex(E, A, a, p, zeta, mu, kappa, k, viscous):
+    """:func:`_apex_with_losses`'s Newton passes, flight by flight, each to its own root."""
+    out = A.copy()
+    for i in range(A.size):
+        x, lo, hi = A[i], 0.0, A[i]
+        floor = 1e-12 * (p[i] * p[i])
+        for _ in range(_NEWTON_MAX):
+            energy, slope = _rise_balance(x, a[i], p[i], zeta[i], mu[i], kappa[i], k[i], viscous)
+            g = energy - E[i]
+            if g < 0.0:
+                lo = x
+            elif g > 0.0:
+                hi = x
+            step = x - g / (slope if (slope >= floor or slope != slope) else floor)
+            if not (step > lo and step < hi):
+                step = 0.5 * (lo + hi)
+            out[i] = step
+            if not abs(step - x) > _NEWTON_TOL * a[i]:
+                break
+            x = step
+    return out
 
 
 def apex_after(v, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):

@@ -19,15 +19,13 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from rocklab.diagnosis import block_tests, measured_test, records_by_series, simulate_measured
+from rocklab.diagnosis import block_tests, measured_test, simulate_measured, stored_records
 from rocklab.diagnosis.catalogue import by_name
 from rocklab.diagnosis.causes import instability_angle, restitution_drift, stop_threshold
 from rocklab.diagnosis.evidence import flight_time_alpha, in_series_order, observe
 from rocklab.diagnosis.extended import model_params
 from rocklab.diagnosis.model import impact_speeds
 from rocklab.diagnosis.result import CampaignDiagnosis
-from rocklab.io import read_dataset, valid_tests
-from rocklab.lab.motion import read_motion
 from rocklab.physics import restitution
 from rocklab.physics.flight import quarter_period
 from rocklab.physics.wall import overturning_velocity
@@ -108,6 +106,12 @@ def _flight_angle_seen(tests, ext, values, A):
     return flight_time_alpha(A, 2.0 * quarter_period(A, mp.flight(A, side), p), p) / alpha
 
 
+#: Tests of a series that the figure of its discovered forms draws at most, spread evenly over it: some
+#: thousands of impacts show a law as well as all of them, and reading every test of the large series
+#: of a campaign ten times the embedded one was nine tenths of the figures' time.
+MAX_TESTS_DRAWN = 100
+
+
 def discovery_figure(tests, entry):
     """Each form the diagnosis discovered beyond the catalogue against the data and the best listed model.
 
@@ -125,7 +129,8 @@ def discovery_figure(tests, entry):
     Parameters
     ----------
     tests : list of rocklab.diagnosis.MeasuredTest
-        Tests of the series, in series order (:func:`rocklab.diagnosis.evidence.in_series_order`).
+        Tests of the series, in series order (:func:`rocklab.diagnosis.evidence.in_series_order`):
+        all, or some spread over it (:data:`MAX_TESTS_DRAWN`, the figure says how many).
     entry : rocklab.diagnosis.result.SeriesDiagnosis
 
     Returns
@@ -189,6 +194,8 @@ def discovery_figure(tests, entry):
             fontsize=9,
         )
         ax.legend(fontsize=7, loc="best")
+    if len(tests) < entry.n_tests:
+        fig.suptitle(f"{len(tests)} of the series' {entry.n_tests} tests drawn, spread evenly over it", fontsize=8)
     fig.set_layout_engine("tight")
     return fig
 
@@ -221,9 +228,7 @@ def series_figures(diagnosis, tests_by_series):
     out = {}
     for e in diagnosis.series:
         paths = {Path(p).stem: p for p in tests_by_series[e.key]}
-        test_id = e.sample_test
-        motion = {test_id: read_motion(paths[test_id])}
-        (recs,) = records_by_series([read_dataset(paths[test_id], ("theta",))], motion).values()
+        (recs,) = stored_records([paths[e.sample_test]]).values()
         out[e.key] = history_figure(measured_test(recs[0]), e)
         if e.discovered:
             out[f"discovered/{e.key}"] = discovery_figure(_series_tests(paths), e)
@@ -347,10 +352,13 @@ def family_figure(result, events):
 
 
 def _series_tests(paths):
-    """The valid tests of one series, ``paths`` (stem -> path) its tests, as the diagnosis read them."""
-    datasets = list(valid_tests(sorted(paths.values()), variables=("theta",)))
-    stored = {ds.attrs["test_id"]: read_motion(paths[ds.attrs["test_id"]]) for ds in datasets}
-    (recs,) = records_by_series(datasets, stored).values()
+    """Valid tests of one series, ``paths`` (stem -> path) its tests, as the diagnosis read them.
+
+    At most :data:`MAX_TESTS_DRAWN`, spread evenly over the series' files.
+    """
+    ordered = sorted(paths.values())
+    drawn = np.unique(np.linspace(0, len(ordered) - 1, min(len(ordered), MAX_TESTS_DRAWN)).round().astype(int))
+    (recs,) = stored_records([ordered[i] for i in drawn]).values()
     return in_series_order([t for t in map(measured_test, recs) if t.n_impacts >= 2])
 
 
