@@ -81,8 +81,8 @@ def cf_attrs(title, source) -> dict:
 #: the patterns zlib finds in readings of a few decimals (transducer
 #: elongations: a third of their size without it, two thirds with it).
 COMPRESSION = {"zlib": True, "complevel": 1, "shuffle": False}
-#: A variable whose first :data:`COMPRESSION_PROBE` bytes zlib cannot bring
-#: below this share of their size is stored uncompressed: the rotations
+#: A variable of which zlib cannot bring :data:`COMPRESSION_PROBE` bytes from
+#: its middle below this share of their size is stored uncompressed: the rotations
 #: solved at full precision keep 85-95 % of their size and took a quarter of
 #: the time of writing a reduced test.
 COMPRESSION_WORTH = 0.8

@@ -11,7 +11,8 @@ Newton solve flight by flight: a fit of the losses in flight evaluates them
 on every flight of a series thousands of times, so the quadratures and the
 Newton passes are compiled loops over the flights (numba), each flight's
 sum over the nodes in the order :func:`numpy.sum` takes (the results are
-those of the array forms, to the last bit).  The diagnosis, the
+those of the array forms to the last bit, but where libm's expm1 rounds
+otherwise than numpy's: with drag, some 1e-15 apart).  The diagnosis, the
 dissipation analysis and the tests of the simulators all take their flights
 from here.
 """
@@ -152,17 +153,29 @@ def _sum8(r):
 
 
 @numba.njit(cache=True)
+def _node_speeds(A, a, p, v):
+    """|thetadot| of the undamped flight of apex A on hinge a at the nodes theta = A (1 - s^2), into ``v``."""
+    c0, pp = math.cos(a - A), 2.0 * (p * p)
+    for j in range(_GL_S.size):
+        th = A * (1.0 - _GL_S[j] * _GL_S[j])
+        v[j] = math.sqrt(max(pp * (c0 - math.cos(a - th)), 0.0))
+
+
+@numba.njit(cache=True)
+def _path_sum(A, v, r):
+    """:func:`path_integral` of one flight from its :func:`_node_speeds` ``v`` (``r``: room for the terms)."""
+    for j in range(_GL_S.size):
+        r[j] = _GL_W[j] * v[j] * 2.0 * A * _GL_S[j]
+    return _sum8(r)
+
+
+@numba.njit(cache=True)
 def _path_nodes(A, a, p):
     out = np.empty(A.size)
-    r = np.empty(_GL_S.size)
+    v, r = np.empty(_GL_S.size), np.empty(_GL_S.size)
     for i in range(A.size):
-        c0 = math.cos(a[i] - A[i])
-        pp = 2.0 * (p[i] * p[i])
-        for j in range(_GL_S.size):
-            th = A[i] * (1.0 - _GL_S[j] * _GL_S[j])
-            f = math.sqrt(max(pp * (c0 - math.cos(a[i] - th)), 0.0))
-            r[j] = _GL_W[j] * f * 2.0 * A[i] * _GL_S[j]
-        out[i] = _sum8(r)
+        _node_speeds(A[i], a[i], p[i], v)
+        out[i] = _path_sum(A[i], v, r)
     return out
 
 
@@ -278,16 +291,13 @@ def _rise_balance(A, a, p, zeta, mu, kappa, k, viscous):
     energy = p2 * (sin_m + mu * one)
     slope = p2 * ((math.sin(a - A) + mu) * math.exp(2.0 * kappa * A) + (k if A < a else 0.0) * cos_m)
     if viscous:
-        c0, pp = math.cos(a - A), 2.0 * p2
-        path, time = np.empty(_GL_S.size), np.empty(_GL_S.size)
+        # the speeds on the nodes, shared by the path and the time
+        v, r = np.empty(_GL_S.size), np.empty(_GL_S.size)
+        _node_speeds(A, a, p, v)
+        energy = energy + 2.0 * zeta * p * _path_sum(A, v, r)
         for j in range(_GL_S.size):
-            th = A * (1.0 - _GL_S[j] * _GL_S[j])
-            # thetadot^2 on the nodes, shared by the path and the time
-            v = math.sqrt(max(pp * (c0 - math.cos(a - th)), 0.0))
-            path[j] = _GL_W[j] * v * 2.0 * A * _GL_S[j]
-            time[j] = _GL_W[j] * 2.0 * A * _GL_S[j] / max(v, 1e-300)
-        energy = energy + 2.0 * zeta * p * _sum8(path)
-        slope = slope + 2.0 * zeta * math.pow(p, 3.0) * math.sin(a - A) * _sum8(time)
+            r[j] = _GL_W[j] * 2.0 * A * _GL_S[j] / max(v[j], 1e-300)
+        slope = slope + 2.0 * zeta * math.pow(p, 3.0) * math.sin(a - A) * _sum8(r)
     return energy, slope
 
 
