@@ -32,8 +32,9 @@ wall with a gap aside),
 it carries), ``coverage_95`` (share of the true parameters of the
 hidden causes named inside their 95 % intervals;
 ``n_params_widened_by_systematic`` of them that the statistical interval
-alone missed and its systematic part,
-:mod:`rocklab.diagnosis.estimation.systematic`, holds), each with its Clopper-Pearson 95 %
+alone missed and its systematic part holds: the pulls of the groups,
+:mod:`rocklab.diagnosis.estimation.systematic`, and the model's bias,
+:mod:`rocklab.diagnosis.estimation.bias`), each with its Clopper-Pearson 95 %
 interval over the series or parameters it rests on, ``n_series``, the
 targets and whether each is met, and ``cells`` (one row per series: its
 factors, verdict, what missed).  Exit status 1 where a target is missed.
@@ -235,12 +236,14 @@ class _Intervals(logging.Handler):
 
 def _widened_by_systematic(cause, name, x, estimate, ci, parts):
     """Whether the truth ``x`` lies in the interval ``ci`` of ``estimate`` only by its systematic part: the
-    statistical interval that, widened by its systematic uncertainty, is ``ci`` misses ``x``."""
+    statistical interval that, widened by the pulls of the groups, is ``ci`` or (widened again by the
+    model's bias, :mod:`rocklab.diagnosis.estimation.bias`) within it misses ``x``."""
     q = next(q for q in catalogue.by_name(cause).params if q.name == name)
     for stat, u in reversed(parts):
         if name in stat and estimate is not None:
-            wide = systematic.widened(stat[name], estimate, q.lower, q.upper, u[name])
-            if np.allclose(wide, ci, rtol=1e-9, atol=1e-12):
+            lo, hi = systematic.widened(stat[name], estimate, q.lower, q.upper, u[name])
+            tol = 1e-9 * (q.upper - q.lower)
+            if ci[0] <= lo + tol and hi - tol <= ci[1]:
                 return not _inside(stat[name], x)
     return False
 

@@ -72,6 +72,9 @@ def test_coverage_counts_the_truths_held_by_the_systematic_part_only():
     parts = [({"c": [0.9, 1.0]}, {"c": 0.0}), ({"c": stat}, {"c": u})]
     s = discovery.score(entry(["restitution_scale"], [found]), truth, parts)
     assert s["named_right"] and s["params_covered"] == 1 and s["params_widened_by_systematic"] == 1
+    # widened again by the model's bias (rocklab.diagnosis.estimation.bias): still by the systematic part
+    wider = {**found, "ci95": {"c": widened(ci, 0.9505, 0.2, 2.0, 0.0002)}}
+    assert discovery.score(entry(["restitution_scale"], [wider]), truth, parts)["params_widened_by_systematic"] == 1
     # a statistical interval that holds the truth on its own
     held = [({"c": [0.949, 0.951]}, {"c": u})]
     found_held = {**found, "ci95": {"c": widened([0.949, 0.951], 0.9505, 0.2, 2.0, u)}}

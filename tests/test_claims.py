@@ -93,13 +93,21 @@ def test_responses_take_their_parameters_margin_and_the_smaller_across_boundarie
 
 
 def test_a_parameter_without_a_simulated_consequence_has_no_margin_and_no_support():
-    # a law of the impact speed has no simulator law; a drift acts nowhere on a wall in mid-series
-    for response in ("restitution_speed.g0", "restitution_drift.drift", "stop_threshold.spread_log", "nothing"):
+    # a drift acts nowhere on a wall in mid-series, nor the scatter of a stop threshold on its mean wall
+    for response in ("restitution_drift.drift", "stop_threshold.spread_log", "nothing"):
         assert np.isnan(margin_of(response))
         assert verdict("zero", -1e-9, 1e-9, 0.9, 0.0, margin_of(response)) == "inconclusive"
-    assert "restitution_speed.g0" in margin_rule()["none"]
+    assert "restitution_drift.drift" in margin_rule()["none"]
     # recomputed: no change in the whole range reaches the tolerance
-    assert np.isnan(outcome_margin("restitution_speed", "g0", "one-sided"))
+    assert np.isnan(outcome_margin("restitution_drift", "drift", "one-sided"))
+
+
+def test_a_law_of_the_impact_speed_acts_on_the_simulated_wall_and_has_its_margin():
+    """The exact simulator carries the law of the impact speed (physics.impact.SpeedLaw): its knots
+    change the simulated outcome, more on the slender two-sided wall, which impacts at many speeds."""
+    two, one = margin_of("restitution_speed.g0", "two-sided"), margin_of("restitution_speed.g0", "one-sided")
+    assert 0 < two < one < 1
+    assert outcome_margin("restitution_speed", "g0", "two-sided") == pytest.approx(two, rel=1e-4)
 
 
 def test_any_contact_gap_changes_the_outcome_its_margin_is_zero():

@@ -477,6 +477,21 @@ def test_a_gap_wall_sticks_by_the_same_rule_in_the_free_run_and_the_simulator():
             1e-6,
         ),
         ({"flight_damping": 0.02}, ("flight_damping",), {"zeta": 0.02}, "two-sided", 1e-3),  # first order in zeta
+        # a law of the impact speed and a change of the base e: the simulator's laws of the diagnosis' own
+        (
+            {"impact": I.SpeedLaw(H(), (0.8, 0.9, 1.05, 1.1))},
+            ("restitution_speed",),
+            {"g0": 0.8, "g1": 0.9, "g2": 1.05, "g3": 1.1},
+            "two-sided",
+            1e-6,
+        ),
+        (
+            {"impact": I.Constant(1 - 0.9 * (1 - restitution.two_sided(ALPHA)) - 0.01)},
+            ("restitution_housner_loss",),
+            {"loss_fraction": 0.9, "loss_constant": 0.01},
+            "two-sided",
+            1e-6,
+        ),
         ({}, (), {}, "one-sided", 1e-6),
         (
             {"impact": I.AmplitudeLaw(I.OneSided(), 1.2, 0.4)},

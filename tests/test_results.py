@@ -64,6 +64,7 @@ SERIES = {
     "rejected": {"hinge_asymmetry": "its signature in the data is absent"},
     "signatures": {"restitution_scale": "e/e_an = 0.95"},
     "heldout": {"base": {"deviance_per_obs": -6.0}, "model": {"deviance_per_obs": -10.0}},
+    "model_bias": {"b": {"c": 2e-5}, "u_model": {"c": 1e-5}},
     "sample_test": "T0001",
 }
 
@@ -221,3 +222,21 @@ def test_every_key_of_the_schemas_is_described(schema):
     missing = [w for name, spec in [("(top)", doc), *defs.items()] for w in undescribed(spec, name)]
     missing += [name for name, spec in defs.items() if not described(spec)]
     assert not missing, missing
+
+
+def test_a_claim_on_a_mean_is_judged_on_the_number_table_3_quotes():
+    """One estimate of a statement on the mean: campaign_effects.csv's row and Table 3's whole history
+    (the mean over tests, CR2 with the walls as clusters, Imbens-Kolesar df)."""
+    import pandas as pd
+
+    effects, t3 = (pd.read_csv(p) for p in embedded("diagnosis/campaign_effects.csv", "table3.csv"))
+    for boundary in ("two-sided", "one-sided"):
+        claim = effects[
+            (effects.boundary == boundary) & (effects.response == "e_ratio") & (effects.covariate == "mean")
+        ]
+        table = t3[(t3.boundary == boundary) & (t3.window == "complete")].iloc[0]
+        assert len(claim)
+        for _, row in claim.iterrows():
+            assert (row.estimate, row.ci_low, row.ci_high, row.df) == pytest.approx(
+                (table["mean"], table.ci_low, table.ci_high, table.df), rel=1e-5
+            )

@@ -5,17 +5,24 @@ A model of the diagnosis is named by its causes (``ext``, names of
 the names become the causes' laws (:func:`rocklab.diagnosis.catalogue.laws`)
 acting on the base model of :mod:`rocklab.diagnosis.model`: its per-test
 arrays (:func:`model_params`), the exact simulator of one wall
-(:func:`rocking_model`) and what the model's free run gets wrong
-(:func:`engineering_errors`).
+(:func:`rocking_model`), what the model's free run gets wrong
+(:func:`engineering_errors`) and the tests it would have given, measured
+as the lab measures (:func:`simulated_tests`).
 """
 
 from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
 
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.causes.restitution_drift import column_of
 from rocklab.diagnosis.errors import engineering_rows, history_rms, summarise_rows
 from rocklab.diagnosis.estimation import finite_mean
+from rocklab.diagnosis.evidence import measured_test
 from rocklab.diagnosis.model import ModelParams, log_columns, model_of, simulate_test, simulator
+from rocklab.lab.motion import noise_level
 from rocklab.simulation.model import RockingModel
 
 
@@ -53,4 +60,35 @@ def engineering_errors(tests, ext=(), values=None, base="analytic", n_history=2)
     out = summarise_rows(engineering_rows(tests, model_params(tests, ext, values).with_base(base)))
     rms = [history_rms(t, rocking_model(t, ext, values, base)) for t in tests[:n_history]]
     out["rms_theta_over_alpha"] = finite_mean(rms) if rms else None
+    return out
+
+
+def simulated_tests(tests, ext=(), values=None, seed=0):
+    """The tests a diagnosis model would have given: each measured test run by the exact simulator
+    from its release on its clock (:func:`simulate_measured`), white noise of its measured level
+    added (:func:`rocklab.lab.motion.noise_level`), read by the lab's extraction
+    (:func:`rocklab.diagnosis.evidence.measured_test`).
+
+    Each keeps its place in the series and its test log; tests of fewer than two impacts are left out.
+
+    Raises
+    ------
+    ValueError
+        For a test without its rotation record.
+    NotImplementedError
+        For a law the exact simulator lacks (:func:`rocklab.diagnosis.model.simulator`).
+    """
+    rng = np.random.default_rng(seed)
+    out = []
+    for t in tests:
+        if t.theta is None:
+            raise ValueError(f"test {t.test_id}: no rotation record to simulate its measurement")
+        fs = 1.0 / t.dt
+        ts, theta = simulate_measured(t, ext, values)
+        theta = theta + rng.normal(0.0, noise_level(t.theta, fs), theta.size)
+        record = dict(test_id=t.test_id, t=ts, theta=theta, fs=fs, alpha=t.alpha, p=t.p, boundary=t.boundary,
+                      direction=t.direction, series=t.series)  # fmt: skip
+        sim = measured_test(record)
+        if sim.n_impacts >= 2:
+            out.append(replace(sim, order=t.order, log=t.log))
     return out

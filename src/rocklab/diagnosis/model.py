@@ -368,7 +368,16 @@ def simulator(mp: ModelParams, base="analytic") -> RockingModel:
     Eqs. 12-13 under them where the wall swings through a gap, and a stop
     (:class:`rocklab.physics.impact.Sticking`).  A law of the impact speed
     and a change of the base e (:class:`~rocklab.physics.law.SpeedFactor`,
-    :class:`~rocklab.physics.law.HousnerLoss`) have no simulator law.
+    :class:`~rocklab.physics.law.HousnerLoss`) are the base e of the model
+    (``mp.e0``) and a law of the impact speed after the others
+    (:class:`rocklab.physics.impact.SpeedLaw`, the reference integrator only),
+    as :func:`impact_speeds` reads them; a law of the speed of the whole
+    excursion through a gap has no law of single impacts.
+
+    Raises
+    ------
+    NotImplementedError
+        For a law of the impact speed on a wall swinging through a gap.
     """
     one = bool(mp.one_sided)
     if base == "zero":
@@ -377,10 +386,17 @@ def simulator(mp: ModelParams, base="analytic") -> RockingModel:
         law = _impact.Constant(-restitution.two_sided(float(mp.alpha)))
     else:
         law = _impact.analytic("one-sided" if one else "two-sided", mp.gap_model)
+        if not np.isclose(float(mp.e0), law.coefficient(1.0, 1, float(mp.alpha), float(mp.p)), rtol=0, atol=1e-12):
+            # a change of the base e (HousnerLoss)
+            law = _impact.Constant(float(mp.e0))
     calibrated = _impact.calibrated(
         _impact.Transverse() if mp.gap_model else law, mp.c_pos, mp.c_neg, mp.amp_a, mp.amp_b
     )
     law, transverse = (law, calibrated) if mp.gap_model else (calibrated, None)
+    if mp.speed_knots is not None:
+        if mp.gap_model:
+            raise NotImplementedError("a law of the impact speed has no simulator law on a wall with a gap")
+        law = _impact.SpeedLaw(law, mp.speed_knots)
     if mp.stop > 0:
         # the landing from the outer hinge only, as free_run and stop_speeds
         # read it: with a gap the base law also serves the return from it

@@ -279,11 +279,22 @@ class SeriesDiagnosis(_Entry):
     ``signatures``, ``heldout`` nor ``extended``; ``listed_verdict`` and
     ``listed_params`` are the causes of the catalogue alone where a form
     beyond it was tried; ``not_identifiable`` the causes its design cannot
-    carry, and why (:func:`rocklab.diagnosis.series.not_identifiable`).
+    carry, and why (:func:`rocklab.diagnosis.series.not_identifiable`);
+    ``model_bias`` the bias of the model measured where a cause is selected
+    (:mod:`rocklab.diagnosis.estimation.bias`).
     """
 
     _optional = frozenset(
-        {"too_small", "not_identifiable", "listed_verdict", "listed_params", "signatures", "heldout", "extended"}
+        {
+            "too_small",
+            "not_identifiable",
+            "listed_verdict",
+            "listed_params",
+            "signatures",
+            "heldout",
+            "model_bias",
+            "extended",
+        }
     )
     _nested = {"base": BaseRun, "findings": [Finding]}
 
@@ -306,6 +317,7 @@ class SeriesDiagnosis(_Entry):
     rejected: dict[str, str] = field(default_factory=dict)
     signatures: dict[str, str] | None = None
     heldout: dict[str, dict] | None = None
+    model_bias: dict[str, Any] | None = None
     extended: dict[str, Any] | None = None
     sample_test: str | None = None
 

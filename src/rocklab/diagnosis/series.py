@@ -30,8 +30,10 @@ from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.discovery import discovery
 from rocklab.diagnosis.errors import what_is_wrong
 from rocklab.diagnosis.estimation import beyond_the_catalogue, finite_mean, select_effects, stand_ins
+from rocklab.diagnosis.estimation.bias import model_bias
+from rocklab.diagnosis.estimation.systematic import widened
 from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_test, observe
-from rocklab.diagnosis.extended import engineering_errors, model_params
+from rocklab.diagnosis.extended import engineering_errors, model_params, simulated_tests
 from rocklab.diagnosis.problem import WallProblem
 from rocklab.diagnosis.result import CampaignDiagnosis
 from rocklab.dissipation.statistics import mean_over_units, t_interval
@@ -220,6 +222,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
             findings.append(found["finding"])
             ext.append(cause.name)
             ext_values.update(found["values"])
+    bias = _with_model_bias(tests, findings, sel, ext, ext_values, seed)
     unexplained = bool(structure) and not sel["weak"]
     if not findings and not unexplained and not off:
         verdict_text = "the base model explains the data within the noise"
@@ -249,6 +252,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         "rejected": sel["rejected"],
         "signatures": {k: v["text"] for k, v in sig.items()},
         "heldout": {"base": _heldout_summary(sel["base"]), "model": _heldout_summary(sel["final"])},
+        **({"model_bias": bias} if bias else {}),
     }
     if ext:
         ext_err = engineering_errors(tests, ext, ext_values, n_history=n_history)
@@ -268,6 +272,35 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         time.perf_counter() - t0,
     )
     return entry
+
+
+def _with_model_bias(tests, findings, sel, ext, values, seed):
+    """Widen the intervals of the selected findings by the bias of the model, measured on the tests
+    simulated at the extended model (:mod:`rocklab.diagnosis.estimation.bias`).
+
+    Returns
+    -------
+    dict
+        ``b`` and ``u_model`` by parameter, or ``not_measured`` (why); empty without a selected cause.
+    """
+    if not sel["effects"]:
+        return {}
+    try:
+        simulated = simulated_tests(tests, ext, values, seed=seed)
+        if len(simulated) < 2:
+            raise ValueError(f"{len(simulated)} simulated tests of two impacts or more (2 needed)")
+    except (NotImplementedError, ValueError) as err:
+        log.warning("bias of the model not measured: %s", err)
+        return {"not_measured": str(err)}
+    u, b = model_bias(WallProblem(simulated), sel["fit"])
+    for f in findings:
+        if f["effect"] not in sel["effects"]:
+            continue
+        bounds = {q.name: q for q in catalogue.by_name(f["effect"]).params}
+        for k, ci in f["ci95"].items():
+            q = bounds[k]
+            f["ci95"][k] = widened(ci, f["params"][k], q.lower, q.upper, u.get(k, 0.0))
+    return {"b": b, "u_model": u}
 
 
 def _estimated(left, found):

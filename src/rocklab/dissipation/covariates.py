@@ -40,8 +40,12 @@ observations:
   each series (the slope on the place, 0 first to 1 last, or the pulled
   minus the pushed mean), then their mean over walls (each the mean of its
   series') with a t interval on walls - 1 degrees of freedom;
-* a claim on a boundary condition's mean: the mean over walls of their
-  series' values, t on walls - 1 degrees of freedom.
+* a claim on a boundary condition's mean: the mean over tests (a series'
+  value weighing its tests) with the walls as clusters, the estimate and
+  interval of Table 3 (:func:`rocklab.dissipation.statistics.clustered_mean`:
+  CR2, t on Imbens-Kolesar degrees of freedom, walls - 1 for walls of equal
+  tests and fewer for unequal ones), so that a statement on the mean is
+  judged on the number the tables quote.
 
 Below the units a verdict needs (two units at each level of a material,
 two residual degrees of freedom, :func:`rocklab.lab.hierarchy.too_few_units`)
@@ -82,7 +86,7 @@ from scipy import stats
 
 from rocklab.dissipation.claims import PAPER_CLAIMS, claim_text, margin_of, verdict
 from rocklab.dissipation.regression import ols
-from rocklab.dissipation.statistics import holm, mean_over_units, t_interval
+from rocklab.dissipation.statistics import clustered_mean, holm, mean_over_units, t_interval
 from rocklab.lab.campaign import order_in_series
 from rocklab.lab.hierarchy import COVARIATE_LEVEL, UNIT_COLUMN, parent, plural, too_few_units
 
@@ -431,12 +435,19 @@ def within_series_row(tests, boundary, response, covariate):
 
 
 def mean_row(frame, boundary, response, source, value):
-    """The mean over walls (each the mean of its series' values) with a t interval (walls - 1 df) and the
-    p-value of mean = value."""
-    common = dict(n_series=len(frame), n_tests=int(frame.n_tests.sum()), term="mean over walls")
-    model = "mean over walls of their series' values (t)"
-    return wall_mean_row(frame.value, frame.wall, null=value, **_row(boundary, response, source, "mean", model=model,
-                                                                       **common))  # fmt: skip
+    """The mean over tests (each series' value weighing its tests) with its cluster-robust t interval, the
+    walls as clusters, and the p-value of mean = value: the estimate and interval of Table 3
+    (:func:`rocklab.dissipation.statistics.clustered_mean`, CR2 on Imbens-Kolesar df), one estimate of
+    a statement on the mean wherever it is quoted."""
+    n = frame.n_tests.to_numpy(int)
+    m, se, df, k, reason = clustered_mean(np.repeat(frame.value.to_numpy(float), n), np.repeat(frame.wall, n), "wall")
+    row = _row(boundary, response, source, "mean", n_series=len(frame), n_tests=int(n.sum()), term="mean over tests",
+               unit_level="wall", n_units=k)  # fmt: skip
+    if reason:
+        return row | {"model": "", "verdict": reason}
+    lo, hi, p = t_interval(m, se, df, null=value)
+    model = "mean over tests, walls as clusters (CR2, Imbens-Kolesar df, t)"
+    return row | dict(model=model, estimate=m, se=se, ci_low=lo, ci_high=hi, p=p, df=df)
 
 
 # --- verdicts ---------------------------------------------------------------------------------

@@ -44,6 +44,7 @@ from collections.abc import Callable
 import numpy as np
 
 from rocklab.physics import restitution
+from rocklab.physics.law import hats
 from rocklab.physics.wall import overturning_velocity
 
 
@@ -244,6 +245,23 @@ class Sticking(ImpactLaw):
         e = self.law.coefficient(thetadot_before, side, alpha, p)
         slow = np.abs(thetadot_before) < self.v_stick * overturning_velocity(alpha, p)
         return np.where(slow, 0.0, e)
+
+
+class SpeedLaw(ImpactLaw):
+    """Another law times g(|thetadot^-| / thetadot_r), g piecewise linear between its values ``knots``
+    at :data:`rocklab.physics.law.KNOTS` (:class:`rocklab.physics.law.SpeedFactor`, its last segment
+    continued past them), within the bounds of :func:`bounded_factor`.
+
+    Only the event-driven reference integrator accepts it (no flat form).
+    """
+
+    def __init__(self, law: ImpactLaw, knots):
+        self.law, self.knots = law, np.asarray(knots, float)
+
+    def coefficient(self, thetadot_before, side, alpha, p):
+        e = self.law.coefficient(thetadot_before, side, alpha, p)
+        g = hats(np.abs(thetadot_before) / overturning_velocity(alpha, p)) @ self.knots
+        return e * bounded_factor(e, g)
 
 
 class Custom(ImpactLaw):

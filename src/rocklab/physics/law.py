@@ -92,7 +92,8 @@ class SpeedFactor:
     """e times g(thetadot^-/thetadot_r), g piecewise linear between its values ``knots`` at
     :data:`KNOTS` (its last segment continued beyond them, :func:`hats`; e within the bounds of
     :func:`rocklab.physics.impact.bounded_factor`): a law of the impact speed no closed form
-    dictates.  No simulator law: the closed forms of a flight only."""
+    dictates.  The exact simulator's law is :class:`rocklab.physics.impact.SpeedLaw` (the
+    reference integrator only: the maps' engines have none)."""
 
     knots: tuple = (1.0, 1.0, 1.0, 1.0)
 

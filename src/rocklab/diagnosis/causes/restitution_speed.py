@@ -8,8 +8,8 @@ says which one the intervals of the fitted values hold): a constant
 (:mod:`restitution_scale`), Eq. 17 (:mod:`restitution_amplitude`), a law
 affine in the speed, a threshold below which the impact stops the wall
 (the law of :mod:`stop_threshold`).  Its law
-(:class:`rocklab.physics.law.SpeedFactor`) acts after the base law, in the
-closed forms only: the exact simulator has no law of it.
+(:class:`rocklab.physics.law.SpeedFactor`) acts after the base law; the
+exact simulator's reference integrator carries it, the maps' engines do not.
 """
 
 from __future__ import annotations
@@ -111,5 +111,5 @@ CAUSE = Cause(
     replaces=(restitution_scale.CAUSE.name, restitution_amplitude.CAUSE.name),
     family=restitution_amplitude.CAUSE.name,
     closed_form=closed_form,
-    on_the_maps=(None, "an impact law of the diagnosis' closed forms that the simulators lack"),
+    on_the_maps=(None, "an impact law the maps' engines lack (the reference integrator only)"),
 )

@@ -5,7 +5,8 @@ hands the engine its tests, its residual groups (log ratios, model over
 measured), the noise covariate of each residual and its candidate causes.
 The engine fits a combination of causes by maximum likelihood with a noise
 model per group, scores it on tests left out, resamples tests for parameter
-intervals and adds their systematic part (the pulls of the residual groups),
+intervals and adds their systematic part (the pulls of the residual groups,
+and the model's bias measured on tests simulated at the fit),
 selects causes greedily and tests what the chosen model leaves.
 The method is described in docs/diagnosis-method.md.
 
@@ -17,6 +18,7 @@ module            holds
 ``fitting``       :func:`fit` (iteratively reweighted least squares), its linearisation
 ``resampling``    :func:`heldout` (K-fold), :func:`parameter_intervals` (bootstrap or sandwich)
 ``systematic``    the systematic part of the intervals: the pulls of the residual groups
+``bias``          the model's bias, measured on tests simulated at a fit
 ``structure``     :func:`structure`, the residual structure a model leaves
 ``selection``     :func:`select_effects`, :func:`beyond_the_catalogue`, :func:`stand_ins`
 ================  ==================================================================

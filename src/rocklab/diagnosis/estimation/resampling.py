@@ -100,6 +100,24 @@ def heldout(problem: Problem, ext, fitted: Fit | None = None):
     return {"deviance": dev, **meas}
 
 
+def sandwich_errors(A, y):
+    """Cluster-robust (by test) standard errors of the parameters of a linearised fit
+    (:func:`sandwich_intervals`); inf for a direction the tests do not fix."""
+    G = len(A)
+    full = np.concatenate(A)
+    N, K = full.shape
+    B = full.T @ full
+    dx = np.linalg.lstsq(full, np.concatenate(y), rcond=None)[0]
+    scores = np.array([a.T @ (b - a @ dx) for a, b in zip(A, y)])
+    Binv = np.linalg.pinv(B)
+    cov = G / max(G - 1, 1) * (N - 1) / max(N - K, 1) * Binv @ (scores.T @ scores) @ Binv
+    se = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    # a direction B does not see is not fixed by the tests: its whole range
+    seen = np.diag(B) > 0
+    seen &= np.abs(np.diag(Binv @ B)) > 0.5
+    return np.where(seen & np.isfinite(se), se, np.inf)
+
+
 def sandwich_intervals(names, x0, lo, hi, A, y, level=0.95):
     """Cluster-robust (by test) t intervals of the parameters from the linearisation of a fit.
 
@@ -121,20 +139,8 @@ def sandwich_intervals(names, x0, lo, hi, A, y, level=0.95):
     dict
         name -> [low, high].
     """
-    G = len(A)
-    full = np.concatenate(A)
-    N, K = full.shape
-    B = full.T @ full
-    dx = np.linalg.lstsq(full, np.concatenate(y), rcond=None)[0]
-    scores = np.array([a.T @ (b - a @ dx) for a, b in zip(A, y)])
-    Binv = np.linalg.pinv(B)
-    cov = G / max(G - 1, 1) * (N - 1) / max(N - K, 1) * Binv @ (scores.T @ scores) @ Binv
-    se = np.sqrt(np.maximum(np.diag(cov), 0.0))
-    # a direction B does not see is not fixed by the tests: its whole range
-    seen = np.diag(B) > 0
-    seen &= np.abs(np.diag(Binv @ B)) > 0.5
-    t = float(stats.t.ppf(0.5 + level / 2, max(G - 1, 1)))
-    half = np.where(seen & np.isfinite(se), t * se, np.inf)
+    t = float(stats.t.ppf(0.5 + level / 2, max(len(A) - 1, 1)))
+    half = t * sandwich_errors(A, y)
     return {
         k: [float(max(x0[i] + lo[i], x0[i] - half[i])), float(min(x0[i] + hi[i], x0[i] + half[i]))]
         for i, k in enumerate(names)

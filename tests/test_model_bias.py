@@ -1,0 +1,97 @@
+"""The bias of the model measured on tests simulated at the fit (rocklab.diagnosis.estimation.bias).
+
+A toy with a closed form: tests see a mean m through a model that reads
+every observation low by a share ``s`` (an approximation of the model that
+every test and group shares, which neither the resampling nor the pulls see):
+the fit is m (1 + s); the same model fitted on tests simulated at the fit
+(the truth the fit claims, measured without the model's error) lands at
+m (1 + s)^2, so b = s m (1 + s), to the noise, which u_model takes off.
+Then the wall: a viscous loss in flight, whose estimate the derivative
+filter's median bias (evidence.FILTER_DAMPING_BIAS) moves by more than
+the statistical interval is wide.
+"""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rocklab.diagnosis.estimation import Problem, fit
+from rocklab.diagnosis.estimation.bias import model_bias
+from rocklab.diagnosis.parameters import Param
+
+TRUTH = 0.3
+NOISE = 0.0005
+#: The standard error of one fit: the noise over all observations of the toy's six tests of 40.
+SE = NOISE / np.sqrt(6 * 40)
+
+
+class _Mean:
+    name = "mean"
+    params = (Param("m", 0.0, 1.0, 0.0, practical=0.01),)
+    replaces = ()
+
+
+class ShareLow(Problem):
+    """Tests of k observations of a mean ``m``, read by a model that takes them to be (1 + share) too low."""
+
+    causes = (_Mean(),)
+
+    def __init__(self, m, share, n_tests=6, k=40, noise=NOISE, seed=0):
+        rng = np.random.default_rng(seed)
+        self.y = m + noise * rng.standard_normal((n_tests, k))
+        self.share, self.n_tests = share, n_tests
+
+    def subset(self, idx):
+        return {"obs": self.y[np.asarray(idx)]}
+
+    def residuals(self, sub, ext, values):
+        return {"obs": values.get("m", 0.0) - (1 + self.share) * sub["obs"]}
+
+    def noise(self, sub):
+        return {"obs": np.ones_like(sub["obs"])}
+
+
+def _fit(problem):
+    return fit(problem, np.arange(problem.n_tests), ("mean",))
+
+
+@pytest.mark.parametrize("share", [0.01, 0.03])
+def test_the_bias_of_a_model_that_reads_low_is_its_closed_form(share):
+    measured = ShareLow(TRUTH, share)
+    f = _fit(measured)
+    assert f.values["m"] == pytest.approx(TRUTH * (1 + share), rel=1e-3)
+    u, b = model_bias(ShareLow(f.values["m"], share, seed=1), f)
+    # two noise draws: the measured and the simulated
+    assert b["m"] == pytest.approx(share * f.values["m"], abs=4 * np.sqrt(2) * SE)
+    # the noise of one draw taken off: a little under |b|
+    assert abs(b["m"]) - SE < u["m"] <= abs(b["m"])
+
+
+def test_an_exact_model_has_no_bias_beyond_the_noise():
+    f = _fit(ShareLow(TRUTH, 0.0))
+    u, b = model_bias(ShareLow(f.values["m"], 0.0, seed=1), f)
+    assert abs(b["m"]) < 4 * np.sqrt(2) * SE
+    assert u["m"] < 4 * SE
+
+
+def test_a_fit_without_parameters_has_no_bias():
+    f = fit(ShareLow(TRUTH, 0.0), np.arange(6), ())
+    assert model_bias(ShareLow(TRUTH, 0.0), f) == ({}, {})
+
+
+@pytest.fixture(scope="module")
+def damped():
+    """The discovery bench's series of a viscous loss zeta = 0.01 on a stocky two-sided wall, 100 Hz, 10 tests."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
+    import discovery
+
+    row = {"cause": "flight_damping", "boundary": "two-sided", "fs": 100.0, "wall": "stocky", "n_tests": 10,
+           "seed": 3}  # fmt: skip
+    return discovery.run_cell(row, 40)
+
+
+def test_the_interval_of_a_loss_in_flight_holds_it_by_the_models_bias(damped):
+    assert damped["verdict"] == ["flight_damping"]
+    assert damped["outside"] == [] and damped["params_covered"] == 1
