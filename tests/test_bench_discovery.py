@@ -101,11 +101,12 @@ def test_the_rates_leave_the_not_identifiable_out_of_the_named_right_rate():
     assert r["false_name_rate_null"] == 1.0 and r["confident_misname_rate"] == pytest.approx(1 / 3)
     bench = {
         **r,
-        **{k: 0 for k in ("n_skipped", "wall_s", "workers", "design_seed")},
+        **{k: 0 for k in ("n_skipped", "wall_s", "workers")},
+        "design_seeds": [0],
         "design": "d",
         "pass": False,
         "targets": {"named_right_rate": {"met": True}, "coverage_95": {"met": False}},
-        "cells": [{**c, "h_over_b": 9.6, "n_impacts": 10} for c in cells],
+        "cells": [{**c, "h_over_b": 9.6, "n_impacts": 10, "design_seed": 0} for c in cells],
     }
     d = _discovery(bench)
     assert d["missed"] == ["coverage_95"]

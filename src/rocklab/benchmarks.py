@@ -296,10 +296,11 @@ def _discovery(bench: dict) -> dict:
     with its binomial interval, the series whose design cannot carry their cause, and one row per series
     with what it missed."""
     keys = ("n_series", "n_null", "n_caused", "n_not_identifiable", "not_identifiable", "n_params_named")
-    keys += ("n_params_widened_by_systematic", "n_skipped", "design", "design_seed", "wall_s", "workers")
+    keys += ("n_params_widened_by_systematic", "n_skipped", "design", "design_seeds", "wall_s", "workers")
     keys += ("named_right_rate", "false_name_rate_null", "confident_misname_rate", "coverage_95", "pass")
     keys += ("named_right_ci95", "false_name_ci95", "confident_misname_ci95", "coverage_ci95")
-    cols = ("cause", "boundary", "fs", "wall", "h_over_b", "n_tests", "n_impacts", "verdict", "named_right")
+    cols = ("design_seed", "cause", "boundary", "fs", "wall", "h_over_b", "n_tests", "n_impacts", "verdict")
+    cols += ("named_right",)
     return {
         **{k: bench[k] for k in keys},
         "targets": bench["targets"],

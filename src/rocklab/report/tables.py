@@ -381,6 +381,7 @@ def discovery_cells(n: Mapping) -> str:
         return "Not measured: `make bench` has not run on these results (`results/bench/discovery.json`)."
     rows = [
         [
+            show(c["design_seed"]),
             c["cause"],
             c["boundary"],
             show(c["fs"], ".0f"),
@@ -393,7 +394,8 @@ def discovery_cells(n: Mapping) -> str:
         ]
         for c in d["cells"]
     ]
-    header = ["hidden", "boundary", "Hz", "wall (h/b)", "tests", "impacts", "verdict", "right", "what it missed"]
+    header = ["shuffle", "hidden", "boundary", "Hz", "wall (h/b)", "tests", "impacts", "verdict", "right"]
+    header += ["what it missed"]
     return markdown_table(header, rows)
 
 

@@ -218,6 +218,8 @@ CAUSE = Cause(
     # short flights move their loss into the measured e (module docstring): a viscous loss named on too few
     # long flights may be a lower e, a lower rocking angle or a dry friction alike
     checks_form=True,
+    # the same reading of short flights as of the viscous member's: dry friction and drag alike
+    not_identifiable=flight_damping.short_flights_only,
     on_the_maps=(
         flight_damping.CAUSE.name,
         "its viscous member, zeta: the maps' numba engine does not simulate dry friction or drag in flight "
