@@ -268,10 +268,7 @@ def impact_speeds(v, side, mp: ModelParams, timed=True):
     if mp.speed_knots is not None:
         # e / e_an = g(v / thetadot_r), after the base law of the other causes
         vr = overturning_velocity(per_test(mp.alpha, side), per_test(mp.p, side))
-        x = np.asarray(v) / vr
-        basis = _law.hats(x)
-        g = np.asarray(mp.speed_knots)
-        g = sum(per_test(g[..., j], x) * basis[..., j] for j in range(_law.KNOTS.size))
+        g = _law.speed_factor(np.asarray(v) / vr, mp.speed_knots)
         with np.errstate(invalid="ignore", divide="ignore"):
             # within the physical bounds of the impact as a whole: no faster take-off than landing
             v_out = v_out * _impact.bounded_factor(np.where(v > 0, v_out / v, 0.0), g)

@@ -44,7 +44,7 @@ from collections.abc import Callable
 import numpy as np
 
 from rocklab.physics import restitution
-from rocklab.physics.law import hats
+from rocklab.physics.law import speed_factor
 from rocklab.physics.wall import overturning_velocity
 
 
@@ -260,7 +260,7 @@ class SpeedLaw(ImpactLaw):
 
     def coefficient(self, thetadot_before, side, alpha, p):
         e = self.law.coefficient(thetadot_before, side, alpha, p)
-        g = hats(np.abs(thetadot_before) / overturning_velocity(alpha, p)) @ self.knots
+        g = speed_factor(np.abs(thetadot_before) / overturning_velocity(alpha, p), self.knots)
         return e * bounded_factor(e, g)
 
 

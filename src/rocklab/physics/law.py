@@ -115,6 +115,17 @@ def hats(x):
     return inside + past * np.r_[np.zeros(KNOTS.size - 2), -1.0, 1.0]
 
 
+def speed_factor(x, knots):
+    """g(x) of :class:`SpeedFactor` [-]: the piecewise-linear law of its values ``knots`` at :data:`KNOTS`
+    (:func:`hats`), at speeds x [thetadot_r]; ``knots`` (..., knots) one law per leading index of x
+    (a law per test of (tests, impacts) speeds) or one for all."""
+    h = hats(x)
+    k = np.asarray(knots, float)
+    if 1 < k.ndim < h.ndim:
+        k = k.reshape(k.shape[:-1] + (1,) * (h.ndim - k.ndim) + k.shape[-1:])
+    return np.sum(h * k, axis=-1)
+
+
 @dataclass(frozen=True)
 class Hinge:
     """The rocking angles times ``ratio`` exp(+-``asymmetry``/2) on hinge +-1: a rounded or indented
