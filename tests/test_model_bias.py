@@ -16,21 +16,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_systematic_intervals import TRUTH, _Mean
 
 from rocklab.diagnosis.estimation import Problem, fit
 from rocklab.diagnosis.estimation.bias import model_bias
-from rocklab.diagnosis.parameters import Param
 
-TRUTH = 0.3
 NOISE = 0.0005
 #: The standard error of one fit: the noise over all observations of the toy's six tests of 40.
 SE = NOISE / np.sqrt(6 * 40)
-
-
-class _Mean:
-    name = "mean"
-    params = (Param("m", 0.0, 1.0, 0.0, practical=0.01),)
-    replaces = ()
 
 
 class ShareLow(Problem):
