@@ -26,6 +26,13 @@ hidden causes, each true parameter inside its 95 % interval; over the
 series whose design can carry their hidden cause: ``n_not_identifiable``
 and ``not_identifiable`` list the others, where the diagnosis says
 ``too_small`` or names the hidden cause in its ``not_identifiable``),
+its two parts ``verdict_right_rate`` (the verdict is the hidden causes,
+intervals aside) and ``named_right_at_coverage`` (the named-right rate
+those verdicts would reach were each true parameter inside its interval
+independently with the measured ``coverage_95``: with k parameters a
+series is all inside with probability coverage^k, some 0.90 for two at
+0.95, so nominal 95 % intervals cap the named-right rate below 0.95 even
+on right verdicts),
 ``false_name_rate_null`` (a cause named on a null series, the gap of a
 wall with a gap aside),
 ``confident_misname_rate`` (a cause that is not hidden named without the
@@ -307,6 +314,7 @@ def score(entry, truth, parts=()):
         "verdict": sorted(named),
         "unexplained": bool(entry["unexplained"]),
         "named_right": named == hidden and not missed,
+        "verdict_right": named == hidden,
         "missing": sorted(hidden - named),
         "wrong": wrong,
         "may_stand_in_for": {c: v for c, v in caveat.items() if v},
@@ -377,6 +385,8 @@ def rates(cells):
     false = int((null.wrong.map(len) > 0).sum())
     confident = int(df.confident_misname.sum())
     right = int(seen.named_right.sum())
+    verdicts = seen[seen.verdict_right]
+    coverage = covered / named if named else None
     return {
         "n_series": len(df),
         "n_null": len(null),
@@ -388,12 +398,21 @@ def rates(cells):
         ],
         "named_right_rate": right / len(seen) if len(seen) else None,
         "named_right_ci95": binomial_interval(right, len(seen)),
+        "verdict_right_rate": len(verdicts) / len(seen) if len(seen) else None,
+        "verdict_right_ci95": binomial_interval(len(verdicts), len(seen)),
+        # every true parameter of a series inside its interval, were each inside with the measured coverage
+        # independently: what intervals of that coverage let the named-right rate reach on these verdicts
+        "named_right_at_coverage": (
+            float(np.mean(coverage ** verdicts.params_named.to_numpy(float))) * len(verdicts) / len(seen)
+            if len(seen) and coverage is not None and len(verdicts)
+            else None
+        ),
         # the gap of a null wall with a gap is its truth, not a false name
         "false_name_rate_null": false / len(null) if len(null) else None,
         "false_name_ci95": binomial_interval(false, len(null)),
         "confident_misname_rate": confident / len(df) if len(df) else None,
         "confident_misname_ci95": binomial_interval(confident, len(df)),
-        "coverage_95": covered / named if named else None,
+        "coverage_95": coverage,
         "coverage_ci95": binomial_interval(covered, named),
         "n_params_named": named,
         "n_params_widened_by_systematic": int(df.params_widened_by_systematic.sum()),
