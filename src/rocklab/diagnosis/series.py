@@ -26,6 +26,7 @@ import time
 
 import numpy as np
 
+from rocklab._imports import lazy_module
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.discovery import discovery
 from rocklab.diagnosis.errors import what_is_wrong
@@ -38,6 +39,8 @@ from rocklab.diagnosis.problem import WallProblem
 from rocklab.diagnosis.result import CampaignDiagnosis
 from rocklab.dissipation.statistics import mean_over_units, t_interval
 from rocklab.lab.hierarchy import plural
+
+stats = lazy_module("scipy.stats")
 
 log = logging.getLogger(__name__)
 
@@ -275,8 +278,9 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
 
 
 def _with_model_bias(tests, findings, sel, ext, values, seed):
-    """Widen the intervals of the selected findings by the bias of the model, measured on the tests
-    simulated at the extended model (:mod:`rocklab.diagnosis.estimation.bias`).
+    """Widen the intervals of the findings by the bias of the model, measured on the tests simulated at
+    the extended model (:mod:`rocklab.diagnosis.estimation.bias`): the selected causes fitted again, a
+    cause estimated after selection (a stop) estimated again.
 
     Returns
     -------
@@ -293,9 +297,19 @@ def _with_model_bias(tests, findings, sel, ext, values, seed):
         log.warning("bias of the model not measured: %s", err)
         return {"not_measured": str(err)}
     u, b = model_bias(WallProblem(simulated), sel["fit"])
+    # a cause estimated after selection, estimated again on the simulated tests: its bias, net of the
+    # noise its interval gives (the half-width over the normal quantile)
+    mp = model_params(simulated, sel["effects"], sel["fit"].values)
     for f in findings:
-        if f["effect"] not in sel["effects"]:
+        cause = catalogue.by_name(f["effect"])
+        if f["effect"] in sel["effects"] or cause.estimate is None:
             continue
+        again = cause.estimate(simulated, mp, seed=seed)
+        for k, ci in f["ci95"].items() if again is not None else ():
+            b[k] = float(again["values"][k] - f["params"][k])
+            se = (ci[1] - ci[0]) / (2 * float(stats.norm.ppf(0.975)))
+            u[k] = float(np.sqrt(max(b[k] ** 2 - se**2, 0.0)))
+    for f in findings:
         bounds = {q.name: q for q in catalogue.by_name(f["effect"]).params}
         for k, ci in f["ci95"].items():
             q = bounds[k]
