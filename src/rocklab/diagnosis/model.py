@@ -382,10 +382,8 @@ def simulator(mp: ModelParams, base="analytic") -> RockingModel:
     elif base == "two-sided-e" and one:
         law = _impact.Constant(-restitution.two_sided(float(mp.alpha)))
     else:
-        law = _impact.analytic("one-sided" if one else "two-sided", mp.gap_model)
-        if not np.isclose(float(mp.e0), law.coefficient(1.0, 1, float(mp.alpha), float(mp.p)), rtol=0, atol=1e-12):
-            # a change of the base e (HousnerLoss)
-            law = _impact.Constant(float(mp.e0))
+        # the model's base e: Eq. 14, or Eq. 2 (two-sided, or through a gap), as a change of it left it
+        law = _impact.Constant(float(mp.e0))
     calibrated = _impact.calibrated(
         _impact.Transverse() if mp.gap_model else law, mp.c_pos, mp.c_neg, mp.amp_a, mp.amp_b
     )

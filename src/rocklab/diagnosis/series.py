@@ -31,7 +31,7 @@ from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.discovery import discovery
 from rocklab.diagnosis.errors import what_is_wrong
 from rocklab.diagnosis.estimation import beyond_the_catalogue, finite_mean, select_effects, stand_ins
-from rocklab.diagnosis.estimation.bias import model_bias
+from rocklab.diagnosis.estimation.bias import model_bias, net_of_noise
 from rocklab.diagnosis.estimation.systematic import widened
 from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_test, observe
 from rocklab.diagnosis.extended import engineering_errors, model_params, simulated_tests
@@ -307,8 +307,7 @@ def _with_model_bias(tests, findings, sel, ext, values, seed):
         again = cause.estimate(simulated, mp, seed=seed)
         for k, ci in f["ci95"].items() if again is not None else ():
             b[k] = float(again["values"][k] - f["params"][k])
-            se = (ci[1] - ci[0]) / (2 * float(stats.norm.ppf(0.975)))
-            u[k] = float(np.sqrt(max(b[k] ** 2 - se**2, 0.0)))
+            u[k] = float(net_of_noise(b[k], (ci[1] - ci[0]) / (2 * float(stats.norm.ppf(0.975)))))
     for f in findings:
         bounds = {q.name: q for q in catalogue.by_name(f["effect"]).params}
         for k, ci in f["ci95"].items():

@@ -40,6 +40,13 @@ from rocklab.diagnosis.estimation.resampling import sandwich_errors
 log = logging.getLogger(__name__)
 
 
+def net_of_noise(b, se):
+    """The bias a difference ``b`` of one noise draw of standard error ``se`` carries: sqrt(max(b^2 - se^2, 0))
+    (E[b^2] = bias^2 + se^2); none where ``se`` is infinite (a direction the tests do not fix)."""
+    b, se = np.asarray(b, float), np.asarray(se, float)
+    return np.sqrt(np.maximum(b**2 - np.where(np.isfinite(se), se, np.abs(b)) ** 2, 0.0))
+
+
 def model_bias(simulated: Problem, fitted: Fit):
     """The bias of ``fitted``'s parameters measured on ``simulated``, its tests simulated at the fit.
 
@@ -64,7 +71,7 @@ def model_bias(simulated: Problem, fitted: Fit):
     names, x0, *_, A, y = linearised(simulated, simulated.subset(every), refit)
     se = sandwich_errors(A, y)
     b = x0 - np.array([fitted.values[k] for k in names], float)
-    u = np.sqrt(np.maximum(b**2 - np.where(np.isfinite(se), se, np.abs(b)) ** 2, 0.0))
+    u = net_of_noise(b, se)
     log.info(
         "bias of %s on %d simulated tests: %s",
         "+".join(fitted.ext),
