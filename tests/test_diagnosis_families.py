@@ -128,3 +128,23 @@ def test_the_test_log_reaches_the_diagnosis(tmp_path):
     tests = in_series_order([measured_test(r) for r in records])
     # only what every test has is a column; each test's place in its range
     assert [t.log for t in tests] == [{"date": 0.0}, {"date": 1.0}, {"date": pytest.approx(1.5 / 2)}]
+
+
+def test_a_law_of_the_impact_speed_on_three_tests_is_not_read_as_eq17():
+    """Three tests leave no structure in the residuals of Eq. 17 (bench/discovery.py, design 1, cell 121)
+    where the information criterion is decisive: the family in its listed member's place opens the search."""
+    from rocklab import diagnosis as D
+    from rocklab.lab import virtual_lab as vl
+    from rocklab.physics.law import KNOTS
+
+    knots = 0.9 + 0.1 * KNOTS
+    model = {"impact": I.SpeedLaw(I.HousnerTwoSided(), knots)}
+    wall = vl.DEFAULT_SPECIMENS.set_index("specimen").loc["1a"]
+    records = vl.series_records("speed", wall, "two-sided", model, n=3, fs=400.0, seed=121, t_end=400.0)
+    entry = D.diagnose_records(records, "speed", n_boot=40, n_history=0, seed=0)
+    assert entry["verdict"] == ["restitution_speed"]
+    assert entry["listed_verdict"] == ["restitution_amplitude"]
+    (finding,) = entry["findings"]
+    for j, g in enumerate(knots):
+        lo, hi = finding["ci95"][f"g{j}"]
+        assert lo <= g <= hi

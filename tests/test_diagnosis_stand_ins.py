@@ -72,3 +72,17 @@ def test_a_family_is_named_on_the_form_it_adds_to_its_listed_member():
     assert not _null_excluded(HingeProblem(), "rounding", shared)
     assert _null_excluded(HingeProblem(), "angle", {"r": shared["r"]})
     assert _null_excluded(HingeProblem(), "rounding", {**shared, "k": [0.25, 0.35]})
+
+
+def test_a_family_displaces_its_listed_member_only_by_the_margin():
+    from rocklab.diagnosis.estimation.selection import BIC_MARGIN, _in_order
+
+    family_of = {"speed": "amplitude"}
+    # fits as well as Eq. 17 (the embedded wall 3a, two-sided): the listed law is tried first
+    tied = [(-1153.7, "speed"), (-1153.4, "amplitude"), (-723.9, "scale")]
+    assert [c[1] for c in _in_order(tied, family_of, BIC_MARGIN)] == ["amplitude", "speed", "scale"]
+    # beats it by more than the margin (a law of the speed on three tests): the family first
+    strong = [(-2444.8, "speed"), (-1021.3, "amplitude"), (-235.7, "scale")]
+    assert [c[1] for c in _in_order(strong, family_of, BIC_MARGIN)] == ["speed", "amplitude", "scale"]
+    # no listed member among the candidates (already in the model): by BIC alone
+    assert [c[1] for c in _in_order([(-5.0, "scale"), (-20.0, "speed")], family_of, BIC_MARGIN)] == ["speed", "scale"]

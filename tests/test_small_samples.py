@@ -155,6 +155,12 @@ def test_a_drift_needs_two_residual_degrees_of_freedom_of_tests(series_of):
         losses = {"flight_damping", "flight_loss"}
         assert set(blind) <= {"restitution_drift"} | losses and (losses <= set(blind)) == (n == 1)
         assert ("flight_damping" in blind) == ("flight_loss" in blind)
+        # a family, named on the form its design cannot show, is never named: its signature does not support
+        # it, so the selection turns it down unfitted; a listed cause keeps its own signature
+        sig = D.catalogue.signatures(tests * n)
+        for c, why in blind.items():
+            family = D.catalogue.by_name(c).family
+            assert (sig[c] == sig[c] | {"supports": False, "not_identifiable": why}) == bool(family)
     assert not not_identifiable(tests * 2, named=["restitution_drift"])
 
 

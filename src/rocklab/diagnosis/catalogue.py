@@ -115,6 +115,11 @@ def signatures(tests):
     out = {}
     for cause in for_boundary(tests[0].boundary, families=True, columns=log_columns(tests)):
         s = cause.signature(ob)
+        why = cause.not_identifiable(ob) if cause.family and cause.not_identifiable is not None else ""
+        if why:
+            # a family is named on the form it adds to its listed member, which a design that cannot identify
+            # it cannot show: never named there (a listed cause may be, its model holding the design's bias)
+            s = {**(s or {}), "supports": False, "not_identifiable": why, "text": (s or {}).get("text", why)}
         if s is not None:
             out[cause.name] = s
     return out

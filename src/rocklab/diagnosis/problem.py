@@ -55,7 +55,7 @@ class WallProblem(Problem):
             sig = self.signature.get(c.name) or {}
             if c.family in ext and sig.get("against_member"):
                 out.append(sig["against_member"])
-            elif c.family in ext and c.checks_form and not sig:
+            elif c.family in ext and c.checks_form and (not sig or sig.get("not_identifiable")):
                 out.append(f"{c.family}: its form is untested, the signature of {c.name} cannot be read in these tests")
             elif c.family and not {c.name, c.family} & set(ext) and sig.get("unmodelled"):
                 out.append(sig["unmodelled"])

@@ -72,7 +72,7 @@ def member_curves(A, v, alpha, p):
 
     u = 1e-3
     return {
-        "zeta": speed_loss(A, alpha, p, zeta=u) / u - FILTER_DAMPING_BIAS,
+        "zeta": flight_damping.viscous_curve(A, alpha, p),
         "mu_over_alpha": speed_loss(A, alpha, p, mu=u * alpha) / u,
         "kappa_alpha": speed_loss(A, alpha, p, kappa=u / alpha) / u - FILTER_DAMPING_BIAS * v / (2.0 * p * alpha),
     }
@@ -131,7 +131,7 @@ def signature(ob):
 def starts(sig):
     """The member that fits the flight-loss curve best, at its fitted value (not the listed viscous loss's)."""
     s = sig.get(CAUSE.name)
-    if not s or s["best"] == "zeta":
+    if not s or s.get("best", "zeta") == "zeta":
         return {}  # the listed loss's own start (its signature)
     return {s["best"]: s["start"]}
 
