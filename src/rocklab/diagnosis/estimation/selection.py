@@ -286,13 +286,8 @@ def _wrong_forms(problem: Problem, sel, signature, fits, bic_margin=BIC_MARGIN):
         # a family its signature does not support is never named: no search for it
         if getattr(c, "family", None) not in current or not signature.get(c.name, {}).get("supports", True):
             continue
-        ext = problem.combine(tuple(e for e in current if e != c.family), c.name)
-        if ext is None:
-            continue
-        if ext not in fits:
-            fits[ext] = fit(problem, np.arange(problem.n_tests), ext)
-        dbic = fits[ext].bic - sel["fit"].bic
-        if dbic < -bic_margin:
+        dbic = _in_place_of(problem, sel, c.name, c.family, fits)
+        if dbic is not None and dbic < -bic_margin:
             out.append(f"{c.name} in place of {c.family} lowers the BIC by {-dbic:.0f}")
     return out
 
@@ -369,20 +364,26 @@ def stand_ins(problem: Problem, sel, hidden, *, fits=None, bic_margin=BIC_MARGIN
         Named cause -> {cause it may stand in for: why that one is not identifiable}; only causes that may.
     """
     fits = {} if fits is None else fits
-    current = tuple(sel["effects"])
-    bic = sel["fit"].bic
     out = {}
     for x, why in hidden.items():
         if x not in problem.candidates(True):
             continue
-        for y in current:
-            ext = problem.combine(tuple(e for e in current if e != y), x)
-            if ext is None:
+        for y in sel["effects"]:
+            dbic = _in_place_of(problem, sel, x, y, fits)
+            if dbic is None:
                 continue
-            if ext not in fits:
-                fits[ext] = fit(problem, np.arange(problem.n_tests), ext)
-            dbic = fits[ext].bic - bic
             log.info("%s in place of %s: BIC %+.1f", x, y, dbic)
             if dbic < bic_margin:
                 out.setdefault(y, {})[x] = why
     return out
+
+
+def _in_place_of(problem: Problem, sel, x, y, fits):
+    """BIC of the selection's model with the cause ``x`` in place of its cause ``y``, less the model's;
+    None where ``x`` cannot join the others (``fits``: shared with the selection)."""
+    ext = problem.combine(tuple(e for e in sel["effects"] if e != y), x)
+    if ext is None:
+        return None
+    if ext not in fits:
+        fits[ext] = fit(problem, np.arange(problem.n_tests), ext)
+    return fits[ext].bic - sel["fit"].bic
