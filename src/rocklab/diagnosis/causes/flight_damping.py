@@ -70,16 +70,22 @@ def signature(ob):
     }
 
 
-def viscous_curve(A, alpha, p):
-    """The viscous loss's flight-loss curve per unit zeta, as the derivative filter reads it [-].
+def filter_reading(A, a, p, v, *, zeta=0.0, mu=0.0, kappa=0.0, k=0.0):
+    """The speed a long flight of apex A [rad] and take-off speed v [rad/s] loses by its next impact, over
+    v, as the derivative filter reads it [-].
 
-    The speed a long flight of apex ``A`` loses
-    (:func:`rocklab.physics.flight.speed_loss`) less the filter's bias
-    within one half of it (:data:`rocklab.diagnosis.evidence.FILTER_DAMPING_BIAS`
-    times zeta): linear in zeta for the small losses of a wall.
+    The speed loss (:func:`rocklab.physics.flight.speed_loss`) less the
+    filter's bias within one half of the flight: :data:`rocklab.diagnosis.evidence.FILTER_DAMPING_BIAS`
+    times zeta, and as much for drag as for a viscous loss of zeta = kappa v / (2 p); none for dry
+    friction, a constant moment the fitted curve's free acceleration absorbs.
     """
+    return speed_loss(A, a, p, zeta, mu=mu, kappa=kappa, k=k) - FILTER_DAMPING_BIAS * (zeta + kappa * v / (2.0 * p))
+
+
+def viscous_curve(A, alpha, p):
+    """The viscous loss's :func:`filter_reading` per unit zeta: linear in zeta for the small losses of a wall."""
     u = 1e-3
-    return speed_loss(A, alpha, p, zeta=u) / u - FILTER_DAMPING_BIAS
+    return filter_reading(A, alpha, p, 0.0, zeta=u) / u
 
 
 def long_flights(ob):

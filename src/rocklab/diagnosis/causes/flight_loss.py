@@ -26,7 +26,7 @@ from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import Cause, flight_damping
 from rocklab.diagnosis.causes.flight_damping import LONG_FLIGHT, MIN_LONG_FLIGHTS, long_flights
 from rocklab.diagnosis.parameters import Param
-from rocklab.physics.flight import speed_loss, takeoff_speed
+from rocklab.physics.flight import takeoff_speed
 from rocklab.physics.law import FlightLoss
 from rocklab.physics.wall import overturning_velocity
 
@@ -55,26 +55,20 @@ def laws(v):
 
 
 def member_curves(A, v, alpha, p):
-    """Each member's flight-loss curve per unit of its parameter, as the derivative filter reads it.
-
-    The speed loss (:func:`rocklab.physics.flight.speed_loss`) less the
-    filter's bias within one half of a long flight
-    (:data:`rocklab.diagnosis.evidence.FILTER_DAMPING_BIAS` times zeta, or
-    kappa v / (2 p) for drag; none for dry friction): linear in the
-    parameter for the small losses of a wall.
+    """Each member's flight-loss curve per unit of its parameter, as the derivative filter reads it
+    (:func:`rocklab.diagnosis.causes.flight_damping.filter_reading`): linear in the parameter for the small
+    losses of a wall.
 
     Returns
     -------
     dict
         Member parameter name -> array like ``A``.
     """
-    from rocklab.diagnosis.evidence import FILTER_DAMPING_BIAS
-
     u = 1e-3
     return {
         "zeta": flight_damping.viscous_curve(A, alpha, p),
-        "mu_over_alpha": speed_loss(A, alpha, p, mu=u * alpha) / u,
-        "kappa_alpha": speed_loss(A, alpha, p, kappa=u / alpha) / u - FILTER_DAMPING_BIAS * v / (2.0 * p * alpha),
+        "mu_over_alpha": flight_damping.filter_reading(A, alpha, p, v, mu=u * alpha) / u,
+        "kappa_alpha": flight_damping.filter_reading(A, alpha, p, v, kappa=u / alpha) / u,
     }
 
 
@@ -170,7 +164,7 @@ def curve(tests, values, listed):
         thetadot_r against the relative speed loss as the derivative filter
         reads it (:func:`member_curves`), on the series' mean wall.
     """
-    from rocklab.diagnosis.evidence import FILTER_DAMPING_BIAS, observe
+    from rocklab.diagnosis.evidence import observe
 
     ob = observe(tests)
     _, v, loss = long_flights(ob)
@@ -184,8 +178,7 @@ def curve(tests, values, listed):
     def line(zeta, mu_a, kappa_a, label):
         kw = {"zeta": zeta, "mu": mu_a * alpha, "kappa": kappa_a / alpha, "k": k}
         v_off = takeoff_speed(A, a, p, **kw)
-        # as the derivative filter reads the long flights (member_curves)
-        read = speed_loss(A, a, p, **kw) - FILTER_DAMPING_BIAS * (zeta + kw["kappa"] * v_off / (2.0 * p))
+        read = flight_damping.filter_reading(A, a, p, v_off, **kw)
         return {"x": (v_off / vr).tolist(), "y": read.tolist(), "label": label}
 
     zeta = listed.get("zeta", 0.0)
