@@ -26,21 +26,18 @@ import time
 
 import numpy as np
 
-from rocklab._imports import lazy_module
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.discovery import discovery
 from rocklab.diagnosis.errors import what_is_wrong
 from rocklab.diagnosis.estimation import beyond_the_catalogue, finite_mean, select_effects, stand_ins
 from rocklab.diagnosis.estimation.bias import model_bias, net_of_noise
-from rocklab.diagnosis.estimation.systematic import widened
+from rocklab.diagnosis.estimation.systematic import standard_error, widened
 from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_test, observe
 from rocklab.diagnosis.extended import engineering_errors, model_params, simulated_tests
 from rocklab.diagnosis.problem import WallProblem
 from rocklab.diagnosis.result import CampaignDiagnosis
 from rocklab.dissipation.statistics import mean_over_units, t_interval
 from rocklab.lab.hierarchy import plural
-
-stats = lazy_module("scipy.stats")
 
 log = logging.getLogger(__name__)
 
@@ -298,7 +295,7 @@ def _with_model_bias(tests, findings, sel, ext, values, seed):
         return {"not_measured": str(err)}
     u, b = model_bias(WallProblem(simulated), sel["fit"])
     # a cause estimated after selection, estimated again on the simulated tests: its bias, net of the
-    # noise its interval gives (the half-width over the normal quantile)
+    # noise its interval gives (systematic.standard_error)
     mp = model_params(simulated, sel["effects"], sel["fit"].values)
     for f in findings:
         cause = catalogue.by_name(f["effect"])
@@ -307,7 +304,7 @@ def _with_model_bias(tests, findings, sel, ext, values, seed):
         again = cause.estimate(simulated, mp, seed=seed)
         for k, ci in f["ci95"].items() if again is not None else ():
             b[k] = float(again["values"][k] - f["params"][k])
-            u[k] = float(net_of_noise(b[k], (ci[1] - ci[0]) / (2 * float(stats.norm.ppf(0.975)))))
+            u[k] = float(net_of_noise(b[k], standard_error(ci)))
     for f in findings:
         bounds = {q.name: q for q in catalogue.by_name(f["effect"]).params}
         for k, ci in f["ci95"].items():

@@ -126,6 +126,17 @@ def systematic_uncertainty(groups):
     return np.sqrt(np.sum(d**2, axis=0))
 
 
+def _z(level):
+    """The two-sided normal quantile of ``level`` (1.96 at 95 %)."""
+    return float(stats.norm.ppf(0.5 + level / 2))
+
+
+def standard_error(ci, level=0.95):
+    """The standard error a symmetric interval ``ci`` of ``level`` stands for: its half-width over the
+    normal quantile (the inverse of :func:`widened`'s scaling)."""
+    return (ci[1] - ci[0]) / (2.0 * _z(level))
+
+
 def widened(ci, x0, lower, upper, u_sys, level=0.95):
     """The interval ``ci`` of an estimate ``x0`` with a systematic standard uncertainty ``u_sys`` added.
 
@@ -133,7 +144,7 @@ def widened(ci, x0, lower, upper, u_sys, level=0.95):
     quantile of ``level`` (1.96 at 95 %), cut at the bounds [lower, upper];
     the result always holds ``x0`` (a side that missed it starts from it).
     """
-    z = float(stats.norm.ppf(0.5 + level / 2))
+    z = _z(level)
     lo, hi = ci
     below = np.hypot(max(x0 - lo, 0.0), z * u_sys)
     above = np.hypot(max(hi - x0, 0.0), z * u_sys)
