@@ -550,9 +550,15 @@ def test_boundary_entries_json_and_markdown(diagnosed, tmp_path):
     values = [next(f for f in fs if f["effect"] == "instability_angle")["params"]["alpha_r_over_alpha"] for fs in named]
     assert f["params"]["alpha_r_over_alpha"] == pytest.approx((sum(values) + 2 * 1.0) / 5)
     assert f["params"]["alpha_r_over_alpha"] == pytest.approx((0.9 + 0.9 + 0.95 + 1 + 1) / 5, abs=2e-3)
-    # a t interval over the five series (4 df)
+    # a t interval over the five series (4 df), widened by the systematic part they share: the mean of
+    # theirs, the two at the null value with none
     x = np.array([*values, 1.0, 1.0])
     half = stats.t.ppf(0.975, 4) * x.std(ddof=1) / np.sqrt(5)
+    u = [
+        next(f for f in fs if f["effect"] == "instability_angle")["u_systematic"]["alpha_r_over_alpha"] for fs in named
+    ]
+    assert f["u_systematic"]["alpha_r_over_alpha"] == pytest.approx(sum(u) / 5)
+    half = np.hypot(half, stats.norm.ppf(0.975) * sum(u) / 5)
     assert f["ci95"]["alpha_r_over_alpha"] == pytest.approx([x.mean() - half, x.mean() + half])
     # with the walls known, the walls are the units: two walls, one residual df, no interval
     walls = dict(zip((e["key"] for e in series), "11122"))

@@ -184,7 +184,8 @@ class _Document:
 class Finding(_Record):
     """A cause named by the data of one series (or of the limestone blocks).
 
-    Parameters of the cause with their bootstrap 95 % intervals, the tests
+    Parameters of the cause with their bootstrap 95 % intervals and the
+    systematic standard uncertainty those hold (``u_systematic``), the tests
     they rest on, the evidence in words, the held-out errors of the model
     with the cause and their gain over the base model; a form discovered
     beyond the catalogue (a family) also says what it reduces to and its
@@ -195,12 +196,23 @@ class Finding(_Record):
     """
 
     _optional = frozenset(
-        {"ci_note", "may_stand_in_for", "discovered", "family", "reduces_to", "best_listed", "heldout_gain", "curve"}
+        {
+            "ci_note",
+            "u_systematic",
+            "may_stand_in_for",
+            "discovered",
+            "family",
+            "reduces_to",
+            "best_listed",
+            "heldout_gain",
+            "curve",
+        }
     )
 
     effect: str
     params: dict[str, float | None] = field(default_factory=dict)
     ci95: dict[str, list] = field(default_factory=dict)
+    u_systematic: dict[str, float] | None = None
     n_tests: int | None = None
     ci_note: str | None = None
     evidence: dict[str, str] = field(default_factory=dict)
@@ -221,16 +233,18 @@ class PooledFinding(_Record):
 
     The random-effects means of its parameters over all those series (walls
     where known; a series that does not name it at the null value), their t
-    intervals, the range over the series that name it, and the test-weighted
+    intervals widened by the systematic uncertainty the series share
+    (``u_systematic``), the range over the series that name it, and the test-weighted
     means of their held-out errors and gains
     (:func:`rocklab.diagnosis.series.diagnose_boundary`).
     """
 
-    _optional = frozenset({"ci_note"})
+    _optional = frozenset({"ci_note", "u_systematic"})
 
     effect: str
     params: dict[str, float | None] = field(default_factory=dict)
     ci95: dict[str, list] = field(default_factory=dict)
+    u_systematic: dict[str, float] | None = None
     evidence: dict[str, Any] = field(default_factory=dict)
     error_heldout: dict[str, float | None] = field(default_factory=dict)
     gain: dict[str, float | None] = field(default_factory=dict)

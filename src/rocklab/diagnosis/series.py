@@ -223,6 +223,10 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
             ext.append(cause.name)
             ext_values.update(found["values"])
     bias = _with_model_bias(tests, findings, sel, ext, ext_values, seed)
+    for f in findings:
+        pulls = sel["ci"].u_sys if f["effect"] in sel["effects"] else {}
+        u_model = bias.get("u_model", {})
+        f["u_systematic"] = {k: float(np.hypot(pulls.get(k, 0.0), u_model.get(k, 0.0))) for k in f["ci95"]}
     unexplained = bool(structure) and not sel["weak"]
     if not findings and not unexplained and not off:
         verdict_text = "the base model explains the data within the noise"
@@ -347,7 +351,7 @@ def _merge_errors(errors, w):
     }
 
 
-def pooled_parameter(values, walls=None):
+def pooled_parameter(values, walls=None, u_sys=None, bounds=(-np.inf, np.inf)):
     """The random-effects mean of one parameter over series, and its 95 % interval.
 
     Each series is one unit (the scatter between series, sd ~0.01-0.05 of
@@ -359,12 +363,28 @@ def pooled_parameter(values, walls=None):
     on units - 1 degrees of freedom; none below the units a verdict needs
     (:func:`rocklab.lab.hierarchy.too_few_units`).
 
+    The scatter between units holds what varies between them and nothing
+    that all share: the series of one lab are measured with one chain and
+    fitted with one model, so the systematic part of their intervals
+    (``u_sys``, :class:`~rocklab.diagnosis.estimation.resampling.Intervals`)
+    is taken as common to all of them, the error of the mean the mean of
+    their errors: the t interval is widened by the mean over units of their
+    systematic standard uncertainties (a unit the mean of its series'), as a
+    series' interval is by its own
+    (:func:`~rocklab.diagnosis.estimation.systematic.widened`).  Taking them
+    as common is the cautious side: were they independent, the scatter would
+    already hold them.
+
     Parameters
     ----------
     values : dict
         Series -> its value.
     walls : mapping, optional
         Series -> wall.
+    u_sys : dict, optional
+        Series -> the systematic standard uncertainty of its value (none: 0).
+    bounds : tuple of float
+        The parameter's bounds, which the interval does not cross.
 
     Returns
     -------
@@ -374,14 +394,18 @@ def pooled_parameter(values, walls=None):
     n_units : int
     note : str
         Why there is no interval; "" when there is one.
+    u_shared : float
+        The systematic standard uncertainty of the mean.
     """
     level = "series" if walls is None else "wall"
     units = [s if walls is None else walls[s] for s in values]
     m, se, k, note = mean_over_units(list(values.values()), units, level)
+    u_sys = u_sys or {}
+    u_shared, *_ = mean_over_units([u_sys.get(s, 0.0) for s in values], units, level)
     if note:
-        return m, None, level, k, note.removeprefix("not testable: ") + ": no interval"
+        return m, None, level, k, note.removeprefix("not testable: ") + ": no interval", u_shared
     lo, hi, _ = t_interval(m, se, k - 1)
-    return m, [float(lo), float(hi)], level, k, ""
+    return m, widened([float(lo), float(hi)], m, *bounds, u_shared), level, k, "", u_shared
 
 
 def _parameter_values(cause, name, usable, named):
@@ -440,10 +464,14 @@ def diagnose_boundary(entries, boundary, *, walls=None, thickness=None):
             continue
         w = np.array([e.n_tests for e, _ in lst], float)
         named = {e.key: f for e, f in lst}
-        params, ci, notes, units = {}, {}, {}, {}
+        params, ci, notes, units, shared = {}, {}, {}, {}, {}
+        bounds = {q.name: (q.lower, q.upper) for q in catalogue.by_name(eff).params}
         for name in lst[0][1].params:
             values = _parameter_values(eff, name, usable, named)
-            params[name], interval, level, units[name], note = pooled_parameter(values, walls)
+            u_sys = {k: (f.u_systematic or {}).get(name, 0.0) for k, f in named.items()}
+            params[name], interval, level, units[name], note, shared[name] = pooled_parameter(
+                values, walls, u_sys, bounds.get(name, (-np.inf, np.inf))
+            )
             if interval is None:
                 notes[name] = note
             else:
@@ -454,6 +482,7 @@ def diagnose_boundary(entries, boundary, *, walls=None, thickness=None):
                 "effect": eff,
                 "params": params,
                 "ci95": ci,
+                "u_systematic": shared,
                 "evidence": {
                     "series": f"named in {len(lst)} of {of_series}",
                     "pooled": f"random-effects mean over {plural(level, max(units.values()))} of all "

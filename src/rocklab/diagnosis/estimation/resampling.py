@@ -37,6 +37,20 @@ COLLAPSED_BOOTSTRAP = 0.5
 log = logging.getLogger(__name__)
 
 
+class Intervals(dict):
+    """Parameter -> its 95 % interval, with ``u_sys``: parameter -> the systematic standard uncertainty
+    the interval holds [its unit] (:mod:`rocklab.diagnosis.estimation.systematic`).
+
+    The systematic part is what every test of a series shares, and what the series of one lab measured
+    with one chain and one model share too: a mean over series averages their statistical parts away
+    but not this one (:func:`rocklab.diagnosis.series.pooled_parameter`).
+    """
+
+    def __init__(self, ci=(), u_sys=None):
+        super().__init__(ci)
+        self.u_sys = dict(u_sys or {})
+
+
 def finite_mean(x):
     """Mean of the finite values of x, None if there are none."""
     x = np.asarray(x, float)
@@ -178,11 +192,16 @@ def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
     each side's half-width h becomes sqrt(h^2 + (1.96 u_sys)^2), within the
     bounds, and the interval always holds its estimate
     (:func:`~rocklab.diagnosis.estimation.systematic.widened`).
+
+    Returns
+    -------
+    Intervals
+        Parameter -> [lower, upper], with the systematic standard uncertainties in ``u_sys``.
     """
     t0 = time.perf_counter()
     rng = np.random.default_rng(seed)
     if not fitted.values:
-        return {}
+        return Intervals()
     names, x0, lo, hi, A, y, groups = by_group(problem, fitted)
     sandwich = sandwich_intervals(names, x0, lo, hi, A, y)
     if problem.n_tests < MIN_BOOTSTRAP:
@@ -227,13 +246,16 @@ def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
 
 def _with_systematic(problem: Problem, fitted: Fit, ci, groups):
     """The statistical intervals ``ci`` widened by the systematic uncertainty of each parameter, within its
-    bounds (:func:`~rocklab.diagnosis.estimation.systematic.widened`)."""
+    bounds (:func:`~rocklab.diagnosis.estimation.systematic.widened`), as :class:`Intervals`."""
     u = dict(zip(fitted.values, systematic_uncertainty(groups)))
-    out = {
-        q.name: widened(ci[q.name], fitted.values[q.name], q.lower, q.upper, u[q.name])
-        for q in problem.params(fitted.ext)
-        if q.name in ci
-    }
+    out = Intervals(
+        {
+            q.name: widened(ci[q.name], fitted.values[q.name], q.lower, q.upper, u[q.name])
+            for q in problem.params(fitted.ext)
+            if q.name in ci
+        },
+        {k: float(v) for k, v in u.items() if k in ci},
+    )
     log.info(
         "intervals of %s, statistical and systematic: %s",
         "+".join(fitted.ext),

@@ -16,7 +16,7 @@ import numpy as np
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.estimation.fitting import fit
 from rocklab.diagnosis.estimation.problem import Problem
-from rocklab.diagnosis.estimation.resampling import heldout, paired_difference, parameter_intervals
+from rocklab.diagnosis.estimation.resampling import Intervals, heldout, paired_difference, parameter_intervals
 from rocklab.diagnosis.estimation.structure import structure
 from rocklab.dissipation.statistics import MIN_BOOTSTRAP
 
@@ -154,7 +154,7 @@ def select_effects(
     cur_fit = fit_of(current)
     cur_ho = heldout(problem, current)
     base_ho = cur_ho
-    steps, rejected, ci = {}, {}, {}
+    steps, rejected, ci = {}, {}, Intervals()
     # candidates that predicted the tests left out worse than the model they would join: no evidence for them
     worse_held_out = set()
     for stage in range(1, max_effects + 1):
@@ -237,7 +237,7 @@ def select_effects(
                 log.info("stage %d: %s removed: %s", stage, old, rejected[old])
                 steps.pop(old)
                 current, cur_fit, cur_ho = ext, f, ho
-                ci = parameter_intervals(problem, f, n_boot=n_boot, seed=seed) if ext else {}
+                ci = parameter_intervals(problem, f, n_boot=n_boot, seed=seed) if ext else Intervals()
     found = structure(problem, all_idx, current, cur_fit.values)
     # structure that a candidate turned down by the held-out test or the bootstrap would remove
     # is weak evidence for it, not something outside the catalogue; one that did worse held out

@@ -1,0 +1,87 @@
+"""A boundary condition's parameters, pooled over its walls, hold the error the walls share.
+
+The scatter between walls holds what varies between them; the bias of the
+chain and of the model is the same for all of them and is not averaged away.
+Four two-sided walls of three tests, one truth (issue 24): every series'
+interval holds it, and so must the pooled one.
+"""
+
+import numpy as np
+import pytest
+from scipy import stats
+from test_diagnosis import SPEC, H, I
+
+from rocklab import diagnosis as D
+from rocklab.diagnosis.series import pooled_parameter
+from rocklab.lab import virtual_lab as vl
+
+TRUTH = {"restitution_scale": {"c": 0.95}, "instability_angle": {"alpha_r_over_alpha": 0.91}}
+TRUTH["flight_damping"] = {"zeta": 0.008}
+
+
+@pytest.fixture(scope="module")
+def four_walls():
+    model = {"impact": I.Scaled(H(), 0.95), "flight_damping": 0.008}
+    entries = []
+    for i, sp in enumerate(["1a", "2a", "3b", "5c"]):
+        records = vl.series_records(
+            sp, SPEC.loc[sp], "two-sided", model, n=3, fs=200.0, alpha_ratio=0.91, seed=i, t_end=30.0
+        )
+        entries.append(D.diagnose_records(records, f"{sp}-2s", n_boot=10, n_history=0))
+    return entries
+
+
+def test_the_pooled_intervals_hold_what_every_series_holds(four_walls):
+    walls = {e["key"]: e["key"][:2] for e in four_walls}
+    b = D.diagnose_boundary(four_walls, "two-sided", walls=walls)
+    assert set(b["verdict"]) == set(TRUTH)
+    narrow = 0
+    for f in b["findings"]:
+        for k, truth in TRUTH[f["effect"]].items():
+            # every series holds the truth, and so does the pool
+            for e in four_walls:
+                lo, hi = next(g for g in e["findings"] if g["effect"] == f["effect"])["ci95"][k]
+                assert lo <= truth <= hi
+            lo, hi = f["ci95"][k]
+            assert lo <= truth <= hi, (f["effect"], k, truth, lo, hi)
+            # the series agree to better than their shared bias: the scatter alone misses the truth
+            values = {
+                e["key"]: next(g for g in e["findings"] if g["effect"] == f["effect"])["params"][k] for e in four_walls
+            }
+            _, (lo, hi), *_ = pooled_parameter(values, walls)
+            narrow += not lo <= truth <= hi
+            assert f["u_systematic"][k] == pytest.approx(
+                np.mean(
+                    [
+                        next(g for g in e["findings"] if g["effect"] == f["effect"])["u_systematic"][k]
+                        for e in four_walls
+                    ]
+                )
+            )
+    assert narrow >= 2
+
+
+def test_a_shared_systematic_uncertainty_is_not_averaged_away():
+    values = {f"s{i}": 0.9 for i in range(4)}
+    walls = {s: s for s in values}
+    m, ci, level, n, note, u = pooled_parameter(values, walls, {s: 0.01 for s in values})
+    assert (m, level, n, note, u) == (pytest.approx(0.9), "wall", 4, "", pytest.approx(0.01))
+    assert ci == pytest.approx([0.9 - 1.96 * 0.01, 0.9 + 1.96 * 0.01], rel=1e-3)
+    # a series at the null value carries none; the mean's share is the mean of the walls'
+    _, ci, *_, u = pooled_parameter(values, walls, {"s0": 0.01, "s1": 0.01})
+    assert u == pytest.approx(0.005) and ci[1] - 0.9 == pytest.approx(1.96 * 0.005, rel=1e-3)
+    # two series of one wall are one wall's evidence: its uncertainty is their mean
+    _, _, _, n, _, u = pooled_parameter(values, {"s0": "a", "s1": "a", "s2": "b", "s3": "c"}, {"s0": 0.02})
+    assert n == 3 and u == pytest.approx(0.01 / 3)
+    # the interval stays within the parameter's bounds
+    _, ci, *_ = pooled_parameter(values, walls, {s: 0.1 for s in values}, bounds=(0.0, 1.0))
+    assert ci[1] == 1.0
+
+
+def test_without_a_systematic_part_the_interval_is_students_t():
+    rng = np.random.default_rng(1)
+    values = {f"s{i}": 0.9 + 0.01 * rng.standard_normal() for i in range(5)}
+    x = np.array(list(values.values()))
+    half = stats.t.ppf(0.975, 4) * x.std(ddof=1) / np.sqrt(5)
+    _, ci, *_ = pooled_parameter(values)
+    assert ci == pytest.approx([x.mean() - half, x.mean() + half])
