@@ -325,7 +325,7 @@ def test_workflow_maps_one_record(tmp_path):
 
 def _diagnosis():
     """A diagnosis.json with one entry per boundary (pooled findings, as
-    rocklab.diagnosis.series.diagnose_boundary writes them) and a series entry."""
+    rocklab.diagnosis.pooling.diagnose_boundary writes them) and a series entry."""
 
     def finding(effect, **params):
         return {"effect": effect, "params": params}

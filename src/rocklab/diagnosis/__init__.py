@@ -17,7 +17,8 @@ module             holds
 ``discovery``      whether a finding's form was discovered (a family) rather than listed
 ``problem``        the tests of a series as a problem of the engine
 ``errors``         engineering errors of a model's free run, in words
-``series``         diagnosis of a series, a boundary condition, a campaign
+``series``         diagnosis of a series
+``pooling``        a boundary condition and a campaign from their series
 ``result``         the results as typed objects: diagnosis.json, limestone_diagnosis.json
 ``report``         results/diagnosis.json and diagnosis.md
 ``block_tests``    the same causes and engine on the limestone block tables
@@ -37,6 +38,7 @@ from rocklab.diagnosis.evidence import (
 )
 from rocklab.diagnosis.extended import engineering_errors, model_params, rocking_model, simulate_measured
 from rocklab.diagnosis.model import free_run
+from rocklab.diagnosis.pooling import diagnose_boundary, diagnose_campaign, with_boundaries
 from rocklab.diagnosis.report import diagnosis_markdown, write_diagnosis
 from rocklab.diagnosis.result import (
     BoundaryDiagnosis,
@@ -47,13 +49,7 @@ from rocklab.diagnosis.result import (
     SeriesDiagnosis,
     jsonable,
 )
-from rocklab.diagnosis.series import (
-    diagnose_boundary,
-    diagnose_campaign,
-    diagnose_records,
-    diagnose_series,
-    with_boundaries,
-)
+from rocklab.diagnosis.series import diagnose_records, diagnose_series
 
 __all__ = [
     "BoundaryDiagnosis",

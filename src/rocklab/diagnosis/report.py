@@ -15,7 +15,7 @@ def write_diagnosis(diagnosis, json_path, md_path=None):
     Parameters
     ----------
     diagnosis : CampaignDiagnosis or list of dict
-        The diagnosis, or the entries :func:`~rocklab.diagnosis.series.diagnose_campaign` computes.
+        The diagnosis, or the entries :func:`~rocklab.diagnosis.pooling.diagnose_campaign` computes.
     json_path, md_path : path-like
         The files (no diagnosis.md where ``md_path`` is None).
     """
@@ -54,7 +54,7 @@ def diagnosis_markdown(diagnosis) -> str:
     Parameters
     ----------
     diagnosis : CampaignDiagnosis or list of dict
-        The diagnosis, or the entries :func:`~rocklab.diagnosis.series.diagnose_campaign` computes.
+        The diagnosis, or the entries :func:`~rocklab.diagnosis.pooling.diagnose_campaign` computes.
     """
     out = [
         "# Model diagnosis",

@@ -16,7 +16,7 @@ object                      file
                             has no test of two impacts)
 :class:`SeriesDiagnosis`    an entry of one series (:func:`~rocklab.diagnosis.series.diagnose_series`)
 :class:`BoundaryDiagnosis`  an entry of one boundary condition, its series summed up
-                            (:func:`~rocklab.diagnosis.series.diagnose_boundary`)
+                            (:func:`~rocklab.diagnosis.pooling.diagnose_boundary`)
 :class:`Finding`            a cause a series (or a limestone block group) names
 :class:`PooledFinding`      a cause named in enough series of a boundary condition
 :class:`LimestoneDiagnosis` results/limestone_diagnosis.json
@@ -236,7 +236,7 @@ class PooledFinding(_Record):
     intervals widened by the systematic uncertainty the series share
     (``u_systematic``), the range over the series that name it, and the test-weighted
     means of their held-out errors and gains
-    (:func:`rocklab.diagnosis.series.diagnose_boundary`).
+    (:func:`rocklab.diagnosis.pooling.diagnose_boundary`).
     """
 
     _optional = frozenset({"ci_note", "u_systematic"})
@@ -382,7 +382,7 @@ class CampaignDiagnosis(_Document):
     """The entries of a diagnosis: results/diagnosis.json, or the series of results/diagnosis/<boundary>.json.
 
     ``entries`` are the series then the boundary conditions, as
-    :func:`~rocklab.diagnosis.series.diagnose_campaign` gives them.
+    :func:`~rocklab.diagnosis.pooling.diagnose_campaign` gives them.
     """
 
     schema: ClassVar[Path] = DIAGNOSIS_SCHEMA

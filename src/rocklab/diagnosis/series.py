@@ -4,8 +4,8 @@
 series (:mod:`rocklab.diagnosis.errors`), selects the causes the data
 carry (:func:`rocklab.diagnosis.estimation.selection.select_effects` on a
 :class:`rocklab.diagnosis.problem.WallProblem`), runs the causes estimated
-after selection and states the gain; :func:`diagnose_boundary` sums the
-series of a boundary condition up.  Method: docs/diagnosis-method.md.
+after selection and states the gain; :mod:`rocklab.diagnosis.pooling` sums
+the series of a boundary condition up.  Method: docs/diagnosis-method.md.
 
 Small samples: a cause is named only where the 95 % interval of its
 parameter over the tests clears its null value: a bootstrap over tests, or
@@ -14,9 +14,7 @@ the cluster-robust t interval on their few degrees of freedom
 (:func:`rocklab.diagnosis.estimation.resampling.parameter_intervals`), wide
 as three tests make it.  A series of one test is compared with the base
 model but names nothing (``too_small``: nothing varies between tests to
-measure the noise of a parameter by), and a boundary condition is summed up
-over the series large enough, its parameters pooled over all of them (walls
-where known), with no interval on fewer units than a verdict needs.
+measure the noise of a parameter by).
 """
 
 from __future__ import annotations
@@ -35,9 +33,6 @@ from rocklab.diagnosis.estimation.systematic import standard_error, widened
 from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_test, observe
 from rocklab.diagnosis.extended import engineering_errors, model_params, simulated_tests
 from rocklab.diagnosis.problem import WallProblem
-from rocklab.diagnosis.result import CampaignDiagnosis
-from rocklab.dissipation.statistics import mean_over_units, t_interval
-from rocklab.lab.hierarchy import plural
 
 log = logging.getLogger(__name__)
 
@@ -331,238 +326,6 @@ def _sample_test(tests):
     return tests[int(np.argmax([t.n_impacts for t in tests]))].test_id
 
 
-def _wmean(vals, w):
-    """Weighted mean of the finite values (None counts as missing); None if there are none."""
-    vals = np.array([np.nan if v is None else v for v in vals], float)
-    w = np.asarray(w, float)
-    ok = np.isfinite(vals)
-    return float(np.sum(vals[ok] * w[ok]) / np.sum(w[ok])) if ok.any() else None
-
-
-def _merge_errors(errors, w):
-    """Weighted means over series of :func:`engineering_errors` dicts."""
-    return {
-        k: (
-            {s: _wmean([e[k][s] for e in errors], w) for s in v}
-            if isinstance(v, dict)
-            else _wmean([e[k] for e in errors], w)
-        )
-        for k, v in errors[0].items()
-    }
-
-
-def pooled_parameter(values, walls=None, u_sys=None, bounds=(-np.inf, np.inf)):
-    """The random-effects mean of one parameter over series, and its 95 % interval.
-
-    Each series is one unit (the scatter between series, sd ~0.01-0.05 of
-    e/e_an, dwarfs a series' own standard error, so a random-effects mean
-    weighs the series equally); where the series' walls are known, each
-    wall's value is the mean of its series and the walls are the units
-    (:mod:`rocklab.lab.hierarchy`: a boundary condition's parameter holds for
-    walls, and the series of one wall are one wall's evidence).  Student's t
-    on units - 1 degrees of freedom; none below the units a verdict needs
-    (:func:`rocklab.lab.hierarchy.too_few_units`).
-
-    The scatter between units holds what varies between them and nothing
-    that all share: the series of one lab are measured with one chain and
-    fitted with one model, so the systematic part of their intervals
-    (``u_sys``, :class:`~rocklab.diagnosis.estimation.resampling.Intervals`)
-    is taken as common to all of them, the error of the mean the mean of
-    their errors: the t interval is widened by the mean over units of their
-    systematic standard uncertainties (a unit the mean of its series'), as a
-    series' interval is by its own
-    (:func:`~rocklab.diagnosis.estimation.systematic.widened`).  Taking them
-    as common is the cautious side: were they independent, the scatter would
-    already hold them.
-
-    Parameters
-    ----------
-    values : dict
-        Series -> its value.
-    walls : mapping, optional
-        Series -> wall.
-    u_sys : dict, optional
-        Series -> the systematic standard uncertainty of its value (none: 0).
-    bounds : tuple of float
-        The parameter's bounds, which the interval does not cross.
-
-    Returns
-    -------
-    mean : float
-    ci : list of float or None
-    unit_level : str
-    n_units : int
-    note : str
-        Why there is no interval; "" when there is one.
-    u_shared : float
-        The systematic standard uncertainty of the mean.
-    """
-    level = "series" if walls is None else "wall"
-    units = [s if walls is None else walls[s] for s in values]
-    m, se, k, note = mean_over_units(list(values.values()), units, level)
-    u_sys = u_sys or {}
-    u_shared, *_ = mean_over_units([u_sys.get(s, 0.0) for s in values], units, level)
-    if note:
-        return m, None, level, k, note.removeprefix("not testable: ") + ": no interval", u_shared
-    lo, hi, _ = t_interval(m, se, k - 1)
-    return m, widened([float(lo), float(hi)], m, *bounds, u_shared), level, k, "", u_shared
-
-
-def _parameter_values(cause, name, usable, named):
-    """Every usable series' value of one parameter of ``cause``: its own estimate where it named the
-    cause, the parameter's null value where it did not (the cause absent there); a parameter without
-    a null value in the catalogue (one that only exists with its cause, the spread of the stop speeds)
-    from the series that estimated it only."""
-    null = next((q.null for q in catalogue.by_name(cause).params if q.name == name), None)
-    out = {}
-    for e in usable:
-        f = named.get(e.key)
-        if f is not None and name in f.params:
-            out[e.key] = f.params[name]
-        elif null is not None:
-            out[e.key] = null
-    return out
-
-
-def diagnose_boundary(entries, boundary, *, walls=None, thickness=None):
-    """One boundary condition from the diagnoses of its series.
-
-    ``entries``: a :class:`~rocklab.diagnosis.result.CampaignDiagnosis` or
-    its entries (those of other boundary conditions are passed over).
-    The series are different walls and set-ups, so their parameters are not
-    pooled into one fit: a cause is in the verdict when it is named in at
-    least half of the series large enough to name one (not ``too_small``),
-    and its parameters pool ALL those series, never only the ones that named
-    it (a mean over the namers alone is the winner's curse): the series
-    that did not name it count at the parameter's null value
-    (:func:`_parameter_values`), and the mean is a random-effects mean over
-    series, or over walls where ``walls`` (series -> wall) is given, with a
-    t interval (:func:`pooled_parameter`; ``ci_note`` says why there is
-    none).  Each finding gives the ``n_series`` that named it, the
-    ``n_units`` its parameters rest on and ``n_tests``.  Errors are
-    test-weighted means over all series.  With ``thickness`` (wall ->
-    thickness [m]) the entry gives ``wall_thickness_m``, the mean over its
-    walls: the size the findings were measured at, for the maps' transfer
-    under absolute sizes (:mod:`rocklab.seismic.calibrated`).
-    """
-    ser = CampaignDiagnosis.of(entries).series_of(boundary)
-    if not ser:
-        return None
-    usable = [e for e in ser if not e.too_small]
-    small = [e.key for e in ser if e.too_small]
-    w_all = np.array([e.n_tests for e in ser], float)
-    n_tests = int(w_all.sum())
-    base_err = _merge_errors([e.base.errors for e in ser], w_all)
-    counts = {}
-    for e in usable:
-        for f in e.findings:
-            counts.setdefault(f.effect, []).append((e, f))
-    of_series = f"{len(usable)} series" + (f" large enough to name a cause (of {len(ser)})" if small else "")
-    findings = []
-    for eff, lst in counts.items():
-        if len(lst) < 0.5 * len(usable):
-            continue
-        w = np.array([e.n_tests for e, _ in lst], float)
-        named = {e.key: f for e, f in lst}
-        params, ci, notes, units, shared = {}, {}, {}, {}, {}
-        bounds = {q.name: (q.lower, q.upper) for q in catalogue.by_name(eff).params}
-        for name in lst[0][1].params:
-            values = _parameter_values(eff, name, usable, named)
-            u_sys = {k: (f.u_systematic or {}).get(name, 0.0) for k, f in named.items()}
-            params[name], interval, level, units[name], note, shared[name] = pooled_parameter(
-                values, walls, u_sys, bounds.get(name, (-np.inf, np.inf))
-            )
-            if interval is None:
-                notes[name] = note
-            else:
-                ci[name] = interval
-        note = "; ".join(f"{k}: {v}" for k, v in notes.items())
-        findings.append(
-            {
-                "effect": eff,
-                "params": params,
-                "ci95": ci,
-                "u_systematic": shared,
-                "evidence": {
-                    "series": f"named in {len(lst)} of {of_series}",
-                    "pooled": f"random-effects mean over {plural(level, max(units.values()))} of all "
-                    f"{len(usable)} series, the {len(usable) - len(lst)} that did not name it at its null value",
-                    "range": {
-                        n: [float(min(f.params[n] for _, f in lst)), float(max(f.params[n] for _, f in lst))]
-                        for n in params
-                    },
-                },
-                "error_heldout": {"deviance_per_obs": _wmean([f.error_heldout["deviance_per_obs"] for _, f in lst], w)},
-                "gain": {k: _wmean([f.gain.get(k) for _, f in lst], w) for k in lst[0][1].gain},
-                "n_series": len(lst),
-                "n_tests": int(w.sum()),
-                **({"ci_note": note} if note else {}),
-            }
-        )
-    findings.sort(key=lambda f: (-f["n_series"], -(f["gain"]["deviance_per_obs"] or 0)))
-    flagged = [e.key for e in usable if e.unexplained]
-    kinds = {}
-    for e in usable:
-        for k in {st.split(":")[0] for st in e.residual_structure}:
-            kinds[k] = kinds.get(k, 0) + 1
-    w_used = [e.n_tests for e in usable]
-    ho = (
-        {
-            m: {k: _wmean([e.heldout[m][k] for e in usable], w_used) for k in usable[0].heldout[m]}
-            for m in ("base", "model")
-        }
-        if usable
-        else None
-    )
-    statement, off = what_is_wrong(base_err, "the simulation")
-    verdicts = {e.key: e.verdict for e in ser}
-    extended = [e for e in ser if e.extended]
-    ext_statement = None
-    if extended:
-        ext_err = _merge_errors([e.extended["errors"] for e in extended], [e.n_tests for e in extended])
-        ext_statement = what_is_wrong(ext_err, "the extended model")[0]
-    if usable and not findings and not flagged and not off:
-        statement = "the base model explains the data within the noise: " + statement
-    out = {
-        "scope": "boundary",
-        "key": boundary,
-        "boundary": boundary,
-        "n_tests": n_tests,
-        "n_series": len(ser),
-        "n_series_diagnosed": len(usable),
-        "too_small_series": small,
-        "n_impacts": int(sum(e.n_impacts for e in ser)),
-        "base": {"model": base_name(boundary), "errors": base_err},
-        "what_is_wrong": statement,
-        "verdict": [f["effect"] for f in findings],
-        "unexplained": bool(usable) and len(flagged) >= 0.5 * len(usable),
-        "residual_structure": [
-            f"{k} in {n} of {len(usable)} series" for k, n in sorted(kinds.items(), key=lambda x: -x[1])
-        ],
-        "unexplained_series": flagged,
-        "findings": findings,
-        "heldout": ho,
-        "series_verdicts": verdicts,
-        **({"extended": {"statement": ext_statement, "n_series": len(extended)}} if ext_statement else {}),
-    }
-    if walls is not None and thickness is not None:
-        out["wall_thickness_m"] = float(np.mean([thickness[w] for w in {walls[e.key] for e in ser}]))
-    if not usable:
-        out["too_small"] = (
-            f"none of its {len(ser)} series has the {MIN_TESTS_TO_NAME} tests "
-            "of two impacts or more a series needs to name one"
-        )
-    log.info(
-        "boundary %s: %d series (%d too small to name a cause), %d tests; verdict %s",
-        boundary,
-        len(ser),
-        len(small),
-        n_tests,
-        ", ".join(out["verdict"]) or "none",
-    )
-    return out
-
-
 def diagnose_records(records, key, *, n_boot=40, n_history=2, seed=0):
     """:func:`diagnose_series` of one series' records, or None when none of its
     tests has two impacts or more (nothing to compare a model with)."""
@@ -572,38 +335,3 @@ def diagnose_records(records, key, *, n_boot=40, n_history=2, seed=0):
         log.warning("series %s: no test with two impacts or more, nothing to diagnose", key)
         return None
     return diagnose_series(tests, key=str(key), n_boot=n_boot, n_history=n_history, seed=seed)
-
-
-def with_boundaries(entries, *, walls=None, thickness=None):
-    """Series entries followed by one entry per boundary condition (:func:`diagnose_boundary`; ``walls``:
-    series -> wall, ``thickness``: wall -> thickness [m])."""
-    out = list(entries)
-    for b in ("two-sided", "one-sided"):
-        e = diagnose_boundary(out, b, walls=walls, thickness=thickness)
-        if e is not None:
-            out.append(e)
-    return out
-
-
-def diagnose_campaign(series_records, *, n_boot=40, n_history=2, by_boundary=True, seed=0):
-    """Diagnose every series and every boundary condition of a campaign.
-
-    Parameters
-    ----------
-    series_records : dict
-        series id -> list of test records (dicts for :func:`measured_test`)
-        or :class:`MeasuredTest`.
-    by_boundary : bool
-        Add one entry per boundary condition (:func:`diagnose_boundary`).
-
-    Returns
-    -------
-    list of dict
-        The content of results/diagnosis.json.
-    """
-    entries = [
-        diagnose_records(recs, sid, n_boot=n_boot, n_history=n_history, seed=seed)
-        for sid, recs in series_records.items()
-    ]
-    entries = [e for e in entries if e is not None]
-    return with_boundaries(entries) if by_boundary else entries

@@ -12,7 +12,7 @@ the contact gap of one-sided walls (Fig. 12), hinge asymmetry, flight damping.
 Each boundary's entry of the diagnosis (scope ``"boundary"``) pools its
 series: a cause named in at least half of them, with the random-effects
 mean of its parameters over all of them
-(:func:`rocklab.diagnosis.series.diagnose_boundary`).  Every parameter is
+(:func:`rocklab.diagnosis.pooling.diagnose_boundary`).  Every parameter is
 dimensionless (ratios to alpha, to e_an, to thetadot_r of Eq. 16), and the
 calibrated walls carry them as found: the transfer to the maps' wall
 (alpha, R of the configuration), about five times thicker than the lab's
@@ -109,7 +109,7 @@ def boundary_findings(diagnosis, boundary):
     ----------
     diagnosis : rocklab.diagnosis.result.CampaignDiagnosis, its entries or path
         ``results/diagnosis.json``; without an entry for ``boundary``, its
-        series are pooled here (:func:`rocklab.diagnosis.series.diagnose_boundary`).
+        series are pooled here (:func:`rocklab.diagnosis.pooling.diagnose_boundary`).
     boundary : {"two-sided", "one-sided"}
 
     Returns
@@ -126,7 +126,7 @@ def boundary_findings(diagnosis, boundary):
     diagnosis = CampaignDiagnosis.of(diagnosis)
     entry = diagnosis.boundary(boundary)
     if entry is None:
-        from rocklab.diagnosis.series import diagnose_boundary
+        from rocklab.diagnosis.pooling import diagnose_boundary
 
         pooled = diagnose_boundary(diagnosis, boundary)
         entry = None if pooled is None else BoundaryDiagnosis.from_dict(pooled)

@@ -43,7 +43,7 @@ class Intervals(dict):
 
     The systematic part is what every test of a series shares, and what the series of one lab measured
     with one chain and one model share too: a mean over series averages their statistical parts away
-    but not this one (:func:`rocklab.diagnosis.series.pooled_parameter`).
+    but not this one (:func:`rocklab.diagnosis.pooling.pooled_parameter`).
     """
 
     def __init__(self, ci=(), u_sys=None):
