@@ -6,8 +6,8 @@ every test and group shares, which neither the resampling nor the pulls see):
 the fit is m (1 + s); the same model fitted on tests simulated at the fit
 (the truth the fit claims, measured without the model's error) lands at
 m (1 + s)^2, so b = s m (1 + s), to the noise, which u_model takes off.
-Then the wall: a viscous loss in flight, whose estimate the derivative
-filter's median bias (evidence.FILTER_DAMPING_BIAS) moves by more than
+Then the wall: a viscous loss in flight, whose estimate what the
+derivative filter reads of it (evidence.filter_reading) moves by more than
 the statistical interval is wide.
 """
 

@@ -218,6 +218,38 @@ def _arrival(us, i, level):
     return i + int(back[0]) if back.size else None
 
 
+def landing_window(t_takeoff, t_landing, fs, width, ring_guard_s):
+    """The window the derivative filter fits for the speed with which a flight lands [s].
+
+    The last ``width`` seconds of the flight (``window_p`` / p), less the
+    ``ring_guard_s`` that the ringing of the take-off spoils (at most 40 % of
+    the flight: late flights are short) and the 2.5 samples before the
+    landing, where the impact has begun.  Works on arrays.
+
+    Returns
+    -------
+    lo, hi : float or ndarray
+    """
+    lo = np.maximum(t_takeoff + np.minimum(ring_guard_s, 0.4 * (t_landing - t_takeoff)), t_landing - width)
+    return lo, t_landing - 2.5 / fs
+
+
+def takeoff_window(t_takeoff, t_apex, width, ring_guard_s):
+    """The window the derivative filter fits for the speed with which a flight takes off [s].
+
+    From the end of the ringing (``ring_guard_s``, at most 80 % of the rise)
+    over ``width`` seconds, at most 80 % of the rise past the apex.  Works on
+    arrays.
+
+    Returns
+    -------
+    lo, hi : float or ndarray
+    """
+    rise = t_apex - t_takeoff
+    lo = t_takeoff + np.minimum(ring_guard_s, 0.8 * rise)
+    return lo, np.minimum(lo + width, t_apex + 0.8 * rise)
+
+
 def extract_motion(t, theta, fs, boundary, p, *, k_noise=10.0, ring_guard_s=0.06, window_p=0.6, hum_hz=(50.0,)):
     """Release, impacts, peaks and end of a free-rocking record.
 
@@ -317,9 +349,7 @@ def extract_motion(t, theta, fs, boundary, p, *, k_noise=10.0, ring_guard_s=0.06
                 tb = ta = t[a + int(np.argmin(seg))]
             neg_exc = float(max(0.0, -u[a : b + 1].min()))
         # Velocity before: flight since the previous impact, ringing excluded
-        # (late flights are short: keep at least 60 % of them).
-        lo = max(prev_after + min(ring_guard_s, 0.4 * (tb - prev_after)), tb - W)
-        c_b = local_fit(t, u, tb, lo, tb - g_pre, p, fs, hum_hz)
+        c_b = local_fit(t, u, tb, *landing_window(prev_after, tb, fs, W, ring_guard_s), p, fs, hum_hz)
         vb = np.nan
         if c_b is not None:
             r = root_tau(c_b, p)
@@ -327,10 +357,7 @@ def extract_motion(t, theta, fs, boundary, p, *, k_noise=10.0, ring_guard_s=0.06
             tb = tb + tau
             vb = model_velocity(c_b, tau, p)
         # Velocity after: the next flight, from the end of the ringing.
-        half_flight = t[b] - ta
-        guard = min(ring_guard_s, 0.8 * half_flight)
-        hi = min(ta + guard + W, t[b] + 0.8 * half_flight)
-        c_a = local_fit(t, u, ta, ta + guard, hi, p, fs, hum_hz)
+        c_a = local_fit(t, u, ta, *takeoff_window(ta, t[b], W, ring_guard_s), p, fs, hum_hz)
         va = np.nan
         if c_a is not None:
             r = root_tau(c_a, p)

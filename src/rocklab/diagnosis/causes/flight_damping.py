@@ -7,10 +7,10 @@ import math
 import numpy as np
 
 from rocklab._imports import lazy_module
+from rocklab.diagnosis import evidence
 from rocklab.diagnosis.causes import Cause
-from rocklab.diagnosis.evidence import FILTER_DAMPING_BIAS
 from rocklab.diagnosis.parameters import Param
-from rocklab.physics.flight import speed_loss
+from rocklab.physics.flight import flight_angle, quarter_period, speed_loss
 from rocklab.physics.law import FlightLoss
 
 stats = lazy_module("scipy.stats")
@@ -43,10 +43,10 @@ def signature(ob):
     not identifiable), all the flights above the noise.  The starting zeta
     is the viscous curve (:func:`viscous_curve`) fitted to the long flights.
     """
-    A, v, loss = long_flights(ob)
+    A, v, loss, read = long_flights(ob)
     if v.size >= MIN_LONG_FLIGHTS:
         fl, which = 1.0 - loss, f"{v.size} flights above {LONG_FLIGHT:g} alpha"
-        g = viscous_curve(A, float(np.median(ob.alpha)), float(np.median(ob.p)))
+        g = viscous_curve(A, float(np.median(ob.alpha)), float(np.median(ob.p)), read)
         zeta = float(g @ loss / (g @ g))
     else:
         S = ob.S
@@ -70,22 +70,38 @@ def signature(ob):
     }
 
 
-def filter_reading(A, a, p, v, *, zeta=0.0, mu=0.0, kappa=0.0, k=0.0):
-    """The speed a long flight of apex A [rad] and take-off speed v [rad/s] loses by its next impact, over
-    v, as the derivative filter reads it [-].
+def filter_reading(A, a, p, v, *, zeta=0.0, mu=0.0, kappa=0.0, k=0.0, read=None, fs=None):
+    """The speed a flight of apex A [rad] and take-off speed v [rad/s] loses by its next impact, over v, as
+    the derivative filter reads it [-].
 
-    The speed loss (:func:`rocklab.physics.flight.speed_loss`) less the
-    filter's bias within one half of the flight: :data:`rocklab.diagnosis.evidence.FILTER_DAMPING_BIAS`
-    times zeta, and as much for drag as for a viscous loss of zeta = kappa v / (2 p); none for dry
-    friction, a constant moment the fitted curve's free acceleration absorbs.
+    The speed loss (:func:`rocklab.physics.flight.speed_loss`) and what the
+    filter reads of each loss: its take-off speed's share less its landing
+    speed's (:func:`rocklab.diagnosis.evidence.filter_reading`, per unit of
+    each loss, linear), ``read`` (flights, losses) where the flights were
+    measured (:func:`long_flights`), else of the flight of apex A on its
+    own angle, sampled at ``fs`` [Hz].
     """
-    return speed_loss(A, a, p, zeta, mu=mu, kappa=kappa, k=k) - FILTER_DAMPING_BIAS * (zeta + kappa * v / (2.0 * p))
+    if read is None:
+        T = 2.0 * quarter_period(A, flight_angle(A, a, k), p)
+        read = np.array(
+            [_loss_read(Tj, vj, p, fs) for Tj, vj in zip(np.ravel(T), np.broadcast_to(v, np.shape(T)).ravel())]
+        )
+        read = read.reshape(*np.shape(T), len(evidence.LOSSES))
+    losses = np.array([zeta, mu, kappa], float)
+    return speed_loss(A, a, p, zeta, mu=mu, kappa=kappa, k=k) + read @ losses
 
 
-def viscous_curve(A, alpha, p):
-    """The viscous loss's :func:`filter_reading` per unit zeta: linear in zeta for the small losses of a wall."""
+def _loss_read(T, v, p, fs):
+    """What the filter reads of each loss in the speed loss of one flight, per unit: take-off less landing."""
+    r = evidence.filter_reading(T, v, p, fs)
+    return r[1] - r[2]
+
+
+def viscous_curve(A, alpha, p, read):
+    """The viscous loss's :func:`filter_reading` per unit zeta on the flights of ``read``: linear in zeta
+    for the small losses of a wall."""
     u = 1e-3
-    return filter_reading(A, alpha, p, 0.0, zeta=u) / u
+    return filter_reading(A, alpha, p, 0.0, zeta=u, read=read) / u
 
 
 def long_flights(ob):
@@ -97,24 +113,36 @@ def long_flights(ob):
         Flat arrays over the flights after an impact with apex above
         :data:`LONG_FLIGHT` alpha and a next impact: apex [rad], take-off
         speed [rad/s], 1 - next impact speed / take-off speed.
+    read : ndarray
+        (flights, losses): what the filter reads of each loss in the speed
+        loss of those flights, per unit of the loss (:func:`filter_reading`).
     """
+    S = ob.S
+    ok, loss = _long(ob)
+    R = S.filter_reading()
+    # the take-off of flight j is impact j's, its landing impact j + 1's
+    read = R["takeoff"][:, :-1] - R["landing"][:, 1:]
+    return S.A[:, :-1][ok], S.va[:, :-1][ok], loss[ok], read[ok]
+
+
+def _long(ob):
+    """Which flights :func:`long_flights` reads, (tests, impacts - 1), and the speed each loses."""
     S = ob.S
     with np.errstate(invalid="ignore", divide="ignore"):
         loss = 1.0 - S.vb[:, 1:] / S.va[:, :-1]
-    A = S.A[:, :-1]
-    ok = np.isfinite(loss) & ob.big[:, :-1] & (A > LONG_FLIGHT * ob.alpha) & np.isfinite(S.va[:, :-1])
-    return A[ok], S.va[:, :-1][ok], loss[ok]
+    ok = np.isfinite(loss) & ob.big[:, :-1] & (S.A[:, :-1] > LONG_FLIGHT * ob.alpha) & np.isfinite(S.va[:, :-1])
+    return ok, loss
 
 
 def short_flights_only(ob):
     """Why the flights of a series cannot tell a loss in flight from a lower e ("" where they can).
 
     The derivative filter moves the loss of a flight shorter than its
-    windows into the measured e (:func:`rocklab.diagnosis.evidence.filter_loss_bias`):
+    windows into the measured e (:func:`rocklab.diagnosis.evidence.filter_reading`):
     only flights above :data:`LONG_FLIGHT` alpha show it apart, and the
     curve needs :data:`MIN_LONG_FLIGHTS` of them.
     """
-    n = long_flights(ob)[0].size
+    n = int(_long(ob)[0].sum())
     if n >= MIN_LONG_FLIGHTS:
         return ""
     return (

@@ -14,7 +14,7 @@ take-off and the next impact relative to its take-off speed v
 mu / alpha (dry friction: constant in v), 4 zeta v / (3 p alpha) (viscous:
 proportional to v) and kappa v^2 / (2 p^2 alpha) (drag: as v^2).  Short
 flights show no loss in their measured speeds (the derivative filter moves
-it into the measured e, :func:`rocklab.diagnosis.evidence.filter_loss_bias`):
+it into the measured e, :func:`rocklab.diagnosis.evidence.filter_reading`):
 the curve is read on the flights whose fit windows stay within one half.
 """
 
@@ -54,10 +54,10 @@ def laws(v):
     return (FlightLoss(v["zeta"], v["mu_over_alpha"], v["kappa_alpha"]),)
 
 
-def member_curves(A, v, alpha, p):
-    """Each member's flight-loss curve per unit of its parameter, as the derivative filter reads it
-    (:func:`rocklab.diagnosis.causes.flight_damping.filter_reading`): linear in the parameter for the small
-    losses of a wall.
+def member_curves(A, v, alpha, p, read):
+    """Each member's flight-loss curve per unit of its parameter on the flights of ``read``, as the
+    derivative filter reads it (:func:`rocklab.diagnosis.causes.flight_damping.filter_reading`): linear in
+    the parameter for the small losses of a wall.
 
     Returns
     -------
@@ -66,9 +66,9 @@ def member_curves(A, v, alpha, p):
     """
     u = 1e-3
     return {
-        "zeta": flight_damping.viscous_curve(A, alpha, p),
-        "mu_over_alpha": flight_damping.filter_reading(A, alpha, p, v, mu=u * alpha) / u,
-        "kappa_alpha": flight_damping.filter_reading(A, alpha, p, v, kappa=u / alpha) / u,
+        "zeta": flight_damping.viscous_curve(A, alpha, p, read),
+        "mu_over_alpha": flight_damping.filter_reading(A, alpha, p, v, mu=u * alpha, read=read) / u,
+        "kappa_alpha": flight_damping.filter_reading(A, alpha, p, v, kappa=u / alpha, read=read) / u,
     }
 
 
@@ -86,13 +86,13 @@ def signature(ob):
     flights hide their loss in the measured e, so the listed loss's own
     signature, a median over all flights, can miss a drag.
     """
-    A, v, loss = long_flights(ob)
+    A, v, loss, read = long_flights(ob)
     if v.size < MIN_LONG_FLIGHTS or np.ptp(loss) == 0:
         return None
     alpha, p = float(np.median(ob.alpha)), float(np.median(ob.p))
     w = stats.wilcoxon(loss, alternative="greater")
     fits = {}
-    for name, g in member_curves(A, v, alpha, p).items():
+    for name, g in member_curves(A, v, alpha, p, read).items():
         c = max(float(g @ loss / (g @ g)), 0.0)
         fits[name] = (c, float(np.mean((loss - c * g) ** 2)))
     best = min(fits, key=lambda k: fits[k][1])
@@ -167,8 +167,8 @@ def curve(tests, values, listed):
     from rocklab.diagnosis.evidence import observe
 
     ob = observe(tests)
-    _, v, loss = long_flights(ob)
-    alpha = float(np.mean(ob.alpha))
+    _, v, loss, _ = long_flights(ob)
+    alpha, fs = float(np.mean(ob.alpha)), float(1.0 / np.median(ob.S.tfloor))
     # the wall as found: its instability angle, and its dependence on the amplitude (instability_amplitude)
     a, k = alpha * values.get("alpha_r_over_alpha", 1.0), values.get("rounding", 0.0)
     p = float(np.mean(ob.p))
@@ -178,7 +178,7 @@ def curve(tests, values, listed):
     def line(zeta, mu_a, kappa_a, label):
         kw = {"zeta": zeta, "mu": mu_a * alpha, "kappa": kappa_a / alpha, "k": k}
         v_off = takeoff_speed(A, a, p, **kw)
-        read = flight_damping.filter_reading(A, a, p, v_off, **kw)
+        read = flight_damping.filter_reading(A, a, p, v_off, fs=fs, **kw)
         return {"x": (v_off / vr).tolist(), "y": read.tolist(), "label": label}
 
     zeta = listed.get("zeta", 0.0)
