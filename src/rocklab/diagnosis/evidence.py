@@ -11,7 +11,9 @@ physics (impact, peak, time, gap_time; docs/diagnosis-method.md).
 
 from __future__ import annotations
 
+import functools
 import inspect
+import math
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 
@@ -23,7 +25,7 @@ from rocklab.lab.campaign import order_in_series
 from rocklab.lab.flight_fit import local_fit
 from rocklab.lab.motion import MOTION_GROUP, extract_motion, landing_window, motion_from_dataset, takeoff_window
 from rocklab.physics import restitution
-from rocklab.physics.flight import apex_after, landing_speed, loss_deceleration, quarter_period
+from rocklab.physics.flight import apex_after, landing_speed, loss_deceleration, quarter_period, quarter_period_linear
 from rocklab.physics.wall import overturning_velocity
 
 # the fit windows of the derivative filter (rocklab.lab.motion.extract_motion's defaults)
@@ -68,7 +70,11 @@ def filter_reading(T, v, p, fs, *, release=False, phases=4):
     window, of value c_0 and slope c_1 at that root, moves the root by
     dt = -c_0 / thetadot and reads the speed there off by c_1 + thetadot'' dt,
     |thetadot''| = p v coth(p T / 2) at the roots of the lossless flight.
-    Averaged over ``phases`` placements of the samples.
+    Averaged over ``phases`` placements of the samples.  The deflection
+    grows with the loss's deceleration, as v^n (n = 1 viscous, 0 dry, 2
+    drag), so the reading is computed at v = 1 and scaled by v^(n - 1), for
+    durations rounded to :data:`DURATION_STEP` (shared by the flights of a
+    wall, and cached).
 
     On the stocky wall's short flights (T = 0.13 s, 200 Hz) dry friction of
     mu = 0.02 alpha lengthens the measured flight by 0.9 %, as the virtual
@@ -98,6 +104,20 @@ def filter_reading(T, v, p, fs, *, release=False, phases=4):
         [1/rad]): the measured duration's change [s], and the take-off's and
         the landing's measured speed's change over v [-].
     """
+    # delta grows as the loss's deceleration, as v^n (n = 1, 0, 2), and the reading as v^(n - 1): it is
+    # computed at v = 1 once per duration, to a step of DURATION_STEP, which one wall's flights share
+    step = math.exp(round(math.log(T) / DURATION_STEP) * DURATION_STEP)
+    return _reading_at_unit_speed(step, float(p), float(fs), bool(release), phases) * np.array([1.0, 1.0 / v, v])
+
+
+#: Relative step of the flight durations at which :func:`filter_reading` is computed [-].
+DURATION_STEP = 0.005
+
+
+@functools.lru_cache(maxsize=65536)
+def _reading_at_unit_speed(T, p, fs, release, phases):
+    """:func:`filter_reading` of a flight of speed 1 rad/s at theta = 0."""
+    v = 1.0
     W, guard, hum = _FILTER["window_p"] / p, _FILTER["ring_guard_s"], _FILTER["hum_hz"]
     tau = np.linspace(0.0, T, _GRID)
     if release:
@@ -113,14 +133,14 @@ def filter_reading(T, v, p, fs, *, release=False, phases=4):
         t = (np.arange(int(T * fs) + 2) + ph) / fs
         c_b = local_fit(t, _on(t, tau, down), T, *landing_window(0.0, T, fs, W, guard), p, fs, hum)
         if c_b is None:
-            return np.zeros_like(out)
+            return np.zeros((3, len(LOSSES)))
         dt_b = c_b[0] / v
         out[2] += (-c_b[1] + acc * dt_b) / v / phases
         if release:
             continue
         c_a = local_fit(t, _on(t, tau, up), 0.0, *takeoff_window(0.0, 0.5 * T, W, guard), p, fs, hum)
         if c_a is None:
-            return np.zeros_like(out)
+            return np.zeros((3, len(LOSSES)))
         dt_a = -c_a[0] / v
         out[0] += (dt_b - dt_a) / phases
         out[1] += (c_a[1] - acc * dt_a) / v / phases
@@ -201,7 +221,7 @@ class MeasuredTest:
         v = np.r_[0.5 * (self.v_after[:-1] + self.v_before[1:]), self.v_after[-1]]
         A, va = self.peaks[-1], self.v_after[-1]
         a = ((va / p) ** 2 + A**2) / (2.0 * A) if A > 0 else np.nan
-        T[-1] = 2.0 * np.arccosh(a / (a - A)) / p if a > A else np.nan
+        T[-1] = 2.0 * float(quarter_period_linear(A / a)) / p if a > A else np.nan
         for j in range(n):
             if np.isfinite(T[j]) and np.isfinite(v[j]) and T[j] > 0 and v[j] > 0:
                 r = filter_reading(T[j], v[j], p, fs)

@@ -378,26 +378,30 @@ def stand_ins(problem: Problem, sel, hidden, *, fits=None, bic_margin=BIC_MARGIN
     return out
 
 
-def _nested_fit(problem: Problem, ext, fits):
-    """The fit of ``ext``, no worse than any of its sub-models of one cause fewer.
+def _nested_fit(problem: Problem, ext, x, fits):
+    """The fit of ``ext``, where its cause ``x`` is not held at its null while a sub-model gives it an effect.
 
     The cold starts of :func:`~rocklab.diagnosis.estimation.fitting.fit`
-    (nulls and the signatures' guesses) can end where one cause of ``ext``
-    has taken another's effect and holds the other at its bound (a lower
-    angle with the viscous loss at zero, 90 BIC worse than the viscous loss
-    alone): so each sub-model's fit (kept in ``fits``) starts it again, the
+    (nulls and the signatures' guesses) can end where another cause of
+    ``ext`` has taken ``x``'s effect and holds it at its null (a lower angle
+    with the viscous loss at zero, 90 BIC worse than the viscous loss
+    alone).  Where ``x``'s parameters all end within the smallest effect
+    worth naming of their nulls, each sub-model of ``ext`` with ``x`` and
+    one cause fewer (fitted and kept in ``fits``) starts the fit again, the
     cause it lacks at its null, and the best end stands.
     """
     idx = np.arange(problem.n_tests)
     best = fits[ext] if ext in fits else fit(problem, idx, ext)
-    nulls = {q.name: q.null for q in problem.params(ext)}
-    for c in ext if len(ext) > 1 else ():
-        sub = tuple(e for e in ext if e != c)
-        if sub not in fits:
-            fits[sub] = fit(problem, idx, sub)
-        warm = fit(problem, idx, ext, x0=nulls | {k: v for k, v in fits[sub].values.items() if k in nulls})
-        if warm.bic < best.bic:
-            best = warm
+    own = [q for q in problem.params((x,)) if q.practical is not None and q.name in best.values]
+    if own and all(abs(best.values[q.name] - q.null) <= q.practical for q in own):
+        nulls = {q.name: q.null for q in problem.params(ext)}
+        for c in (c for c in ext if c != x):
+            sub = tuple(e for e in ext if e != c)
+            if sub not in fits:
+                fits[sub] = fit(problem, idx, sub)
+            warm = fit(problem, idx, ext, x0=nulls | {k: v for k, v in fits[sub].values.items() if k in nulls})
+            if warm.bic < best.bic:
+                best = warm
     fits[ext] = best
     return best
 
@@ -408,4 +412,4 @@ def _in_place_of(problem: Problem, sel, x, y, fits):
     ext = problem.combine(tuple(e for e in sel["effects"] if e != y), x)
     if ext is None:
         return None
-    return _nested_fit(problem, ext, fits).bic - sel["fit"].bic
+    return _nested_fit(problem, ext, x, fits).bic - sel["fit"].bic
