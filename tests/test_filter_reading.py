@@ -72,7 +72,7 @@ def test_limits_of_the_reading():
     short = filter_reading(0.15, v, p, fs)[:, LOSSES.index("mu")]
     assert np.all(np.abs(long) < 1e-3 * np.abs(short).max())
     # the fall from the release has no apex in its window: no friction read, no take-off
-    fall = filter_reading(0.4, v, p, fs, release=True)
+    fall = filter_reading(0.4, v, p, fs, from_rest=True)
     assert np.all(fall[:2] == 0.0) and abs(fall[2, LOSSES.index("mu")]) < 1e-3 * np.abs(short).max()
     # a viscous loss reads the take-off low and the landing high, the flight long
     z = filter_reading(0.3, v, p, fs)[:, LOSSES.index("zeta")]

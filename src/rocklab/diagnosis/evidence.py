@@ -15,10 +15,10 @@ import functools
 import inspect
 import math
 from dataclasses import dataclass, field, replace
-from functools import cached_property
 
 import numpy as np
 
+from rocklab._imports import lazy_module
 from rocklab.diagnosis.model import ModelParams, impact_speeds, log_columns, per_test, release
 from rocklab.io import valid_tests
 from rocklab.lab.campaign import order_in_series
@@ -28,12 +28,18 @@ from rocklab.physics import restitution
 from rocklab.physics.flight import apex_after, landing_speed, loss_deceleration, quarter_period, quarter_period_linear
 from rocklab.physics.wall import overturning_velocity
 
+integrate = lazy_module("scipy.integrate")
+
 # the fit windows of the derivative filter (rocklab.lab.motion.extract_motion's defaults)
 _FILTER = {k: v.default for k, v in inspect.signature(extract_motion).parameters.items()}
 
 
 #: The losses in flight, in the order of :func:`filter_reading`'s columns.
 LOSSES = ("zeta", "mu", "kappa")
+
+#: n of each of :data:`LOSSES`: its deceleration grows with the speed as v^n
+#: (:func:`rocklab.physics.flight.loss_deceleration`).
+SPEED_POWER = np.array([1.0, 0.0, 2.0])
 
 #: Points of the fine grid on which a flight's deflection by a loss is integrated.
 _GRID = 257
@@ -42,15 +48,13 @@ _GRID = 257
 def _deflection(tau, d, p):
     """delta(tau) = -int_0^tau sinh(p (tau - s)) / p d(s) ds on the grid ``tau`` (from 0, either way):
     the solution of delta'' = p^2 delta - d with delta = delta' = 0 at tau = 0, by column of ``d``."""
-    from scipy.integrate import cumulative_trapezoid
-
     ch, sh = np.cosh(p * tau)[:, None], np.sinh(p * tau)[:, None]
-    ic = cumulative_trapezoid(ch * d, tau, axis=0, initial=0.0)
-    is_ = cumulative_trapezoid(sh * d, tau, axis=0, initial=0.0)
+    ic = integrate.cumulative_trapezoid(ch * d, tau, axis=0, initial=0.0)
+    is_ = integrate.cumulative_trapezoid(sh * d, tau, axis=0, initial=0.0)
     return -(sh * ic - ch * is_) / p
 
 
-def filter_reading(T, v, p, fs, *, release=False, phases=4):
+def filter_reading(T, v, p, fs, *, from_rest=False, phases=4):
     """How the derivative filter reads a flight with losses, per unit of each loss, to first order.
 
     The filter (:func:`rocklab.lab.motion.extract_motion`) reads an impact's
@@ -71,8 +75,8 @@ def filter_reading(T, v, p, fs, *, release=False, phases=4):
     dt = -c_0 / thetadot and reads the speed there off by c_1 + thetadot'' dt,
     |thetadot''| = p v coth(p T / 2) at the roots of the lossless flight.
     Averaged over ``phases`` placements of the samples.  The deflection
-    grows with the loss's deceleration, as v^n (n = 1 viscous, 0 dry, 2
-    drag), so the reading is computed at v = 1 and scaled by v^(n - 1), for
+    grows with the loss's deceleration, as v^n (:data:`SPEED_POWER`), so
+    the reading is computed at v = 1 and scaled by v^(n - 1), for
     durations rounded to :data:`DURATION_STEP` (shared by the flights of a
     wall, and cached).
 
@@ -86,7 +90,7 @@ def filter_reading(T, v, p, fs, *, release=False, phases=4):
     Parameters
     ----------
     T : float
-        Duration of the flight, take-off to landing [s]; with ``release``,
+        Duration of the flight, take-off to landing [s]; with ``from_rest``,
         of the fall from the release at rest to the first landing.
     v : float
         Its speed at theta = 0 [rad/s].
@@ -94,7 +98,7 @@ def filter_reading(T, v, p, fs, *, release=False, phases=4):
         Frequency parameter [rad/s].
     fs : float
         Sampling rate [Hz].
-    release : bool
+    from_rest : bool
         The fall from the release: a landing and no take-off.
 
     Returns
@@ -104,10 +108,9 @@ def filter_reading(T, v, p, fs, *, release=False, phases=4):
         [1/rad]): the measured duration's change [s], and the take-off's and
         the landing's measured speed's change over v [-].
     """
-    # delta grows as the loss's deceleration, as v^n (n = 1, 0, 2), and the reading as v^(n - 1): it is
-    # computed at v = 1 once per duration, to a step of DURATION_STEP, which one wall's flights share
+    # computed once per duration, to a step of DURATION_STEP, which one wall's flights share
     step = math.exp(round(math.log(T) / DURATION_STEP) * DURATION_STEP)
-    return _reading_at_unit_speed(step, float(p), float(fs), bool(release), phases) * np.array([1.0, 1.0 / v, v])
+    return _reading_at_unit_speed(step, float(p), float(fs), bool(from_rest), phases) * v ** (SPEED_POWER - 1.0)
 
 
 #: Relative step of the flight durations at which :func:`filter_reading` is computed [-].
@@ -115,16 +118,16 @@ DURATION_STEP = 0.005
 
 
 @functools.lru_cache(maxsize=65536)
-def _reading_at_unit_speed(T, p, fs, release, phases):
+def _reading_at_unit_speed(T, p, fs, from_rest, phases):
     """:func:`filter_reading` of a flight of speed 1 rad/s at theta = 0."""
-    v = 1.0
     W, guard, hum = _FILTER["window_p"] / p, _FILTER["ring_guard_s"], _FILTER["hum_hz"]
     tau = np.linspace(0.0, T, _GRID)
-    if release:
-        thetadot, acc = -v * np.sinh(p * tau) / np.sinh(p * T), p * v / np.tanh(p * T)
+    # the lossless flight's speed and |thetadot''| at its roots
+    if from_rest:
+        thetadot, acc = -np.sinh(p * tau) / np.sinh(p * T), p / np.tanh(p * T)
     else:
         h = 0.5 * T
-        thetadot, acc = v * np.sinh(p * (h - tau)) / np.sinh(p * h), p * v / np.tanh(p * h)
+        thetadot, acc = np.sinh(p * (h - tau)) / np.sinh(p * h), p / np.tanh(p * h)
     d = np.column_stack([loss_deceleration(thetadot, p, **{k: 1.0}) for k in LOSSES])
     up = _deflection(tau, d, p)
     down = _deflection(tau[::-1] - T, d[::-1], p)[::-1]
@@ -134,16 +137,16 @@ def _reading_at_unit_speed(T, p, fs, release, phases):
         c_b = local_fit(t, _on(t, tau, down), T, *landing_window(0.0, T, fs, W, guard), p, fs, hum)
         if c_b is None:
             return np.zeros((3, len(LOSSES)))
-        dt_b = c_b[0] / v
-        out[2] += (-c_b[1] + acc * dt_b) / v / phases
-        if release:
+        dt_b = c_b[0]
+        out[2] += (-c_b[1] + acc * dt_b) / phases
+        if from_rest:
             continue
         c_a = local_fit(t, _on(t, tau, up), 0.0, *takeoff_window(0.0, 0.5 * T, W, guard), p, fs, hum)
         if c_a is None:
             return np.zeros((3, len(LOSSES)))
-        dt_a = -c_a[0] / v
+        dt_a = -c_a[0]
         out[0] += (dt_b - dt_a) / phases
-        out[1] += (c_a[1] - acc * dt_a) / v / phases
+        out[1] += (c_a[1] - acc * dt_a) / phases
     return out
 
 
@@ -199,7 +202,7 @@ class MeasuredTest:
     def n_impacts(self) -> int:
         return int(self.peaks.size)
 
-    @cached_property
+    @functools.cached_property
     def filter_reading(self) -> dict:
         """How the filter reads this test's flights, per unit of each loss in flight (:func:`filter_reading`).
 
@@ -230,7 +233,7 @@ class MeasuredTest:
                     out["time"][j], out["landing"][j + 1] = r[0], r[2]
         fall, vb = self.t_before[0] - self.t_release, self.v_before[0]
         if np.isfinite(fall) and np.isfinite(vb) and fall > 0 and vb > 0:
-            out["landing"][0] = filter_reading(fall, vb, p, fs, release=True)[2]
+            out["landing"][0] = filter_reading(fall, vb, p, fs, from_rest=True)[2]
         return out
 
     @property
