@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from rocklab.diagnosis.estimation import select_effects, stand_ins
+from rocklab.diagnosis.estimation import rivals, select_effects, stand_ins
 from rocklab.diagnosis.estimation.problem import Problem
 from rocklab.diagnosis.estimation.selection import _null_excluded
 from rocklab.diagnosis.parameters import Param
@@ -59,6 +59,24 @@ def test_a_level_the_data_tell_from_the_loss_carries_none():
     sel = select_effects(problem, signature=NO_LOSS)
     assert sel["effects"] == ["level"]
     assert stand_ins(problem, sel, HIDDEN) == {}
+
+
+def test_a_cause_these_tests_cannot_tell_from_a_rival_carries_the_caveat():
+    # every x alike on three tests: the loss (its signature read) fits as the level does, and the
+    # selection named the first of the two without testing it against the other
+    problem = LossProblem(np.ones(15), k=0.1, n_tests=3)
+    sel = select_effects(problem, signature={})
+    (named,) = sel["effects"]
+    other = ({"level", "loss"} - {named}).pop()
+    out = rivals(problem, sel, {})
+    assert list(out) == [named] and list(out[named]) == [other]
+    assert "cannot tell them apart" in out[named][other]
+    # no rival whose signature is absent, nor one the data tell apart
+    assert rivals(problem, sel, {other: {"supports": False}}) == {}
+    told = LossProblem(np.linspace(0.2, 3.0, 15), s=0.1, n_tests=3)
+    sel = select_effects(told, signature={})
+    assert sel["effects"] == ["level"]
+    assert rivals(told, sel, {}) == {}
 
 
 class HingeProblem(Problem):

@@ -27,7 +27,7 @@ import numpy as np
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.discovery import discovery
 from rocklab.diagnosis.errors import what_is_wrong
-from rocklab.diagnosis.estimation import beyond_the_catalogue, finite_mean, select_effects, stand_ins
+from rocklab.diagnosis.estimation import beyond_the_catalogue, finite_mean, rivals, select_effects, stand_ins
 from rocklab.diagnosis.estimation.bias import model_bias, net_of_noise
 from rocklab.diagnosis.estimation.systematic import standard_error, widened
 from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_test, observe
@@ -230,9 +230,13 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
     else:
         verdict_text = ""
     blind = not_identifiable(tests, [f["effect"] for f in findings])
-    # a cause the design cannot identify is never named: a named cause whose effect it could produce is
-    # named with that caveat, not with confidence
-    for y, xs in stand_ins(problem, sel, blind, fits=fits).items():
+    # a cause the design cannot identify is never named, and a rival these tests cannot tell from a named
+    # cause was never tested against it: a named cause whose effect either could produce is named with
+    # that caveat, not with confidence
+    caveats = stand_ins(problem, sel, blind, fits=fits)
+    for y, xs in rivals(problem, sel, sig, fits=fits).items():
+        caveats[y] = caveats.get(y, {}) | xs
+    for y, xs in caveats.items():
         next(f for f in findings if f["effect"] == y)["may_stand_in_for"] = xs
     entry = {
         **head,

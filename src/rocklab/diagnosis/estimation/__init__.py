@@ -20,7 +20,8 @@ module            holds
 ``systematic``    the systematic part of the intervals: the pulls of the residual groups
 ``bias``          the model's bias, measured on tests simulated at a fit
 ``structure``     :func:`structure`, the residual structure a model leaves
-``selection``     :func:`select_effects`, :func:`beyond_the_catalogue`, :func:`stand_ins`
+``selection``     :func:`select_effects`, :func:`beyond_the_catalogue`, :func:`stand_ins`,
+                  :func:`rivals`
 ================  ==================================================================
 
 Progress goes to the modules' loggers: each candidate with its BIC, held-out
@@ -33,7 +34,7 @@ from rocklab.diagnosis.estimation.fitting import Fit, fit
 from rocklab.diagnosis.estimation.noise import noise_variance
 from rocklab.diagnosis.estimation.problem import Problem
 from rocklab.diagnosis.estimation.resampling import finite_mean, heldout, paired_gain, parameter_intervals
-from rocklab.diagnosis.estimation.selection import beyond_the_catalogue, select_effects, stand_ins
+from rocklab.diagnosis.estimation.selection import beyond_the_catalogue, rivals, select_effects, stand_ins
 from rocklab.diagnosis.estimation.structure import structure, within_slope
 
 __all__ = [
@@ -47,6 +48,7 @@ __all__ = [
     "paired_gain",
     "parameter_intervals",
     "select_effects",
+    "rivals",
     "stand_ins",
     "structure",
     "within_slope",

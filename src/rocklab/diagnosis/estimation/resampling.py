@@ -21,7 +21,7 @@ import numpy as np
 
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.estimation.fitting import Fit, fit, linearised
-from rocklab.diagnosis.estimation.noise import deviance, finite_residuals, group_variances
+from rocklab.diagnosis.estimation.noise import deviance, finite_residuals, group_variances, predictive_dof
 from rocklab.diagnosis.estimation.problem import Problem
 from rocklab.diagnosis.estimation.systematic import by_group, systematic_uncertainty, widened
 from rocklab.dissipation.statistics import MIN_BOOTSTRAP
@@ -72,7 +72,11 @@ def heldout(problem: Problem, ext, fitted: Fit | None = None):
     (:func:`~rocklab.diagnosis.estimation.fitting.linearised`, the
     linearisation of the bootstrap, :func:`parameter_intervals`); its noise
     model (:func:`~rocklab.diagnosis.estimation.noise.noise_variance`) is
-    then that of the training tests' residuals at the step's parameters.
+    then that of the training tests' residuals at the step's parameters, and
+    the held-out residuals are scored by the Student-t it predicts on their
+    number (:func:`~rocklab.diagnosis.estimation.noise.predictive_dof`): the
+    few residuals of a short series' training tests fix their variance
+    loosely, and the normal law would take that variance as known.
     A fold leaves out a fifth of the tests (one, up to six): its fit
     differs from the full one by about its standard errors, where the
     residuals are linear in the parameters, so the step lands on the refit
@@ -103,12 +107,14 @@ def heldout(problem: Problem, ext, fitted: Fit | None = None):
             )
             values = dict(zip(names, map(float, x0 + step.x)))
         R = problem.residuals(every, ext, values)
-        var = group_variances({g: r[train] for g, r in R.items()}, {g: x[train] for g, x in X.items()})
+        Rt, Xt = {g: r[train] for g, r in R.items()}, {g: x[train] for g, x in X.items()}
+        var = group_variances(Rt, Xt)
+        dof = predictive_dof(Rt, Xt, var)
         for i in held:
             Ri = {g: r[i : i + 1] for g, r in R.items() if g in var}
             Xi = {g: X[g][i : i + 1] for g in Ri}
             nobs = sum(r.size for r, _ in finite_residuals(Ri, Xi).values())
-            dev[i] = deviance(Ri, Xi, var) / nobs if nobs else np.nan
+            dev[i] = deviance(Ri, Xi, var, dof) / nobs if nobs else np.nan
         for name, x in problem.heldout_measures(problem.subset(held), ext, values).items():
             meas.setdefault(name, np.full(n, np.nan))[held] = x
     return {"deviance": dev, **meas}

@@ -5,7 +5,9 @@ deviance (:mod:`rocklab.diagnosis.estimation.resampling`) and a bootstrap
 interval clear of its null (:func:`select_effects`); where the listed causes
 leave structure (:mod:`rocklab.diagnosis.estimation.structure`) the
 selection is run again with the generalised families
-(:func:`beyond_the_catalogue`).
+(:func:`beyond_the_catalogue`).  A named cause that a cause the design
+cannot identify (:func:`stand_ins`) or a rival the series cannot tell from it
+(:func:`rivals`) may stand in for is named with that caveat.
 """
 
 import logging
@@ -375,6 +377,52 @@ def stand_ins(problem: Problem, sel, hidden, *, fits=None, bic_margin=BIC_MARGIN
             log.info("%s in place of %s: BIC %+.1f", x, y, dbic)
             if dbic < bic_margin:
                 out.setdefault(y, {})[x] = why
+    return out
+
+
+def rivals(problem: Problem, sel, signature, *, fits=None, bic_margin=BIC_MARGIN):
+    """The named causes that a candidate the series cannot tell from them may stand in for.
+
+    The selection tries the candidates in the order of their information
+    criterion and names the first that passes the held-out test; a rival
+    that fits almost as well is then never tested against it, and on a short
+    series (six impacts over three tests, a restitution falling with the
+    amplitude named as an instability angle that grows with it) the two are
+    alike to the data.  A named cause ``Y`` may stand in for a candidate
+    ``X`` whose signature the data carry where the model with ``X`` in
+    ``Y``'s place is not worse by the strong evidence a cause needs to enter
+    (its BIC within ``bic_margin`` of the chosen model's) and does not
+    predict the held-out tests worse beyond the noise (the paired test of
+    the selection).  A generalised family and its listed member are one
+    cause in two forms (:func:`beyond_the_catalogue` decides between them)
+    and are not each other's rivals.
+
+    Returns
+    -------
+    dict
+        Named cause -> {rival: why the series cannot tell them apart}; only causes that have one.
+    """
+    fits = {} if fits is None else fits
+    family = {c.name: getattr(c, "family", None) for c in problem.causes}
+    named = tuple(sel["effects"])
+    out = {}
+    for y in named:
+        for x in problem.candidates(True):
+            if x in named or family.get(x) == y or family.get(y) == x or not signature.get(x, {}).get("supports", True):
+                continue
+            dbic = _in_place_of(problem, sel, x, y, fits)
+            if dbic is None or dbic >= bic_margin:
+                continue
+            ext = problem.combine(tuple(e for e in named if e != y), x)
+            d = heldout(problem, ext, fits[ext])["deviance"] - sel["final"]["deviance"]
+            if _improves(d):
+                continue
+            gain, se = paired_difference(d)
+            out.setdefault(y, {})[x] = (
+                f"in its place the BIC is {dbic:+.1f} and the held-out deviance per observation {gain:+.3g} "
+                f"(standard error {se:.2g}) on {problem.n_tests} tests: these tests cannot tell them apart"
+            )
+            log.info("%s may stand in for %s: %s", y, x, out[y][x])
     return out
 
 
