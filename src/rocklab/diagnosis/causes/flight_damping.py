@@ -46,8 +46,7 @@ def signature(ob):
     A, v, loss, read = long_flights(ob)
     if v.size >= MIN_LONG_FLIGHTS:
         fl, which = 1.0 - loss, f"{v.size} flights above {LONG_FLIGHT:g} alpha"
-        g = viscous_curve(A, float(np.median(ob.alpha)), float(np.median(ob.p)), read)
-        zeta = float(g @ loss / (g @ g))
+        zeta, _ = curve_scale(viscous_curve(A, float(np.median(ob.alpha)), float(np.median(ob.p)), read), loss)
     else:
         S = ob.S
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -102,6 +101,13 @@ def viscous_curve(A, alpha, p, read):
     for the small losses of a wall."""
     u = 1e-3
     return filter_reading(A, alpha, p, 0.0, zeta=u, read=read) / u
+
+
+def curve_scale(curve, loss):
+    """The scale c >= 0 of a loss curve per unit of its parameter that fits the losses best (least
+    squares through the origin), and the mean square of what it leaves."""
+    c = max(float(curve @ loss / (curve @ curve)), 0.0)
+    return c, float(np.mean((loss - c * curve) ** 2))
 
 
 def long_flights(ob):

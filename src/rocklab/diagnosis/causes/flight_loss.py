@@ -91,10 +91,7 @@ def signature(ob):
         return None
     alpha, p = float(np.median(ob.alpha)), float(np.median(ob.p))
     w = stats.wilcoxon(loss, alternative="greater")
-    fits = {}
-    for name, g in member_curves(A, v, alpha, p, read).items():
-        c = max(float(g @ loss / (g @ g)), 0.0)
-        fits[name] = (c, float(np.mean((loss - c * g) ** 2)))
+    fits = {name: flight_damping.curve_scale(g, loss) for name, g in member_curves(A, v, alpha, p, read).items()}
     best = min(fits, key=lambda k: fits[k][1])
     rms = {k: np.sqrt(r) for k, (_, r) in fits.items()}
     med = float(np.median(loss))
