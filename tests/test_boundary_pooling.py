@@ -73,3 +73,29 @@ def test_without_a_systematic_part_the_interval_is_students_t():
     half = stats.t.ppf(0.975, 4) * x.std(ddof=1) / np.sqrt(5)
     _, ci, *_ = pooled_parameter(values)
     assert ci == pytest.approx([x.mean() - half, x.mean() + half])
+
+
+def test_a_series_short_of_naming_a_cause_its_data_show_counts_at_its_own_estimate(four_walls):
+    """A wall whose data carry a cause's signature but lack the held-out power to name it (a one-sided
+    wall of eight impacts) says how large the cause is: the boundary pools it there, not at the null value
+    (issue 24, item 6: pooling without selection, 'with their own estimates')."""
+    walls = {e["key"]: e["key"][:2] for e in four_walls}
+    key, name = "instability_angle", "alpha_r_over_alpha"
+    own = [next(f for f in e["findings"] if f["effect"] == key)["params"][name] for e in four_walls]
+
+    def unnamed(e, estimates):
+        out = {**e, "verdict": [v for v in e["verdict"] if v != key]}
+        out["findings"] = [f for f in e["findings"] if f["effect"] != key]
+        return {**out, "unnamed_estimates": estimates} if estimates else out
+
+    def pooled(entries):
+        b = D.diagnose_boundary(entries, "two-sided", walls=walls)
+        return next(f for f in b["findings"] if f["effect"] == key)
+
+    f = pooled([unnamed(four_walls[0], {key: {name: own[0]}}), *four_walls[1:]])
+    assert f["params"][name] == pytest.approx(np.mean(own))
+    assert f["n_series"] == 3 and "1 at their own estimates" in f["evidence"]["pooled"]
+    # without the signature's estimate the series counts at the null value (the cause absent there)
+    f = pooled([unnamed(four_walls[0], None), *four_walls[1:]])
+    assert f["params"][name] == pytest.approx(np.mean([1.0, *own[1:]]))
+    assert "1 at its null value" in f["evidence"]["pooled"]

@@ -105,19 +105,39 @@ def pooled_parameter(values, walls=None, u_sys=None, bounds=(-np.inf, np.inf)):
 
 
 def _parameter_values(cause, name, usable, named):
-    """Every usable series' value of one parameter of ``cause``: its own estimate where it named the
-    cause, the parameter's null value where it did not (the cause absent there); a parameter without
-    a null value in the catalogue (one that only exists with its cause, the spread of the stop speeds)
-    from the series that estimated it only."""
+    """Every usable series' value of one parameter of ``cause``: its estimate where it named the cause;
+    where it did not, its own estimate where its data carry the cause's signature (its
+    ``unnamed_estimates``: a series short of the evidence to name it still says how large it is), else
+    the parameter's null value (the data show no sign of it); a parameter without a null value in the
+    catalogue (one that only exists with its cause, the spread of the stop speeds) from the series that
+    estimated it only.  Returns (values, how many series that did not name it count at their own
+    estimates, how many at the null value)."""
     null = next((q.null for q in catalogue.by_name(cause).params if q.name == name), None)
-    out = {}
+    out, n_own, n_null = {}, 0, 0
     for e in usable:
         f = named.get(e.key)
+        own = (e.unnamed_estimates or {}).get(cause, {})
         if f is not None and name in f.params:
             out[e.key] = f.params[name]
+        elif name in own:
+            out[e.key], n_own = own[name], n_own + 1
         elif null is not None:
-            out[e.key] = null
-    return out
+            out[e.key], n_null = null, n_null + 1
+    return out, n_own, n_null
+
+
+def _pooled_text(units, n_values, n_unnamed, n_own, n_null):
+    """How a pooled parameter counts the series, in words."""
+    head = f"random-effects mean over {units} of {n_values} series"
+    if not n_unnamed:
+        return head + ", every one of which named it"
+    left = n_unnamed - n_own - n_null
+    how = [
+        f"{n_own} at their own estimates (their data carry its signature)" if n_own else "",
+        f"{n_null} at its null value" if n_null else "",
+        f"{left} left out (the parameter has no null value)" if left else "",
+    ]
+    return f"{head}; of the {n_unnamed} that did not name it, " + ", ".join(h for h in how if h)
 
 
 def diagnose_boundary(entries, boundary, *, walls=None, thickness=None):
@@ -129,8 +149,9 @@ def diagnose_boundary(entries, boundary, *, walls=None, thickness=None):
     pooled into one fit: a cause is in the verdict when it is named in at
     least half of the series large enough to name one (not ``too_small``),
     and its parameters pool ALL those series, never only the ones that named
-    it (a mean over the namers alone is the winner's curse): the series
-    that did not name it count at the parameter's null value
+    it (a mean over the namers alone is the winner's curse): a series that
+    did not name it counts at its own estimate where its data carry the
+    cause's signature, at the parameter's null value where they do not
     (:func:`_parameter_values`), and the mean is a random-effects mean over
     series, or over walls where ``walls`` (series -> wall) is given, with a
     t interval (:func:`pooled_parameter`; ``ci_note`` says why there is
@@ -163,7 +184,7 @@ def diagnose_boundary(entries, boundary, *, walls=None, thickness=None):
         params, ci, notes, units, shared = {}, {}, {}, {}, {}
         bounds = {q.name: (q.lower, q.upper) for q in catalogue.by_name(eff).params}
         for name in lst[0][1].params:
-            values = _parameter_values(eff, name, usable, named)
+            values, n_own, n_null = _parameter_values(eff, name, usable, named)
             u_sys = {k: (f.u_systematic or {}).get(name, 0.0) for k, f in named.items()}
             params[name], interval, level, units[name], note, shared[name] = pooled_parameter(
                 values, walls, u_sys, bounds.get(name, (-np.inf, np.inf))
@@ -181,8 +202,9 @@ def diagnose_boundary(entries, boundary, *, walls=None, thickness=None):
                 "u_systematic": shared,
                 "evidence": {
                     "series": f"named in {len(lst)} of {of_series}",
-                    "pooled": f"random-effects mean over {plural(level, max(units.values()))} of all "
-                    f"{len(usable)} series, the {len(usable) - len(lst)} that did not name it at its null value",
+                    "pooled": _pooled_text(
+                        plural(level, max(units.values())), len(values), len(usable) - len(lst), n_own, n_null
+                    ),
                     "range": {
                         n: [float(min(f.params[n] for _, f in lst)), float(max(f.params[n] for _, f in lst))]
                         for n in params

@@ -295,7 +295,9 @@ class SeriesDiagnosis(_Entry):
     beyond it was tried; ``not_identifiable`` the causes its design cannot
     carry, and why (:func:`rocklab.diagnosis.series.not_identifiable`);
     ``model_bias`` the bias of the model measured where a cause is selected
-    (:mod:`rocklab.diagnosis.estimation.bias`).
+    (:mod:`rocklab.diagnosis.estimation.bias`); ``unnamed_estimates`` the
+    parameters of the candidates it does not name whose signature its data
+    carry (:func:`rocklab.diagnosis.series.unnamed_estimates`).
     """
 
     _optional = frozenset(
@@ -305,6 +307,7 @@ class SeriesDiagnosis(_Entry):
             "listed_verdict",
             "listed_params",
             "signatures",
+            "unnamed_estimates",
             "heldout",
             "model_bias",
             "extended",
@@ -330,6 +333,7 @@ class SeriesDiagnosis(_Entry):
     weak_evidence: dict[str, str] = field(default_factory=dict)
     rejected: dict[str, str] = field(default_factory=dict)
     signatures: dict[str, str] | None = None
+    unnamed_estimates: dict[str, dict[str, float]] | None = None
     heldout: dict[str, dict] | None = None
     model_bias: dict[str, Any] | None = None
     extended: dict[str, Any] | None = None

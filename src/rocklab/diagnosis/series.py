@@ -97,6 +97,32 @@ def not_identifiable(tests, named=()):
     return out
 
 
+def unnamed_estimates(problem, sel, fits):
+    """The parameters of each candidate a series does not name whose signature its data carry.
+
+    Its fit with the chosen model (``sel``, the selection with its ``fits``),
+    where the selection made one: what the series says of the cause's size
+    where it lacked the evidence to name it (a one-sided wall of eight
+    impacts whose flights give alpha_r/alpha = 0.729 and whose fit says
+    0.7299, short of the held-out test on three tests).  A boundary condition
+    pools its series there rather than at the null value
+    (:func:`rocklab.diagnosis.pooling.diagnose_boundary`).  A candidate whose
+    signature is absent has none: the data show no sign of it; nor one with
+    a parameter at a bound: the data did not fix it.
+    """
+    named = tuple(sel["effects"])
+    out = {}
+    for x in problem.candidates(True):
+        if x in named or not problem.signature.get(x, {}).get("supports", True):
+            continue
+        f = fits.get(problem.combine(named, x))
+        own = [q for q in catalogue.by_name(x).params if f is not None and q.name in f.values]
+        tol = [1e-6 * (q.upper - q.lower) for q in own]
+        if own and all(q.lower + t < f.values[q.name] < q.upper - t for q, t in zip(own, tol)):
+            out[x] = {q.name: float(f.values[q.name]) for q in own}
+    return out
+
+
 def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, seed=0):
     """Diagnosis of one series: base model, what it gets wrong, causes, gain.
 
@@ -254,6 +280,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         "weak_evidence": {k: v["reason"] for k, v in sel["weak"].items()},
         "rejected": sel["rejected"],
         "signatures": {k: v["text"] for k, v in sig.items()},
+        **({"unnamed_estimates": unnamed} if (unnamed := unnamed_estimates(problem, sel, fits)) else {}),
         "heldout": {"base": _heldout_summary(sel["base"]), "model": _heldout_summary(sel["final"])},
         **({"model_bias": bias} if bias else {}),
     }
