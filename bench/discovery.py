@@ -39,8 +39,8 @@ on right verdicts),
 ``false_name_rate_null`` (a cause named on a null series, the gap of a
 wall with a gap aside),
 ``confident_misname_rate`` (a cause that is not hidden named without the
-``unexplained`` flag nor the caveat ``may_stand_in_for``: a cause the design cannot identify may be what
-it carries), ``coverage_95`` (share of the true parameters of the
+``unexplained`` flag nor the caveat ``may_stand_in_for``: a cause the design cannot identify, or a rival
+its tests cannot tell from the named one, may be what it carries), ``coverage_95`` (share of the true parameters of the
 hidden causes named inside their 95 % intervals;
 ``n_params_widened_by_systematic`` of them that the statistical interval
 alone missed and its systematic part holds: the pulls of the groups,

@@ -284,7 +284,10 @@ def _miss(cell) -> str:
     if cell["wrong"]:
         stand = cell["may_stand_in_for"]
         flag = {c: "flagged unexplained" if cell["unexplained"] else "not flagged" for c in cell["wrong"]}
-        flag |= {c: f"may stand in for {', '.join(v)}, which the design cannot identify" for c, v in stand.items()}
+        flag |= {
+            c: f"may stand in for {', '.join(v)}, which the design cannot identify or these tests cannot tell from it"
+            for c, v in stand.items()
+        }
         out.append("named beside the truth: " + "; ".join(f"{c} ({why})" for c, why in flag.items()))
     if cell["outside"]:
         out.append(f"interval misses the truth: {'; '.join(cell['outside'])}")
