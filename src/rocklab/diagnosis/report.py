@@ -109,7 +109,8 @@ def diagnosis_markdown(diagnosis) -> str:
         if stand:
             out += [
                 "Named with a caveat, the model with a cause this series cannot identify, or cannot tell from "
-                "the named one, in its place fits as well: " + "; ".join(f"{f.effect} may stand in for {', '.join(f.may_stand_in_for)}" for f in stand),
+                "the named one, in its place fits as well: "
+                + "; ".join(f"{f.effect} may stand in for {', '.join(f.may_stand_in_for)}" for f in stand),
                 "",
             ]
         if e.findings:
