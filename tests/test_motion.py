@@ -333,3 +333,18 @@ def test_a_test_without_motion_stores_the_reason():
     assert stored.attrs["test_id"] == "T3"
     with pytest.raises(ValueError, match="truncated"):
         motion_from_dataset(stored)
+
+
+def test_an_apex_is_resolved_where_its_flight_spans_the_samples_of_its_fit():
+    """The flight of apex A lasts 2 arccosh(1 / (1 - A/alpha)) / p (Housner), the exact rigid block's
+    2 quarter_period to a per cent at these amplitudes; an apex is resolved from MIN_APEX_SAMPLES samples."""
+    from rocklab.lab.motion import MIN_APEX_SAMPLES, apex_resolved
+    from rocklab.physics.flight import quarter_period
+
+    alpha, p, fs = 0.245, 5.39, 200.0
+    edge = alpha * (1.0 - 1.0 / np.cosh(MIN_APEX_SAMPLES * p / (2.0 * fs)))
+    assert apex_resolved(np.array([1.01 * edge, 0.0068 * alpha]), alpha, p, fs).all()
+    assert not apex_resolved(np.array([0.99 * edge, 0.0006 * alpha]), alpha, p, fs).any()
+    exact = 2.0 * quarter_period(np.array([edge]), np.array([alpha]), np.array([p]))[0] * fs
+    assert exact == pytest.approx(MIN_APEX_SAMPLES, rel=0.01)
+    assert not apex_resolved(np.array([np.nan]), alpha, p, fs).any()

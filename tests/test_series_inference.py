@@ -119,6 +119,20 @@ def test_a_null_series_of_three_tests_names_nothing(seed):
     assert "too_small" not in e and e["verdict"] == [] and not e["unexplained"]
 
 
+def test_quiet_records_of_a_null_stocky_wall_name_nothing():
+    """At a tenth of the lab's noise the motion keeps the apex of a flight of two or three samples (0.0006
+    alpha, 200 Hz), read some 25 % off; a law of the speed's slowest knot took it for a loss of e (bench
+    design 0, cell 75).  Such an apex is no observation (rocklab.lab.motion.apex_resolved)."""
+    import pandas as pd
+
+    from rocklab.lab import virtual_lab as vl
+
+    stocky = pd.Series({"length_mm": 1130.0, "height_mm": 492.0, "thickness_mm": 123.0}, name="st")
+    recs = vl.series_records("null", stocky, "one-sided", {}, n=10, fs=200.0, seed=75, t_end=400.0, noise_mm=0.0002)
+    e = D.diagnose_records(recs, "null", n_boot=40, n_history=0)
+    assert e["verdict"] == [] and not e["unexplained"]
+
+
 def test_one_test_names_nothing_and_says_why():
     recs = virtual_series("one", "two-sided", {"impact": I.Scaled(H(), 0.93)}, n=1, seed=5)
     e = D.diagnose_series(recs, key="one", n_boot=10, n_history=0)

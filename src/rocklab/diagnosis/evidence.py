@@ -21,9 +21,9 @@ import numpy as np
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.model import ModelParams, impact_speeds, log_columns, per_test, release
 from rocklab.io import valid_tests
+from rocklab.lab import motion as chain
 from rocklab.lab.campaign import order_in_series
 from rocklab.lab.flight_fit import local_fit
-from rocklab.lab.motion import MOTION_GROUP, extract_motion, landing_window, motion_from_dataset, takeoff_window
 from rocklab.physics import restitution
 from rocklab.physics.flight import apex_after, landing_speed, loss_deceleration, quarter_period, quarter_period_linear
 from rocklab.physics.wall import overturning_velocity
@@ -31,7 +31,7 @@ from rocklab.physics.wall import overturning_velocity
 integrate = lazy_module("scipy.integrate")
 
 # the fit windows of the derivative filter (rocklab.lab.motion.extract_motion's defaults)
-_FILTER = {k: v.default for k, v in inspect.signature(extract_motion).parameters.items()}
+_FILTER = {k: v.default for k, v in inspect.signature(chain.extract_motion).parameters.items()}
 
 
 #: The losses in flight, in the order of :func:`filter_reading`'s columns.
@@ -134,14 +134,14 @@ def _reading_at_unit_speed(T, p, fs, from_rest, phases):
     out = np.zeros((3, len(LOSSES)))
     for ph in (np.arange(phases) + 0.5) / phases:
         t = (np.arange(int(T * fs) + 2) + ph) / fs
-        c_b = local_fit(t, _on(t, tau, down), T, *landing_window(0.0, T, fs, W, guard), p, fs, hum)
+        c_b = local_fit(t, _on(t, tau, down), T, *chain.landing_window(0.0, T, fs, W, guard), p, fs, hum)
         if c_b is None:
             return np.zeros((3, len(LOSSES)))
         dt_b = c_b[0]
         out[2] += (-c_b[1] + acc * dt_b) / phases
         if from_rest:
             continue
-        c_a = local_fit(t, _on(t, tau, up), 0.0, *takeoff_window(0.0, 0.5 * T, W, guard), p, fs, hum)
+        c_a = local_fit(t, _on(t, tau, up), 0.0, *chain.takeoff_window(0.0, 0.5 * T, W, guard), p, fs, hum)
         if c_a is None:
             return np.zeros((3, len(LOSSES)))
         dt_a = -c_a[0]
@@ -257,7 +257,7 @@ def measured_test(record) -> MeasuredTest:
     theta = np.asarray(record["theta"], float)
     m = record.get("motion")
     if m is None:
-        m = extract_motion(t, theta, record["fs"], record["boundary"], record["p"])
+        m = chain.extract_motion(t, theta, record["fs"], record["boundary"], record["p"])
     imp = m.impacts
     n = min(len(imp), m.peaks.size)
     col = lambda name: np.abs(imp[name].to_numpy(float)[:n])  # noqa: E731
@@ -353,9 +353,9 @@ def stored_records(paths, qc_path=None):
     as :func:`rocklab.io.valid_tests` says (``qc_path``, or each test's own verdict).
     """
     datasets, motions = [], {}
-    for ds, motion in valid_tests(paths, qc_path, variables=("theta",), also=MOTION_GROUP):
+    for ds, motion in valid_tests(paths, qc_path, variables=("theta",), also=chain.MOTION_GROUP):
         datasets.append(ds)
-        motions[ds.attrs["test_id"]] = motion_from_dataset(motion)
+        motions[ds.attrs["test_id"]] = chain.motion_from_dataset(motion)
     return records_by_series(datasets, motions)
 
 
@@ -383,6 +383,7 @@ class TestStack:
     side: np.ndarray
     k: np.ndarray
     order: np.ndarray
+    resolved: np.ndarray | None = None
 
     @classmethod
     def of(cls, tests):
@@ -393,7 +394,9 @@ class TestStack:
 
         side = np.array([np.r_[t.sides, np.full(n - t.n_impacts, np.nan)] for t in tests])
         floor = np.array([t.floor for t in tests])
+        par = np.array([[t.alpha, t.p, 1.0 / t.dt] for t in tests]).T[..., None]
         return cls(
+            resolved=chain.apex_resolved(pad("peaks"), *par),
             tests=list(tests),
             theta0=np.array([t.theta0 for t in tests]),
             v0=np.array([t.v_release for t in tests]),
@@ -474,10 +477,11 @@ def residuals(S: TestStack, mp: ModelParams, cache=None):
     v_land = landing_speed(S.A[:, :-1], mp.hinge(S.side[:, 1:]), p, **loss)
     v_land = np.c_[release(S, mp, timed=False)[0], v_land]
     R["peak"] = log_ratio(apex_after(impact_speeds(v_land, S.side, mp, timed=False)[0], a_ap, p, **loss), S.A, f)
+    R["peak"][~S.resolved] = np.nan
     key = mp.a_pos.tobytes() + mp.a_neg.tobytes() + mp.rounding.tobytes()
     if cache.get("angles") != key or cache.get("timed") is not S:
         # flights too close to the noise have apexes too uncertain to time them
-        A_t = np.where(S.A[:, :-1] > 3 * f, S.A[:, :-1], np.nan)
+        A_t = np.where((S.A[:, :-1] > 3 * f) & S.resolved[:, :-1], S.A[:, :-1], np.nan)
         A0 = np.nan_to_num(A_t)
         cache.update(
             timed=S,
