@@ -383,7 +383,7 @@ class TestStack:
     side: np.ndarray
     k: np.ndarray
     order: np.ndarray
-    resolved: np.ndarray | None = None
+    resolved: np.ndarray
 
     @classmethod
     def of(cls, tests):
@@ -394,9 +394,10 @@ class TestStack:
 
         side = np.array([np.r_[t.sides, np.full(n - t.n_impacts, np.nan)] for t in tests])
         floor = np.array([t.floor for t in tests])
+        A = pad("peaks")
         par = np.array([[t.alpha, t.p, 1.0 / t.dt] for t in tests]).T[..., None]
         return cls(
-            resolved=chain.apex_resolved(pad("peaks"), *par),
+            resolved=chain.apex_resolved(A, *par),
             tests=list(tests),
             theta0=np.array([t.theta0 for t in tests]),
             v0=np.array([t.v_release for t in tests]),
@@ -404,7 +405,7 @@ class TestStack:
             floor=floor,
             vfloor=np.array([t.p * t.floor for t in tests]),
             tfloor=np.array([t.dt for t in tests]),
-            A=pad("peaks"),
+            A=A,
             vb=pad("v_before"),
             va=pad("v_after"),
             tb=pad("t_before"),

@@ -66,6 +66,7 @@ from rocklab.lab.channels import LOST_STATUSES
 from rocklab.lab.flight_fit import local_fit, model_value, model_velocity, odd_samples, root_tau, stationary_tau
 from rocklab.lab.release import screw_departure
 from rocklab.lab.rotation import unseen_impacts
+from rocklab.physics.flight import quarter_period_linear
 
 #: Group of a reduced test's netCDF file that holds its stored motion.
 MOTION_GROUP = "motion"
@@ -225,11 +226,12 @@ MIN_APEX_SAMPLES = 5
 
 def apex_resolved(A, alpha, p, fs):
     """Whether the flight of apex A [rad] on a wall (alpha [rad], p [rad/s]) spans :data:`MIN_APEX_SAMPLES`
-    samples at ``fs`` [Hz]: its duration 2 arccosh(1 / (1 - A / alpha)) / p (Housner's flight).  The end
-    of a motion is set on the noise; with quiet instruments it keeps apexes of flights of two or three
-    samples (0.0006 alpha on a stocky wall at 200 Hz), read some 25 % off."""
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return 2.0 * np.arccosh(1.0 / (1.0 - np.asarray(A) / alpha)) / p * fs >= MIN_APEX_SAMPLES
+    samples at ``fs`` [Hz]: its duration twice Housner's quarter period from the apex
+    (:func:`rocklab.physics.flight.quarter_period_linear`).  The end of a motion is set on the noise; with
+    quiet instruments it keeps apexes of flights of two or three samples (0.0006 alpha on a stocky wall at
+    200 Hz), read some 25 % off."""
+    with np.errstate(invalid="ignore"):
+        return 2.0 * quarter_period_linear(np.asarray(A) / alpha) / p * fs >= MIN_APEX_SAMPLES
 
 
 def landing_window(t_takeoff, t_landing, fs, width, ring_guard_s):
