@@ -29,6 +29,7 @@ from rocklab.diagnosis.discovery import discovery
 from rocklab.diagnosis.errors import what_is_wrong
 from rocklab.diagnosis.estimation import beyond_the_catalogue, finite_mean, rivals, select_effects, stand_ins
 from rocklab.diagnosis.estimation.bias import model_bias, net_of_noise
+from rocklab.diagnosis.estimation.selection import supported
 from rocklab.diagnosis.estimation.systematic import standard_error, widened
 from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_test, observe
 from rocklab.diagnosis.extended import engineering_errors, model_params, simulated_tests
@@ -113,10 +114,12 @@ def unnamed_estimates(problem, sel, fits):
     named = tuple(sel["effects"])
     out = {}
     for x in problem.candidates(True):
-        if x in named or not problem.signature.get(x, {}).get("supports", True):
+        if x in named or not supported(problem.signature, x):
             continue
         f = fits.get(problem.combine(named, x))
-        own = [q for q in catalogue.by_name(x).params if f is not None and q.name in f.values]
+        if f is None:
+            continue
+        own = [q for q in catalogue.by_name(x).params if q.name in f.values]
         tol = [1e-6 * (q.upper - q.lower) for q in own]
         if own and all(q.lower + t < f.values[q.name] < q.upper - t for q, t in zip(own, tol)):
             out[x] = {q.name: float(f.values[q.name]) for q in own}

@@ -30,6 +30,12 @@ log = logging.getLogger(__name__)
 BIC_MARGIN = 10.0
 
 
+def supported(signature, cause):
+    """Whether the data carry the signature of ``cause`` (``signature``: cause -> its signature dict,
+    :func:`rocklab.diagnosis.catalogue.signatures`); a cause without a signature is never held back by one."""
+    return signature.get(cause, {}).get("supports", True)
+
+
 def _improves(d):
     """Whether paired per-test improvements ``d`` are beyond the noise.
 
@@ -167,7 +173,7 @@ def select_effects(
             ext = problem.combine(current, eff) if eff not in current else None
             if ext is None or ext == current or rejected.get(eff, "").startswith("95%"):
                 continue
-            if not signature.get(eff, {}).get("supports", True):
+            if not supported(signature, eff):
                 # never named without it: its fit, the costliest of all for a loss in flight, is not needed
                 why = signature[eff].get("not_identifiable")
                 rejected[eff] = (
@@ -250,7 +256,7 @@ def select_effects(
             if eff in worse_held_out:
                 continue
             ext = problem.combine(current, eff) if eff not in current else None
-            if ext is not None and ext != current and signature.get(eff, {}).get("supports", True):
+            if ext is not None and ext != current and supported(signature, eff):
                 f = fit_of(ext)
                 if not structure(problem, all_idx, ext, f.values):
                     weak[eff] = {"params": f.values, "reason": rejected.get(eff, "")}
@@ -286,7 +292,7 @@ def _wrong_forms(problem: Problem, sel, signature, fits, bic_margin=BIC_MARGIN):
     out = []
     for c in problem.causes:
         # a family its signature does not support is never named: no search for it
-        if getattr(c, "family", None) not in current or not signature.get(c.name, {}).get("supports", True):
+        if getattr(c, "family", None) not in current or not supported(signature, c.name):
             continue
         dbic = _in_place_of(problem, sel, c.name, c.family, fits)
         if dbic is not None and dbic < -bic_margin:
@@ -408,7 +414,7 @@ def rivals(problem: Problem, sel, signature, *, fits=None, bic_margin=BIC_MARGIN
     out = {}
     for y in named:
         for x in problem.candidates(True):
-            if x in named or family.get(x) == y or family.get(y) == x or not signature.get(x, {}).get("supports", True):
+            if x in named or family.get(x) == y or family.get(y) == x or not supported(signature, x):
                 continue
             dbic = _in_place_of(problem, sel, x, y, fits)
             if dbic is None or dbic >= bic_margin:
