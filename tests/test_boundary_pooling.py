@@ -95,6 +95,9 @@ def test_a_series_short_of_naming_a_cause_its_data_show_counts_at_its_own_estima
     f = pooled([unnamed(four_walls[0], {key: {name: own[0]}}), *four_walls[1:]])
     assert f["params"][name] == pytest.approx(np.mean(own))
     assert f["n_series"] == 3 and "1 at their own estimates" in f["evidence"]["pooled"]
+    # its systematic part is the namers' mean, not nothing: the chain and the model are theirs
+    u = [next(g for g in e["findings"] if g["effect"] == key)["u_systematic"][name] for e in four_walls[1:]]
+    assert f["u_systematic"][name] == pytest.approx(np.mean(u))
     # without the signature's estimate the series counts at the null value (the cause absent there)
     f = pooled([unnamed(four_walls[0], None), *four_walls[1:]])
     assert f["params"][name] == pytest.approx(np.mean([1.0, *own[1:]]))

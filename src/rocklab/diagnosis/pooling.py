@@ -110,20 +110,21 @@ def _parameter_values(cause, name, usable, named):
     ``unnamed_estimates``: a series short of the evidence to name it still says how large it is), else
     the parameter's null value (the data show no sign of it); a parameter without a null value in the
     catalogue (one that only exists with its cause, the spread of the stop speeds) from the series that
-    estimated it only.  Returns (values, how many series that did not name it count at their own
+    estimated it only.  Returns (values, the series that did not name it counted at their own
     estimates, how many at the null value)."""
     null = next((q.null for q in catalogue.by_name(cause).params if q.name == name), None)
-    out, n_own, n_null = {}, 0, 0
+    out, own, n_null = {}, [], 0
     for e in usable:
         f = named.get(e.key)
-        own = (e.unnamed_estimates or {}).get(cause, {})
+        mine = (e.unnamed_estimates or {}).get(cause, {})
         if f is not None and name in f.params:
             out[e.key] = f.params[name]
-        elif name in own:
-            out[e.key], n_own = own[name], n_own + 1
+        elif name in mine:
+            out[e.key] = mine[name]
+            own.append(e.key)
         elif null is not None:
             out[e.key], n_null = null, n_null + 1
-    return out, n_own, n_null
+    return out, own, n_null
 
 
 def _pooled_text(units, n_values, n_unnamed, n_own, n_null):
@@ -184,8 +185,11 @@ def diagnose_boundary(entries, boundary, *, walls=None, thickness=None):
         params, ci, notes, units, shared = {}, {}, {}, {}, {}
         bounds = {q.name: (q.lower, q.upper) for q in catalogue.by_name(eff).params}
         for name in lst[0][1].params:
-            values, n_own, n_null = _parameter_values(eff, name, usable, named)
+            values, own, n_null = _parameter_values(eff, name, usable, named)
             u_sys = {k: (f.u_systematic or {}).get(name, 0.0) for k, f in named.items()}
+            # an own estimate comes through the chain and the model the namers' came through, with no
+            # interval of its own: their mean systematic part (a null value has none)
+            u_sys |= dict.fromkeys(own, float(np.mean(list(u_sys.values()))))
             params[name], interval, level, units[name], note, shared[name] = pooled_parameter(
                 values, walls, u_sys, bounds.get(name, (-np.inf, np.inf))
             )
@@ -203,7 +207,7 @@ def diagnose_boundary(entries, boundary, *, walls=None, thickness=None):
                 "evidence": {
                     "series": f"named in {len(lst)} of {of_series}",
                     "pooled": _pooled_text(
-                        plural(level, max(units.values())), len(values), len(usable) - len(lst), n_own, n_null
+                        plural(level, max(units.values())), len(values), len(usable) - len(lst), len(own), n_null
                     ),
                     "range": {
                         n: [float(min(f.params[n] for _, f in lst)), float(max(f.params[n] for _, f in lst))]
