@@ -68,15 +68,26 @@ def test_a_cause_these_tests_cannot_tell_from_a_rival_carries_the_caveat():
     sel = select_effects(problem, signature={})
     (named,) = sel["effects"]
     other = ({"level", "loss"} - {named}).pop()
-    out = rivals(problem, sel, {})
-    assert list(out) == [named] and list(out[named]) == [other]
+    out, preferred = rivals(problem, sel, {})
+    assert list(out) == [named] and list(out[named]) == [other] and preferred == []
     assert "cannot tell them apart" in out[named][other]
     # no rival whose signature is absent, nor one the data tell apart
-    assert rivals(problem, sel, {other: {"supports": False}}) == {}
+    assert rivals(problem, sel, {other: {"supports": False}}) == ({}, [])
     told = LossProblem(np.linspace(0.2, 3.0, 15), s=0.1, n_tests=3)
     sel = select_effects(told, signature={})
     assert sel["effects"] == ["level"]
-    assert rivals(told, sel, {}) == {}
+    assert rivals(told, sel, {}) == ({}, [])
+
+
+def test_a_rival_the_data_prefer_leaves_structure_not_a_caveat():
+    # a loss the selection never tried (its signature read as absent) beside a level named in its place:
+    # where the loss, read after all, fits and predicts the held-out tests better, the level is the wrong form
+    problem = LossProblem(np.linspace(0.2, 3.0, 15), k=0.1)
+    sel = select_effects(problem, signature=NO_LOSS)
+    assert sel["effects"] == ["level"]
+    out, preferred = rivals(problem, sel, {})
+    assert "the data prefer it" in out["level"]["loss"]
+    assert len(preferred) == 1 and preferred[0].startswith("loss in place of level")
 
 
 class HingeProblem(Problem):

@@ -251,6 +251,13 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         pulls = sel["ci"].u_sys if f["effect"] in sel["effects"] else {}
         u_model = bias.get("u_model", {})
         f["u_systematic"] = {k: float(np.hypot(pulls.get(k, 0.0), u_model.get(k, 0.0))) for k in f["ci95"]}
+    blind = not_identifiable(tests, [f["effect"] for f in findings])
+    # a cause the design cannot identify is never named, and a rival these tests cannot tell from a named
+    # cause was never tested against it: a named cause whose effect either could produce is named with
+    # that caveat, not with confidence; a rival the data prefer is a form the selection missed
+    caveats = stand_ins(problem, sel, blind, fits=fits)
+    rival, preferred = rivals(problem, sel, sig, fits=fits)
+    structure += preferred
     unexplained = bool(structure) and not sel["weak"]
     if not findings and not unexplained and not off:
         verdict_text = "the base model explains the data within the noise"
@@ -258,12 +265,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         verdict_text = "none of the candidate causes is carried by the data"
     else:
         verdict_text = ""
-    blind = not_identifiable(tests, [f["effect"] for f in findings])
-    # a cause the design cannot identify is never named, and a rival these tests cannot tell from a named
-    # cause was never tested against it: a named cause whose effect either could produce is named with
-    # that caveat, not with confidence
-    caveats = stand_ins(problem, sel, blind, fits=fits)
-    for y, xs in rivals(problem, sel, sig, fits=fits).items():
+    for y, xs in rival.items():
         caveats[y] = caveats.get(y, {}) | xs
     for y, xs in caveats.items():
         next(f for f in findings if f["effect"] == y)["may_stand_in_for"] = xs

@@ -401,17 +401,23 @@ def rivals(problem: Problem, sel, signature, *, fits=None, bic_margin=BIC_MARGIN
     predict the held-out tests worse beyond the noise (the paired test of
     the selection).  A generalised family and its listed member are one
     cause in two forms (:func:`beyond_the_catalogue` decides between them)
-    and are not each other's rivals.
+    and are not each other's rivals.  Where ``X`` in ``Y``'s place is better
+    by that evidence and predicts the held-out tests better beyond the noise,
+    the data prefer it: a form the selection did not reach (a law of the speed
+    whose closed form's signature is absent), which leaves the model's
+    structure unexplained rather than a caveat on a confident name.
 
     Returns
     -------
-    dict
-        Named cause -> {rival: why the series cannot tell them apart}; only causes that have one.
+    caveats : dict
+        Named cause -> {rival: why}; only causes that have one.
+    preferred : list of str
+        The structure the rivals the data prefer leave: one line each.
     """
     fits = {} if fits is None else fits
     family = {c.name: getattr(c, "family", None) for c in problem.causes}
     named = tuple(sel["effects"])
-    out = {}
+    out, preferred = {}, []
     for y in named:
         for x in problem.candidates(True):
             if x in named or family.get(x) == y or family.get(y) == x or not supported(signature, x):
@@ -424,12 +430,17 @@ def rivals(problem: Problem, sel, signature, *, fits=None, bic_margin=BIC_MARGIN
             if _improves(d):
                 continue
             gain, se = paired_difference(d)
-            out.setdefault(y, {})[x] = (
+            numbers = (
                 f"in its place the BIC is {dbic:+.1f} and the held-out deviance per observation {gain:+.3g} "
-                f"(standard error {se:.2g}) on {problem.n_tests} tests: these tests cannot tell them apart"
+                f"(standard error {se:.2g}) on {problem.n_tests} tests"
             )
+            if dbic <= -bic_margin and _improves(-d):
+                out.setdefault(y, {})[x] = f"{numbers}: the data prefer it"
+                preferred.append(f"{x} in place of {y}: {numbers}, a better form the selection did not reach")
+            else:
+                out.setdefault(y, {})[x] = f"{numbers}: these tests cannot tell them apart"
             log.info("%s may stand in for %s: %s", y, x, out[y][x])
-    return out
+    return out, preferred
 
 
 def _nested_fit(problem: Problem, ext, x, fits):

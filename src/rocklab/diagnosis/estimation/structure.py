@@ -66,11 +66,11 @@ def structure(problem: Problem, idx, ext, values):
     return found + problem.form_structure(ext) + problem.extra_structure(sub, ext, values)
 
 
-def within_slope(r, x, ok):
+def within_slope(r, x, ok, min_obs=3):
     """Within-test slope of r on x, its cluster-robust p-value and the 10-90 % span of x.
 
     The slope of the residuals on the covariate, each demeaned within its
-    test (tests with three observations or more), with the cluster-robust
+    test (tests with ``min_obs`` observations or more, at least three such tests), with the cluster-robust
     (by test) standard error and its small-sample correction CR1,
     se^2 = G / (G - 1) (N - 1) / (N - K) sum_g (x_g . u_g)^2 / (sum x^2)^2
     with G tests, N observations and K = 1 slope (statsmodels' cluster
@@ -83,7 +83,7 @@ def within_slope(r, x, ok):
     slope, p_value, span : float
     """
     ok = ok & np.isfinite(x)
-    rows = [i for i in range(r.shape[0]) if ok[i].sum() >= 3]
+    rows = [i for i in range(r.shape[0]) if ok[i].sum() >= min_obs]
     if len(rows) < 3:
         return 0.0, np.nan, 0.0
     xs = [x[i][ok[i]] - x[i][ok[i]].mean() for i in rows]
