@@ -213,6 +213,27 @@ def note_lines(notes):
     return [f"{mark} {note}" for note, mark in notes.items()]
 
 
+def percentile_interval(draws, level=0.95, axis=None):
+    """Percentile interval of resampled values whose expected content of their distribution is ``level``.
+
+    The quantiles (1 -+ level) / 2 of the ``n`` draws at the plotting
+    position p (n + 1) (numpy's ``method="weibull"``): the order statistics
+    j < k of n draws hold on average (k - j) / (n + 1) of the distribution
+    they are drawn from, so these hold ``level``; numpy's default position
+    p (n - 1) + 1 holds (n - 1) level / (n + 1): 0.904 of it from 40
+    resamples for a 95 % interval, 0.941 from 200.  Below
+    n = 2 / (1 - level) - 1 draws (39 at 95 %) the interval is their range,
+    whose content (n - 1) / (n + 1) falls short of ``level``.
+
+    Returns
+    -------
+    (low, high) : float, or arrays along the axes left
+    """
+    q = (1.0 - level) / 2.0
+    lo, hi = np.quantile(np.asarray(draws, float), [q, 1.0 - q], axis=axis, method="weibull")
+    return (float(lo), float(hi)) if np.ndim(lo) == 0 else (lo, hi)
+
+
 def bootstrap_ci(values, n_boot=4000, level=0.95, seed=0):
     """Percentile bootstrap interval of the mean (vectorised, seeded).
 
@@ -224,9 +245,7 @@ def bootstrap_ci(values, n_boot=4000, level=0.95, seed=0):
         return np.nan, np.nan
     rng = np.random.default_rng(seed)
     means = x[rng.integers(0, x.size, size=(n_boot, x.size))].mean(axis=1)
-    q = (1 - level) / 2
-    lo, hi = np.quantile(means, [q, 1 - q])
-    return float(lo), float(hi)
+    return percentile_interval(means, level)
 
 
 def boundary_summary(tests_df, columns, walls, by="series", within="boundary"):

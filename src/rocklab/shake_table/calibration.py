@@ -48,6 +48,7 @@ import numpy as np
 from scipy import optimize
 
 from rocklab.diagnosis.parameters import Param
+from rocklab.dissipation.statistics import percentile_interval
 from rocklab.shake_table.block import PARAMS
 
 #: Log-scatter of the contact half-widths from test to test [-] (ln units).
@@ -208,15 +209,13 @@ def paired_accuracy_difference(y, p_a, p_b, groups, n_boot=2000, seed=0, level=0
     per_d, per_n = np.bincount(inv, d, names.size), np.bincount(inv, minlength=names.size).astype(float)
     draw = np.random.default_rng(seed).integers(0, names.size, (n_boot, names.size))
     boot = per_d[draw].sum(axis=1) / per_n[draw].sum(axis=1)
-    q = [(1 - level) / 2 * 100, (1 + level) / 2 * 100]
-    lo, hi = np.percentile(boot, q)
-    return float(d.mean()), float(lo), float(hi)
+    lo, hi = percentile_interval(boot, level)
+    return float(d.mean()), lo, hi
 
 
 def intervals(boot, level=0.95):
     """Percentile interval of every parameter over the resamples' values."""
-    q = [(1 - level) / 2 * 100, (1 + level) / 2 * 100]
-    return {k: tuple(float(x) for x in np.percentile([b[k] for b in boot], q)) for k in boot[0]}
+    return {k: percentile_interval([b[k] for b in boot], level) for k in boot[0]}
 
 
 def named(param: Param, ci) -> bool:

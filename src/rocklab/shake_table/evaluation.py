@@ -30,6 +30,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from rocklab.dissipation.statistics import percentile_interval
 from rocklab.io import cf_attrs
 from rocklab.seismic.indices import map_indices
 from rocklab.seismic.maps import scales
@@ -301,8 +302,7 @@ def rate_interval(y, groups, n_boot=N_BOOT_DIFF, seed=0, level=0.95):
     per_n = np.bincount(inv, minlength=names.size).astype(float)
     draw = np.random.default_rng(seed).integers(0, names.size, (n_boot, names.size))
     boot = per_y[draw].sum(axis=1) / per_n[draw].sum(axis=1)
-    lo, hi = np.percentile(boot, [(1 - level) / 2 * 100, (1 + level) / 2 * 100])
-    return float(lo), float(hi)
+    return percentile_interval(boot, level)
 
 
 def fragility_table(predictions: pd.DataFrame) -> pd.DataFrame:
@@ -394,7 +394,7 @@ def parameter_table(specimen, fit, block) -> pd.DataFrame:
     names = ("alpha_plus_deg", "alpha_minus_deg", "e_leaving_plus", "e_leaving_minus")
     nulls = (np.degrees(fp["alpha_plus"]), np.degrees(fp["alpha_minus"]), fp["e_plus"], fp["e_minus"])
     for j, (name, value, nv) in enumerate(zip(names, derived(v), nulls)):
-        lo, hi = np.percentile(boot[:, j], [2.5, 97.5])
+        lo, hi = percentile_interval(boot[:, j])
         rows.append(
             {
                 "specimen": specimen,

@@ -20,7 +20,7 @@ from rocklab.diagnosis.errors import engineering_rows
 from rocklab.diagnosis.evidence import TestStack
 from rocklab.diagnosis.model import next_flight
 from rocklab.diagnosis.parameters import Param
-from rocklab.dissipation.statistics import MIN_BOOTSTRAP, t_interval
+from rocklab.dissipation.statistics import MIN_BOOTSTRAP, percentile_interval, t_interval
 from rocklab.lab.motion import odd_samples
 from rocklab.physics.flight import landing_speed, quarter_period
 from rocklab.physics.law import Stop
@@ -195,7 +195,7 @@ def threshold(tests, mp, *, n_boot=200, seed=0, min_tests=3):
     if x.size >= MIN_BOOTSTRAP:
         rng = np.random.default_rng(seed)
         boots = np.exp([rng.choice(x, x.size).mean() for _ in range(n_boot)])
-        ci = [float(np.percentile(boots, 2.5)), float(np.percentile(boots, 97.5))]
+        ci = list(percentile_interval(boots))
     else:
         # too few stops to resample: Student's t on their few degrees of freedom (issue 24)
         lo_x, hi_x, _ = t_interval(x.mean(), x.std(ddof=1) / math.sqrt(x.size), x.size - 1)
