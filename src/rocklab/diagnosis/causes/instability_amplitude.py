@@ -35,7 +35,7 @@ def signature(ob):
     """
     x = ob.S.A[:, :-1] / ob.alpha
     ok = np.isfinite(ob.a_T) & np.isfinite(x)
-    slope, p, span = within_slope(np.where(ok, ob.a_T, 0.0), x, ok)
+    slope, p, span = within_slope(np.where(ok, ob.a_T, 0.0), x, ok, min_obs=2)
     if not np.isfinite(p):
         return None
     return {
