@@ -243,10 +243,11 @@ def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
         outside = x0[i] < b[0] - tol or x0[i] > b[1] + tol
         # the bootstrap of an estimate on a bound is inconsistent (Andrews 2000): resamples pile on the bound
         at_bound = lo[i] >= -tol or hi[i] <= tol
-        collapsed = outside or at_bound or b[1] - b[0] < COLLAPSED_BOOTSTRAP * (s[1] - s[0])
-        if collapsed:
-            log.info("bootstrap of %s collapsed (%.4g not in [%.4g, %.4g]): the sandwich interval", k, x0[i], *b)
-        ci[k] = s if collapsed else b
+        narrow = b[1] - b[0] < COLLAPSED_BOOTSTRAP * (s[1] - s[0])
+        why = "its estimate outside" if outside else "fitted on a bound" if at_bound else "narrow" if narrow else ""
+        if why:
+            log.info("bootstrap of %s [%.4g, %.4g] of %.4g, %s: the sandwich interval", k, *b, x0[i], why)
+        ci[k] = s if why else b
     log.info(
         "bootstrap of %s: %d resamples of %d tests in %.1f s: %s",
         "+".join(fitted.ext),
