@@ -68,7 +68,7 @@ def test_coverage_counts_the_truths_held_by_the_systematic_part_only():
     truth = {"restitution_scale": {"c": 0.95}}
     stat, u = [0.9504, 0.9506], 0.0003
     ci = widened(stat, 0.9505, 0.2, 2.0, u)
-    found = {"effect": "restitution_scale", "params": {"c": 0.9505}, "ci95": {"c": ci}}
+    found = {"effect": "restitution_scale", "params": {"c": 0.9505}, "ci95": {"c": ci}, "ci95_joint": {"c": ci}}
     parts = [({"c": [0.9, 1.0]}, {"c": 0.0}), ({"c": stat}, {"c": u})]
     s = discovery.score(entry(["restitution_scale"], [found]), truth, parts)
     assert s["named_right"] and s["params_covered"] == 1 and s["params_widened_by_systematic"] == 1
@@ -120,22 +120,28 @@ def test_the_rates_leave_the_not_identifiable_out_of_the_named_right_rate():
 def test_the_named_right_rate_splits_into_verdicts_and_their_intervals():
     """Two right verdicts, one of two parameters with one outside its interval, one of one inside; a wrong
     verdict: verdicts right 2/3, named right 1/3, coverage 2/3, and at that coverage the right verdicts
-    would be all inside with probability (2/3)^2 and 2/3: (4/9 + 2/3) / 2 of them, times 2/3."""
+    would be all inside with probability (2/3)^2 and 2/3: (4/9 + 2/3) / 2 of them, times 2/3.  Named
+    right reads the simultaneous intervals: where those of the first hold both, it is named right, its own
+    intervals still miss (named right against them 1/3)."""
     row = {"boundary": "two-sided", "fs": 400.0, "wall": "paper", "n_tests": 5}
     two = {"restitution_amplitude": {"a": 1.0, "b": 0.1}}
     both = {
         "effect": "restitution_amplitude",
         "params": {"a": 1.0, "b": 0.1},
         "ci95": {"a": [0.9, 1.1], "b": [0.2, 0.3]},
+        "ci95_joint": {"a": [0.85, 1.15], "b": [0.05, 0.35]},
     }
     one = {"restitution_scale": {"c": 0.95}}
     inside = {"effect": "restitution_scale", "params": {"c": 0.95}, "ci95": {"c": [0.94, 0.96]}}
+    inside["ci95_joint"] = inside["ci95"]
     cells = [
         {**row, "cause": "restitution_amplitude", **discovery.score(entry(["restitution_amplitude"], [both]), two)},
         {**row, "cause": "restitution_scale", **discovery.score(entry(["restitution_scale"], [inside]), one)},
         {**row, "cause": "restitution_scale", **discovery.score(entry(["instability_angle"], []), one)},
     ]
     r = discovery.rates(cells)
-    assert r["verdict_right_rate"] == pytest.approx(2 / 3) and r["named_right_rate"] == pytest.approx(1 / 3)
+    assert r["verdict_right_rate"] == pytest.approx(2 / 3) and r["named_right_marginal_rate"] == pytest.approx(1 / 3)
+    assert r["named_right_rate"] == pytest.approx(2 / 3)
+    assert cells[0]["outside"] and not cells[0]["outside_joint"]
     assert r["coverage_95"] == pytest.approx(2 / 3)
     assert r["named_right_at_coverage"] == pytest.approx((4 / 9 + 2 / 3) / 2 * 2 / 3)

@@ -121,6 +121,11 @@ def test_a_two_test_series_names_its_causes_on_one_degree_of_freedom(series_of):
     for f in e["findings"]:
         for k, (lo, hi) in f["ci95"].items():
             assert lo <= f["params"][k] <= hi and lo <= truth[k] <= hi and f["n_tests"] == 2
+            # the verdict's two values together: each side at least as far out, by up to Student's Šidák
+            # factor on 1 df (1.98) where the side is statistical
+            j_lo, j_hi = f["ci95_joint"][k]
+            assert j_lo <= lo and hi <= j_hi and (j_hi - j_lo) <= 1.98 * (hi - lo)
+            assert (j_lo, j_hi) != (lo, hi) or lo == 0.0
     b = D.diagnose_boundary([e], "two-sided")
     assert b["verdict"] == e["verdict"] and b["n_series_diagnosed"] == 1 and "too_small" not in b
     # one series is one unit: its parameters pass to the boundary without an interval, and say why

@@ -11,6 +11,7 @@ from rocklab.dissipation.statistics import (
     bootstrap_ci,
     boundary_summary,
     clustered_mean,
+    expanded,
     factor_effect,
     flag_outlying_series,
     holm,
@@ -18,6 +19,8 @@ from rocklab.dissipation.statistics import (
     percentile_interval,
     series_stats,
     series_table,
+    simultaneous_factor,
+    small_sample_expansion,
     symmetry_test,
     table3,
     table3_markdown,
@@ -104,6 +107,46 @@ def test_a_percentile_interval_holds_its_level_of_the_resampled_distribution(n):
 def test_a_percentile_interval_of_39_draws_is_their_range():
     x = np.random.default_rng(2).permutation(np.arange(1.0, 40.0))
     assert percentile_interval(x) == pytest.approx((1.0, 39.0))
+
+
+@pytest.mark.parametrize("n", [5, 10])
+def test_the_expanded_percentile_interval_of_a_mean_over_few_units_holds_95_percent(n):
+    """The percentile interval of the mean over n normal units holds P(|t_{n-1}| < z sqrt((n-1)/n)) of the
+    time (0.85 from 5 units); widened by sqrt(n/(n-1)) t_{n-1}/z about the mean it holds 95 %, as the t
+    interval does (Hesterberg 2015)."""
+    rng = np.random.default_rng(7)
+    x = rng.normal(size=(4000, n))
+    means = np.take_along_axis(x[:, None, :], rng.integers(0, n, (4000, 200, n)), axis=2).mean(axis=2)
+    lo, hi = percentile_interval(means, axis=1)
+    plain = ((lo <= 0) & (hi >= 0)).mean()
+    z = stats.norm.ppf(0.975)
+    assert plain == pytest.approx(1 - 2 * stats.t.sf(z * np.sqrt((n - 1) / n), n - 1), abs=0.02)
+    f = small_sample_expansion(n)
+    centre = x.mean(axis=1)
+    e_lo, e_hi = centre - f * (centre - lo), centre + f * (hi - centre)
+    assert ((e_lo <= 0) & (e_hi >= 0)).mean() == pytest.approx(0.95, abs=0.015)
+    assert expanded((lo[0], hi[0]), centre[0], n) == pytest.approx((e_lo[0], e_hi[0]))
+
+
+def test_the_expansion_vanishes_with_many_units_and_the_bootstrap_ci_takes_it():
+    assert small_sample_expansion(5) == pytest.approx(np.sqrt(5 / 4) * stats.t.ppf(0.975, 4) / 1.959964)
+    assert small_sample_expansion(100000) == pytest.approx(1.0, abs=1e-4)
+    x = np.random.default_rng(4).normal(1.0, 0.1, 6)
+    rng = np.random.default_rng(0)
+    plain = percentile_interval(x[rng.integers(0, 6, (4000, 6))].mean(axis=1))
+    assert bootstrap_ci(x, seed=0) == pytest.approx(expanded(plain, x.mean(), 6))
+
+
+@pytest.mark.parametrize(("k", "df"), [(2, np.inf), (3, np.inf), (2, 4)])
+def test_simultaneous_intervals_hold_all_their_parameters_at_95_percent(k, df):
+    """k independent estimates, each with its t interval on df: widened by the Šidák factor, all k are
+    inside together 95 % of the time (the plain intervals, 0.95^k)."""
+    rng = np.random.default_rng(3)
+    t = rng.standard_t(df, size=(40000, k)) if np.isfinite(df) else rng.normal(size=(40000, k))
+    q = stats.t.ppf(0.975, df)
+    assert (np.abs(t) < q).all(axis=1).mean() == pytest.approx(0.95**k, abs=0.006)
+    assert (np.abs(t) < q * simultaneous_factor(k, df)).all(axis=1).mean() == pytest.approx(0.95, abs=0.004)
+    assert simultaneous_factor(1, df) == 1.0
 
 
 def test_holm_against_hand_computation():

@@ -13,7 +13,7 @@ import pytest
 from rocklab.diagnosis.estimation import Problem, fit
 from rocklab.diagnosis.estimation.fitting import linearised
 from rocklab.diagnosis.estimation.resampling import parameter_intervals, sandwich_intervals
-from rocklab.diagnosis.estimation.systematic import by_group, systematic_uncertainty, widened
+from rocklab.diagnosis.estimation.systematic import by_group, simultaneous, systematic_uncertainty, widened
 from rocklab.diagnosis.parameters import Param
 
 TRUTH = 0.3
@@ -125,3 +125,17 @@ def test_a_widened_interval_holds_its_estimate_within_the_bounds():
     assert lo == 0.0 and hi == pytest.approx(np.hypot(0.001, 1.96 * 0.01), rel=1e-3)
     assert widened([0.99, 1.0], 1.0, 0.0, 1.0, 0.5) == pytest.approx([1.0 - np.hypot(0.01, 1.96 * 0.5), 1.0], rel=1e-3)
     assert widened([0.2, 0.4], 0.3, 0.0, 1.0, 10.0) == [0.0, 1.0]
+
+
+def test_a_simultaneous_interval_widens_each_part_by_its_own_factor_and_keeps_its_bound():
+    """The statistical part of a widened interval by Student's Šidák factor, the systematic by the normal's:
+    on 2 df two parameters widen a statistical half-width 0.1 by 1.433, a systematic 0.05 by 1.141."""
+    stat, u = 0.1, 0.05
+    ci = widened([0.3 - stat, 0.3 + stat], 0.3, 0.0, 1.0, u)
+    assert simultaneous(ci, 0.3, 0.0, 1.0, u, 1, 2) == pytest.approx(ci)
+    lo, hi = simultaneous(ci, 0.3, 0.0, 1.0, u, 2, 2)
+    half = np.hypot(1.4327 * stat, 1.1411 * 1.96 * u)
+    assert (lo, hi) == pytest.approx((0.3 - half, 0.3 + half), rel=1e-3)
+    # a side on its bound stays there; the other widens
+    lo, hi = simultaneous([0.0, 0.05], 0.0, 0.0, 1.0, 0.0, 3, 4)
+    assert lo == 0.0 and hi > 0.05

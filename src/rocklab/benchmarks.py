@@ -289,8 +289,8 @@ def _miss(cell) -> str:
             for c, v in stand.items()
         }
         out.append("named beside the truth: " + "; ".join(f"{c} ({why})" for c, why in flag.items()))
-    if cell["outside"]:
-        out.append(f"interval misses the truth: {'; '.join(cell['outside'])}")
+    if cell["outside_joint"]:
+        out.append(f"the verdict's intervals miss the truth: {'; '.join(cell['outside_joint'])}")
     return "; ".join(out)
 
 
@@ -302,7 +302,7 @@ def _discovery(bench: dict) -> dict:
     keys += ("n_params_widened_by_systematic", "n_skipped", "design", "design_seeds", "wall_s", "workers")
     keys += ("named_right_rate", "false_name_rate_null", "confident_misname_rate", "coverage_95", "pass")
     keys += ("named_right_ci95", "false_name_ci95", "confident_misname_ci95", "coverage_ci95")
-    keys += ("verdict_right_rate", "verdict_right_ci95", "named_right_at_coverage")
+    keys += ("verdict_right_rate", "verdict_right_ci95", "named_right_marginal_rate", "named_right_at_coverage")
     cols = ("design_seed", "cause", "boundary", "fs", "wall", "h_over_b", "n_tests", "n_impacts", "verdict")
     cols += ("named_right",)
     return {

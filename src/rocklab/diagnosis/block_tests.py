@@ -46,6 +46,7 @@ from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.causes import restitution_housner_loss
 from rocklab.diagnosis.discovery import discovery, family_against_listed
 from rocklab.diagnosis.estimation import Problem, beyond_the_catalogue, finite_mean, select_effects
+from rocklab.diagnosis.estimation.systematic import verdict_intervals
 from rocklab.physics import restitution
 from rocklab.physics.impact import bounded_factor
 from rocklab.physics.law import Amplitude, HousnerLoss, Restitution
@@ -286,6 +287,7 @@ def diagnose_group(trials: _Trials, *, n_boot=40, seed=0):
                 "effect": eff,
                 "params": {k: sel["fit"].values[k] for k in own},
                 "ci95": {k: sel["ci"][k] for k in own if k in sel["ci"]},
+                "u_systematic": {k: sel["ci"].u_sys[k] for k in own if k in sel["ci"].u_sys},
                 "n_tests": len(trials.ids),
                 "evidence": {
                     "signature": sig[eff]["text"],
@@ -298,6 +300,7 @@ def diagnose_group(trials: _Trials, *, n_boot=40, seed=0):
                 **discovery(problem, eff, sel),
             }
         )
+    verdict_intervals(findings, {q.name: q for q in problem.params(tuple(sel["effects"]))}, problem.n_tests)
     hb = 1.0 / np.tan(trials.alpha)
     one = np.ptp(hb) == 0
     families = [c for c in problem.candidates(True) if c not in problem.candidates()]

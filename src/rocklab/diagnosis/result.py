@@ -184,8 +184,10 @@ class _Document:
 class Finding(_Record):
     """A cause named by the data of one series (or of the limestone blocks).
 
-    Parameters of the cause with their bootstrap 95 % intervals and the
-    systematic standard uncertainty those hold (``u_systematic``), the tests
+    Parameters of the cause with their bootstrap 95 % intervals, the
+    systematic standard uncertainty those hold (``u_systematic``), the
+    intervals that hold all the verdict's parameters together at 95 %
+    (``ci95_joint``), the tests
     they rest on, the evidence in words, the held-out errors of the model
     with the cause and their gain over the base model; a form discovered
     beyond the catalogue (a family) also says what it reduces to and its
@@ -199,6 +201,7 @@ class Finding(_Record):
         {
             "ci_note",
             "u_systematic",
+            "ci95_joint",
             "may_stand_in_for",
             "discovered",
             "family",
@@ -213,6 +216,7 @@ class Finding(_Record):
     params: dict[str, float | None] = field(default_factory=dict)
     ci95: dict[str, list] = field(default_factory=dict)
     u_systematic: dict[str, float] | None = None
+    ci95_joint: dict[str, list] | None = None
     n_tests: int | None = None
     ci_note: str | None = None
     evidence: dict[str, str] = field(default_factory=dict)

@@ -30,7 +30,7 @@ from rocklab.diagnosis.errors import what_is_wrong
 from rocklab.diagnosis.estimation import beyond_the_catalogue, finite_mean, rivals, select_effects, stand_ins
 from rocklab.diagnosis.estimation.bias import model_bias, net_of_noise
 from rocklab.diagnosis.estimation.selection import supported
-from rocklab.diagnosis.estimation.systematic import standard_error, widened
+from rocklab.diagnosis.estimation.systematic import standard_error, verdict_intervals, widened
 from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_test, observe
 from rocklab.diagnosis.extended import engineering_errors, model_params, simulated_tests
 from rocklab.diagnosis.problem import WallProblem
@@ -251,6 +251,9 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         pulls = sel["ci"].u_sys if f["effect"] in sel["effects"] else {}
         u_model = bias.get("u_model", {})
         f["u_systematic"] = {k: float(np.hypot(pulls.get(k, 0.0), u_model.get(k, 0.0))) for k in f["ci95"]}
+    verdict_intervals(
+        findings, {q.name: q for f in findings for q in catalogue.by_name(f["effect"]).params}, len(tests)
+    )
     blind = not_identifiable(tests, [f["effect"] for f in findings])
     # a cause the design cannot identify is never named, and a rival these tests cannot tell from a named
     # cause was never tested against it: a named cause whose effect either could produce is named with

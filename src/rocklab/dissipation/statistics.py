@@ -213,6 +213,61 @@ def note_lines(notes):
     return [f"{mark} {note}" for note, mark in notes.items()]
 
 
+def small_sample_expansion(n_units, level=0.95):
+    """The factor by which a percentile bootstrap interval over ``n_units`` resampled units is too narrow.
+
+    The bootstrap distribution of a mean over n units has the spread of
+    the plug-in standard error, sqrt((n - 1) / n) of the unbiased one, and
+    its percentiles are normal quantiles where the mean over few units is
+    Student's t on n - 1 degrees of freedom; the expanded percentile
+    interval (Hesterberg 2015, The American Statistician 69, 371-386) makes
+    up both, sqrt(n / (n - 1)) t_{n-1} / z: 1.58 from 5 units, 1.22 from 10,
+    1.09 from 20 at 95 %.  A percentile interval of a mean over 5 normal
+    units at the plain percentiles holds about 85 %.
+
+    Returns
+    -------
+    float
+        >= 1; 1 for an infinite number of units.
+    """
+    q = 0.5 + level / 2
+    return float(np.sqrt(n_units / (n_units - 1)) * stats.t.ppf(q, n_units - 1) / stats.norm.ppf(q))
+
+
+def expanded(interval, centre, n_units, level=0.95):
+    """A percentile ``interval`` over ``n_units`` resampled units, each side's distance from the estimate
+    ``centre`` widened by :func:`small_sample_expansion` (the expanded percentile interval with its
+    quantiles read off a normal approximation: 40 resamples cannot reach the 0.3 % percentile that
+    5 units need).
+
+    Returns
+    -------
+    (low, high) : float
+    """
+    f = small_sample_expansion(n_units, level)
+    lo, hi = interval
+    return float(centre - f * (centre - lo)), float(centre + f * (hi - centre))
+
+
+def simultaneous_factor(k, df, level=0.95):
+    """The factor that widens ``k`` intervals of ``level`` each into intervals that hold all ``k`` at ``level``.
+
+    Šidák's rule: each interval at level^(1/k) (0.9747 for two at 95 %),
+    exact for independent estimates and conservative for correlated ones;
+    the factor is the ratio of Student's t quantiles on ``df`` degrees of
+    freedom (normal quantiles for ``df`` infinite): 1 for one interval,
+    1.14 for two at large df, 1.44 for two on 2 df.
+
+    Returns
+    -------
+    float
+    """
+    if k <= 1:
+        return 1.0
+    joint = level ** (1.0 / k)
+    return float(stats.t.ppf(0.5 + joint / 2, df) / stats.t.ppf(0.5 + level / 2, df))
+
+
 def percentile_interval(draws, level=0.95, axis=None):
     """Percentile interval of resampled values whose expected content of their distribution is ``level``.
 
@@ -235,7 +290,8 @@ def percentile_interval(draws, level=0.95, axis=None):
 
 
 def bootstrap_ci(values, n_boot=4000, level=0.95, seed=0):
-    """Percentile bootstrap interval of the mean (vectorised, seeded).
+    """Percentile bootstrap interval of the mean (vectorised, seeded), expanded for its few values
+    (:func:`expanded`).
 
     Returns (low, high); NaN for fewer than :data:`MIN_BOOTSTRAP` finite values.
     """
@@ -245,7 +301,7 @@ def bootstrap_ci(values, n_boot=4000, level=0.95, seed=0):
         return np.nan, np.nan
     rng = np.random.default_rng(seed)
     means = x[rng.integers(0, x.size, size=(n_boot, x.size))].mean(axis=1)
-    return percentile_interval(means, level)
+    return expanded(percentile_interval(means, level), x.mean(), x.size, level)
 
 
 def boundary_summary(tests_df, columns, walls, by="series", within="boundary"):

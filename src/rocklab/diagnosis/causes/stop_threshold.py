@@ -20,7 +20,7 @@ from rocklab.diagnosis.errors import engineering_rows
 from rocklab.diagnosis.evidence import TestStack
 from rocklab.diagnosis.model import next_flight
 from rocklab.diagnosis.parameters import Param
-from rocklab.dissipation.statistics import MIN_BOOTSTRAP, percentile_interval, t_interval
+from rocklab.dissipation.statistics import MIN_BOOTSTRAP, expanded, percentile_interval, t_interval
 from rocklab.lab.motion import odd_samples
 from rocklab.physics.flight import landing_speed, quarter_period
 from rocklab.physics.law import Stop
@@ -194,8 +194,8 @@ def threshold(tests, mp, *, n_boot=200, seed=0, min_tests=3):
     x = 0.5 * (np.log(lo) + np.log(hi))
     if x.size >= MIN_BOOTSTRAP:
         rng = np.random.default_rng(seed)
-        boots = np.exp([rng.choice(x, x.size).mean() for _ in range(n_boot)])
-        ci = list(percentile_interval(boots))
+        boots = [rng.choice(x, x.size).mean() for _ in range(n_boot)]
+        ci = [float(v) for v in np.exp(expanded(percentile_interval(boots), x.mean(), x.size))]
     else:
         # too few stops to resample: Student's t on their few degrees of freedom (issue 24)
         lo_x, hi_x, _ = t_interval(x.mean(), x.std(ddof=1) / math.sqrt(x.size), x.size - 1)

@@ -24,7 +24,7 @@ from rocklab.diagnosis.estimation.fitting import Fit, fit, linearised
 from rocklab.diagnosis.estimation.noise import deviance, finite_residuals, group_variances, predictive_dof
 from rocklab.diagnosis.estimation.problem import Problem
 from rocklab.diagnosis.estimation.systematic import by_group, systematic_uncertainty, widened
-from rocklab.dissipation.statistics import MIN_BOOTSTRAP, percentile_interval
+from rocklab.dissipation.statistics import MIN_BOOTSTRAP, expanded, percentile_interval
 
 optimize = lazy_module("scipy.optimize")
 stats = lazy_module("scipy.stats")
@@ -236,7 +236,8 @@ def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
     d = np.array(draws).reshape(len(draws), len(names))
     ci = {}
     for i, k in enumerate(names):
-        b = list(percentile_interval(d[:, i]))
+        p_lo, p_hi = expanded(percentile_interval(d[:, i]), x0[i], problem.n_tests)
+        b = [max(x0[i] + lo[i], p_lo), min(x0[i] + hi[i], p_hi)]
         s = sandwich[k]
         # a margin of rounding: a fit at its bound and percentiles a step of lsq_linear's tolerance inside it
         tol = 1e-9 * (hi[i] - lo[i])

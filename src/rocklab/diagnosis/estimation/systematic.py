@@ -46,6 +46,7 @@ import numpy as np
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.estimation.fitting import Fit, linearised
 from rocklab.diagnosis.estimation.problem import Problem
+from rocklab.dissipation.statistics import simultaneous_factor
 
 stats = lazy_module("scipy.stats")
 
@@ -149,3 +150,50 @@ def widened(ci, x0, lower, upper, u_sys, level=0.95):
     below = np.hypot(max(x0 - lo, 0.0), z * u_sys)
     above = np.hypot(max(hi - x0, 0.0), z * u_sys)
     return [float(max(lower, x0 - below)), float(min(upper, x0 + above))]
+
+
+def simultaneous(ci, x0, lower, upper, u_sys, k, df, level=0.95):
+    """The interval ``ci`` of :func:`widened` (its systematic part ``u_sys``) as one of ``k`` that hold all
+    their parameters together at ``level``.
+
+    Each side's statistical half-width, sqrt(h^2 - (z u_sys)^2), is widened
+    by the Šidák factor of Student's t on ``df`` degrees of freedom (the
+    units resampled, less one), its systematic part by that of the normal
+    quantile (:func:`rocklab.dissipation.statistics.simultaneous_factor`),
+    added again in quadrature and cut at the bounds: a side on its bound
+    stays there.  For ``k`` = 1 the interval is ``ci``.
+    """
+    z = _z(level)
+    r_stat, r_sys = simultaneous_factor(k, df, level), simultaneous_factor(k, np.inf, level)
+    lo, hi = ci
+    below, above = (
+        np.hypot(r_stat * np.sqrt(max(h**2 - (z * u_sys) ** 2, 0.0)), r_sys * z * u_sys)
+        for h in (max(x0 - lo, 0.0), max(hi - x0, 0.0))
+    )
+    return [float(max(lower, x0 - below)), float(min(upper, x0 + above))]
+
+
+def verdict_intervals(findings, params, n_units, level=0.95):
+    """Give each finding ``ci95_joint``: its intervals as part of the verdict's, which hold every parameter
+    of every cause named together at ``level`` (:func:`simultaneous` over all of them, on the units
+    resampled less one): the claim that the verdict and all its values are right.
+
+    Parameters
+    ----------
+    findings : list of dict
+        With ``params``, ``ci95`` and, where known, ``u_systematic`` (none: the interval is all statistical).
+    params : dict
+        Parameter name -> :class:`~rocklab.diagnosis.parameters.Param` (its bounds).
+    n_units : int
+        The units (tests, block groups) the intervals rest on.
+    """
+    k = sum(len(f["ci95"]) for f in findings)
+    for f in findings:
+        u = f.get("u_systematic") or {}
+        f["ci95_joint"] = {
+            name: simultaneous(
+                ci, f["params"][name], params[name].lower, params[name].upper, u.get(name, 0.0), k, n_units - 1, level
+            )
+            for name, ci in f["ci95"].items()
+            if ci is not None
+        }
