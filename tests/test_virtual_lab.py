@@ -238,3 +238,9 @@ def test_virtual_campaign_default_plan(tmp_path):
         z1 = float(g[g.channel == 1].wall_z_mm.iloc[0])
         if "ch1 dead" not in str(tr.faults):
             assert rec.ch1.iloc[0] / z1 == pytest.approx(tr.theta0, rel=0.1)
+
+
+def test_a_virtual_test_of_an_unknown_specimen_is_refused_by_name(tmp_path):
+    with pytest.raises(ValueError, match=r"specimens '2z' not in the specimens table \(known: 1a"):
+        vl.write_campaign(tmp_path / "c", [vl.VirtualTest("V1", "2z")])
+    assert not list((tmp_path / "c" / "tests").iterdir())

@@ -404,6 +404,12 @@ def write_campaign(out_dir, tests, specimens=None, layouts=None, seed=0, t_end=4
     (out / "tests").mkdir(parents=True, exist_ok=True)
     specimens = DEFAULT_SPECIMENS if specimens is None else specimens
     spec = specimens.set_index("specimen")
+    unknown = sorted({t.specimen for t in tests} - set(spec.index))
+    if unknown:
+        raise ValueError(
+            f"virtual tests of specimens {', '.join(map(repr, unknown))} not in the specimens table "
+            f"(known: {', '.join(map(str, spec.index))})"
+        )
     layouts = dict(layouts or {})
     rows, truths = [], []
     streams = np.random.SeedSequence(seed).spawn(len(tests))

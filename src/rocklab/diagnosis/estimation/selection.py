@@ -437,9 +437,10 @@ def rivals(problem: Problem, sel, signature, *, fits=None, bic_margin=BIC_MARGIN
             if dbic <= -bic_margin and _improves(-d):
                 out.setdefault(y, {})[x] = f"{numbers}: the data prefer it"
                 preferred.append(f"{x} in place of {y}: {numbers}, a better form the selection did not reach")
+                log.info("the data prefer %s in place of %s: %s", x, y, numbers)
             else:
                 out.setdefault(y, {})[x] = f"{numbers}: these tests cannot tell them apart"
-            log.info("%s may stand in for %s: %s", y, x, out[y][x])
+                log.info("%s may stand in for %s: %s", y, x, out[y][x])
     return out, preferred
 
 
