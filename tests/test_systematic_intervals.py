@@ -9,11 +9,19 @@ then holds the truth that the statistical interval misses.
 
 import numpy as np
 import pytest
+from scipy import stats
 
 from rocklab.diagnosis.estimation import Problem, fit
 from rocklab.diagnosis.estimation.fitting import linearised
 from rocklab.diagnosis.estimation.resampling import parameter_intervals, sandwich_intervals
-from rocklab.diagnosis.estimation.systematic import by_group, simultaneous, systematic_uncertainty, widened
+from rocklab.diagnosis.estimation.systematic import (
+    by_group,
+    simultaneous,
+    standard_error,
+    systematic_uncertainty,
+    verdict_intervals,
+    widened,
+)
 from rocklab.diagnosis.parameters import Param
 
 TRUTH = 0.3
@@ -139,3 +147,35 @@ def test_a_simultaneous_interval_widens_each_part_by_its_own_factor_and_keeps_it
     # a side on its bound stays there; the other widens
     lo, hi = simultaneous([0.0, 0.05], 0.0, 0.0, 1.0, 0.0, 3, 4)
     assert lo == 0.0 and hi > 0.05
+
+
+def test_a_verdicts_intervals_count_all_its_parameters_each_on_its_own_units():
+    """Three parameters in two findings: each interval is simultaneous over k = 3, on the units its finding
+    rests on less one (a stop on the 5 tests that stop of 10); a side already cut at its bound by the
+    pulls and again by the model's bias stays there."""
+    P = {n: Param(n, 0.0, 1.0, 0.0) for n in ("a", "b", "v")}
+    u_pull, u_model = 0.01, 0.02
+    cut = widened(widened([0.001, 0.05], 0.002, 0.0, 1.0, u_pull), 0.002, 0.0, 1.0, u_model)
+    assert cut[0] == 0.0
+    u = float(np.hypot(u_pull, u_model))
+    found = [
+        {
+            "effect": "x",
+            "params": {"a": 0.3, "b": 0.002},
+            "ci95": {"a": [0.25, 0.36], "b": cut},
+            "u_systematic": {"b": u},
+        },
+        {"effect": "stop", "params": {"v": 0.2}, "ci95": {"v": [0.15, 0.26]}},
+    ]
+    verdict_intervals(found, P, {"x": 10, "stop": 5})
+    assert found[0]["ci95_joint"]["a"] == pytest.approx(simultaneous([0.25, 0.36], 0.3, 0.0, 1.0, 0.0, 3, 9))
+    assert found[0]["ci95_joint"]["b"] == pytest.approx(simultaneous(cut, 0.002, 0.0, 1.0, u, 3, 9))
+    assert found[0]["ci95_joint"]["b"][0] == 0.0
+    lo, hi = found[1]["ci95_joint"]["v"]
+    r = stats.t.ppf(0.5 + 0.95 ** (1 / 3) / 2, 4) / stats.t.ppf(0.975, 4)
+    assert (lo, hi) == pytest.approx((0.2 - r * 0.05, 0.2 + r * 0.06))
+
+
+def test_the_standard_error_of_an_interval_over_few_units_is_its_half_width_over_t():
+    assert standard_error([0.9, 1.1]) == pytest.approx(0.1 / 1.959964)
+    assert standard_error([0.9, 1.1], df=4) == pytest.approx(0.1 / stats.t.ppf(0.975, 4))

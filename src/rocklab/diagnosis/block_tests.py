@@ -300,7 +300,8 @@ def diagnose_group(trials: _Trials, *, n_boot=40, seed=0):
                 **discovery(problem, eff, sel),
             }
         )
-    verdict_intervals(findings, {q.name: q for q in problem.params(tuple(sel["effects"]))}, problem.n_tests)
+    params = {q.name: q for q in problem.params(tuple(sel["effects"]))}
+    verdict_intervals(findings, params, dict.fromkeys(sel["effects"], problem.n_tests))
     hb = 1.0 / np.tan(trials.alpha)
     one = np.ptp(hb) == 0
     families = [c for c in problem.candidates(True) if c not in problem.candidates()]

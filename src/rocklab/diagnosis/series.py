@@ -251,9 +251,8 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         pulls = sel["ci"].u_sys if f["effect"] in sel["effects"] else {}
         u_model = bias.get("u_model", {})
         f["u_systematic"] = {k: float(np.hypot(pulls.get(k, 0.0), u_model.get(k, 0.0))) for k in f["ci95"]}
-    verdict_intervals(
-        findings, {q.name: q for f in findings for q in catalogue.by_name(f["effect"]).params}, len(tests)
-    )
+    params = {q.name: q for f in findings for q in catalogue.by_name(f["effect"]).params}
+    verdict_intervals(findings, params, {f["effect"]: f["n_tests"] for f in findings})
     blind = not_identifiable(tests, [f["effect"] for f in findings])
     # a cause the design cannot identify is never named, and a rival these tests cannot tell from a named
     # cause was never tested against it: a named cause whose effect either could produce is named with
@@ -342,7 +341,7 @@ def _with_model_bias(tests, findings, sel, ext, values, seed):
         again = cause.estimate(simulated, mp, seed=seed)
         for k, ci in f["ci95"].items() if again is not None else ():
             b[k] = float(again["values"][k] - f["params"][k])
-            u[k] = float(net_of_noise(b[k], standard_error(ci)))
+            u[k] = float(net_of_noise(b[k], standard_error(ci, df=f["n_tests"] - 1)))
     for f in findings:
         bounds = {q.name: q for q in catalogue.by_name(f["effect"]).params}
         for k, ci in f["ci95"].items():

@@ -222,7 +222,7 @@ def small_sample_expansion(n_units, level=0.95):
     Student's t on n - 1 degrees of freedom; the expanded percentile
     interval (Hesterberg 2015, The American Statistician 69, 371-386) makes
     up both, sqrt(n / (n - 1)) t_{n-1} / z: 1.58 from 5 units, 1.22 from 10,
-    1.09 from 20 at 95 %.  A percentile interval of a mean over 5 normal
+    1.10 from 20 at 95 %.  A percentile interval of a mean over 5 normal
     units at the plain percentiles holds about 85 %.
 
     Returns
@@ -256,7 +256,7 @@ def simultaneous_factor(k, df, level=0.95):
     exact for independent estimates and conservative for correlated ones;
     the factor is the ratio of Student's t quantiles on ``df`` degrees of
     freedom (normal quantiles for ``df`` infinite): 1 for one interval,
-    1.14 for two at large df, 1.44 for two on 2 df.
+    1.14 for two at large df, 1.43 for two on 2 df.
 
     Returns
     -------

@@ -31,7 +31,8 @@ stats = lazy_module("scipy.stats")
 
 #: A bootstrap interval narrower than this share of the sandwich interval (:func:`sandwich_intervals`) has
 #: resamples collapsed on a bound or on a kink of the fit, not a precision the tests carry: the sandwich
-#: interval stands instead.  Over tests that vary freely the two differ by their quantiles, some 20 %.
+#: interval stands instead.  Over tests that vary freely the two, both on Student's t of the tests less
+#: one, differ by the noise of 40 resamples' extreme percentiles, some 20 %.
 COLLAPSED_BOOTSTRAP = 0.5
 
 log = logging.getLogger(__name__)
@@ -179,7 +180,10 @@ def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
     2.5-97.5 % percentiles of the resamples at the position that gives them
     their nominal content
     (:func:`~rocklab.dissipation.statistics.percentile_interval`: numpy's
-    default holds 90 % of 40 resamples).  The resamples
+    default holds 90 % of 40 resamples), each side's distance from the
+    estimate expanded for the few tests resampled
+    (:func:`~rocklab.dissipation.statistics.expanded`: Student's t on the
+    tests less one, not the normal quantiles of the plain percentiles).  The resamples
     differ from the full fit by a few times its standard errors, where the
     residuals are linear in the parameters to well below those errors (the refit of every resample with its own noise
     model, the engine's former bootstrap, gives the same intervals to a few

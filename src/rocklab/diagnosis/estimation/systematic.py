@@ -132,10 +132,11 @@ def _z(level):
     return float(stats.norm.ppf(0.5 + level / 2))
 
 
-def standard_error(ci, level=0.95):
+def standard_error(ci, level=0.95, df=np.inf):
     """The standard error a symmetric interval ``ci`` of ``level`` stands for: its half-width over the
-    normal quantile (the inverse of :func:`widened`'s scaling)."""
-    return (ci[1] - ci[0]) / (2.0 * _z(level))
+    quantile of Student's t on ``df`` degrees of freedom (the normal's by default, the inverse of
+    :func:`widened`'s scaling; an interval over n units, t or expanded bootstrap, on n - 1)."""
+    return (ci[1] - ci[0]) / (2.0 * float(stats.t.ppf(0.5 + level / 2, df)))
 
 
 def widened(ci, x0, lower, upper, u_sys, level=0.95):
@@ -175,24 +176,26 @@ def simultaneous(ci, x0, lower, upper, u_sys, k, df, level=0.95):
 
 def verdict_intervals(findings, params, n_units, level=0.95):
     """Give each finding ``ci95_joint``: its intervals as part of the verdict's, which hold every parameter
-    of every cause named together at ``level`` (:func:`simultaneous` over all of them, on the units
-    resampled less one): the claim that the verdict and all its values are right.
+    of every cause named together at ``level`` (:func:`simultaneous` over all of them, each on the units
+    its intervals rest on less one): the claim that the verdict and all its values are right.
 
     Parameters
     ----------
     findings : list of dict
-        With ``params``, ``ci95`` and, where known, ``u_systematic`` (none: the interval is all statistical).
+        With ``effect``, ``params``, ``ci95`` and, where known, ``u_systematic`` (none: the interval is all
+        statistical).
     params : dict
         Parameter name -> :class:`~rocklab.diagnosis.parameters.Param` (its bounds).
-    n_units : int
-        The units (tests, block groups) the intervals rest on.
+    n_units : dict
+        Effect -> the units (tests, the tests that show a stop, block groups) its intervals rest on.
     """
     k = sum(len(f["ci95"]) for f in findings)
     for f in findings:
         u = f.get("u_systematic") or {}
+        df = n_units[f["effect"]] - 1
         f["ci95_joint"] = {
             name: simultaneous(
-                ci, f["params"][name], params[name].lower, params[name].upper, u.get(name, 0.0), k, n_units - 1, level
+                ci, f["params"][name], params[name].lower, params[name].upper, u.get(name, 0.0), k, df, level
             )
             for name, ci in f["ci95"].items()
             if ci is not None
