@@ -161,17 +161,15 @@ def simultaneous(ci, x0, lower, upper, u_sys, k, df, level=0.95):
     by the Šidák factor of Student's t on ``df`` degrees of freedom (the
     units resampled, less one), its systematic part by that of the normal
     quantile (:func:`rocklab.dissipation.statistics.simultaneous_factor`),
-    added again in quadrature and cut at the bounds: a side on its bound
-    stays there.  For ``k`` = 1 the interval is ``ci``.
+    added again in quadrature by :func:`widened` and cut at the bounds: a
+    side on its bound stays there.  For ``k`` = 1 the interval is ``ci``.
     """
     z = _z(level)
-    r_stat, r_sys = simultaneous_factor(k, df, level), simultaneous_factor(k, np.inf, level)
-    lo, hi = ci
+    r_stat = simultaneous_factor(k, df, level)
     below, above = (
-        np.hypot(r_stat * np.sqrt(max(h**2 - (z * u_sys) ** 2, 0.0)), r_sys * z * u_sys)
-        for h in (max(x0 - lo, 0.0), max(hi - x0, 0.0))
+        r_stat * np.sqrt(max(h**2 - (z * u_sys) ** 2, 0.0)) for h in (max(x0 - ci[0], 0.0), max(ci[1] - x0, 0.0))
     )
-    return [float(max(lower, x0 - below)), float(min(upper, x0 + above))]
+    return widened([x0 - below, x0 + above], x0, lower, upper, simultaneous_factor(k, np.inf, level) * u_sys, level)
 
 
 def verdict_intervals(findings, params, n_units, level=0.95):
