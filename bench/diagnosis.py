@@ -40,7 +40,7 @@ def main():
     cfg |= (yaml.safe_load((ROOT / "config" / "config.yaml").read_text()) or {}).get("diagnosis", {})
     tests = args.results / "tests"
     series, entries = {}, []
-    for key, records in stored_records(sorted(tests.glob("*.nc"))).items():
+    for key, records in stored_records(sorted(tests.rglob("*.nc"), key=lambda p: p.name)).items():
         t0, c0 = time.perf_counter(), time.process_time()
         entry = diagnose_records(records, key, n_boot=cfg["n_boot"], n_history=cfg["n_history"], seed=cfg["seed"])
         series[key] = {

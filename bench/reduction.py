@@ -49,7 +49,9 @@ class Names(list):
         self.__dict__.update(items if isinstance(items, dict) else {})
     def __getitem__(self, key):
         return self.__dict__[key] if isinstance(key, str) else super().__getitem__(key)
-snakemake = type("Snakemake", (), {k: Names(v) for k, v in json.loads(sys.argv[2]).items()})()
+obj = json.loads(sys.argv[2])
+snakemake = type("Snakemake", (), {k: Names(v) for k, v in obj.items() if k != "config"})()
+snakemake.config = obj["config"]
 runpy.run_path(sys.argv[1], init_globals={"snakemake": snakemake}, run_name="__main__")
 """
 
@@ -78,15 +80,13 @@ def run(campaign: Path, results: Path) -> dict:
     for job, ids in jobs.items():
         cpu[job] = run_shim(
             "reduce_tests.py",
-            output={"rows": str(results / "reduction" / f"{job}.json")},
-            params={
-                "netcdf": [str(results / "tests" / f"{t}.nc") for t in ids],
-                "raw_dir": str(raw_dir),
-                "options": options,
-            },
+            input={},
+            output={"tests": str(results / "tests" / job), "rows": str(results / "reduction" / f"{job}.json")},
+            params={"tests": {t: {} for t in ids}, "raw_dir": str(raw_dir), "options": options},
             log=[str(results / "logs" / "reduce" / f"{job}.log")],
+            config={"results_dir": str(results)},
         )
-    ids = [t for part in jobs.values() for t in part]
+    files = [str(results / "tests" / job / f"{t}.nc") for job, part in jobs.items() for t in part]
     tables = {name: str(results / f"{name}.csv") for name in TABLES}
     tables["laws"] = str(results / "amplitude_laws.csv")
     run_shim(
@@ -95,9 +95,14 @@ def run(campaign: Path, results: Path) -> dict:
             "rows": [str(results / "reduction" / f"{job}.json") for job in jobs],
             "log": str(campaign / "tests.csv"),
         },
-        output={"qc": tables["qc"], "kinematics": tables["kinematics"]},
+        output={
+            "qc": tables["qc"],
+            "kinematics": tables["kinematics"],
+            "docs_summary": str(results / "summaries" / "quality_control.json"),
+        },
         params={"raw_dir": str(raw_dir), "schema": str(ROOT / "workflow" / "schemas" / "qc.schema.yaml")},
         log=[str(results / "logs" / "qc_table.log")],
+        config={"results_dir": str(results)},
     )
     run_shim(
         "dissipation_tables.py",
@@ -105,13 +110,15 @@ def run(campaign: Path, results: Path) -> dict:
         output={
             **{k: v for k, v in tables.items() if k not in ("qc", "kinematics")},
             "table3_md": tables["table3"][:-3] + "md",
+            "docs_summary": str(results / "summaries" / "dissipation.json"),
         },
         params={
-            "test_files": [str(results / "tests" / f"{t}.nc") for t in ids],
+            "test_files": files,
             "schemas": str(ROOT / "workflow" / "schemas"),
             **config["statistics"],
         },
         log=[str(results / "logs" / "dissipation_tables.log")],
+        config={"results_dir": str(results)},
     )
     return cpu
 
@@ -167,15 +174,20 @@ def _group_differences(a, b) -> list:
     return out
 
 
+def _tests(results: Path) -> dict:
+    """The reduced tests of a results folder (in their jobs' folders, or flat before issue 39), by file name."""
+    return {p.name: p for p in sorted((results / "tests").rglob("*.nc"))}
+
+
 def compare(results: Path, reference: Path) -> dict:
     """Every netCDF file and table of ``results`` against ``reference``."""
     report = {"files": 0, "different": {}}
-    names = sorted(p.name for p in (results / "tests").glob("*.nc"))
-    if names != sorted(p.name for p in (reference / "tests").glob("*.nc")):
+    ours, theirs = _tests(results), _tests(reference)
+    if sorted(ours) != sorted(theirs):
         report["different"]["tests"] = "not the same files"
-    for name in names:
+    for name in sorted(ours):
         report["files"] += 1
-        diff = netcdf_differences(results / "tests" / name, reference / "tests" / name)
+        diff = netcdf_differences(ours[name], theirs[name])
         if diff:
             report["different"][f"tests/{name}"] = diff
     for table in sorted(results.glob("*.csv")) + sorted(results.glob("*.md")):
@@ -183,15 +195,15 @@ def compare(results: Path, reference: Path) -> dict:
         if table.read_bytes() != (reference / table.name).read_bytes():
             report["different"][table.name] = "bytes"
     with (
-        netCDF4.Dataset(next((results / "tests").glob("*.nc"))) as a,
-        netCDF4.Dataset(next((reference / "tests").glob("*.nc"))) as b,
+        netCDF4.Dataset(next(iter(ours.values()))) as a,
+        netCDF4.Dataset(next(iter(theirs.values()))) as b,
     ):
         report["filters"] = {"results": a.variables["theta"].filters(), "reference": b.variables["theta"].filters()}
     return report
 
 
 def size_mb(folder: Path) -> float:
-    return sum(p.stat().st_size for p in folder.glob("*.nc")) / 1e6
+    return sum(p.stat().st_size for p in folder.rglob("*.nc")) / 1e6
 
 
 def main(argv=None):

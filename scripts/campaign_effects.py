@@ -2,15 +2,16 @@
 
 import pandas as pd
 
+from rocklab import jobs
 from rocklab.diagnosis import CampaignDiagnosis
 from rocklab.dissipation.covariates import campaign_effects, series_fits
 from rocklab.dissipation.summary import campaign_level_summary
-from rocklab.io import setup_logging, write_table
+from rocklab.io import write_table
 from rocklab.plots import save_png
 from rocklab.plots.covariates import covariate_figure
 from rocklab.summaries import write_summary
 
-setup_logging(snakemake.log[0])
+job = jobs.start(snakemake)
 tests = pd.read_csv(snakemake.input.tests)
 qc = pd.read_csv(snakemake.input.qc)
 diagnosis = CampaignDiagnosis.from_json(snakemake.input.diagnosis)
@@ -19,3 +20,4 @@ effects = campaign_effects(tests, diagnosis, qc, walls=walls)
 write_table(effects, snakemake.output.table, snakemake.params.schema)
 write_summary(campaign_level_summary(snakemake.output.table), snakemake.output.docs_summary)
 save_png(covariate_figure(series_fits(tests, diagnosis, qc, walls), effects), snakemake.output.figure, dpi=90)
+job.finish()

@@ -4,10 +4,10 @@ The series are read and diagnosed one at a time, so that the job's memory is
 that of its largest series, not of all the job's tests.
 """
 
+from rocklab import jobs
 from rocklab.diagnosis import CampaignDiagnosis, diagnose_records, stored_records
-from rocklab.io import setup_logging
 
-setup_logging(snakemake.log[0])
+job = jobs.start(snakemake)
 entries = []
 for series in snakemake.params.series:
     entry = diagnose_records(
@@ -20,3 +20,4 @@ for series in snakemake.params.series:
     if entry:
         entries.append(entry)
 CampaignDiagnosis.from_dict(entries).to_json(snakemake.output[0])
+job.finish()

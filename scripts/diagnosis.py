@@ -1,12 +1,13 @@
 """Snakemake shim: results/diagnosis.json and diagnosis.md from the series' diagnoses."""
 
+from rocklab import jobs
 from rocklab.diagnosis import CampaignDiagnosis, with_boundaries, write_diagnosis
 from rocklab.diagnosis.summary import diagnosis_summary
-from rocklab.io import setup_logging
 from rocklab.summaries import write_summary
 
-setup_logging(snakemake.log[0])
+job = jobs.start(snakemake)
 series = CampaignDiagnosis.of_series_files(snakemake.input)
 entries = with_boundaries(series.to_dict(), walls=snakemake.params.walls, thickness=snakemake.params.thickness)
 write_diagnosis(entries, snakemake.output.json, snakemake.output.md)
 write_summary(diagnosis_summary(snakemake.output.json), snakemake.output.docs_summary)
+job.finish()

@@ -1,14 +1,14 @@
 """Snakemake shim: Figs. 14-15 of each series' sample test, and of the largest series of each boundary."""
 
-import shutil
 from pathlib import Path
 
+from rocklab import jobs
 from rocklab.diagnosis import CampaignDiagnosis
-from rocklab.io import setup_logging
+from rocklab.disk import write_bytes
 from rocklab.plots import save_png
 from rocklab.plots.diagnosis import series_figures
 
-setup_logging(snakemake.log[0])
+job = jobs.start(snakemake)
 diagnosis = CampaignDiagnosis.from_json(snakemake.input.diagnosis)
 out = Path(snakemake.output.series)
 out.mkdir(parents=True, exist_ok=True)
@@ -17,7 +17,8 @@ for name, fig in series_figures(diagnosis, snakemake.params.tests).items():
     path = Path(snakemake.output[name]) if name in ("fig14", "fig15") else out / f"{name}.png"
     path.parent.mkdir(parents=True, exist_ok=True)  # discovered/<series>: the forms found beyond the catalogue
     if fig in written:
-        shutil.copyfile(written[fig], path)
+        write_bytes(path, written[fig].read_bytes())
     else:
         save_png(fig, path, dpi=110)
         written[fig] = path
+job.finish()

@@ -3,17 +3,18 @@
 import pandas as pd
 import xarray as xr
 
-from rocklab.io import setup_logging
+from rocklab import jobs
 from rocklab.plots import dissipation as figures
 from rocklab.plots import save_png
 
-setup_logging(snakemake.log[0])
+job = jobs.start(snakemake)
 sample = None
-if snakemake.input.sample:
-    with xr.open_dataset(snakemake.input.sample[0]) as ds:
+if snakemake.params.sample:
+    with xr.open_dataset(snakemake.params.sample[0]) as ds:
         sample = ds.load()
 figs = figures.dissipation_figures(
     pd.read_csv(snakemake.input.tests), pd.read_csv(snakemake.input.e_by_n), pd.read_csv(snakemake.input.series), sample
 )
 for name, fig in figs.items():
     save_png(fig, snakemake.output[name], dpi=120)
+job.finish()

@@ -5,13 +5,15 @@ from pathlib import Path
 
 import pandas as pd
 
+from rocklab import jobs
+from rocklab.disk import write_text
 from rocklab.dissipation.statistics import campaign_tables, table3_markdown
 from rocklab.dissipation.summary import dissipation_summary
-from rocklab.io import setup_logging, write_table
+from rocklab.io import write_table
 from rocklab.lab.motion import valid_stored_motions
 from rocklab.summaries import write_summary
 
-setup_logging(snakemake.log[0])
+job = jobs.start(snakemake)
 qc = pd.read_csv(snakemake.input.qc, keep_default_na=False, na_values=[""])
 tables, failed = campaign_tables(
     valid_stored_motions(snakemake.params.test_files, snakemake.input.qc),
@@ -26,5 +28,6 @@ schemas = Path(snakemake.params.schemas)
 for name in ("tests", "impacts", "e_by_n", "series", "laws", "effects", "table3", "summary"):
     schema = schemas / f"{name}.schema.yaml"
     write_table(tables[name], snakemake.output[name], schema if schema.exists() else None)
-Path(snakemake.output.table3_md).write_text(table3_markdown(tables["table3"]) + "\n")
+write_text(snakemake.output.table3_md, table3_markdown(tables["table3"]) + "\n")
 write_summary(dissipation_summary(snakemake.output), snakemake.output.docs_summary)
+job.finish()

@@ -3,11 +3,12 @@
 import logging
 from pathlib import Path
 
-from rocklab.io import setup_logging
+from rocklab import jobs
 from rocklab.report.pages import write_docs
 
-setup_logging(snakemake.log[0])
+job = jobs.start(snakemake)
 templates = Path(snakemake.input.templates[0]).parent
 out = Path(snakemake.output.numbers).parent
 for path in write_docs(snakemake.params.results_dir, templates, out, checkout=snakemake.params.checkout):
     logging.info("wrote %s", path)
+job.finish()

@@ -1,8 +1,9 @@
 """Snakemake shim: results/summaries/instruments.json, the accuracy of each instrument (rocklab.lab.accuracy)."""
 
-from rocklab.io import setup_logging
+from rocklab import jobs
 from rocklab.lab.accuracy import accuracy_summary
 from rocklab.summaries import write_summary
 
-setup_logging(snakemake.log[0])
+job = jobs.start(snakemake)
 write_summary(accuracy_summary(), snakemake.output.docs_summary)
+job.finish()

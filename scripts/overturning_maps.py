@@ -1,19 +1,17 @@
-"""Snakemake shim: the overturning maps (Sect. 5) of a batch of records.
+"""Snakemake shim: the overturning maps (Sect. 5) of a batch of records, in
+the job's folder (its declared output), one file per record and model.
 
-Rule ``overturning_maps``: the paper's models, one file per record and
-model.  Rule ``calibrated_maps``: the calibrated walls the campaign's
-diagnosis names, one folder per record (emptied first, as Snakemake empties
-a folder it is told of), one file per model in it.  Each record logs to its
-own file.  Last, the job's declared output: the maps it wrote, by record.
+Rule ``overturning_maps``: the paper's models.  Rule ``calibrated_maps``:
+the calibrated walls the campaign's diagnosis names.  Each record logs to
+its own file.
 """
 
-import json
 import logging
-import shutil
 from pathlib import Path
 
 import numba
 
+from rocklab import jobs
 from rocklab.diagnosis.result import CampaignDiagnosis
 from rocklab.io import setup_logging, write_netcdf
 from rocklab.seismic import calibrated
@@ -21,22 +19,16 @@ from rocklab.seismic.accelerograms import load_record
 from rocklab.seismic.maps import overturning_map
 
 numba.set_num_threads(min(snakemake.threads, numba.config.NUMBA_NUM_THREADS))
-setup_logging(snakemake.log[0])
+job = jobs.start(snakemake)
 p = snakemake.params
 # read once: every calibrated model of every record of the batch is built from it
 diagnosis = CampaignDiagnosis.from_json(snakemake.input.diagnosis) if "diagnosis" in snakemake.input.keys() else None
 names = calibrated.model_names(diagnosis) if diagnosis is not None else p.models
-written = {}
+folder = Path(snakemake.output[0])
 logging.info("records %s: %d maps each, logged in %s", ", ".join(p.records), len(names), ", ".join(p.logs))
 for k, record in enumerate(p.records):
     setup_logging(p.logs[k])
-    if diagnosis is not None:
-        folder = Path(p.folders[k])
-        shutil.rmtree(folder, ignore_errors=True)
-        folder.mkdir(parents=True)
-        paths = [folder / f"{record}__{name}.nc" for name in names]
-    else:
-        paths = p.maps[k * len(names) : (k + 1) * len(names)]
+    paths = [folder / f"{record}__{name}.nc" for name in names]
     trace = load_record(record)
     for name, path in zip(names, paths):
         ds = overturning_map(
@@ -54,5 +46,4 @@ for k, record in enumerate(p.records):
             chunks=p.chunks,
         )
         write_netcdf(ds, path)
-    written[record] = [Path(path).name for path in paths]
-Path(snakemake.output[0]).write_text(json.dumps(written, indent=1) + "\n")
+job.finish()

@@ -2,15 +2,17 @@
 
 import pandas as pd
 
-from rocklab.io import setup_logging, write_table
+from rocklab import jobs
+from rocklab.io import write_table
 from rocklab.lab.campaign import open_campaign
 from rocklab.lab.reduction import kinematics_table, qc_table, read_row_attrs
 from rocklab.lab.summary import quality_control_summary
 from rocklab.summaries import write_summary
 
-setup_logging(snakemake.log[0])
+job = jobs.start(snakemake)
 reduced = read_row_attrs(snakemake.input.rows)
 campaign = open_campaign(snakemake.params.raw_dir)
 write_table(qc_table(reduced, campaign), snakemake.output.qc, snakemake.params.schema)
 write_table(kinematics_table(reduced, campaign), snakemake.output.kinematics)
 write_summary(quality_control_summary(pd.read_csv(snakemake.output.qc)), snakemake.output.docs_summary)
+job.finish()

@@ -1,18 +1,18 @@
-"""Snakemake shim: reduce the tests of one job to results/tests/<test_id>.nc,
+"""Snakemake shim: reduce the tests of one job to results/tests/<job>/<test_id>.nc,
 each with its motion inside (rocklab.lab.motion.write_test_with_motion), and
-the attributes their QC rows are made of in results/reduction/<job>.json,
-last: the job's declared output, which a job cut short does not leave."""
+the attributes their QC rows are made of in results/reduction/<job>.json."""
 
 import logging
 from pathlib import Path
 
-from rocklab.io import setup_logging
+from rocklab import jobs
 from rocklab.lab.campaign import open_campaign
 from rocklab.lab.motion import write_test_with_motion
 from rocklab.lab.reduction import reduce_tests, row_attrs, write_row_attrs
 
-setup_logging(snakemake.log[0])
-outputs = {Path(out).stem: out for out in snakemake.params.netcdf}
+job = jobs.start(snakemake)
+folder = Path(snakemake.output.tests)
+outputs = {t: folder / f"{t}.nc" for t in snakemake.params.tests}
 rows = []
 for test_id, ds in reduce_tests(open_campaign(snakemake.params.raw_dir), outputs, snakemake.params.options):
     logging.info("%s: valid=%s %s %s", test_id, ds.attrs["valid"], ds.attrs["reject_reason"], ds.attrs["reject_detail"])
@@ -23,3 +23,4 @@ for test_id, ds in reduce_tests(open_campaign(snakemake.params.raw_dir), outputs
     if "motion_error" in motion.attrs:
         logging.info("%s: no motion: %s", test_id, motion.attrs["motion_error"])
 write_row_attrs(rows, snakemake.output.rows)
+job.finish()

@@ -3,14 +3,15 @@
 import pandas as pd
 import xarray as xr
 
-from rocklab.io import setup_logging, write_table
+from rocklab import jobs
+from rocklab.io import write_table
 from rocklab.shake_table.block import specimen_block
 from rocklab.shake_table.evaluation import calibration_tables
 from rocklab.shake_table.records import read_geometry, read_tests
 from rocklab.shake_table.summary import shake_table_summary
 from rocklab.summaries import write_summary
 
-setup_logging(snakemake.log[0])
+job = jobs.start(snakemake)
 p = snakemake.params
 geometry = read_geometry(p.folder)
 outcomes = {ds.attrs["specimen"]: ds for ds in map(xr.load_dataset, snakemake.input.outcomes)}
@@ -27,3 +28,4 @@ tables = calibration_tables(
 for name, df in tables.items():
     write_table(df, snakemake.output[name], p.schemas[name])
 write_summary(shake_table_summary(snakemake.output, snakemake.input.outcomes, tests), snakemake.output.docs_summary)
+job.finish()

@@ -3,12 +3,13 @@
 import numba
 import pandas as pd
 
-from rocklab.io import setup_logging, write_netcdf
+from rocklab import jobs
+from rocklab.io import write_netcdf
 from rocklab.shake_table.block import specimen_block
 from rocklab.shake_table.evaluation import calibrated_maps
 from rocklab.shake_table.records import SPECIMENS, read_geometry, read_tests
 
-setup_logging(snakemake.log[0])
+job = jobs.start(snakemake)
 numba.set_num_threads(min(snakemake.threads, numba.config.NUMBA_NUM_THREADS))
 p, specimen = snakemake.params, snakemake.wildcards.specimen
 geometry = read_geometry(p.folder)
@@ -22,3 +23,4 @@ ds = calibrated_maps(
     p.n,
 )
 write_netcdf(ds, snakemake.output[0])
+job.finish()

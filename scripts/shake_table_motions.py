@@ -1,12 +1,14 @@
 """Snakemake shim: PGA, PGV and the sign check of every shake-table record."""
 
-from rocklab.io import setup_logging, write_table
+from rocklab import jobs
+from rocklab.io import write_table
 from rocklab.shake_table.evaluation import motion_table
 from rocklab.shake_table.records import read_tests
 
-setup_logging(snakemake.log[0])
+job = jobs.start(snakemake)
 p = snakemake.params
 tests = read_tests(p.folder)
 if p.ground_motions:
     tests = tests[tests.ground_motion.isin(p.ground_motions)]
 write_table(motion_table(p.folder, tests), snakemake.output[0], p.schema)
+job.finish()

@@ -1,10 +1,12 @@
 """The workflow's configuration: one schema holds every key and default, the library agrees with it,
 and a misspelt key or a results folder inside the campaign is refused with a line that names it."""
 
+import errno
 import inspect
 import os
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import jsonschema
@@ -16,6 +18,7 @@ from rocklab.config import (
     ConfigError,
     calibrated_map_n,
     check_paths,
+    check_writable,
     recorded_path,
     schema_defaults,
     schema_error,
@@ -136,6 +139,24 @@ def test_check_paths(tmp_path):
     for inside in (raw, raw / "results", raw / "a" / ".." / "b", tmp_path / "x" / ".." / "campaign"):
         with pytest.raises(ConfigError, match="is inside raw_dir"):
             check_paths(raw, inside)
+
+
+def test_check_writable_creates_the_folder_and_leaves_nothing_in_it(tmp_path):
+    check_writable(tmp_path / "new" / "results")
+    assert list((tmp_path / "new" / "results").iterdir()) == []
+
+
+@pytest.mark.parametrize("code", [errno.EROFS, errno.EACCES, errno.ENOSPC])
+def test_a_results_folder_that_cannot_be_written_is_refused_by_name(tmp_path, monkeypatch, code):
+    """A read-only mount, another user's folder, a full disk: the write itself is refused
+    (file modes do not tell, and root passes them); the workflow's own test mounts one."""
+
+    def refused(*args, **kwargs):
+        raise OSError(code, os.strerror(code))
+
+    monkeypatch.setattr(tempfile, "mkstemp", refused)
+    with pytest.raises(ConfigError, match=rf"results_dir '{tmp_path}' cannot be written \({os.strerror(code)}\)"):
+        check_writable(tmp_path)
 
 
 def test_the_calibrated_maps_grid_is_a_subgrid_of_the_papers():

@@ -18,8 +18,9 @@ from rocklab.dissipation.summary import dissipation_summary
 from rocklab.lab.summary import quality_control_summary
 from rocklab.lab.validity import FAULT_COLUMNS
 from rocklab.report import pages, tables
+from rocklab.seismic.indices import FLIPPED_FRACTION
 from rocklab.seismic.paper_comparison import record_comparison
-from rocklab.seismic.summary import FLIPPED_FRACTION, maps_summary
+from rocklab.seismic.summary import maps_summary
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
@@ -87,6 +88,26 @@ def test_committed_numbers_are_those_of_the_current_results():
         pytest.skip(f"{results.name}/ is incomplete (no summaries/{', '.join(missing)}): run `make run`")
     diff = pages.differences(pages.docs_numbers(results), committed_numbers())
     assert not diff, "docs/ is stale, run `make docs`:\n" + "\n".join(diff[:30])
+
+
+@pytest.mark.parametrize("section", sorted(pages.SECTIONS))
+def test_every_float_of_the_pages_has_a_tolerance_its_stage_declares(section):
+    """No float is compared digit for digit by default: the stage that makes it says how far
+    two machines may take it apart (rocklab.summaries, docs/reproducibility.md)."""
+    numbers = committed_numbers()[section]
+    assert numbers is not None, f"docs/numbers.json has no {section}: run `make docs` after the stage"
+    missing = summaries.undeclared(numbers, pages.SECTIONS[section])
+    assert not missing, f"floats of {section} whose stage declares no tolerance: {missing[:20]}"
+
+
+def test_a_float_without_a_declared_tolerance_is_an_error_not_an_exact_comparison():
+    assert summaries.differences({"x": 0.5}, {"x": 0.5}) == [
+        "x: a float with no declared tolerance (0.5 committed, 0.5 from the results)"
+    ]
+    assert summaries.differences({"n": 3}, {"n": 3}) == []  # a count needs none
+    assert summaries.undeclared({"a": {"x": 0.5, "n": 3, "t": "b"}, "l": [0.1]}, {"a.*": summaries.EXACT}) == ["l.0"]
+    # one unit of the sixth significant digit: a last bit that rounds the other way
+    assert summaries.LAST_DIGIT.admits(1.23457, 1.23456) and not summaries.LAST_DIGIT.admits(1.23459, 1.23456)
 
 
 def test_a_number_may_differ_by_the_tolerance_its_stage_declares_and_no_more():
@@ -555,6 +576,14 @@ def numbers_of(results: Path) -> dict:
     maps = [results / "maps" / f"{name}.csv" for name in ("summary", "reductions", "comparison")]
     summaries.write_summary(maps_summary(*maps), out / "maps.json")
     return pages.docs_numbers(results)
+
+
+def test_every_float_of_another_campaign_s_summaries_has_a_declared_tolerance(tiny_results):
+    """Keys the embedded campaign's summaries lack (another campaign's series, boundaries, models)."""
+    numbers = numbers_of(tiny_results)
+    for section, tolerances in pages.SECTIONS.items():
+        if numbers.get(section) is not None:
+            assert not summaries.undeclared(numbers[section], tolerances), section
 
 
 def test_quality_control_numbers(tiny_results):

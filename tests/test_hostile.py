@@ -485,7 +485,7 @@ def test_the_workflow_never_reads_or_writes_outside_its_folders(tmp_path, tmp_pa
     run = subprocess.run(cmd, capture_output=True, text=True, cwd=workdir, timeout=600)
     assert run.returncode == 0, run.stderr[-3000:]
     qc = pd.read_csv(results / "qc.csv", dtype=str, keep_default_na=False)
-    assert {p.name for p in (results / "tests").iterdir()} == {f"{t}.nc" for t in [*GOOD, "X0002", "X0003"]}
+    assert {p.name for p in (results / "tests").rglob("*.nc")} == {f"{t}.nc" for t in [*GOOD, "X0002", "X0003"]}
     # nothing outside results/ written, nothing named pwned anywhere
     shutil.rmtree(results)
     after = tree_state(tmp_path)

@@ -183,7 +183,7 @@ def test_workflow_reduces_any_campaign_and_never_writes_to_it(virtual_campaign, 
     for name in ("impacts.csv", "series.csv", "figures/fig09.png", "report/qc.html", "report/diagnosis.html"):
         assert (results / name).exists()
     # the motion of every test, extracted once by its reduction job and stored in the test's file
-    assert {read_stored_motion(p).attrs["test_id"] for p in (results / "tests").glob("*.nc")} == set(qc.test_id)
+    assert {read_stored_motion(p).attrs["test_id"] for p in (results / "tests").rglob("*.nc")} == set(qc.test_id)
     # every series with valid tests is diagnosed from those stored motions, each with its figure
     diagnosed = {e["key"] for e in json.loads((results / "diagnosis.json").read_text()) if e["scope"] == "series"}
     assert diagnosed and diagnosed <= set(tests.series)

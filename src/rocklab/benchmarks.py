@@ -268,7 +268,42 @@ def performance_summary(results, checkout=None) -> dict:
     out["shake_table"] = shake_table_times(results)
     disc = _bench(results, "discovery")
     out["discovery"] = _discovery(disc) if disc else None
+    env = _bench(results, "environments")
+    out["environments"] = _environments(env) if env else None
     return out
+
+
+#: Moves the docs list one by one: those nearest their tolerance.
+SHOWN_MOVES = 25
+
+
+def _environments(bench: dict) -> dict:
+    """The published numbers under other floating-point environments (``bench/environments.py``):
+    per section, the floats, how many moved and the nearest any came to its tolerance; the moves
+    nearest their tolerance one by one."""
+    moves = bench["moves"]
+    sections = {}
+    for section, n in bench["n_floats"].items():
+        mine = [m for m in moves if m["number"].split(".", 1)[0] == section]
+        sections[section] = {
+            "n_floats": n,
+            "n_moved": len(mine),
+            "max_headroom": max((m["headroom"] for m in mine if m["headroom"] is not None), default=0.0),
+            "n_beyond": sum(not m["admitted"] for m in mine),
+        }
+    nearest = sorted(moves, key=lambda m: -(m["headroom"] if m["headroom"] is not None else float("inf")))
+    return {
+        "commit": bench["commit"][:8],
+        "cpu": bench["cpu"],
+        "environments": bench["environments"],
+        # the order of the columns (a summary's keys are sorted when written)
+        "runs": list(next(iter(moves), {"values": {}})["values"]),
+        "wall_s": bench["wall_s"],
+        "sections": sections,
+        "n_moved": len(moves),
+        "n_beyond": sum(not m["admitted"] for m in moves),
+        "nearest": nearest[:SHOWN_MOVES],
+    }
 
 
 def _miss(cell) -> str:

@@ -3,14 +3,16 @@
 Every key, with its meaning and default, is in
 ``workflow/schemas/config.schema.yaml``; Snakemake validates the
 configuration against it and fills in the defaults.  What a schema cannot
-see is the file system: whether ``raw_dir`` is a campaign folder, and
-whether ``results_dir`` would write into it.  Those checks live here, as do
+see is the file system: whether ``raw_dir`` is a campaign folder, whether
+``results_dir`` would write into it, and whether it can be written at all.  Those checks live here, as do
 the paths the workflow records with each output.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
+import tempfile
 from pathlib import Path
 
 import jsonschema
@@ -102,6 +104,41 @@ def check_paths(raw_dir, results_dir) -> None:
         )
     if results.exists() and not results.is_dir():
         raise ConfigError(f"results_dir {str(results_dir)!r} is a file, not a folder")
+
+
+#: Bytes the write check of ``results_dir`` writes: a filesystem block.
+WRITE_PROBE = 4096
+
+
+def check_writable(results_dir) -> None:
+    """Refuse a ``results_dir`` that cannot be written, before any job starts.
+
+    The folder is created if it does not exist, and a small file written
+    and removed in it (file modes alone do not tell: a read-only mount, a
+    full disk, or a folder of another user all refuse a write).
+
+    Raises
+    ------
+    ConfigError
+        Naming the folder and what the system said.
+    """
+    folder = Path(results_dir)
+    probe = None
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        fd, probe = tempfile.mkstemp(prefix=".rocklab-write-check-", dir=folder)
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(b"\0" * WRITE_PROBE)
+    except OSError as exc:
+        why = exc.strerror or str(exc)
+        raise ConfigError(
+            f"results_dir {str(results_dir)!r} cannot be written ({why}): give a folder you can write "
+            "with --config results_dir=..., or free its disk"
+        ) from None
+    finally:
+        if probe is not None:
+            with contextlib.suppress(OSError):
+                os.remove(probe)
 
 
 def check_names(config, test_ids, records) -> None:

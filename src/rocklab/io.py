@@ -6,6 +6,10 @@ they are written, netCDF files are written compressed and atomically
 variables asked for (:func:`read_dataset`), both through netCDF4 directly,
 and logging goes to the rule's log file.
 
+Every file is written through a temporary file beside it, renamed into place
+once complete (:func:`rocklab.disk.atomic_output`): a job killed or out of
+disk space never leaves a half-written result under its final name.
+
 netCDF files follow the CF conventions (:data:`CF_CONVENTIONS`, checked by
 ``cfchecker`` in ``tests/test_cf.py``): the datasets carry :func:`cf_attrs`
 and a ``long_name`` and ``units`` on each variable, and :func:`write_netcdf`
@@ -20,10 +24,8 @@ seconds back.
 
 from __future__ import annotations
 
-import glob
 import logging
-import os
-import tempfile
+import sys
 import zlib
 from datetime import UTC, datetime
 from numbers import Number
@@ -34,6 +36,7 @@ import yaml
 
 from rocklab import __version__
 from rocklab._imports import lazy_module
+from rocklab.disk import SPACE_ERRNOS, atomic_output, write_text
 
 # bound lazily: a job that writes report pages needs neither
 jsonschema = lazy_module("jsonschema")
@@ -48,12 +51,22 @@ REFERENCES = (
 )
 
 
+class _JobLog(logging.FileHandler):
+    """A job's log file, which a full disk silences rather than floods: the
+    failed write that stops the job says what happened (:class:`NoSpace`)."""
+
+    def handleError(self, record):
+        if isinstance(sys.exc_info()[1], OSError) and sys.exc_info()[1].errno in SPACE_ERRNOS:
+            return
+        super().handleError(record)
+
+
 def setup_logging(path):
     """Send log records and warnings of this process to ``path``."""
     Path(path).parent.mkdir(parents=True, exist_ok=True)
-    logging.basicConfig(
-        filename=path, filemode="w", level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s", force=True
-    )
+    handler = _JobLog(path, mode="w")
+    handler.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(message)s"))
+    logging.basicConfig(level=logging.INFO, handlers=[handler], force=True)
     logging.captureWarnings(True)
 
 
@@ -106,8 +119,8 @@ ATTRIBUTE_TYPES = (str, Number, np.ndarray, np.number, list, tuple, bytes)
 
 
 def write_netcdf(ds, path, groups=None):
-    """Write a dataset compressed, through a temporary file, so an interrupted
-    run never leaves a truncated output that looks complete.
+    """Write a dataset compressed, through a temporary file (:func:`atomic_output`),
+    so an interrupted run never leaves a truncated output that looks complete.
 
     ``groups`` maps a name to a dataset stored in the file as the netCDF-4
     group of that name (CF-1.8 section 2.7; read back with
@@ -130,7 +143,6 @@ def write_netcdf(ds, path, groups=None):
     ``tests/test_io.py`` checks that both read back the same.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     attrs = dict(ds.attrs)
     attrs.setdefault("Conventions", CF_CONVENTIONS)
     line = f"{datetime.now(UTC):%Y-%m-%dT%H:%M:%SZ} rocklab {__version__}: wrote {path.name}"
@@ -148,13 +160,9 @@ def write_netcdf(ds, path, groups=None):
         all(v is not None for v in variables.values()) and set(d.coords) <= set(d.dims)
         for d, variables in [(ds, stored), *(((groups or {})[n], v) for n, (_, v) in grouped.items())]
     )
-    # a writer killed outright (SIGKILL) leaves its temporary file: the next
-    # write of the same file, the rerun, removes it
-    for stale in path.parent.glob(f".{glob.escape(path.name)}.*.tmp"):
-        stale.unlink(missing_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
+    # compressed as it is written: the uncompressed size bounds what it needs
+    needed = ds.nbytes + sum(g.nbytes for g in (groups or {}).values())
+    with atomic_output(path, needed) as tmp:
         if direct:
             _write_variables(stored, attrs, tmp, path, grouped)
         else:
@@ -163,14 +171,6 @@ def write_netcdf(ds, path, groups=None):
                 g = g.copy(deep=False)
                 g.attrs = grouped[name][0]
                 _write_with_xarray(g, tmp, name)
-        # mkstemp makes the file private (0600): give it the mode of any new file
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
 
 
 def _stored_variable(var):
@@ -448,8 +448,7 @@ def write_table(df: pd.DataFrame, path, schema=None, float_format="%.6g") -> Non
     """Validate (when a schema is given) and write a CSV table."""
     if schema is not None:
         validate_table(df, schema)
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    df.to_csv(path, index=False, float_format=float_format)
+    write_text(path, df.to_csv(index=False, float_format=float_format))
 
 
 def valid_test_ids(qc_path) -> list:

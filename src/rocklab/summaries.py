@@ -10,10 +10,14 @@ by the stage's own summary function (``rocklab.lab.summary``,
 
 Floats are kept to :data:`SIGNIFICANT` significant digits, enough for any
 number a page prints, so that a file reads well and two files compare.
-Two summaries of the same stage agree when every number is equal, or within
-the tolerance that the stage declares for it (:func:`differences`): a
-chaotic computation, such as the overturning maps, declares how far two
-machines may take it apart, beside the function that makes it.
+Two summaries of the same stage agree when every number is within the
+tolerance that the stage declares for it (:func:`differences`). Every float
+has one, declared beside the function that makes it (the stage's
+``TOLERANCES``): :data:`LAST_DIGIT` for a float that floating point only
+rounds, a wider one for a chaotic computation such as the overturning maps,
+from the spread measured between floating-point environments
+(``bench/environments.py``, docs/reproducibility.md); a float without one is
+an error of its stage (:func:`undeclared`), never compared digit for digit.
 """
 
 from __future__ import annotations
@@ -26,6 +30,8 @@ from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
+
+from rocklab.disk import write_text
 
 #: Significant digits kept of every float.
 SIGNIFICANT = 6
@@ -63,9 +69,7 @@ def dumps(tree) -> str:
 
 def write_summary(summary, path) -> None:
     """Write a stage's summary (:func:`rounded`) as JSON at ``path``."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(dumps(rounded(summary)))
+    write_text(path, dumps(rounded(summary)))
 
 
 def read_summary(path):
@@ -84,21 +88,48 @@ class Tolerance(NamedTuple):
         return abs(new - old) <= self.abs + self.rel * abs(old)
 
 
-#: A quantity no stage declared a tolerance for: the same digits on every machine.
+#: A float that floating point cannot move: a setting, a constant of the
+#: paper, a count or a ratio of counts (one correctly rounded division).
 EXACT = Tolerance()
+#: One unit of the last digit kept (:data:`SIGNIFICANT`): a float computed
+#: in floating point may differ in its last bits between two machines (other
+#: SIMD kernels of NumPy and OpenBLAS, other code from numba), which rounds
+#: it to either neighbour of its kept digits. The least a computed float is
+#: held to.
+LAST_DIGIT = Tolerance(rel=10.0 ** (1 - SIGNIFICANT))
 
 
-def tolerance(path: str, tolerances: Mapping[str, Tolerance]) -> Tolerance:
+def tolerance(path: str, tolerances: Mapping[str, Tolerance]) -> Tolerance | None:
     """The tolerance of the quantity at the dotted ``path`` of a summary: that of
     the first pattern of ``tolerances`` (:func:`fnmatch.fnmatchcase`, ``*``
-    spans dots) that matches it, :data:`EXACT` where none does."""
-    return next((tol for pattern, tol in tolerances.items() if fnmatchcase(path, pattern)), EXACT)
+    spans dots) that matches it; None where none does (an undeclared float
+    is an error of the stage that made it, :func:`undeclared`)."""
+    return next((tol for pattern, tol in tolerances.items() if fnmatchcase(path, pattern)), None)
+
+
+def leaves(tree, path: str = ""):
+    """Every (dotted path, value) of a summary that is not a mapping or a list."""
+    if isinstance(tree, Mapping):
+        for k, v in tree.items():
+            yield from leaves(v, f"{path}.{k}")
+    elif isinstance(tree, list):
+        for k, v in enumerate(tree):
+            yield from leaves(v, f"{path}.{k}")
+    else:
+        yield path.lstrip("."), tree
+
+
+def undeclared(summary, tolerances: Mapping[str, Tolerance]) -> list[str]:
+    """Dotted paths of the floats of ``summary`` whose stage declares no tolerance."""
+    return [p for p, v in leaves(summary) if isinstance(v, float) and tolerance(p, tolerances) is None]
 
 
 def differences(a, b, tolerances: Mapping[str, Tolerance] = {}, path: str = "") -> list[str]:
     """Dotted paths where the summaries ``a`` (new) and ``b`` (old) differ
-    beyond the tolerance of the quantity (:func:`tolerance`). A count (an
-    integer) and a text are exact whatever the tolerances say."""
+    beyond the tolerance of the quantity (:func:`tolerance`), and the floats
+    whose stage declares none (compared at no tolerance at all: each such
+    float is reported, equal or not). A count (an integer) and a text are
+    exact whatever the tolerances say."""
     if isinstance(a, Mapping) and isinstance(b, Mapping):
         return [d for k in sorted(set(a) | set(b)) for d in differences(a.get(k), b.get(k), tolerances, f"{path}.{k}")]
     if isinstance(a, list) and isinstance(b, list) and len(a) == len(b):
@@ -108,6 +139,9 @@ def differences(a, b, tolerances: Mapping[str, Tolerance] = {}, path: str = "") 
     key = path.lstrip(".")
     measured = isinstance(a, float) or isinstance(b, float)
     numeric = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (a, b))
-    if a == b or (measured and numeric and tolerance(key, tolerances).admits(a, b)):
+    declared = tolerance(key, tolerances)
+    if measured and declared is None:
+        return [f"{key}: a float with no declared tolerance ({b!r} committed, {a!r} from the results)"]
+    if a == b or (measured and numeric and declared.admits(a, b)):
         return []
     return [f"{key}: {b!r} committed, {a!r} from the results"]

@@ -3,11 +3,13 @@
 # targets and the rules' input functions.
 import functools
 import re
+import sys
 from pathlib import Path
 
 from snakemake.exceptions import WorkflowError
 
-from rocklab.config import check_names, check_paths, recorded_path
+from rocklab.config import check_names, check_paths, check_writable, recorded_path
+from rocklab.jobs import clear_damage
 from rocklab.lab.campaign import UNREADABLE, open_campaign
 from rocklab.lab.hierarchy import thickness_of_walls, walls_of_series, walls_of_specimens
 from rocklab.seismic import calibrated
@@ -17,8 +19,20 @@ from rocklab.shake_table.records import check_dir
 # config is validated by the Snakefile, every default filled in from
 # workflow/schemas/config.schema.yaml: the rules read it without defaults.
 check_paths(config["raw_dir"], config["results_dir"])
+# before any job starts: a folder a job could not write in is refused, named
+check_writable(config["results_dir"])
 RAW = Path(config["raw_dir"])
 RESULTS = Path(config["results_dir"])
+# Results damaged since their job wrote them (a file deleted from a folder
+# output, any output truncated or replaced, or gone while what was made from
+# it stays, which Snakemake alone leaves as it is): that job's outputs and
+# every output made from them are removed, so that Snakemake makes them
+# again, and nothing else (rocklab.jobs).  In the main process only (a
+# cluster job parses this file too), and not while another run of this
+# working directory holds its lock: its jobs may be writing.
+if workflow.is_main_process and not any(Path(".snakemake", "locks").glob("*")):
+    for cleared in clear_damage(RESULTS):
+        print(f"rocklab: {RESULTS / cleared.damage.file}: {cleared}", file=sys.stderr)
 # Every row checked at the door (docs/raw-format.md): a refused row is a row
 # of qc.csv, and no id or path of the tables names a file outside the two folders.
 CAMPAIGN = open_campaign(RAW)
@@ -120,18 +134,27 @@ def record_stamp(test_id):
     return [st.st_size, st.st_mtime_ns]
 
 
-def reduced_inputs(test_ids):
-    """The input of a job over many reduced tests: the rows files of
-    their reduction jobs, not the tests' netCDF files (passed as params).
+def test_file(test_id):
+    """A reduced test's netCDF file, in the folder of its reduction job (rule reduce)."""
+    return res("tests", REDUCTION_JOB[test_id], f"{test_id}.nc")
 
-    Each job writes its tests' files and its rows file together, so the rows
-    file is as new as any of them and stands for them all.  Snakemake stats
-    every input of every job waiting for a core at each scheduling round:
-    listed file by file, the 2,500 netCDF inputs of the QC, dissipation and
-    diagnosis jobs cost Snakemake's own process some 20 s of CPU of a 35 s
-    total (with the rounds of its job-rate limit, several a second, see
-    profiles/default), beside the jobs it runs.
+
+def reduced_inputs(test_ids):
+    """The input of a job over many reduced tests: the folders of their
+    reduction jobs (rule reduce), not the tests' netCDF files in them
+    (:func:`test_file`, passed as params).
+
+    Snakemake stats every input of every job waiting for a core at each
+    scheduling round: listed file by file, the 2,500 netCDF inputs of the
+    QC, dissipation and diagnosis jobs cost Snakemake's own process some
+    20 s of CPU of a 35 s total (with the rounds of its job-rate limit,
+    several a second, see profiles/default), beside the jobs it runs.
     """
+    return expand(rules.reduce.output.tests, job=list(dict.fromkeys(REDUCTION_JOB[t] for t in test_ids)))
+
+
+def reduced_rows(test_ids):
+    """The rows files (the attributes of their QC rows) of the reduction jobs of ``test_ids``."""
     return expand(rules.reduce.output.rows, job=list(dict.fromkeys(REDUCTION_JOB[t] for t in test_ids)))
 
 
@@ -213,20 +236,20 @@ def all_outputs():
 
 
 # Input functions of the stages' rules (`snakemake --lint` wants a rule file
-# without functions).  A test's netCDF file and a map are no rule's declared
-# output (a job writes a number of them that its wildcards do not give): a
-# function that returns them is evaluated after a checkpoint downstream of the
-# jobs that write them.
+# without functions).  A test's netCDF file and a map lie in the folder that
+# their job declares as its output (a job writes a number of them that its
+# wildcards do not give): a rule that reads one takes the folder as input,
+# the file as a param.
 
 
 def kinematics_sample(wildcards):
     """The reduced test that Figs. 6, 8 and 9 draw, once the QC table (after
-    every reduction job) is written."""
+    every reduction job) is written: its id (its file: :func:`test_file`)."""
     from rocklab.io import valid_test_ids
 
     qc = checkpoints.qc_table.get().output.qc
     if KINEMATICS_SAMPLE:
-        return res("tests", f"{KINEMATICS_SAMPLE}.nc")
+        return KINEMATICS_SAMPLE
     valid = valid_test_ids(qc)
     if not valid:
         # every later stage needs a reduced test: stop here, with the table that says why
@@ -236,22 +259,29 @@ def kinematics_sample(wildcards):
 
     table = pd.read_csv(qc, usecols=["test_id", "instrument"], dtype=str, keep_default_na=False)
     transducers = set(table.test_id[table.instrument == "transducers"])
-    return res("tests", f"{next((t for t in valid if t in transducers), valid[0])}.nc")
+    return next((t for t in valid if t in transducers), valid[0])
 
 
 def fig20_sample_test(wildcards):
     """The reduced test that Fig. 20a draws (none without a one-sided test with a
-    monitor), once the dissipation tables (after every reduction job) are written."""
+    monitor), once the dissipation tables (after every reduction job) are
+    written: a list of its id, or an empty one."""
     import pandas as pd
     from rocklab.plots.dissipation import fig20_sample
 
     tests = checkpoints.dissipation_tables.get().output.tests
     test_id = FIG20_SAMPLE or fig20_sample(pd.read_csv(tests))
-    return [res("tests", f"{test_id}.nc")] if test_id else []
+    return [test_id] if test_id else []
 
 
 def map_path(record, model):
-    return res("maps", f"{record}__{model}.nc")
+    """The paper's map of a record, in the folder of its map job (rule overturning_maps)."""
+    return res("maps", f"records-{MAP_BATCH[record]}", f"{record}__{model}.nc")
+
+
+def calibrated_map_folder(record):
+    """The folder of the calibrated maps of a record's map job (rule calibrated_maps)."""
+    return res("maps", "calibrated", f"records-{MAP_BATCH[record]}")
 
 
 def record_path(record):
@@ -268,16 +298,16 @@ def calibrated_map_names():
 
 
 def calibrated_map_inputs(wildcards):
-    """The maps of the paper's e-alone models and the folders of the calibrated
-    ones, for the boundaries the campaign's diagnosis calibrates."""
+    """The maps of the paper's e-alone models and of the calibrated walls, for
+    the boundaries the campaign's diagnosis calibrates."""
     names, e_alone = calibrated_map_names()
     return [map_path(r, m) for r in MAP_RECORDS for m in e_alone] + [
-        res("maps", "calibrated", r) for r in MAP_RECORDS if names
+        str(Path(calibrated_map_folder(r), f)) for r in MAP_RECORDS for f in sorted(f"{r}__{n}.nc" for n in names)
     ]
 
 
 def calibrated_map_batches(wildcards):
-    """The map jobs that write :func:`calibrated_map_inputs`: their lists of maps."""
+    """The folders of the map jobs that write :func:`calibrated_map_inputs`."""
     names, e_alone = calibrated_map_names()
     batches = expand(rules.overturning_maps.output, batch=MAP_BATCHES) if e_alone else []
     return batches + (expand(rules.calibrated_maps.output, batch=MAP_BATCHES) if names else [])

@@ -47,9 +47,7 @@ rule diagnose_series:
         series=lambda wildcards: DIAGNOSIS_JOBS[wildcards.job],
         # the tests of each series, each with its own QC verdict, read
         # series by series: the job holds one series' tests at a time
-        tests=lambda wildcards: {
-            s: [res("tests", f"{t}.nc") for t in TESTS_BY_SERIES[s]] for s in DIAGNOSIS_JOBS[wildcards.job]
-        },
+        tests=lambda wildcards: {s: [test_file(t) for t in TESTS_BY_SERIES[s]] for s in DIAGNOSIS_JOBS[wildcards.job]},
         n_boot=DIAGNOSIS["n_boot"],
         n_history=DIAGNOSIS["n_history"],
         seed=DIAGNOSIS["seed"],
@@ -93,12 +91,13 @@ rule diagnosis_pages:
 
 
 # Each series' sample test, and every test of a series with a form discovered
-# beyond the catalogue, are read by the job (params): they are no input, the
-# diagnosis (written after every reduction job) stands for them, and Snakemake
-# would stat thousands of files at each scheduling round of a large campaign.
+# beyond the catalogue, are read by the job: the folders of their reduction
+# jobs are its inputs, the files its params (Snakemake would stat thousands of
+# files at each scheduling round of a large campaign).
 rule diagnosis_figures:
     input:
         diagnosis=rules.diagnosis.output.json,
+        tests=reduced_inputs(TEST_IDS),
     output:
         fig14=report_figure("14", "diagnosis", "two-sided, models against the test", "Summary"),
         fig15=report_figure("15", "diagnosis", "one-sided, models against the test", "Summary"),
@@ -117,7 +116,7 @@ rule diagnosis_figures:
         res("benchmarks", "diagnosis_figures.tsv")
     priority: PRIORITY["longest_figures"]
     params:
-        tests={s: [res("tests", f"{t}.nc") for t in ids] for s, ids in TESTS_BY_SERIES.items()},
+        tests={s: [test_file(t) for t in ids] for s, ids in TESTS_BY_SERIES.items()},
     script:
         "../../scripts/diagnosis_figures.py"
 

@@ -40,7 +40,7 @@ checkpoint dissipation_tables:
         res("benchmarks", "dissipation_tables.tsv")
     params:
         # the reduced tests, whose files hold their motions
-        test_files=[res("tests", f"{t}.nc") for t in TEST_IDS],
+        test_files=[test_file(t) for t in TEST_IDS],
         schemas=schema_path(""),
         n_boot=config["statistics"]["n_boot"],
         seed=config["statistics"]["seed"],

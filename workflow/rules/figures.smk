@@ -22,7 +22,8 @@ rule kinematics_figures:
     input:
         qc=rules.qc_table.output.qc,
         kinematics=rules.qc_table.output.kinematics,
-        sample=kinematics_sample,
+        # the folder of the sample test's reduction job; the test's file is a param
+        sample=lambda wildcards: reduced_inputs([kinematics_sample(wildcards)]),
     output:
         fig6=report_figure("06", "kinematics", "a record, elongation and velocity"),
         fig8=report_figure("08", "kinematics", "the four degrees of freedom"),
@@ -33,6 +34,7 @@ rule kinematics_figures:
         res("benchmarks", "kinematics_figures.tsv")
     params:
         specimen=FIG_SPECIMEN,
+        sample=lambda wildcards: test_file(kinematics_sample(wildcards)),
     script:
         "../../scripts/kinematics_figures.py"
 
@@ -42,7 +44,7 @@ rule dissipation_figures:
         tests=rules.dissipation_tables.output.tests,
         e_by_n=rules.dissipation_tables.output.e_by_n,
         series=rules.dissipation_tables.output.series,
-        sample=fig20_sample_test,
+        sample=lambda wildcards: reduced_inputs(fig20_sample_test(wildcards)),
     output:
         fig10=report_figure("10", "dissipation", "theta0 / alpha test by test", "Figures"),
         fig11=report_figure("11", "dissipation", "e_exp / e_an after n impacts", "Figures"),
@@ -56,5 +58,7 @@ rule dissipation_figures:
         res("logs", "dissipation_figures.log"),
     benchmark:
         res("benchmarks", "dissipation_figures.tsv")
+    params:
+        sample=lambda wildcards: [test_file(t) for t in fig20_sample_test(wildcards)],
     script:
         "../../scripts/dissipation_figures.py"

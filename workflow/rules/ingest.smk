@@ -2,8 +2,7 @@
 # four-DOF kinematics, validity by the lab's rules), one netCDF per test, and
 # the motion extracted from it (release, impacts, peaks), stored inside it for the
 # dissipation tables and the diagnosis; and per job the attributes of its tests'
-# QC rows (results/reduction/<job>.json), the input that stands for the job's
-# files downstream (reduced_inputs in common.smk).
+# QC rows (results/reduction/<job>.json).
 #
 # Whole specimens packed into jobs of at most reduction.max_tests_per_job
 # tests (a larger specimen cut into parts of its own), and one job for the
@@ -12,15 +11,18 @@
 # reducing thirty tests.
 
 
-# The job's rows file is its one declared output: a rule's outputs are
-# patterns of its wildcards, and a job writes as many netCDF files as it has
-# tests.  The rows file is written last, so a job cut short has none and runs
-# again; every later use of a test's files goes through it (reduced_inputs,
-# or a checkpoint downstream of it).  A job's tests are its params: a test
-# added to it reduces it again (the params trigger; not under
-# --rerun-triggers mtime alone); a test's file deleted by hand does not.
+# A job's tests are the files of its folder, its declared output (a rule's
+# outputs are patterns of its wildcards, and a job writes as many netCDF
+# files as it has tests): Snakemake removes the folder before the job runs
+# and when it fails, and a rule that reads a test takes its job's folder as
+# input (reduced_inputs).  A file deleted from the folder, or any output
+# truncated, is found by the check of the jobs' manifests before each run
+# (rocklab.jobs.repair, common.smk), which has the job run again.  A job's
+# tests are its params: a test added to it reduces it again (the params
+# trigger; not under --rerun-triggers mtime alone).
 rule reduce:
     output:
+        tests=directory(res("tests", "{job}")),
         rows=res("reduction", "{job}.json"),
     log:
         res("logs", "reduce", "{job}.log"),
@@ -31,7 +33,6 @@ rule reduce:
     priority: lambda wildcards: reduction_priority(wildcards.job)
     params:
         tests=lambda wildcards: {t: test_params(t) for t in REDUCTION_JOBS[wildcards.job]},
-        netcdf=lambda wildcards: [res("tests", f"{t}.nc") for t in REDUCTION_JOBS[wildcards.job]],
         raw_dir=config["raw_dir"],
         options={"channels": config["channels"], "validity": config["validity"]},
     script:

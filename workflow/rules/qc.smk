@@ -7,7 +7,7 @@ QC_OUTPUTS = [res("qc.csv"), res("kinematics.csv"), res("report", "qc.html"), re
 
 checkpoint qc_table:
     input:
-        rows=reduced_inputs(TEST_IDS),
+        rows=reduced_rows(TEST_IDS),
         log=str(RAW / "tests.csv"),
     output:
         qc=res("qc.csv"),

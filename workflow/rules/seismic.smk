@@ -46,16 +46,17 @@ MAP_BATCHES = {
 MAP_BATCH = {r: k for k, batch in MAP_BATCHES.items() for r in batch}
 
 
-# A job's declared output is the list of the maps it wrote, written last (a
-# rule's outputs are patterns of its wildcards, and a job holds as many
-# records as maps.records_per_job); the rules that read maps take it as
-# input, the maps' paths as params.  Its records are params too: another
-# record in the batch recomputes it (not under --rerun-triggers mtime alone).
+# A job's declared output is the folder of the maps it writes (a rule's
+# outputs are patterns of its wildcards, and a job holds as many records as
+# maps.records_per_job): the rules that read maps take the folders as
+# input, the maps' paths as params (map_path).  Its records are params too:
+# another record in the batch recomputes it (not under --rerun-triggers
+# mtime alone).
 rule overturning_maps:
     input:
         records=lambda wildcards: [record_path(r) for r in MAP_BATCHES[wildcards.batch]],
     output:
-        res("maps", "batches", "{batch}.json"),
+        directory(res("maps", "records-{batch}")),
     log:
         res("logs", "maps", "batch{batch}.log"),
     benchmark:
@@ -71,7 +72,6 @@ rule overturning_maps:
     params:
         **MAP_PARAMS,
         records=lambda wildcards: MAP_BATCHES[wildcards.batch],
-        maps=lambda wildcards: [map_path(r, m) for r in MAP_BATCHES[wildcards.batch] for m in MODELS],
         # each record's own log; the job's (log:) names them
         logs=lambda wildcards: [res("logs", "maps", f"{r}.log") for r in MAP_BATCHES[wildcards.batch]],
         models=list(MODELS),
@@ -80,13 +80,14 @@ rule overturning_maps:
 
 
 # The calibrated walls (rocklab.seismic.calibrated) are named by the
-# campaign's diagnosis, a checkpoint: their maps of a record go to one folder.
+# campaign's diagnosis, a checkpoint: the maps of a batch's records go to
+# the job's folder (calibrated_map_folder).
 rule calibrated_maps:
     input:
         records=lambda wildcards: [record_path(r) for r in MAP_BATCHES[wildcards.batch]],
         diagnosis=rules.diagnosis.output.json,
     output:
-        res("maps", "calibrated", "batches", "{batch}.json"),
+        directory(res("maps", "calibrated", "records-{batch}")),
     log:
         res("logs", "maps_calibrated", "batch{batch}.log"),
     benchmark:
@@ -102,7 +103,6 @@ rule calibrated_maps:
     params:
         **{**MAP_PARAMS, "n": CALIBRATED_N},
         records=lambda wildcards: MAP_BATCHES[wildcards.batch],
-        folders=lambda wildcards: [res("maps", "calibrated", r) for r in MAP_BATCHES[wildcards.batch]],
         logs=lambda wildcards: [res("logs", "maps_calibrated", f"{r}.log") for r in MAP_BATCHES[wildcards.batch]],
     script:
         "../../scripts/overturning_maps.py"

@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 from rocklab.diagnosis.causes import stop_threshold
 from rocklab.diagnosis.result import BoundaryDiagnosis, CampaignDiagnosis
+from rocklab.disk import write_text
 from rocklab.dissipation.statistics import MIN_BOOTSTRAP, counted, note_lines, note_mark
 
 
@@ -22,7 +21,7 @@ def write_diagnosis(diagnosis, json_path, md_path=None):
     diagnosis = CampaignDiagnosis.of(diagnosis)
     diagnosis.to_json(json_path)
     if md_path is not None:
-        Path(md_path).write_text(diagnosis_markdown(diagnosis))
+        write_text(md_path, diagnosis_markdown(diagnosis))
 
 
 def _fmt_params(f):

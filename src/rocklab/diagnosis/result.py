@@ -46,6 +46,7 @@ import numpy as np
 
 from rocklab._imports import lazy_module
 from rocklab.data import data_path
+from rocklab.disk import write_text
 
 jsonschema = lazy_module("jsonschema")
 yaml = lazy_module("yaml")
@@ -160,7 +161,7 @@ class _Document:
         """
         document = jsonable(self.to_dict())
         validate(document, self.schema, f"{type(self).__name__} for {path}")
-        Path(path).write_text(json.dumps(document, indent=1))
+        write_text(path, json.dumps(document, indent=1))
 
     @classmethod
     def from_json(cls, path):

@@ -23,12 +23,14 @@ import tempfile
 import numpy as np
 import pandas as pd
 
-from rocklab.summaries import Tolerance
+from rocklab.summaries import LAST_DIGIT
 
 #: The instruments and sampling rates measured by default [Hz]: the labs' ranges (docs/raw-format.md).
 RATES = {"transducers": (100.0, 400.0), "rotation": (100.0, 240.0, 500.0), "inertial": (200.0, 1000.0, 2000.0)}
-#: How far two machines may take the summary apart: the simulator and the fits in floating point.
-TOLERANCES = {"*": Tolerance(abs=1e-5, rel=1e-2)}
+#: How far two machines may take the summary apart: the simulator and the fits
+#: in floating point, which no floating-point environment moved
+#: (bench/environments.py): the last digit kept.
+TOLERANCES = {"*": LAST_DIGIT}
 #: Largest distance in time between a found impact and the true one it is compared with [s].
 MATCH_S = 0.02
 

@@ -24,6 +24,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from rocklab.disk import write_text
 from rocklab.io import cf_attrs
 from rocklab.lab import channels as health
 from rocklab.lab import inertial, instrument, kinematics, release, rotation, validity
@@ -508,8 +509,7 @@ def row_attrs(ds: xr.Dataset) -> dict:
 
 def write_row_attrs(rows, path) -> None:
     """Write :func:`row_attrs` of a job's tests (a list) to ``path`` (JSON; NaN as ``NaN``)."""
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    Path(path).write_text(json.dumps(list(rows), indent=0) + "\n")
+    write_text(path, json.dumps(list(rows), indent=0) + "\n")
 
 
 def read_row_attrs(paths) -> list:

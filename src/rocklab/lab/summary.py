@@ -9,6 +9,13 @@ from __future__ import annotations
 import pandas as pd
 
 from rocklab.lab.validity import Verdict
+from rocklab.summaries import LAST_DIGIT
+
+#: How far two machines may take the summary apart: its floats are extremes of
+#: release velocities and residual out-of-plumb of least-squares kinematics,
+#: which no floating-point environment moved (bench/environments.py): the last
+#: digit kept.
+TOLERANCES = {"*": LAST_DIGIT}
 
 #: The channel faults the docs count, each by its column of ``qc.csv``
 #: (:data:`rocklab.lab.validity.FAULT_COLUMNS`: the channels that had it).

@@ -1,6 +1,10 @@
 """The paper's figures, regenerated from reduced data and tables (matplotlib, no display)."""
 
+import io
+
 import matplotlib.pyplot as plt
+
+from rocklab.disk import write_bytes
 
 
 def save_png(fig, path, dpi):
@@ -26,5 +30,7 @@ def save_png(fig, path, dpi):
     if engine is not None:
         engine.execute(fig)
         fig.set_layout_engine(None)
-    fig.savefig(path, dpi=dpi, pil_kwargs={"compress_level": 1})
+    png = io.BytesIO()
+    fig.savefig(png, format="png", dpi=dpi, pil_kwargs={"compress_level": 1})
     plt.close(fig)
+    write_bytes(path, png.getvalue())

@@ -1,4 +1,4 @@
-"""How a page prints one value of the numbers file."""
+"""How a page prints one value of the numbers file, and a table of them."""
 
 from __future__ import annotations
 
@@ -28,3 +28,12 @@ def show(value, spec: str = "") -> str:
     if isinstance(value, str):
         return value
     return format(value, spec) if spec else format(value, "g")
+
+
+def _row(cells) -> str:
+    return "| " + " | ".join(cells) + " |"
+
+
+def markdown_table(header, rows) -> str:
+    """A markdown table of strings."""
+    return "\n".join([_row(header), _row(["---"] * len(header)), *(_row(r) for r in rows)])

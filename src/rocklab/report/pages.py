@@ -32,23 +32,27 @@ from jinja2 import ChainableUndefined, Environment, StrictUndefined
 from rocklab import summaries
 from rocklab.benchmarks import performance_summary
 from rocklab.diagnosis.summary import TOLERANCES as FIT_TOLERANCES
+from rocklab.disk import write_text
 from rocklab.dissipation.summary import CAMPAIGN_LEVEL_TOLERANCES
+from rocklab.dissipation.summary import TOLERANCES as DISSIPATION_TOLERANCES
 from rocklab.lab.accuracy import TOLERANCES as ACCURACY_TOLERANCES
+from rocklab.lab.summary import TOLERANCES as QC_TOLERANCES
 from rocklab.report.format import NOT_MEASURED, show
 from rocklab.report.tables import TABLES
 from rocklab.seismic.summary import TOLERANCES as MAP_TOLERANCES
+from rocklab.shake_table.summary import TOLERANCES as SHAKE_TABLE_TOLERANCES
 
 #: The sections of the numbers file that stages publish (``summaries/<section>.json``),
 #: each with the tolerances its stage declares (:func:`rocklab.summaries.differences`).
 SECTIONS = {
-    "quality_control": {},
-    "dissipation": {},
+    "quality_control": QC_TOLERANCES,
+    "dissipation": DISSIPATION_TOLERANCES,
     "campaign_level": CAMPAIGN_LEVEL_TOLERANCES,
     "diagnosis": FIT_TOLERANCES,
     "limestone": FIT_TOLERANCES,
     "maps": MAP_TOLERANCES,
     "calibrated": MAP_TOLERANCES,
-    "shake_table": {},
+    "shake_table": SHAKE_TABLE_TOLERANCES,
     "instruments": ACCURACY_TOLERANCES,
 }
 
@@ -93,7 +97,7 @@ def differences(new: Mapping, old: Mapping) -> list[str]:
 
 
 def write_numbers(numbers: Mapping, path) -> None:
-    Path(path).write_text(summaries.dumps(numbers))
+    write_text(path, summaries.dumps(numbers))
 
 
 def read_numbers(path) -> dict:
@@ -158,6 +162,6 @@ def write_docs(results_dir, template_dir, out_dir, strict: bool = False, checkou
     # they are a function of the numbers file alone.
     numbers = read_numbers(written[0])
     for name, text in render_pages(template_dir, numbers, strict).items():
-        (out / name).write_text(text)
+        write_text(out / name, text)
         written.append(out / name)
     return written

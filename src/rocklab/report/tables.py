@@ -12,7 +12,8 @@ from collections.abc import Callable, Mapping
 
 from rocklab.lab.hierarchy import plural
 from rocklab.lab.validity import Verdict
-from rocklab.report.format import NOT_MEASURED, show
+from rocklab.report.environments import environment_moves, environment_sections
+from rocklab.report.format import NOT_MEASURED, markdown_table, show
 
 #: The rejections of a series' row (an unreadable test belongs to no series).
 SERIES_REJECTIONS = (
@@ -20,15 +21,6 @@ SERIES_REJECTIONS = (
     Verdict.RESIDUAL_OUT_OF_PLUMB,
     Verdict.DISTURBED_INITIAL_CONDITIONS,
 )
-
-
-def _row(cells) -> str:
-    return "| " + " | ".join(cells) + " |"
-
-
-def markdown_table(header, rows) -> str:
-    """A markdown table of strings."""
-    return "\n".join([_row(header), _row(["---"] * len(header)), *(_row(r) for r in rows)])
 
 
 def _of(section: str) -> Callable[[Callable[[Mapping], str]], Callable[[Mapping], str]]:
@@ -555,6 +547,8 @@ TABLES: dict[str, Callable[[Mapping], str]] = {
     "performance_jobs": performance_jobs,
     "performance_stages": performance_stages,
     "discovery_cells": discovery_cells,
+    "environment_sections": environment_sections,
+    "environment_moves": environment_moves,
     "shake_table_status": shake_table_status,
     "shake_table_scores": shake_table_scores,
     "shake_table_nominal": shake_table_nominal,

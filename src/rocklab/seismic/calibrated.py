@@ -52,6 +52,7 @@ import numpy as np
 import pandas as pd
 
 from rocklab.physics import wall
+from rocklab.seismic.indices import FLIPPED_FRACTION
 from rocklab.seismic.reductions import record_reductions
 
 log = logging.getLogger(__name__)
@@ -334,6 +335,13 @@ TABLE_COLUMNS = [
 ]
 
 
+#: Two findings whose mean shifts of N_O differ by less than this share a rank: each shift
+#: may move by twice the flipped fraction between machines (the flips of the two maps it
+#: compares), so their difference by four times it, and which of the two comes first is
+#: not something the maps can tell.
+RANK_MARGIN = 4 * FLIPPED_FRACTION
+
+
 def calibrated_table(summary, diagnosis):
     """What the lab's findings do to the maps, per boundary condition.
 
@@ -348,7 +356,9 @@ def calibrated_table(summary, diagnosis):
     ``N_O_shift`` is the mean of N_O(model) - N_O(calibrated) [fraction of
     the map] and ``N_O_shift_abs`` the mean of its absolute value; ``rank``
     orders the findings by ``N_O_shift_abs`` (1: the finding that matters
-    most, switched off it moves N_O the most).  ``N_O_low`` and ``N_O_high``,
+    most, switched off it moves N_O the most), findings whose shifts lie
+    within :data:`RANK_MARGIN` of each other sharing a rank (one plus the
+    number of findings that move N_O more by more than the margin).  ``N_O_low`` and ``N_O_high``,
     on the calibrated rows, bound ``N_O_mean`` over the two transfer
     assumptions (ratios, absolute sizes): the calibrated N_O is a range.
 
@@ -408,8 +418,8 @@ def calibrated_table(summary, diagnosis):
                 }
             )
         offs = sorted((r for r in block if r["role"] == "finding off"), key=lambda r: -r["N_O_shift_abs"])
-        for k, r in enumerate(offs, 1):
-            r["rank"] = k
+        for r in offs:
+            r["rank"] = 1 + sum(o["N_O_shift_abs"] > r["N_O_shift_abs"] + RANK_MARGIN for o in offs)
         calibrated = [r for r in block if r["role"] in ("calibrated", "absolute sizes")]
         for r in calibrated:
             r["N_O_low"] = min(c["N_O_mean"] for c in calibrated)

@@ -12,6 +12,15 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+#: Fraction of a map's cells that may flip between machines: 0.2 %, 20 cells of a
+#: calibrated wall's map (101 x 101), 80 of the paper's (201 x 201), a tenth of the
+#: cells next to an overturning boundary that crosses the map. A cell next to
+#: that boundary lies on a chaotic one: its history turns on the last bits of
+#: the machine's arithmetic. Seen: one cell of a paper's map, some eight of
+#: sixteen calibrated ones (``bench/environments.py``); earlier, four of a
+#: calibrated map between two machines.
+FLIPPED_FRACTION = 0.002
+
 
 def map_indices(overturned):
     """Normalised overturning and change counts of one map (Sect. 5, Fig. 22).

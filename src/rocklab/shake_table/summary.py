@@ -15,9 +15,30 @@ import xarray as xr
 from rocklab.shake_table import calibration
 from rocklab.shake_table.block import C_NODES, CONTACT_NODES_MM
 from rocklab.shake_table.records import SPECIMENS
+from rocklab.summaries import LAST_DIGIT, Tolerance
 
 #: Held-out accuracy the calibrated block is asked for on each replica (issue 25).
 TARGET_ACCURACY = 0.93
+
+#: Predictions of the held-out tests that may flip between machines: a test whose
+#: simulated histories sit on an overturning boundary turns on the last bits of
+#: the arithmetic (measured, bench/environments.py: one test of 490 between four
+#: floating-point environments, its Brier score moving 5e-4 and its log loss
+#: 3.4e-3); five times that.
+_FLIPPED_PREDICTIONS = 5 / 490
+#: How far two machines may take the summary apart: an accuracy (and a difference
+#: of two, its interval, the shortfall from the target) by the flipped
+#: predictions, the probabilistic scores by five times their measured move; the
+#: fitted parameters (grid nodes and their intervals), the records and the
+#: design, which no environment moved, to the last digit kept.
+TOLERANCES = {
+    "*.accuracy": Tolerance(abs=_FLIPPED_PREDICTIONS),
+    "*.target_shortfall": Tolerance(abs=_FLIPPED_PREDICTIONS),
+    "*.diff_vs_*": Tolerance(abs=2 * _FLIPPED_PREDICTIONS),
+    "*.brier": Tolerance(abs=0.0025),
+    "*.log_loss": Tolerance(abs=0.02),
+    "*": LAST_DIGIT,
+}
 
 
 def _number(x):

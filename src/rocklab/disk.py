@@ -1,0 +1,130 @@
+"""Results on a disk: written whole or not at all, and a full disk said plainly.
+
+Every result is written into a temporary file beside it and renamed into
+place once complete (:func:`atomic_output`, :func:`write_bytes`,
+:func:`write_text`): a job killed or out of disk space never leaves a
+half-written file under a result's name, and Snakemake's own removal of a
+failed job's outputs finds nothing half-done to miss. A write that fails
+for want of space is a :class:`NoSpace` error naming the file, the bytes it
+needed and those left, which a job prints in one line
+(:func:`rocklab.jobs.start`).
+"""
+
+from __future__ import annotations
+
+import errno
+import glob
+import os
+import shutil
+import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+#: The errors of a write that found no room: the disk full, the user's quota spent.
+SPACE_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT})
+
+
+def _size(n: float) -> str:
+    """A number of bytes for a person: 1.2 MB, 830 kB, 12 B."""
+    for unit, scale in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if n >= scale:
+            return f"{n / scale:.1f} {unit}"
+    return f"{n:.0f} B"
+
+
+class NoSpace(OSError):
+    """A result the disk had no room for.
+
+    ``path``: the file that could not be written; ``needed``: the bytes it
+    takes (an upper bound where it is compressed as it is written; None if
+    not known); ``free``: the bytes left on its filesystem.
+    """
+
+    def __init__(self, path, needed: int | None, free: int):
+        self.path, self.needed, self.free = Path(path), needed, free
+        super().__init__(errno.ENOSPC, str(self), str(path))
+
+    def __str__(self) -> str:
+        need = f"it needs up to {_size(self.needed)}, " if self.needed else ""
+        return (
+            f"no space left to write {self.path}: {need}{_size(self.free)} free on its disk. "
+            "Free some space and run the same command again: nothing half-written is left behind."
+        )
+
+    def __reduce__(self):
+        return type(self), (self.path, self.needed, self.free)
+
+
+def _is_out_of_space(exc: BaseException, folder: Path, needed: int | None) -> bool:
+    """Whether a failed write failed for want of space: the error says so, or
+    (a library that reports a bare I/O error, as netCDF-C does) the folder's
+    filesystem has less room than the write needed, or none to speak of."""
+    if isinstance(exc, OSError) and exc.errno in SPACE_ERRNOS:
+        return True
+    if not isinstance(exc, (OSError, RuntimeError)):
+        return False
+    free = free_bytes(folder)
+    return free < (needed or 0) or free < SPACE_FLOOR
+
+
+#: Free bytes below which a failed write is taken for a full disk whatever it needed.
+SPACE_FLOOR = 64 * 1024
+
+
+@contextmanager
+def atomic_output(path, needed: int | None = None) -> Iterator[Path]:
+    """A temporary file beside ``path``, renamed to ``path`` once the block ends without error.
+
+    The file gets the mode of any new file (not ``mkstemp``'s 0600). On an
+    error the temporary file is removed; an error for want of space
+    (:func:`_is_out_of_space`) becomes :class:`NoSpace`, naming ``path`` and
+    ``needed`` (bytes, if the caller knows them). A temporary file that a
+    killed writer left behind is removed by the next write of ``path``.
+    """
+    path = Path(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        for stale in path.parent.glob(f".{glob.escape(path.name)}.*.tmp"):
+            stale.unlink(missing_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    except OSError as exc:
+        if _is_out_of_space(exc, path.parent, needed):
+            raise NoSpace(path, needed, free_bytes(path.parent)) from exc
+        raise
+    os.close(fd)
+    try:
+        yield Path(tmp)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, path)
+    except Exception as exc:
+        if _is_out_of_space(exc, path.parent, needed):
+            raise NoSpace(path, needed, free_bytes(path.parent)) from exc
+        raise
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+
+
+def free_bytes(folder) -> int:
+    """Bytes free on the filesystem of ``folder`` (or of its nearest existing parent), 0 if it cannot be told."""
+    folder = Path(folder).absolute()
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    try:
+        return shutil.disk_usage(folder).free
+    except OSError:
+        return 0
+
+
+def write_bytes(path, data: bytes) -> None:
+    """Write ``data`` to ``path`` through :func:`atomic_output`."""
+    with atomic_output(path, len(data)) as tmp:
+        tmp.write_bytes(data)
+
+
+def write_text(path, text: str) -> None:
+    """Write ``text`` (UTF-8) to ``path`` through :func:`atomic_output`."""
+    write_bytes(path, text.encode())
