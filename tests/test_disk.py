@@ -31,9 +31,10 @@ def test_a_write_that_fails_leaves_neither_the_file_nor_a_temporary_one(tmp_path
 
 
 def test_a_killed_writer_s_temporary_file_goes_with_the_next_write(tmp_path):
-    (tmp_path / ".a.csv.x1.tmp").write_text("left by a killed job")
+    (tmp_path / ".a.csv.k3j9x_2q.tmp").write_text("left by a killed job")
+    (tmp_path / ".a.csv.bak.abcdefgh.tmp").write_text("another file's, being written")
     rocklab.disk.write_text(tmp_path / "a.csv", "x\n")
-    assert [p.name for p in tmp_path.iterdir()] == ["a.csv"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".a.csv.bak.abcdefgh.tmp", "a.csv"]
 
 
 def test_no_space_names_the_file_and_the_space_it_needed(tmp_path, monkeypatch):

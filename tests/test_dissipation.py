@@ -251,7 +251,7 @@ def virtual_tests(tmp_path_factory):
 
 @pytest.mark.parametrize("test_id", ["V0001", "V0002"])
 def test_the_stored_motion_gives_the_tables_of_the_reduced_test(virtual_tests, test_id, tmp_path):
-    """The motion stored in results/tests/<test_id>.nc, written and read back, gives the same three tables;
+    """The motion stored in results/tests/<job>/<test_id>.nc, written and read back, gives the same three tables;
     the test beside it reads back as it was."""
     ds = virtual_tests[test_id][0]
     write_test_with_motion(ds, tmp_path / "T.nc")

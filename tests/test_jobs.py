@@ -152,3 +152,40 @@ def test_a_job_reading_a_folder_output_or_a_file_in_it_is_downstream(results):
     os.truncate(results / "tests/job-a/T1.nc", 1)
     (cleared,) = jobs.clear_damage(results)
     assert "fig.png" in cleared.outputs and not (results / "fig.png").exists()
+
+
+def test_a_manifest_that_names_a_path_outside_the_results_is_never_followed(results, tmp_path):
+    outside = tmp_path / "precious.txt"
+    outside.write_text("not ours")
+    manifest = jobs.manifest_path(results, results / "qc.csv")
+    entry = json.loads(manifest.read_text())
+    for evil in ("../precious.txt", str(outside)):
+        manifest.write_text(json.dumps({**entry, "outputs": [evil], "files": {evil: [1, 1, "x"]}}))
+        (d,) = jobs.damaged(results)
+        assert (d.file, d.problem, d.outputs) == (".manifests/qc.csv.json", "unreadable manifest", ("qc.csv",))
+    manifest.write_text(json.dumps({**entry, "files": {"qc.csv": "12 bytes"}}))
+    assert [d.problem for d in jobs.damaged(results)] == ["unreadable manifest"]
+    jobs.clear_damage(results)
+    assert outside.read_text() == "not ours" and not (results / "qc.csv").exists()
+
+
+def test_damage_is_not_cleared_while_a_job_of_another_run_writes(results):
+    os.truncate(results / "qc.csv", 4)
+    script = f"""
+import sys, time
+from types import SimpleNamespace
+from rocklab import jobs
+smk = SimpleNamespace(log=[{str(results / "job.log")!r}], output=[], input=[])
+smk.config = {{"results_dir": {str(results)!r}}}
+job = jobs.start(smk)
+print("writing", flush=True)
+time.sleep(30)
+"""
+    job = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
+    try:
+        assert job.stdout.readline() == "writing\n"
+        assert jobs.clear_damage(results) is None and (results / "qc.csv").exists()
+    finally:
+        job.kill()
+        job.wait()
+    assert [c.damage.file for c in jobs.clear_damage(results)] == ["qc.csv"]

@@ -302,7 +302,7 @@ def test_a_wall_that_stops_dead_ends_on_its_last_flight(k_gap, hump, quiet):
 
 
 def test_a_stored_motion_reads_back_equal(two_sided, tmp_path):
-    """The motion group of results/tests/<test_id>.nc: the Motion read back equals the one extracted."""
+    """The motion group of results/tests/<job>/<test_id>.nc: the Motion read back equals the one extracted."""
     t, th, _ = two_sided
     m = extract_motion(t, th, 400.0, "two-sided", P)
     write_netcdf(xr.Dataset(), tmp_path / "T1.nc", groups={MOTION_GROUP: motion_to_dataset(m, {"test_id": "T1"})})

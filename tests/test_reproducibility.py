@@ -3,12 +3,16 @@
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
+from rocklab import summaries
+from rocklab.report import pages
 from rocklab.reproducibility import ENVIRONMENTS, SECOND_ENVIRONMENT, environment, moves
 from rocklab.summaries import LAST_DIGIT, Tolerance
 
+ROOT = Path(__file__).resolve().parents[1]
 TOLERANCES = {"maps": {"*.N_O": Tolerance(abs=0.002), "*": LAST_DIGIT}, "qc": {"*": LAST_DIGIT}}
 
 
@@ -18,7 +22,7 @@ def test_the_environment_reaches_every_process(tmp_path):
     probe = """
 import json, numba
 from numpy._core import _multiarray_umath as m
-print(json.dumps({"numba": numba.config.CPU_NAME, "x86_v3": m.__cpu_features__.get("X86_V3", False)}))
+print(json.dumps({"numba": numba.config.CPU_NAME, "x86_v3": m.__cpu_features__["X86_V3"]}))
 """
     base = {"PATH": "/usr/bin", **ENVIRONMENTS["avx2"]}
     env = environment(SECOND_ENVIRONMENT, numba_cache=tmp_path, base=base)
@@ -42,3 +46,13 @@ def test_moves_are_the_numbers_that_differ_each_against_its_tolerance():
     assert not found["maps.A.n"].admitted  # a count may not move
     # a run that did not make a section is left out of it
     assert "qc.x" not in found
+
+
+@pytest.mark.parametrize("section", sorted(pages.SECTIONS))
+def test_every_float_of_the_pages_has_a_tolerance_its_stage_declares(section):
+    """No float is compared digit for digit by default: the stage that makes it says how far
+    two machines may take it apart (rocklab.summaries, docs/reproducibility.md)."""
+    numbers = pages.read_numbers(ROOT / "docs" / "numbers.json")[section]
+    assert numbers is not None, f"docs/numbers.json has no {section}: run `make docs` after the stage"
+    missing = summaries.undeclared(numbers, pages.SECTIONS[section])
+    assert not missing, f"floats of {section} whose stage declares no tolerance: {missing[:20]}"

@@ -113,9 +113,11 @@ WRITE_PROBE = 4096
 def check_writable(results_dir) -> None:
     """Refuse a ``results_dir`` that cannot be written, before any job starts.
 
-    The folder is created if it does not exist, and a small file written
-    and removed in it (file modes alone do not tell: a read-only mount, a
-    full disk, or a folder of another user all refuse a write).
+    The folder is created if it does not exist, and a file of one block
+    written and removed in it (file modes alone do not tell: a read-only
+    mount, a folder of another user, or a disk without a free block all
+    refuse a write; a disk that fills up later stops the job that finds it
+    full, :class:`rocklab.disk.NoSpace`).
 
     Raises
     ------
@@ -144,8 +146,8 @@ def check_writable(results_dir) -> None:
 def check_names(config, test_ids, records) -> None:
     """Refuse a test or accelerogram that the configuration names and the inputs lack.
 
-    They become file names of the results (``tests/<id>.nc``,
-    ``maps/<record>__<model>.nc``): a name that is not one of the campaign's
+    They become file names of the results (``tests/<job>/<id>.nc``,
+    ``maps/records-<k>/<record>__<model>.nc``): a name that is not one of the campaign's
     tests or of the manifest's records could make the workflow read or write
     outside ``results_dir``, or fail late for want of an input.
 

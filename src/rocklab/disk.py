@@ -65,11 +65,22 @@ def _is_out_of_space(exc: BaseException, folder: Path, needed: int | None) -> bo
     if not isinstance(exc, (OSError, RuntimeError)):
         return False
     free = free_bytes(folder)
-    return free < (needed or 0) or free < SPACE_FLOOR
+    return free is not None and (free < (needed or 0) or free < SPACE_FLOOR)
+
+
+def no_space(exc: BaseException, path, needed: int | None = None) -> NoSpace | None:
+    """The :class:`NoSpace` that a failed write of ``path`` stands for, None if it failed for another reason."""
+    path = Path(path)
+    if not _is_out_of_space(exc, path.parent, needed):
+        return None
+    return NoSpace(path, needed, free_bytes(path.parent) or 0)
 
 
 #: Free bytes below which a failed write is taken for a full disk whatever it needed.
 SPACE_FLOOR = 64 * 1024
+#: The process's umask, read once (reading it means setting it): the mode of a new file.
+_UMASK = os.umask(0)
+os.umask(_UMASK)
 
 
 @contextmanager
@@ -78,45 +89,47 @@ def atomic_output(path, needed: int | None = None) -> Iterator[Path]:
 
     The file gets the mode of any new file (not ``mkstemp``'s 0600). On an
     error the temporary file is removed; an error for want of space
-    (:func:`_is_out_of_space`) becomes :class:`NoSpace`, naming ``path`` and
-    ``needed`` (bytes, if the caller knows them). A temporary file that a
-    killed writer left behind is removed by the next write of ``path``.
+    (:func:`no_space`) becomes :class:`NoSpace`, naming ``path`` and
+    ``needed`` (bytes, if the caller knows them), and the space free once
+    the temporary file is gone. A temporary file that a killed writer left
+    behind (``mkstemp``'s eight random characters) goes with the next write
+    of ``path``.
     """
     path = Path(path)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        for stale in path.parent.glob(f".{glob.escape(path.name)}.*.tmp"):
+        for stale in path.parent.glob(f".{glob.escape(path.name)}.{'?' * 8}.tmp"):
             stale.unlink(missing_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     except OSError as exc:
-        if _is_out_of_space(exc, path.parent, needed):
-            raise NoSpace(path, needed, free_bytes(path.parent)) from exc
+        if (full := no_space(exc, path, needed)) is not None:
+            raise full from exc
         raise
     os.close(fd)
     try:
         yield Path(tmp)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
+        os.chmod(tmp, 0o666 & ~_UMASK)
         os.replace(tmp, path)
     except Exception as exc:
-        if _is_out_of_space(exc, path.parent, needed):
-            raise NoSpace(path, needed, free_bytes(path.parent)) from exc
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        if (full := no_space(exc, path, needed)) is not None:
+            raise full from exc
         raise
     finally:
         if os.path.exists(tmp):
             os.remove(tmp)
 
 
-def free_bytes(folder) -> int:
-    """Bytes free on the filesystem of ``folder`` (or of its nearest existing parent), 0 if it cannot be told."""
+def free_bytes(folder) -> int | None:
+    """Bytes free on the filesystem of ``folder`` (or of its nearest existing parent), None if it cannot be told."""
     folder = Path(folder).absolute()
     while not folder.exists() and folder != folder.parent:
         folder = folder.parent
     try:
         return shutil.disk_usage(folder).free
     except OSError:
-        return 0
+        return None
 
 
 def write_bytes(path, data: bytes) -> None:

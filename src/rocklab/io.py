@@ -36,7 +36,7 @@ import yaml
 
 from rocklab import __version__
 from rocklab._imports import lazy_module
-from rocklab.disk import SPACE_ERRNOS, atomic_output, write_text
+from rocklab.disk import SPACE_ERRNOS, atomic_output, no_space, write_text
 
 # bound lazily: a job that writes report pages needs neither
 jsonschema = lazy_module("jsonschema")
@@ -62,9 +62,20 @@ class _JobLog(logging.FileHandler):
 
 
 def setup_logging(path):
-    """Send log records and warnings of this process to ``path``."""
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    handler = _JobLog(path, mode="w")
+    """Send log records and warnings of this process to ``path``.
+
+    Raises
+    ------
+    rocklab.disk.NoSpace
+        The log file cannot be made for want of space.
+    """
+    try:
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        handler = _JobLog(path, mode="w")
+    except OSError as exc:
+        if (full := no_space(exc, path)) is not None:
+            raise full from exc
+        raise
     handler.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(message)s"))
     logging.basicConfig(level=logging.INFO, handlers=[handler], force=True)
     logging.captureWarnings(True)

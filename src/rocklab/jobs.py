@@ -25,6 +25,7 @@ is read again only where its size matches and its time does not.
 
 from __future__ import annotations
 
+import fcntl
 import hashlib
 import json
 import logging
@@ -32,14 +33,17 @@ import os
 import shutil
 import sys
 from collections.abc import Iterable
+from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
-from rocklab.disk import SPACE_ERRNOS, NoSpace, free_bytes, write_text
+from rocklab.disk import NoSpace, write_text
 from rocklab.io import setup_logging
 
 #: The folder of the manifests, inside the results folder.
 MANIFESTS = ".manifests"
+#: The lock file in it (:func:`clear_damage`).
+LOCK = ".lock"
 #: The marker Snakemake writes into a folder output (its time stands for the folder's).
 SNAKEMAKE_TIMESTAMP = ".snakemake_timestamp"
 
@@ -113,13 +117,40 @@ def _problem(path: Path, size: int, mtime_ns: int, blake: str) -> str | None:
     """What is wrong with a recorded file now, None if nothing."""
     try:
         st = path.stat()
+        if st.st_size != size:
+            return f"{st.st_size} bytes where its job wrote {size}"
+        if st.st_mtime_ns != mtime_ns and digest(path) != blake:
+            return "changed since its job wrote it"
     except FileNotFoundError:
         return "missing"
-    if st.st_size != size:
-        return f"{st.st_size} bytes where its job wrote {size}"
-    if st.st_mtime_ns != mtime_ns and digest(path) != blake:
-        return "changed since its job wrote it"
+    except OSError as exc:
+        return f"unreadable ({exc.strerror or exc})"
     return None
+
+
+def _inside_results(rel) -> bool:
+    """Whether a path a manifest names stays inside the results folder (relative, no ``..``)."""
+    return isinstance(rel, str) and bool(rel) and not Path(rel).is_absolute() and ".." not in Path(rel).parts
+
+
+def _well_formed(entry) -> bool:
+    """Whether a manifest's entry is what :func:`record` writes, every path inside the results folder."""
+    files = entry.get("files")
+    return (
+        isinstance(entry.get("outputs"), list)
+        and all(map(_inside_results, entry["outputs"]))
+        and isinstance(entry.get("inputs"), list)
+        and all(isinstance(i, str) for i in entry["inputs"])
+        and isinstance(files, dict)
+        and all(
+            _inside_results(f)
+            and isinstance(r, list)
+            and len(r) == 3
+            and all(isinstance(x, int) for x in r[:2])
+            and isinstance(r[2], str)
+            for f, r in files.items()
+        )
+    )
 
 
 def _first_output(manifest: Path, root: Path) -> str:
@@ -129,14 +160,15 @@ def _first_output(manifest: Path, root: Path) -> str:
 
 
 def _manifests(root: Path) -> dict[Path, dict | None]:
-    """Every manifest of the results folder ``root``, read (None: unreadable)."""
+    """Every manifest of the results folder ``root``, read (None: unreadable, or not what
+    :func:`record` writes: a path it names that leaves the results folder is never followed)."""
     out = {}
     for manifest in sorted((root / MANIFESTS).rglob("*.json")):
         try:
             entry = json.loads(manifest.read_text())
-            out[manifest] = {k: entry[k] for k in ("outputs", "inputs", "files")}
-        except (OSError, ValueError, KeyError, TypeError):
-            out[manifest] = None
+        except (OSError, ValueError):
+            entry = None
+        out[manifest] = entry if isinstance(entry, dict) and _well_formed(entry) else None
     return out
 
 
@@ -149,7 +181,8 @@ def damaged(results_dir) -> list[Damage]:
     out = []
     for manifest, entry in _manifests(root).items():
         if entry is None:
-            out.append(Damage((_first_output(manifest, root),), manifest.name, "unreadable manifest", manifest))
+            rel = manifest.relative_to(root).as_posix()
+            out.append(Damage((_first_output(manifest, root),), rel, "unreadable manifest", manifest))
             continue
         bad = next(((f, p) for f, rec in entry["files"].items() if (p := _problem(root / f, *rec))), None)
         if bad is not None:
@@ -176,13 +209,43 @@ def _inside(path: str, folders: set[str]) -> bool:
     return any(Path(*parts[:k]).as_posix() in folders for k in range(1, len(parts) + 1))
 
 
-def clear_damage(results_dir) -> list[Cleared]:
+@contextmanager
+def _lock(root: Path, kind: int, wait: bool = True):
+    """The results folder's lock (``<results>/.manifests/.lock``), shared by running jobs,
+    exclusive for :func:`clear_damage`: yields whether it was taken (it is not, without
+    waiting, while another holds it; nor where the folder cannot hold the file)."""
+    try:
+        (root / MANIFESTS).mkdir(parents=True, exist_ok=True)
+        fd = os.open(root / MANIFESTS / LOCK, os.O_RDWR | os.O_CREAT, 0o666)
+    except OSError:
+        yield False
+        return
+    try:
+        fcntl.flock(fd, kind | (0 if wait else fcntl.LOCK_NB))
+    except OSError:
+        os.close(fd)
+        yield False
+        return
+    try:
+        yield True
+    finally:
+        os.close(fd)
+
+
+def clear_damage(results_dir) -> list[Cleared] | None:
     """Remove the outputs of every damaged job of ``results_dir`` (:func:`damaged`) and of
     every job downstream of it, with their manifests, so that Snakemake makes them again.
 
     Downstream: a job whose recorded inputs are, or lie in, the removed outputs, and so on.
+    None, and nothing removed, while a job of another run holds the folder (its
+    outputs may be half-recorded).
     """
     root = Path(results_dir)
+    with _lock(root, fcntl.LOCK_EX, wait=False) as held:
+        return _clear(root) if held else None
+
+
+def _clear(root: Path) -> list[Cleared]:
     entries = {m: e for m, e in _manifests(root).items() if e is not None}
     out = []
     for damage in damaged(root):
@@ -219,16 +282,15 @@ class Job:
     def __init__(self, smk):
         self.smk = smk
         sys.excepthook = _one_line_for_no_space
-        try:
-            setup_logging(smk.log[0])
-        except OSError as exc:
-            if exc.errno not in SPACE_ERRNOS:
-                raise
-            raise NoSpace(smk.log[0], None, free_bytes(Path(smk.log[0]).parent)) from exc
+        setup_logging(smk.log[0])
+        # held while the job writes: no other run clears damage meanwhile
+        self._lock = ExitStack()
+        self._lock.enter_context(_lock(Path(smk.config["results_dir"]), fcntl.LOCK_SH))
 
     def finish(self) -> None:
         """The job's outputs are written: record them and its inputs (:func:`record`)."""
         record(list(self.smk.output), self.smk.config["results_dir"], list(self.smk.input))
+        self._lock.close()
 
 
 def start(smk) -> Job:

@@ -85,7 +85,9 @@ class Tolerance(NamedTuple):
     rel: float = 0.0
 
     def admits(self, new: float, old: float) -> bool:
-        return abs(new - old) <= self.abs + self.rel * abs(old)
+        # a few units of the last bit beyond the bound: one unit of the sixth
+        # digit, 1.00001 - 1.0, is itself a float a hair above 1e-5
+        return abs(new - old) <= (self.abs + self.rel * abs(old)) * (1 + 1e-9)
 
 
 #: A float that floating point cannot move: a setting, a constant of the

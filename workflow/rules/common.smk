@@ -9,7 +9,7 @@ from pathlib import Path
 from snakemake.exceptions import WorkflowError
 
 from rocklab.config import check_names, check_paths, check_writable, recorded_path
-from rocklab.jobs import clear_damage
+from rocklab.jobs import clear_damage, damaged
 from rocklab.lab.campaign import UNREADABLE, open_campaign
 from rocklab.lab.hierarchy import thickness_of_walls, walls_of_series, walls_of_specimens
 from rocklab.seismic import calibrated
@@ -23,16 +23,36 @@ check_paths(config["raw_dir"], config["results_dir"])
 check_writable(config["results_dir"])
 RAW = Path(config["raw_dir"])
 RESULTS = Path(config["results_dir"])
+#: Snakemake's options that run no job (a dry run, a report, a lint, a listing,
+#: a graph): under them a damaged result is said, not cleared.
+RUNS_NO_JOB = {"-n", "--dry-run", "--dryrun", "--report", "--lint", "-l", "--list-rules", "--list-target-rules"}
+RUNS_NO_JOB |= {"-S", "--summary", "-D", "--detailed-summary", "--dag", "--rulegraph", "--filegraph", "--d3dag"}
+RUNS_NO_JOB |= {"--unlock", "--cleanup-metadata", "--list-changes", "--lc", "--list-untracked", "--lt"}
+RUNS_NO_JOB |= {"--delete-all-output", "--delete-temp-output", "--containerize", "--export-cwl"}
+
+
+def runs_jobs(argv):
+    """Whether a Snakemake command line may run jobs (a cluster of short flags with n is a dry run)."""
+    return not any(a in RUNS_NO_JOB or re.fullmatch(r"-[A-Za-z]*n[A-Za-z]*", a) for a in argv)
+
+
 # Results damaged since their job wrote them (a file deleted from a folder
 # output, any output truncated or replaced, or gone while what was made from
 # it stays, which Snakemake alone leaves as it is): that job's outputs and
 # every output made from them are removed, so that Snakemake makes them
-# again, and nothing else (rocklab.jobs).  In the main process only (a
-# cluster job parses this file too), and not while another run of this
-# working directory holds its lock: its jobs may be writing.
-if workflow.is_main_process and not any(Path(".snakemake", "locks").glob("*")):
-    for cleared in clear_damage(RESULTS):
-        print(f"rocklab: {RESULTS / cleared.damage.file}: {cleared}", file=sys.stderr)
+# again, and nothing else (rocklab.jobs).  In the main process of a run
+# that runs jobs only (a cluster job parses this file too), and not while
+# another run holds this working directory's lock or a job of another run
+# writes in the results folder.
+if workflow.is_main_process and not runs_jobs(sys.argv[1:]):
+    for damage in damaged(RESULTS):
+        print(f"rocklab: {RESULTS / damage.file}: {damage.problem}; its job would run again", file=sys.stderr)
+elif workflow.is_main_process and not any(Path(".snakemake", "locks").glob("*")):
+    cleared = clear_damage(RESULTS)
+    if cleared is None:
+        print(f"rocklab: a job of another run is writing in {RESULTS}: damaged results not looked for", file=sys.stderr)
+    for c in cleared or []:
+        print(f"rocklab: {RESULTS / c.damage.file}: {c}", file=sys.stderr)
 # Every row checked at the door (docs/raw-format.md): a refused row is a row
 # of qc.csv, and no id or path of the tables names a file outside the two folders.
 CAMPAIGN = open_campaign(RAW)

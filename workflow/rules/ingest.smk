@@ -17,7 +17,7 @@
 # and when it fails, and a rule that reads a test takes its job's folder as
 # input (reduced_inputs).  A file deleted from the folder, or any output
 # truncated, is found by the check of the jobs' manifests before each run
-# (rocklab.jobs.repair, common.smk), which has the job run again.  A job's
+# (rocklab.jobs.clear_damage, common.smk), which has the job run again.  A job's
 # tests are its params: a test added to it reduces it again (the params
 # trigger; not under --rerun-triggers mtime alone).
 rule reduce:

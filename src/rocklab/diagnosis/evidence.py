@@ -319,7 +319,7 @@ def records_by_series(datasets, motions=None):
         Reduced tests.
     motions : mapping, optional
         Test id -> :class:`rocklab.lab.motion.Motion` already extracted (the
-        motion stored in the workflow's ``results/tests/<test_id>.nc``, :func:`rocklab.lab.motion.read_motion`);
+        motion stored in the workflow's ``results/tests/<job>/<test_id>.nc``, :func:`rocklab.lab.motion.read_motion`);
         a test without one has its motion extracted from theta by :func:`measured_test`.
     """
     motions = motions or {}
@@ -347,7 +347,7 @@ def records_by_series(datasets, motions=None):
 def stored_records(paths, qc_path=None):
     """:func:`records_by_series` of the valid reduced tests at ``paths``, with the motions stored in them.
 
-    Each file (``results/tests/<test_id>.nc``) is opened once for its
+    Each file (``results/tests/<job>/<test_id>.nc``) is opened once for its
     rotation and its motion group (:func:`rocklab.lab.motion.write_test_with_motion`):
     netCDF-C spends longer opening a reduced test than reading both.  Valid
     as :func:`rocklab.io.valid_tests` says (``qc_path``, or each test's own verdict).

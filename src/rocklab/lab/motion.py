@@ -38,7 +38,7 @@ Stored motion
 -------------
 The workflow extracts the motion of each test once, in the reduction job of
 its series, and stores it inside the reduced test's file
-``results/tests/<test_id>.nc``, as its netCDF-4 group :data:`MOTION_GROUP`
+``results/tests/<job>/<test_id>.nc``, as its netCDF-4 group :data:`MOTION_GROUP`
 (:func:`write_test_with_motion`; one file per test, not two: a third of the
 reduction's time was the writing of a second file): the :class:`Motion`
 (:func:`motion_to_dataset`), who the test is and the constants of its wall
@@ -529,7 +529,7 @@ def motion_from_dataset(ds) -> Motion:
 
 def read_stored_motion(path) -> xr.Dataset:
     """The stored motion (:func:`stored_motion`) of the reduced test at ``path``
-    (``results/tests/<test_id>.nc``, written by :func:`write_test_with_motion`)."""
+    (``results/tests/<job>/<test_id>.nc``, written by :func:`write_test_with_motion`)."""
     return read_dataset(path, group=MOTION_GROUP)
 
 

@@ -47,7 +47,7 @@ class RawFormatError(ValueError):
 def check_identifier(value: str, what: str) -> str | None:
     """Why ``value`` cannot name a file of the results (None when it can).
 
-    Test ids name the files ``results/tests/<id>.nc`` and specimen ids the
+    Test ids name the files ``results/tests/<job>/<id>.nc`` and specimen ids the
     series (``<specimen>-2s``) that name logs and figures: only letters,
     digits and ``. _ -``, starting with a letter or a digit, at most
     :data:`ID_MAX_LENGTH` characters, so that no id can climb out of the

@@ -208,7 +208,7 @@ def series_figures(diagnosis, tests_by_series):
     diagnosis : rocklab.diagnosis.result.CampaignDiagnosis or path
         results/diagnosis.json.
     tests_by_series : mapping
-        Series id -> its reduced tests (``results/tests/<test_id>.nc``, each
+        Series id -> its reduced tests (``results/tests/<job>/<test_id>.nc``, each
         with its stored motion, :func:`rocklab.lab.motion.write_test_with_motion`).
         Of a series the sample test is read, and every test where the series
         has a form discovered beyond the catalogue (:func:`discovery_figure`):
