@@ -5,7 +5,7 @@ import pandas as pd
 from rocklab import jobs
 from rocklab.diagnosis import CampaignDiagnosis
 from rocklab.dissipation.covariates import campaign_effects, series_fits
-from rocklab.dissipation.summary import campaign_level_summary
+from rocklab.dissipation.dissipation_summary import campaign_level_summary
 from rocklab.io import write_table
 from rocklab.plots import save_png
 from rocklab.plots.covariates import covariate_figure

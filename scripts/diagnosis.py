@@ -2,7 +2,7 @@
 
 from rocklab import jobs
 from rocklab.diagnosis import CampaignDiagnosis, with_boundaries, write_diagnosis
-from rocklab.diagnosis.summary import diagnosis_summary
+from rocklab.diagnosis.diagnosis_summary import diagnosis_summary
 from rocklab.summaries import write_summary
 
 job = jobs.start(snakemake)

@@ -7,8 +7,8 @@ import pandas as pd
 
 from rocklab import jobs
 from rocklab.disk import write_text
+from rocklab.dissipation.dissipation_summary import dissipation_summary
 from rocklab.dissipation.statistics import campaign_tables, table3_markdown
-from rocklab.dissipation.summary import dissipation_summary
 from rocklab.io import write_table
 from rocklab.lab.motion import valid_stored_motions
 from rocklab.summaries import write_summary

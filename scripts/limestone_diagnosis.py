@@ -3,7 +3,7 @@
 from rocklab import jobs
 from rocklab.diagnosis import LimestoneDiagnosis
 from rocklab.diagnosis.block_tests import blocks_markdown, diagnose_blocks, read_events
-from rocklab.diagnosis.summary import limestone_summary
+from rocklab.diagnosis.diagnosis_summary import limestone_summary
 from rocklab.disk import write_text
 from rocklab.plots import save_png
 from rocklab.plots.diagnosis import family_figure

@@ -5,7 +5,7 @@ from rocklab.io import load_datasets, write_table
 from rocklab.seismic.calibrated import calibrated_table
 from rocklab.seismic.indices import summary_table
 from rocklab.seismic.maps import subgrid
-from rocklab.seismic.summary import calibrated_summary
+from rocklab.seismic.maps_summary import calibrated_summary
 from rocklab.summaries import write_summary
 
 job = jobs.start(snakemake)

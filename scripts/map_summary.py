@@ -4,8 +4,8 @@ from rocklab import jobs
 from rocklab.io import load_datasets, write_table
 from rocklab.seismic.accelerograms import table4_agreement
 from rocklab.seismic.indices import summary_table
+from rocklab.seismic.maps_summary import maps_summary
 from rocklab.seismic.paper_comparison import TABLE4_SUBSET, record_comparison, reductions
-from rocklab.seismic.summary import maps_summary
 from rocklab.summaries import write_summary
 
 job = jobs.start(snakemake)

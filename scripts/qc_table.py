@@ -5,8 +5,8 @@ import pandas as pd
 from rocklab import jobs
 from rocklab.io import write_table
 from rocklab.lab.campaign import open_campaign
+from rocklab.lab.qc_summary import quality_control_summary
 from rocklab.lab.reduction import kinematics_table, qc_table, read_row_attrs
-from rocklab.lab.summary import quality_control_summary
 from rocklab.summaries import write_summary
 
 job = jobs.start(snakemake)

@@ -5,10 +5,10 @@ import xarray as xr
 
 from rocklab import jobs
 from rocklab.io import write_table
+from rocklab.shake_table.asu_data import read_geometry, read_tests
 from rocklab.shake_table.block import specimen_block
 from rocklab.shake_table.evaluation import calibration_tables
-from rocklab.shake_table.records import read_geometry, read_tests
-from rocklab.shake_table.summary import shake_table_summary
+from rocklab.shake_table.shake_table_summary import shake_table_summary
 from rocklab.summaries import write_summary
 
 job = jobs.start(snakemake)

@@ -5,9 +5,9 @@ import pandas as pd
 
 from rocklab import jobs
 from rocklab.io import write_netcdf
+from rocklab.shake_table.asu_data import SPECIMENS, read_geometry, read_tests
 from rocklab.shake_table.block import specimen_block
 from rocklab.shake_table.evaluation import calibrated_maps
-from rocklab.shake_table.records import SPECIMENS, read_geometry, read_tests
 
 job = jobs.start(snakemake)
 numba.set_num_threads(min(snakemake.threads, numba.config.NUMBA_NUM_THREADS))

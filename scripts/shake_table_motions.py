@@ -2,8 +2,8 @@
 
 from rocklab import jobs
 from rocklab.io import write_table
+from rocklab.shake_table.asu_data import read_tests
 from rocklab.shake_table.evaluation import motion_table
-from rocklab.shake_table.records import read_tests
 
 job = jobs.start(snakemake)
 p = snakemake.params

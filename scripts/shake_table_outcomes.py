@@ -5,9 +5,9 @@ import pandas as pd
 
 from rocklab import jobs
 from rocklab.io import write_netcdf
+from rocklab.shake_table.asu_data import read_geometry, read_tests
 from rocklab.shake_table.block import outcome_grid, specimen_block
 from rocklab.shake_table.evaluation import block_inputs
-from rocklab.shake_table.records import read_geometry, read_tests
 
 job = jobs.start(snakemake)
 numba.set_num_threads(min(snakemake.threads, numba.config.NUMBA_NUM_THREADS))

@@ -7,8 +7,8 @@ import pytest
 from rocklab.physics import impact, restitution
 
 
-def _impulse_e(b_leave, b_land, h, k, m=2.7):
-    """thetadot^+ / thetadot^- of a planar body from its impulse equations, solved as a linear system.
+def _impulse(b_leave, b_land, h, k, m=2.7):
+    """thetadot^+ / thetadot^- and T^+ / T^- of a planar body from its impulse equations, solved as a linear system.
 
     The body turns at thetadot^- = 1 about the edge it leaves, at (0, 0), its
     centre of mass at (-b_leave, h) and the edge it lands on at
@@ -36,7 +36,30 @@ def _impulse_e(b_leave, b_land, h, k, m=2.7):
         float,
     )
     rhs = np.array([m * v0[0], m * v0[1], inertia * w0, 0.0, 0.0])
-    return np.linalg.solve(a, rhs)[2] / w0
+    u, v, w = np.linalg.solve(a, rhs)[:3]
+    before = 0.5 * m * (v0 @ v0) + 0.5 * inertia * w0**2
+    after = 0.5 * m * (u**2 + v**2) + 0.5 * inertia * w**2
+    return w / w0, after / before
+
+
+def _impulse_e(b_leave, b_land, h, k, m=2.7):
+    return _impulse(b_leave, b_land, h, k, m)[0]
+
+
+@pytest.mark.parametrize("b1, b2, h, k", [(0.02, 0.05, 0.3, 0.12), (0.05, 0.02, 0.3, 0.12), (0.1, 0.1, 0.5, 0.2)])
+def test_the_kinetic_energy_kept_is_that_of_the_impulse_and_the_same_both_ways(b1, b2, h, k):
+    """T+/T- from the impulse solution's velocities (translation and rotation); the two directions
+    keep the same share though their e differ (docs/shake-table.md, issue 40 item 7)."""
+    kept = restitution.energy_ratio_asymmetric(b1, b2, h, k)
+    assert kept == pytest.approx(_impulse(b1, b2, h, k)[1], rel=1e-12)
+    assert kept == pytest.approx(restitution.energy_ratio_asymmetric(b2, b1, h, k), rel=1e-14)
+    assert 0.0 < kept < 1.0
+    if b1 == b2:
+        assert kept == pytest.approx(restitution.two_sided_asymmetric(b1, b2, h, k) ** 2, rel=1e-14)
+    else:
+        assert restitution.two_sided_asymmetric(b1, b2, h, k) != pytest.approx(
+            restitution.two_sided_asymmetric(b2, b1, h, k), rel=1e-3
+        )
 
 
 @pytest.mark.parametrize("seed", range(5))

@@ -1,4 +1,4 @@
-"""Batch engine (numba) against the event-driven reference of rocklab.simulation.model."""
+"""Batch engine (numba) against the event-driven reference of rocklab.simulation.rocking_model."""
 
 import numpy as np
 import pytest
@@ -6,8 +6,8 @@ import pytest
 from rocklab.physics import restitution, wall
 from rocklab.simulation import engine
 from rocklab.simulation.batch import free_batch, ground_batch, overturning_batch
-from rocklab.simulation.model import RockingModel
 from rocklab.simulation.reference import simulate_free, simulate_ground
+from rocklab.simulation.rocking_model import RockingModel
 
 ALPHA, P = 0.1, float(wall.frequency_parameter(3.0))
 

@@ -18,8 +18,8 @@ import rocklab
 from rocklab import cli
 from rocklab.cli.arguments import HelpFormatter
 from rocklab.cli.map import ProgressBar
-from rocklab.simulation.model import RockingModel
 from rocklab.simulation.reference import simulate_ground
+from rocklab.simulation.rocking_model import RockingModel
 
 
 def run(argv, capsys):

@@ -354,7 +354,7 @@ def test_diagnosis_parameters_are_modelled_per_series():
 
 
 def test_the_docs_numbers_and_tables_of_the_campaign_level(tmp_path):
-    from rocklab.dissipation.summary import campaign_level_summary
+    from rocklab.dissipation.dissipation_summary import campaign_level_summary
     from rocklab.io import write_table
     from rocklab.report import tables
     from rocklab.summaries import rounded

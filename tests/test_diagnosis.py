@@ -17,8 +17,8 @@ from rocklab.diagnosis.causes import stop_threshold
 from rocklab.lab import virtual_lab as vl
 from rocklab.physics import impact as I
 from rocklab.physics import restitution, wall
-from rocklab.simulation.model import RockingModel
 from rocklab.simulation.reference import simulate_free
+from rocklab.simulation.rocking_model import RockingModel
 
 SPEC = vl.DEFAULT_SPECIMENS.set_index("specimen")
 TWO, ONE = "1a", "5c"  # a slender two-sided wall, a stocky one-sided one (short records)

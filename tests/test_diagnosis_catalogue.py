@@ -71,7 +71,7 @@ def test_the_simulator_and_the_engine_carry_the_toy(with_toy):
     # the diagnosis' closed forms: the take-off speed of an impact leaving each hinge
     mp = D.model_params([wall], ("chipped_hinge",), {"chip": 0.1})
     v = np.ones((1, 2))
-    out = D.model.impact_speeds(v, np.array([[1.0, -1.0]]), mp)[0]
+    out = D.wall_model.impact_speeds(v, np.array([[1.0, -1.0]]), mp)[0]
     np.testing.assert_allclose(out[0], [0.9 * e_an, e_an], rtol=1e-12)
 
 
@@ -114,18 +114,18 @@ def test_a_toy_cause_added_to_the_catalogue_is_named(with_toy, hidden_chip):
 @pytest.mark.parametrize("cause", catalogue.in_order(("temperature",)), ids=lambda c: c.name)
 def test_a_cause_at_its_null_values_leaves_the_base_model(cause):
     walls = [MapWall(0.2, 2.0, b, order) for b, order in (("two-sided", 0.0), ("one-sided", 1.0))]
-    base = D.model.base_params(walls)
-    null = D.model.model_of(walls, cause.laws(cause.values({})))
+    base = D.wall_model.base_params(walls)
+    null = D.wall_model.model_of(walls, cause.laws(cause.values({})))
     for name, value in vars(base).items():
         if isinstance(value, np.ndarray) and name not in ("gap_model", "e0"):
             np.testing.assert_allclose(getattr(null, name), value, rtol=1e-15, atol=0, err_msg=name)
     # a gap of zero swings through nothing: Eq. 2 twice and the transverse impact are Eq. 14
     v = np.full((2, 1), 1.0)
     np.testing.assert_allclose(
-        D.model.impact_speeds(v, np.ones((2, 1)), null)[0], D.model.impact_speeds(v, np.ones((2, 1)), base)[0]
+        D.wall_model.impact_speeds(v, np.ones((2, 1)), null)[0], D.wall_model.impact_speeds(v, np.ones((2, 1)), base)[0]
     )
 
 
 def test_the_model_takes_only_the_laws_of_physics_law():
     with pytest.raises(TypeError, match="no law of rocklab.physics.law"):
-        D.model.base_params([MapWall(0.2, 2.0, "two-sided")]).under(I.Scaled(I.HousnerTwoSided(), 0.9))
+        D.wall_model.base_params([MapWall(0.2, 2.0, "two-sided")]).under(I.Scaled(I.HousnerTwoSided(), 0.9))

@@ -7,7 +7,7 @@ from scipy import optimize, stats
 from rocklab.diagnosis.estimation import fit, noise, parameter_intervals, resampling, within_slope
 from rocklab.diagnosis.estimation.problem import Problem
 from rocklab.diagnosis.parameters import Param
-from rocklab.dissipation.statistics import expanded, percentile_interval
+from rocklab.inference.intervals import expanded, percentile_interval
 
 
 class _Cause:

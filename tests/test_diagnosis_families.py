@@ -15,8 +15,8 @@ from scipy.optimize import brentq
 from rocklab.diagnosis import extended as dx
 from rocklab.physics import flight, restitution
 from rocklab.physics import impact as I
-from rocklab.simulation.model import RockingModel
 from rocklab.simulation.reference import simulate_free, simulate_ground
+from rocklab.simulation.rocking_model import RockingModel
 
 A_S, P = 0.08, 3.3
 

@@ -18,8 +18,8 @@ from test_diagnosis import A2, H, virtual_series
 from rocklab import diagnosis as D
 from rocklab.physics import flight
 from rocklab.seismic import calibrated
-from rocklab.simulation.model import RockingModel
 from rocklab.simulation.reference import simulate_free
+from rocklab.simulation.rocking_model import RockingModel
 
 ALPHA, P = 0.1, 3.4
 
@@ -74,7 +74,7 @@ def test_closed_forms_of_a_flight_match_the_exact_simulator(kw):
 def test_losses_on_an_angle_that_depends_on_the_amplitude_match_the_exact_simulator(k, kw):
     """A flight rocks on the angle of its own apex (flight_angle(A, alpha, k)) and loses on that angle:
     the closed forms, solving apex and angle together, against the event-driven simulator."""
-    from rocklab.diagnosis import model as dm
+    from rocklab.diagnosis import wall_model as dm
     from rocklab.seismic.calibrated import MapWall
 
     m = RockingModel(alpha=ALPHA, p=P, impact=H(), hinge_rounding=k, **kw)
@@ -293,7 +293,7 @@ def test_a_viscous_loss_on_short_flights_is_not_identifiable():
 
 
 def test_a_named_viscous_loss_whose_form_cannot_be_read_is_structure_left():
-    from rocklab.diagnosis.problem import WallProblem
+    from rocklab.diagnosis.series_problem import WallProblem
 
     recs = virtual_series("fl", "two-sided", {"flight_damping": 0.01}, n=3, seed=1)
     problem = WallProblem([D.measured_test(r) for r in recs])

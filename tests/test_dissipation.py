@@ -27,8 +27,8 @@ from rocklab.lab.reduction import reduce_test
 from rocklab.physics import restitution
 from rocklab.physics.impact import Constant
 from rocklab.physics.wall import overturning_velocity
-from rocklab.simulation.model import RockingModel
 from rocklab.simulation.reference import simulate_free
+from rocklab.simulation.rocking_model import RockingModel
 
 P = 3.4
 

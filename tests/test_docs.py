@@ -13,14 +13,14 @@ import pytest
 import yaml
 
 from rocklab import summaries
-from rocklab.diagnosis.summary import diagnosis_summary, limestone_summary
-from rocklab.dissipation.summary import dissipation_summary
-from rocklab.lab.summary import quality_control_summary
+from rocklab.diagnosis.diagnosis_summary import diagnosis_summary, limestone_summary
+from rocklab.dissipation.dissipation_summary import dissipation_summary
+from rocklab.lab.qc_summary import quality_control_summary
 from rocklab.lab.validity import FAULT_COLUMNS
 from rocklab.report import pages, tables
 from rocklab.seismic.indices import FLIPPED_FRACTION
+from rocklab.seismic.maps_summary import maps_summary
 from rocklab.seismic.paper_comparison import record_comparison
-from rocklab.seismic.summary import maps_summary
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
@@ -78,7 +78,7 @@ def results_dir() -> Path:
 
 def test_committed_numbers_are_those_of_the_current_results():
     """Each number within the tolerance its stage declares for it (a map index:
-    the cells that flip between machines, rocklab.seismic.summary), so that
+    the cells that flip between machines, rocklab.seismic.maps_summary), so that
     `make run` then `make test` passes on any machine."""
     results = results_dir()
     if not results.is_dir():

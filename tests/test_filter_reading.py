@@ -14,8 +14,8 @@ import pytest
 from rocklab.diagnosis.evidence import LOSSES, filter_reading
 from rocklab.lab.motion import extract_motion
 from rocklab.physics import impact as I
-from rocklab.simulation.model import RockingModel
 from rocklab.simulation.reference import simulate_free
+from rocklab.simulation.rocking_model import RockingModel
 
 KEYWORD = {"zeta": "flight_damping", "mu": "hinge_friction", "kappa": "flight_drag"}
 WALLS = {"stocky": (0.492, 0.123), "paper": (1.1, 0.12)}

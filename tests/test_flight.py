@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from rocklab.physics.flight import apex, quarter_period, quarter_period_linear, transit_time
-from rocklab.simulation.model import RockingModel
 from rocklab.simulation.reference import simulate_free
+from rocklab.simulation.rocking_model import RockingModel
 
 ALPHA, P = 0.15, 3.2
 

@@ -29,7 +29,7 @@ from rocklab.lab.reduction import qc_table, reduce_tests
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 
-pytest.importorskip("rocklab.simulation.model")
+pytest.importorskip("rocklab.simulation.rocking_model")
 from rocklab.lab import virtual_lab  # noqa: E402
 
 GOOD = ["V0001", "V0002", "V0003"]

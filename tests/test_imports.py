@@ -88,6 +88,58 @@ def test_no_module_of_rocklab_imports_itself_through_others():
     assert cycles(import_graph(Path(rocklab.__file__).parent)) == []
 
 
+def package_graph(graph, root):
+    """Package -> the packages it imports: each subpackage of ``root`` (all its modules, at any
+    depth) and each top-level module is one node; imports within a node are left out."""
+
+    def node(module):
+        return ".".join(module.split(".")[:2])
+
+    out = {}
+    for module, targets in graph.items():
+        out.setdefault(node(module), set()).update(node(t) for t in targets)
+    out.pop(root, None)
+    return {k: v - {k, root} for k, v in out.items()}
+
+
+def test_no_package_of_rocklab_imports_itself_through_others():
+    """Issue 40, item 4: module-level and function-level imports alike; the statistics the
+    diagnosis and the dissipation share are rocklab.inference, below both."""
+    graph = package_graph(import_graph(Path(rocklab.__file__).parent), "rocklab")
+    assert cycles(graph) == []
+    assert "rocklab.dissipation" not in graph["rocklab.diagnosis"]
+    assert not {"rocklab.diagnosis", "rocklab.dissipation"} & graph["rocklab.inference"]
+
+
+def test_the_package_walker_sees_a_cycle_through_a_function_level_import(tmp_path):
+    pkg = tmp_path / "pkg"
+    for sub in ("one", "two"):
+        (pkg / sub / "deep").mkdir(parents=True)
+        (pkg / sub / "__init__.py").write_text("")
+        (pkg / sub / "deep" / "__init__.py").write_text("")
+    (pkg / "__init__.py").write_text("")
+    (pkg / "one" / "deep" / "a.py").write_text("from pkg.two import b\n")
+    (pkg / "two" / "b.py").write_text("def f():\n    from pkg.one.deep import c\n")
+    (pkg / "one" / "deep" / "c.py").write_text("")
+    assert cycles(import_graph(pkg)) == []  # no cycle between modules
+    assert cycles(package_graph(import_graph(pkg), "pkg")) == [["pkg.one", "pkg.two"]]
+
+
+def test_no_two_library_modules_share_a_name():
+    """Issue 40, item 5: a module's file name is its own, and no package's; only ``__init__.py`` and
+    the ``plots/`` modules, each named after the topic it draws, repeat one."""
+    root = Path(rocklab.__file__).parent
+    names = {}
+    for path in root.rglob("*.py"):
+        if path.name != "__init__.py" and path.parent.name != "plots":
+            names.setdefault(path.stem, []).append(str(path.relative_to(root)))
+    for path in root.rglob("__init__.py"):
+        if path.parent != root:
+            names.setdefault(path.parent.name, []).append(str(path.parent.relative_to(root)) + "/")
+    assert {k: v for k, v in names.items() if len(v) > 1} == {}
+    assert {p.stem for p in (root / "plots").glob("*.py") if p.name != "__init__.py"} <= set(names)
+
+
 def test_the_walker_sees_an_import_inside_a_function(tmp_path):
     pkg = tmp_path / "pkg"
     (pkg / "sub").mkdir(parents=True)

@@ -31,7 +31,7 @@ import xarray as xr
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 
-pytest.importorskip("rocklab.simulation.model")
+pytest.importorskip("rocklab.simulation.rocking_model")
 pytestmark = pytest.mark.skipif(not SNAKEMAKE.exists(), reason="snakemake not installed beside this interpreter")
 from rocklab.lab import virtual_lab  # noqa: E402
 from rocklab.lab.campaign import open_campaign  # noqa: E402

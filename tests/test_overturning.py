@@ -24,7 +24,7 @@ from rocklab.seismic.reductions import record_reductions
 from rocklab.seismic.reference_check import check_against_reference
 from rocklab.seismic.walls import MODELS, named_model
 from rocklab.simulation.batch import overturning_batch
-from rocklab.simulation.model import RockingModel
+from rocklab.simulation.rocking_model import RockingModel
 
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
@@ -454,7 +454,7 @@ def test_calibrated_table_ranks_the_findings(tmp_path):
     the docs' numbers and table read it."""
     from rocklab.report import tables
     from rocklab.seismic.calibrated import TABLE_COLUMNS, calibrated_table
-    from rocklab.seismic.summary import calibrated_summary
+    from rocklab.seismic.maps_summary import calibrated_summary
 
     n_o = {
         "2s-0.95": (0.4, 0.2),

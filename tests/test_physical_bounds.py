@@ -14,11 +14,14 @@ import pytest
 
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.extended import model_params
-from rocklab.diagnosis.model import impact_speeds
+from rocklab.diagnosis.wall_model import impact_speeds, simulator
 from rocklab.physics import impact as I
 from rocklab.physics import law, restitution
 from rocklab.physics.flight import apex_after
 from rocklab.physics.wall import overturning_velocity
+from rocklab.simulation import engine
+from rocklab.simulation.batch import free_batch
+from rocklab.simulation.rocking_model import RockingModel
 
 ALPHA, P = 0.12, 3.4
 
@@ -61,6 +64,69 @@ def test_a_scale_beyond_one_over_e_is_bounded_alike_in_every_form():
         e0, a, b = scaled.flat(ALPHA)[0]
         np.testing.assert_allclose(e, e0 * I.amplitude_factor(e0, a, b, v, ALPHA, P))
         np.testing.assert_allclose(e, min(c * e_an, 1.0))
+
+
+def _engine_against_reference(model, speeds):
+    """Largest |e_engine - e_reference| over the impact rows of ``model`` at landings ``speeds`` [thetadot_r]."""
+    rows, prm = model.numba_law(), model.numba_params()
+    laws = ((model.base_law, 1), (model.base_law, -1), (model.transverse_law, -1))
+    worst = 0.0
+    for row, (impact_law, side) in enumerate(laws):
+        v = speeds * model.thetadot_r
+        ref = np.broadcast_to(impact_law.coefficient(v, side, model.alpha, model.p), v.shape)
+        eng = np.array([engine._coefficient(rows, row, x, prm) for x in v])
+        assert np.all(np.abs(eng) <= 1.0), (row, eng)
+        worst = max(worst, float(np.max(np.abs(eng - ref))))
+    return worst
+
+
+@pytest.mark.parametrize("boundary", ["two-sided", "one-sided"])
+def test_the_engine_gives_every_cause_at_its_bounds_the_reference_s_e(boundary):
+    """Issue 40, item 7: every cause the engine can simulate, at every corner of its bounds (a
+    restitution scale up to 2 included), has in the numba engine the e of the reference's law at
+    every landing speed, within 1e-12: the engine never lets a scale past 1/|e| create energy."""
+    tests = _tests(boundary)[:1]
+    speeds = np.linspace(0.0, 2.0, 41)
+    checked = 0
+    for cause in catalogue.for_boundary(boundary, families=True):
+        for values in _corners(cause):
+            try:
+                model = simulator(model_params(tests, (cause.name,), values).row(0))
+                model.numba_params(), model.numba_law()
+            except NotImplementedError:
+                continue  # a law the engine has no form of is refused, not mis-simulated
+            assert _engine_against_reference(model, speeds) < 1e-12, (cause.name, values)
+            checked += 1
+    assert checked >= 15
+
+
+@pytest.mark.parametrize(
+    "law",
+    [
+        I.Scaled(I.HousnerTwoSided(), 1.2),
+        I.AmplitudeLaw(I.Scaled(I.HousnerTwoSided(), 1.2), 1.0, 0.1),
+        I.Sided(I.Scaled(I.HousnerTwoSided(), 1.2), I.Scaled(I.HousnerTwoSided(), 0.8)),
+        I.Constant(1.3),
+        I.Sticking(I.Scaled(I.OneSided(), 2.0), 0.1),
+    ],
+    ids=["scaled", "amplitude-of-scaled", "sided", "constant", "sticking"],
+)
+def test_a_law_past_one_over_e_is_bounded_in_the_engine_as_in_the_reference(law):
+    """The review's case: 1.2 e_an,2s at alpha 0.2 is e = 1 in the reference, not 1.129; a free
+    rocking history then keeps its speed through every impact, never gains it."""
+    boundary = "one-sided" if isinstance(law, I.Sticking) else "two-sided"
+    model = RockingModel(alpha=0.2, p=P, form="linear", boundary=boundary, impact=law)
+    assert _engine_against_reference(model, np.linspace(0.0, 2.0, 41)) < 1e-12
+    ds = free_batch(model, 0.5 * model.alpha, t_end=5.0, max_impacts=4)
+    ratio = np.abs(ds.thetadot_after[0] / ds.thetadot_before[0]).values
+    assert np.all(ratio[np.isfinite(ratio)] <= 1.0 + 1e-12)
+
+
+def test_a_per_history_e_scale_is_bounded_as_a_scaled_law():
+    model = RockingModel(alpha=0.2, p=P, form="linear")
+    ds = free_batch(model, 0.5 * model.alpha, e_scale=[1.2, 0.9], t_end=5.0, max_impacts=2)
+    ratio = (ds.thetadot_after / ds.thetadot_before).values[:, 0]
+    np.testing.assert_allclose(ratio, [1.0, 0.9 * restitution.two_sided(0.2)], rtol=1e-12)
 
 
 def test_eq_17_is_continued_past_the_fitted_speeds_to_a_stop_never_a_pass_through():

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from rocklab.physics import flight, impact, restitution, wall
-from rocklab.simulation.model import RockingModel
 from rocklab.simulation.reference import simulate_free, simulate_ground
+from rocklab.simulation.rocking_model import RockingModel
 
 
 def _energy_drift(model, h, mask):

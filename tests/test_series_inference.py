@@ -19,8 +19,8 @@ from rocklab.diagnosis.estimation.resampling import parameter_intervals, sandwic
 from rocklab.diagnosis.estimation.selection import _improves
 from rocklab.diagnosis.evidence import in_series_order
 from rocklab.diagnosis.parameters import Param
-from rocklab.diagnosis.problem import WallProblem
 from rocklab.diagnosis.series import MIN_TESTS_TO_NAME
+from rocklab.diagnosis.series_problem import WallProblem
 from rocklab.physics import impact as I
 
 

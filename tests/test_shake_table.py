@@ -20,7 +20,7 @@ from rocklab.io import validate_table
 from rocklab.physics import restitution
 from rocklab.physics.wall import G
 from rocklab.report import pages, tables
-from rocklab.shake_table import block, calibration, evaluation, records
+from rocklab.shake_table import asu_data, block, calibration, evaluation
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data" / "shake-table"
@@ -38,12 +38,12 @@ needs_data = pytest.mark.skipif(
 
 @needs_data
 def test_reader_on_the_real_files():
-    tests = records.read_tests(DATA)
+    tests = asu_data.read_tests(DATA)
     assert len(tests) == tests.test.nunique() > 0
     with_file = tests[tests.motion_file != ""]
     # the most strongly shaken record: its sign check is decisive
     row = with_file.loc[with_file.peak_table_acc_g.idxmax()]
-    st = records.read_motion(DATA, row)
+    st = asu_data.read_motion(DATA, row)
     acc, dsp = st.select(channel="ACC")[0], st.select(channel="DSP")[0]
     assert acc.stats.units == "m/s2" and dsp.stats.units == "m" and acc.stats.delta == pytest.approx(0.005)
     assert acc.stats.npts == row.n_samples_200hz
@@ -55,7 +55,7 @@ def test_reader_on_the_real_files():
     raw = pd.read_csv(DATA / row.motion_file)
     np.testing.assert_allclose(acc.data, -(raw.table_acc_g - acc.stats.offset_g) * G, rtol=1e-12)
     # the velocity from the displacement agrees with the source's PGV (PGV/PGA x PGA)
-    m = records.motion_measures(st)
+    m = asu_data.motion_measures(st)
     if not row.scaled_pga_is_nominal:
         assert m["pgv_m_s"] == pytest.approx(row.pgv_over_pga_s * row.scaled_pga_g * G, rel=0.25)
         assert m["pga_g"] == pytest.approx(row.pga_bp_0p1_25hz_g, rel=0.05)
@@ -66,18 +66,18 @@ def test_geometry_without_what_the_block_reads_is_refused(tmp_path):
 
     (tmp_path / "motions").mkdir()
     (tmp_path / "tests.csv").write_text("test\n")
-    geo = {s: json.loads(json.dumps(SYNTHETIC_GEOMETRY["S"])) for s in records.SPECIMENS}
+    geo = {s: json.loads(json.dumps(SYNTHETIC_GEOMETRY["S"])) for s in asu_data.SPECIMENS}
     (tmp_path / "geometry.json").write_text(json.dumps(geo))
-    assert records.read_geometry(tmp_path)["SP1"]["mass_kg"] == 300.0
+    assert asu_data.read_geometry(tmp_path)["SP1"]["mass_kg"] == 300.0
     del geo["SP2"]["footprint"]["rocking_2d"]["minus_x_edge"]["I_o_kgm2"]
     (tmp_path / "geometry.json").write_text(json.dumps(geo))
     with pytest.raises(ValueError, match="geometry.json: SP2 lacks"):
-        records.read_geometry(tmp_path)
+        asu_data.read_geometry(tmp_path)
 
 
 def test_a_missing_folder_names_the_config_key(tmp_path):
     with pytest.raises(FileNotFoundError, match="shake_table_dir"):
-        records.check_dir(tmp_path / "nowhere")
+        asu_data.check_dir(tmp_path / "nowhere")
 
 
 # --- the sign check -------------------------------------------------------------------------
@@ -101,7 +101,7 @@ def _motion_folder(tmp_path, acc_sign):
 def test_sign_check_accepts_the_convention_and_refuses_a_flipped_accelerometer(tmp_path):
     (tmp_path / "a").mkdir()
     row = _motion_folder(tmp_path / "a", -1.0)
-    st = records.read_motion(tmp_path / "a", row)
+    st = asu_data.read_motion(tmp_path / "a", row)
     acc, dsp = st.select(channel="ACC")[0], st.select(channel="DSP")[0]
     assert acc.stats.sign_gain == pytest.approx(-1.0, abs=0.05)
     # after the reader, acceleration and displacement share +x: a = d''
@@ -111,23 +111,23 @@ def test_sign_check_accepts_the_convention_and_refuses_a_flipped_accelerometer(t
     (tmp_path / "b").mkdir()
     row = _motion_folder(tmp_path / "b", +1.0)
     with pytest.raises(ValueError, match="Test001.csv.gz.*sign convention"):
-        records.read_motion(tmp_path / "b", row)
+        asu_data.read_motion(tmp_path / "b", row)
 
 
 def test_a_weak_record_is_not_refused_on_a_noisy_sign():
-    records.check_sign(+0.4, 0.1)  # below SIGN_CHECK_MIN_CORR: no verdict
+    asu_data.check_sign(+0.4, 0.1)  # below SIGN_CHECK_MIN_CORR: no verdict
     with pytest.raises(ValueError):
-        records.check_sign(+0.9, 0.9)
+        asu_data.check_sign(+0.9, 0.9)
 
 
 # --- folds ---------------------------------------------------------------------------------
 
 
 def test_record_of_joins_the_components_of_a_record():
-    assert records.record_of("RSN137_TABAS_BAJ-L1.AT2") == records.record_of("RSN137_TABAS_BAJ-T1.AT2") == "RSN137"
-    assert records.record_of("RSN1114_KOBE") != records.record_of("RSN1119_KOBE")
-    assert records.record_of("rsn23_SanFracisco") == "RSN23"
-    assert records.record_of("Nepal") == "Nepal"  # no RSN: the name is the record
+    assert asu_data.record_of("RSN137_TABAS_BAJ-L1.AT2") == asu_data.record_of("RSN137_TABAS_BAJ-T1.AT2") == "RSN137"
+    assert asu_data.record_of("RSN1114_KOBE") != asu_data.record_of("RSN1119_KOBE")
+    assert asu_data.record_of("rsn23_SanFracisco") == "RSN23"
+    assert asu_data.record_of("Nepal") == "Nepal"  # no RSN: the name is the record
 
 
 def test_folds_never_share_a_record_and_are_balanced():
@@ -146,17 +146,17 @@ def test_folds_keep_both_components_of_a_record_together():
     names = ["RSN40_BORREGO_A-SON033.AT2", "RSN40_BORREGO_A-SON303.AT2", "RSN43_LYTLECREEK", "RSN45_LYTLECREEK"]
     names += [f"RSN{1000 + i}_X" for i in range(8)]
     gm = np.repeat(names, 7)
-    fold = calibration.folds_by_group([records.record_of(g) for g in gm], 4)
+    fold = calibration.folds_by_group([asu_data.record_of(g) for g in gm], 4)
     assert np.unique(fold[np.isin(gm, names[:2])]).size == 1
     # by name alone the two components could land apart: the records are what holds them
-    assert len({records.record_of(n) for n in names}) == len(names) - 1
+    assert len({asu_data.record_of(n) for n in names}) == len(names) - 1
 
 
 @needs_data
 def test_folds_of_the_real_tests_never_split_a_record():
-    tests = records.read_tests(DATA)
+    tests = asu_data.read_tests(DATA)
     tests = tests[tests.motion_file != ""]
-    rec = tests.ground_motion.map(records.record_of).to_numpy(str)
+    rec = tests.ground_motion.map(asu_data.record_of).to_numpy(str)
     fold = calibration.folds_by_group(rec, 5)
     df = pd.DataFrame({"r": rec, "f": fold, "gm": tests.ground_motion})
     assert df.groupby("r").f.nunique().max() == 1

@@ -24,7 +24,7 @@ hypothesis = pytest.importorskip("hypothesis")
 from hypothesis import example, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
-pytest.importorskip("rocklab.simulation.model")
+pytest.importorskip("rocklab.simulation.rocking_model")
 from rocklab.lab.virtual_lab import DEFAULT_SPECIMENS, VirtualTest, write_campaign  # noqa: E402
 from rocklab.lab.virtual_record import Fault  # noqa: E402
 

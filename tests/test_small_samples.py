@@ -3,7 +3,7 @@
 A campaign of two valid tests used to print a Table 3 cell ``0.949 [nan,
 nan]`` and a diagnosis ``alpha_r_over_alpha = 0.9088 [0.9088, 0.9088]``
 naming causes from two tests; below
-:data:`rocklab.dissipation.statistics.MIN_BOOTSTRAP` units a table's value
+:data:`rocklab.inference.intervals.MIN_BOOTSTRAP` units a table's value
 comes without an interval, marked, and a series of two to four tests names a
 cause on the t interval of its few degrees of freedom (issue 24), a series of
 one test none.
@@ -21,15 +21,8 @@ import pytest
 from test_diagnosis import SCENARIOS, virtual_series
 
 from rocklab import diagnosis as D
-from rocklab.dissipation.statistics import (
-    MIN_BOOTSTRAP,
-    TABLE3_WINDOWS,
-    bootstrap_ci,
-    boundary_summary,
-    series_stats,
-    table3,
-    table3_markdown,
-)
+from rocklab.dissipation.statistics import TABLE3_WINDOWS, boundary_summary, series_stats, table3, table3_markdown
+from rocklab.inference.intervals import MIN_BOOTSTRAP, bootstrap_ci
 from rocklab.lab.campaign import open_campaign
 
 

@@ -8,23 +8,24 @@ import pytest
 from scipy import stats
 
 from rocklab.dissipation.statistics import (
-    bootstrap_ci,
     boundary_summary,
-    clustered_mean,
-    expanded,
     factor_effect,
     flag_outlying_series,
-    holm,
-    mean_over_units,
-    percentile_interval,
     series_stats,
     series_table,
-    simultaneous_factor,
-    small_sample_expansion,
     symmetry_test,
     table3,
     table3_markdown,
 )
+from rocklab.inference.intervals import (
+    bootstrap_ci,
+    clustered_mean,
+    expanded,
+    mean_over_units,
+    percentile_interval,
+    small_sample_expansion,
+)
+from rocklab.inference.multiplicity import holm, simultaneous_factor
 
 
 def campaign(seed=0, odd_series="5a-2s", shift=-0.08):

@@ -14,8 +14,8 @@ from rocklab.lab import virtual_lab as vl
 from rocklab.lab import virtual_record as vr
 from rocklab.physics import wall
 
-HAVE_SIM = importlib.util.find_spec("rocklab.simulation.model") is not None
-needs_sim = pytest.mark.skipif(not HAVE_SIM, reason="rocklab.simulation.model not available")
+HAVE_SIM = importlib.util.find_spec("rocklab.simulation.rocking_model") is not None
+needs_sim = pytest.mark.skipif(not HAVE_SIM, reason="rocklab.simulation.rocking_model not available")
 
 SPEC = vl.DEFAULT_SPECIMENS.set_index("specimen").loc["1a"]
 LAYOUT = vr.usual_layout("S-1a-2s", SPEC.length_mm, SPEC.height_mm, SPEC.thickness_mm, False)

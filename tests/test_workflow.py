@@ -20,7 +20,7 @@ from rocklab.lab.reduction import qc_table, reduce_test, reduce_tests
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 
-rocking = pytest.importorskip("rocklab.simulation.model")
+rocking = pytest.importorskip("rocklab.simulation.rocking_model")
 from rocklab.lab import virtual_lab  # noqa: E402
 
 

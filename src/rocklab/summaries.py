@@ -2,9 +2,9 @@
 
 Each stage of the workflow writes, beside its tables, the numbers the docs
 quote of them (``results/summaries/<stage>.json``): a nested dictionary made
-by the stage's own summary function (``rocklab.lab.summary``,
-``rocklab.dissipation.summary``, ``rocklab.diagnosis.summary``,
-``rocklab.seismic.summary``, ``rocklab.shake_table.summary``,
+by the stage's own summary function (``rocklab.lab.qc_summary``,
+``rocklab.dissipation.dissipation_summary``, ``rocklab.diagnosis.diagnosis_summary``,
+``rocklab.seismic.maps_summary``, ``rocklab.shake_table.shake_table_summary``,
 ``rocklab.benchmarks``). A quantity that the stage does not hold is ``None``
 (the pages say "not measured").
 

@@ -14,7 +14,7 @@ from rocklab.lab.campaign import UNREADABLE, open_campaign
 from rocklab.lab.hierarchy import thickness_of_walls, walls_of_series, walls_of_specimens
 from rocklab.seismic import calibrated
 from rocklab.seismic.accelerograms import accelerogram_dir, read_manifest
-from rocklab.shake_table.records import check_dir
+from rocklab.shake_table.asu_data import check_dir
 
 # config is validated by the Snakefile, every default filled in from
 # workflow/schemas/config.schema.yaml: the rules read it without defaults.

@@ -3,7 +3,7 @@
 # The table motions are read once; each specimen's block is simulated once per
 # test at every node of the causes' grid (the job that takes time); every fit,
 # fold and resample reads that grid.
-from rocklab.shake_table.records import SPECIMENS
+from rocklab.shake_table.asu_data import SPECIMENS
 
 ST = config["shake_table"]
 ST_DIR = config["shake_table_dir"]

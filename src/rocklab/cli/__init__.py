@@ -1,7 +1,7 @@
 """Command-line entry point ``rocklab`` (argparse with subcommands).
 
 ``rocklab simulate`` runs one wall, free or under a record, with the
-event-driven reference of :mod:`rocklab.simulation.model` and writes its
+event-driven reference of :mod:`rocklab.simulation.rocking_model` and writes its
 history to netCDF.  ``rocklab map`` computes overturning maps of Sect. 5
 (:func:`rocklab.seismic.maps.overturning_map`) for a shipped or a
 user's record, writes them to netCDF and a figure and prints their indices.

@@ -27,7 +27,7 @@ from rocklab.cli.arguments import (
     write_dataset,
 )
 from rocklab.physics import impact, wall
-from rocklab.simulation.model import OVERTURN, RockingModel
+from rocklab.simulation.rocking_model import OVERTURN, RockingModel
 
 LAWS = {"housner": impact.HousnerTwoSided, "one-sided": impact.OneSided, "zero": impact.Zero}
 
@@ -47,8 +47,11 @@ def _impact_law(args, alpha):
         a, b = check_eq17(args.amplitude_law, "--amplitude-law")
         law = impact.AmplitudeLaw(law or impact.OneSided(), a, b)
     elif law is not None:
-        # Eq. 17's bracket is clipped to |e| <= 1; a constant law is not
-        e0 = np.abs(law.flat(alpha)[:, 0]).max()
+        # Eq. 17's bracket is a law of the speed, clipped where it reaches
+        # |e| = 1; a scale or a constant past it would be clipped everywhere
+        # (rocklab.physics.impact.bounded_factor): asked for, it is a mistake
+        base = law.law if isinstance(law, impact.Scaled) else law
+        e0 = np.abs(base.flat(alpha)[:, 0]).max() * args.e_scale
         if e0 > 1.0:
             raise UsageError(
                 "--e-scale" if args.e_scale != 1.0 else "--impact",
@@ -58,7 +61,7 @@ def _impact_law(args, alpha):
 
 
 def simulate_model(args):
-    """The :class:`~rocklab.simulation.model.RockingModel` of ``rocklab simulate``'s options."""
+    """The :class:`~rocklab.simulation.rocking_model.RockingModel` of ``rocklab simulate``'s options."""
     given = check_wall(args, "--p")
     if given == "hb":
         alpha = float(wall.slenderness_angle(args.height, args.thickness))

@@ -26,6 +26,7 @@ module             holds
 """
 
 from rocklab.diagnosis.catalogue import CAUSES, signatures
+from rocklab.diagnosis.diagnosis_report import diagnosis_markdown, write_diagnosis
 from rocklab.diagnosis.errors import engineering_rows, what_is_wrong
 from rocklab.diagnosis.estimation import Problem, finite_mean, parameter_intervals, select_effects
 from rocklab.diagnosis.evidence import (
@@ -37,9 +38,7 @@ from rocklab.diagnosis.evidence import (
     stored_records,
 )
 from rocklab.diagnosis.extended import engineering_errors, model_params, rocking_model, simulate_measured
-from rocklab.diagnosis.model import free_run
 from rocklab.diagnosis.pooling import diagnose_boundary, diagnose_campaign, with_boundaries
-from rocklab.diagnosis.report import diagnosis_markdown, write_diagnosis
 from rocklab.diagnosis.result import (
     BoundaryDiagnosis,
     CampaignDiagnosis,
@@ -50,6 +49,7 @@ from rocklab.diagnosis.result import (
     jsonable,
 )
 from rocklab.diagnosis.series import diagnose_records, diagnose_series
+from rocklab.diagnosis.wall_model import free_run
 
 __all__ = [
     "BoundaryDiagnosis",

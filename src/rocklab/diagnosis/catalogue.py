@@ -31,7 +31,7 @@ from rocklab.diagnosis.causes import (
     stop_threshold,
 )
 from rocklab.diagnosis.evidence import observe
-from rocklab.diagnosis.model import log_columns
+from rocklab.diagnosis.wall_model import log_columns
 
 CAUSES = [
     restitution_scale.CAUSE,

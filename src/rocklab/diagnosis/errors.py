@@ -1,6 +1,6 @@
 """What a model gets wrong, in measures an engineer reads: impacts, duration, decay, periods, lag.
 
-The free run of a model (:func:`rocklab.diagnosis.model.free_run`) from
+The free run of a model (:func:`rocklab.diagnosis.wall_model.free_run`) from
 each test's measured release against the measured motion
 (:func:`engineering_rows`), summarised over a series
 (:func:`summarise_rows`, :func:`rocklab.diagnosis.extended.engineering_errors`
@@ -15,8 +15,8 @@ import numpy as np
 
 from rocklab.diagnosis.estimation import finite_mean
 from rocklab.diagnosis.evidence import MeasuredTest, TestStack, log_ratio, residuals
-from rocklab.diagnosis.model import ModelParams, free_run, simulate_test
-from rocklab.simulation.model import RockingModel
+from rocklab.diagnosis.wall_model import ModelParams, free_run, simulate_test
+from rocklab.simulation.rocking_model import RockingModel
 
 
 def engineering_rows(tests, mp: ModelParams, n_max=600):

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from rocklab._imports import lazy_module
-from rocklab.diagnosis.model import ModelParams, impact_speeds, log_columns, per_test, release
+from rocklab.diagnosis.wall_model import ModelParams, impact_speeds, log_columns, per_test, release
 from rocklab.io import valid_tests
 from rocklab.lab import motion as chain
 from rocklab.lab.campaign import order_in_series
@@ -443,7 +443,7 @@ def log_ratio(model, meas, floor=0.0):
 def residuals(S: TestStack, mp: ModelParams, cache=None):
     """One-step residuals of every group (module docstring), log(model / measured).
 
-    ``mp`` is a :class:`rocklab.diagnosis.model.ModelParams` of the tests of ``S``.
+    ``mp`` is a :class:`rocklab.diagnosis.wall_model.ModelParams` of the tests of ``S``.
 
     ``cache`` (a dict) keeps the flight times between calls with the same
     hinge angles (a fit of the restitution moves nothing else) and how the

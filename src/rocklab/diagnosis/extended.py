@@ -3,7 +3,7 @@
 A model of the diagnosis is named by its causes (``ext``, names of
 :mod:`rocklab.diagnosis.catalogue`) and their parameter ``values``; here
 the names become the causes' laws (:func:`rocklab.diagnosis.catalogue.laws`)
-acting on the base model of :mod:`rocklab.diagnosis.model`: its per-test
+acting on the base model of :mod:`rocklab.diagnosis.wall_model`: its per-test
 arrays (:func:`model_params`), the exact simulator of one wall
 (:func:`rocking_model`), what the model's free run gets wrong
 (:func:`engineering_errors`) and the tests it would have given, measured
@@ -21,16 +21,16 @@ from rocklab.diagnosis.causes.restitution_drift import column_of
 from rocklab.diagnosis.errors import engineering_rows, history_rms, summarise_rows
 from rocklab.diagnosis.estimation import finite_mean
 from rocklab.diagnosis.evidence import measured_test
-from rocklab.diagnosis.model import ModelParams, log_columns, model_of, simulate_test, simulator
+from rocklab.diagnosis.wall_model import ModelParams, log_columns, model_of, simulate_test, simulator
 from rocklab.lab.motion import noise_level
-from rocklab.simulation.model import RockingModel
+from rocklab.simulation.rocking_model import RockingModel
 
 
 def model_params(tests, ext=(), values=None, base=None) -> ModelParams:
     """ModelParams of the base model extended by the causes ``ext`` with parameter ``values``.
 
     The causes act in catalogue order; the values of causes outside ``ext``
-    are not used.  ``base``: :func:`rocklab.diagnosis.model.base_params` of
+    are not used.  ``base``: :func:`rocklab.diagnosis.wall_model.base_params` of
     ``tests`` already made (the causes replace its arrays, never change them).
     """
     # a drift along a column of the test log that these tests (the maps' wall) lack still acts
@@ -39,7 +39,7 @@ def model_params(tests, ext=(), values=None, base=None) -> ModelParams:
 
 
 def rocking_model(test, ext=(), values=None, base="analytic") -> RockingModel:
-    """The exact simulator of a diagnosis model, for one test (:func:`rocklab.diagnosis.model.simulator`).
+    """The exact simulator of a diagnosis model, for one test (:func:`rocklab.diagnosis.wall_model.simulator`).
 
     ``base``: ``"analytic"`` (Eq. 2 / Eq. 14), ``"two-sided-e"`` (e_an,2s used
     for a one-sided wall, Hogan 1992) or ``"zero"`` (e = 0, Liberatore & Spera
@@ -50,7 +50,7 @@ def rocking_model(test, ext=(), values=None, base="analytic") -> RockingModel:
 
 def simulate_measured(test, ext=(), values=None, base="analytic", t_end=None, fs=None):
     """Free run of a diagnosis model (exact simulator) from a measured test's release, on its clock
-    (:func:`rocklab.diagnosis.model.simulate_test`)."""
+    (:func:`rocklab.diagnosis.wall_model.simulate_test`)."""
     return simulate_test(test, rocking_model(test, ext, values, base), t_end, fs)
 
 
@@ -76,7 +76,7 @@ def simulated_tests(tests, ext=(), values=None, seed=0):
     ValueError
         For a test without its rotation record.
     NotImplementedError
-        For a law the exact simulator lacks (:func:`rocklab.diagnosis.model.simulator`).
+        For a law the exact simulator lacks (:func:`rocklab.diagnosis.wall_model.simulator`).
     """
     rng = np.random.default_rng(seed)
     out = []

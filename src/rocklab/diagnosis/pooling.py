@@ -21,7 +21,7 @@ from rocklab.diagnosis.errors import what_is_wrong
 from rocklab.diagnosis.estimation.systematic import widened
 from rocklab.diagnosis.result import CampaignDiagnosis
 from rocklab.diagnosis.series import MIN_TESTS_TO_NAME, base_name, diagnose_records
-from rocklab.dissipation.statistics import mean_over_units, t_interval
+from rocklab.inference.intervals import mean_over_units, t_interval
 from rocklab.lab.hierarchy import plural
 
 log = logging.getLogger(__name__)

@@ -3,13 +3,13 @@
 :func:`diagnose_series` compares the base model with the tests of one
 series (:mod:`rocklab.diagnosis.errors`), selects the causes the data
 carry (:func:`rocklab.diagnosis.estimation.selection.select_effects` on a
-:class:`rocklab.diagnosis.problem.WallProblem`), runs the causes estimated
+:class:`rocklab.diagnosis.series_problem.WallProblem`), runs the causes estimated
 after selection and states the gain; :mod:`rocklab.diagnosis.pooling` sums
 the series of a boundary condition up.  Method: docs/diagnosis-method.md.
 
 Small samples: a cause is named only where the 95 % interval of its
 parameter over the tests clears its null value: a bootstrap over tests, or
-from fewer than :data:`rocklab.dissipation.statistics.MIN_BOOTSTRAP` tests
+from fewer than :data:`rocklab.inference.intervals.MIN_BOOTSTRAP` tests
 the cluster-robust t interval on their few degrees of freedom
 (:func:`rocklab.diagnosis.estimation.resampling.parameter_intervals`), wide
 as three tests make it.  A series of one test is compared with the base
@@ -33,7 +33,7 @@ from rocklab.diagnosis.estimation.selection import supported
 from rocklab.diagnosis.estimation.systematic import standard_error, verdict_intervals, widened
 from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_test, observe
 from rocklab.diagnosis.extended import engineering_errors, model_params, simulated_tests
-from rocklab.diagnosis.problem import WallProblem
+from rocklab.diagnosis.series_problem import WallProblem
 
 log = logging.getLogger(__name__)
 

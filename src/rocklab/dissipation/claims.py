@@ -14,7 +14,7 @@ paper's calibrated restitution (0.95 e_an,2s two-sided, 1.05 e_an,1s
 one-sided, :mod:`rocklab.physics.restitution`), released from rest at
 :data:`REFERENCE_RELEASE` alpha, the instability displacement the paper's
 two-sided walls reach on average (Sect. 3: 91 % of alpha), through the exact
-simulator (:func:`rocklab.diagnosis.model.simulator`,
+simulator (:func:`rocklab.diagnosis.wall_model.simulator`,
 :func:`rocklab.simulation.reference.simulate_free`).  The tolerance
 (:data:`DURATION_TOLERANCE`, 5 %) is the change of duration an assessment
 would act on, and of the order of the scatter of the durations of one
@@ -213,13 +213,13 @@ def reference_wall(boundary, cause=None, values=None):
     The maps' wall (:mod:`rocklab.seismic.walls`) with the paper's calibrated
     restitution (:data:`REFERENCE_SCALE`; the restitution scale itself when
     ``cause`` is it), as the diagnosis models a wall
-    (:func:`rocklab.diagnosis.model.model_of`, :func:`rocklab.diagnosis.model.simulator`).
+    (:func:`rocklab.diagnosis.wall_model.model_of`, :func:`rocklab.diagnosis.wall_model.simulator`).
 
     Returns
     -------
-    rocklab.simulation.model.RockingModel
+    rocklab.simulation.rocking_model.RockingModel
     """
-    from rocklab.diagnosis.model import model_of, simulator
+    from rocklab.diagnosis.wall_model import model_of, simulator
     from rocklab.seismic.calibrated import MapWall
     from rocklab.seismic.walls import ALPHA, R
 

@@ -42,7 +42,7 @@ observations:
   series') with a t interval on walls - 1 degrees of freedom;
 * a claim on a boundary condition's mean: the mean over tests (a series'
   value weighing its tests) with the walls as clusters, the estimate and
-  interval of Table 3 (:func:`rocklab.dissipation.statistics.clustered_mean`:
+  interval of Table 3 (:func:`rocklab.inference.intervals.clustered_mean`:
   CR2, t on Imbens-Kolesar degrees of freedom, walls - 1 for walls of equal
   tests and fewer for unequal ones), so that a statement on the mean is
   judged on the number the tables quote.
@@ -86,7 +86,8 @@ from scipy import stats
 
 from rocklab.dissipation.claims import PAPER_CLAIMS, claim_text, margin_of, verdict
 from rocklab.dissipation.regression import ols
-from rocklab.dissipation.statistics import clustered_mean, holm, mean_over_units, t_interval
+from rocklab.inference.intervals import clustered_mean, mean_over_units, t_interval
+from rocklab.inference.multiplicity import holm
 from rocklab.lab.campaign import order_in_series
 from rocklab.lab.hierarchy import COVARIATE_LEVEL, UNIT_COLUMN, parent, plural, too_few_units
 
@@ -437,7 +438,7 @@ def within_series_row(tests, boundary, response, covariate):
 def mean_row(frame, boundary, response, source, value):
     """The mean over tests (each series' value weighing its tests) with its cluster-robust t interval, the
     walls as clusters, and the p-value of mean = value: the estimate and interval of Table 3
-    (:func:`rocklab.dissipation.statistics.clustered_mean`, CR2 on Imbens-Kolesar df), one estimate of
+    (:func:`rocklab.inference.intervals.clustered_mean`, CR2 on Imbens-Kolesar df), one estimate of
     a statement on the mean wherever it is quoted."""
     n = frame.n_tests.to_numpy(int)
     m, se, df, k, reason = clustered_mean(np.repeat(frame.value.to_numpy(float), n), np.repeat(frame.wall, n), "wall")

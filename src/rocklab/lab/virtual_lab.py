@@ -200,8 +200,8 @@ def simulate_virtual_test(test: VirtualTest, specimen, layout, rng=None, t_end=4
         As :func:`record_from_motion`; truth also holds every parameter used.
     """
     from rocklab.physics.impact import HousnerTwoSided, calibrated
-    from rocklab.simulation.model import RockingModel
     from rocklab.simulation.reference import simulate_free
+    from rocklab.simulation.rocking_model import RockingModel
 
     rng = np.random.default_rng(rng)
     h, b = specimen["height_mm"] / 1e3, specimen["thickness_mm"] / 1e3

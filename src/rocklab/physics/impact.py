@@ -33,7 +33,7 @@ held at the value of the fastest impact fitted), with the factor clipped to
 to fast impacts never turns a rebound into a pass-through, it stops the
 wall: Eq. 17 of the one-sided walls reaches e = 0 past 1.5 thetadot_r) and
 |e| <= 1 (an impact never creates energy).  The diagnosis' one-step model
-(:func:`rocklab.diagnosis.model.impact_speeds`), the limestone blocks, the
+(:func:`rocklab.diagnosis.wall_model.impact_speeds`), the limestone blocks, the
 exact simulators and the calibrated maps read their laws through it.
 """
 
@@ -141,7 +141,7 @@ class OneSided(ImpactLaw):
 class Transverse(ImpactLaw):
     """Impact on the transverse walls, e_an,tr of Eqs. 12-13 (a rebound).
 
-    Used by the gap model of one-sided rocking (see :mod:`rocklab.simulation.model`).
+    Used by the gap model of one-sided rocking (see :mod:`rocklab.simulation.rocking_model`).
     """
 
     def __init__(self, mR2_over_Io=None):
@@ -179,8 +179,10 @@ class Scaled(ImpactLaw):
         return e * bounded_factor(e, self.c)
 
     def _triple(self, side, alpha):
+        # the flat form carries the bounded constant, so that Eq. 17's bracket
+        # on top clips against the e the impact really has
         e0, a, b = self.law._triple(side, alpha)
-        return (self.c * e0, a, b)
+        return (e0 * float(bounded_factor(e0, self.c)), a, b)
 
 
 class AmplitudeLaw(ImpactLaw):
@@ -235,7 +237,7 @@ class Sticking(ImpactLaw):
     landings whole, so the walls stop after fewer impacts than any
     coefficient of restitution predicts, a number that scatters from test to
     test (Fig. 18).  The numba engine reads the threshold from the fourth
-    column of :meth:`rocklab.simulation.model.RockingModel.numba_law`.
+    column of :meth:`rocklab.simulation.rocking_model.RockingModel.numba_law`.
     """
 
     def __init__(self, law: ImpactLaw, v_stick: float):

@@ -4,9 +4,9 @@ A cause of the diagnosis (:mod:`rocklab.diagnosis.causes`) declares its
 physics once, as a tuple of these laws (``Cause.laws(values)``); every
 consumer reads the laws rather than the cause's name:
 
-- the diagnosis' per-test wall model (:meth:`rocklab.diagnosis.model.ModelParams.under`),
-  from which the exact simulator's :class:`rocklab.simulation.model.RockingModel`
-  is derived (:func:`rocklab.diagnosis.model.simulator`) and with it the
+- the diagnosis' per-test wall model (:meth:`rocklab.diagnosis.wall_model.ModelParams.under`),
+  from which the exact simulator's :class:`rocklab.simulation.rocking_model.RockingModel`
+  is derived (:func:`rocklab.diagnosis.wall_model.simulator`) and with it the
   calibrated walls of the maps (:mod:`rocklab.seismic.calibrated`);
 - the shake-table block (:func:`rocklab.shake_table.block.block_model`: its extra loss, ``restitution_scale``);
 - the limestone block tables (:meth:`rocklab.diagnosis.block_tests.BlockProblem.model_e`).

@@ -80,6 +80,27 @@ def two_sided_asymmetric(b_leave, b_land, height, gyration_radius):
     return out if out.ndim else float(out)
 
 
+def energy_ratio_asymmetric(b_leave, b_land, height, gyration_radius):
+    """Kinetic energy kept by the impact of :func:`two_sided_asymmetric`, T^+ / T^- [-].
+
+    T^+ / T^- = (I_O,new / I_O,old) e^2 = (I_G + m h^2 - m b_1 b_2)^2 / (I_O,old I_O,new),
+    with I_O,old = I_G + m (h^2 + b_1^2) about the edge left: symmetric in
+    b_1 and b_2, so the two impacts of an asymmetric body keep the same
+    share of their energy though their velocity ratios e differ (a body
+    lands on its far edge with a smaller e, but turns about it with a
+    larger moment of inertia).  e^2 for b_1 = b_2 (Eq. 1).
+
+    Parameters
+    ----------
+    b_leave, b_land, height, gyration_radius : array_like
+        As :func:`two_sided_asymmetric` [m].
+    """
+    b1, b2 = np.asarray(b_leave, float), np.asarray(b_land, float)
+    k2h2 = np.asarray(gyration_radius, float) ** 2 + np.asarray(height, float) ** 2
+    out = (k2h2 - b1 * b2) ** 2 / ((k2h2 + b1**2) * (k2h2 + b2**2))
+    return out if out.ndim else float(out)
+
+
 def two_sided_from_slenderness(zeta):
     """Eq. 2 in terms of zeta = h/b: (2 zeta^2 - 1) / (2 (zeta^2 + 1))."""
     z2 = np.asarray(zeta, float) ** 2

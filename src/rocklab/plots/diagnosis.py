@@ -24,8 +24,8 @@ from rocklab.diagnosis.catalogue import by_name
 from rocklab.diagnosis.causes import instability_angle, restitution_drift, stop_threshold
 from rocklab.diagnosis.evidence import flight_time_alpha, in_series_order, observe
 from rocklab.diagnosis.extended import model_params
-from rocklab.diagnosis.model import impact_speeds
 from rocklab.diagnosis.result import CampaignDiagnosis
+from rocklab.diagnosis.wall_model import impact_speeds
 from rocklab.physics import restitution
 from rocklab.physics.flight import quarter_period
 from rocklab.physics.wall import overturning_velocity

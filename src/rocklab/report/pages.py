@@ -31,16 +31,16 @@ from jinja2 import ChainableUndefined, Environment, StrictUndefined
 
 from rocklab import summaries
 from rocklab.benchmarks import performance_summary
-from rocklab.diagnosis.summary import TOLERANCES as FIT_TOLERANCES
+from rocklab.diagnosis.diagnosis_summary import TOLERANCES as FIT_TOLERANCES
 from rocklab.disk import write_text
-from rocklab.dissipation.summary import CAMPAIGN_LEVEL_TOLERANCES
-from rocklab.dissipation.summary import TOLERANCES as DISSIPATION_TOLERANCES
+from rocklab.dissipation.dissipation_summary import CAMPAIGN_LEVEL_TOLERANCES
+from rocklab.dissipation.dissipation_summary import TOLERANCES as DISSIPATION_TOLERANCES
 from rocklab.lab.accuracy import TOLERANCES as ACCURACY_TOLERANCES
-from rocklab.lab.summary import TOLERANCES as QC_TOLERANCES
+from rocklab.lab.qc_summary import TOLERANCES as QC_TOLERANCES
 from rocklab.report.format import NOT_MEASURED, show
 from rocklab.report.tables import TABLES
-from rocklab.seismic.summary import TOLERANCES as MAP_TOLERANCES
-from rocklab.shake_table.summary import TOLERANCES as SHAKE_TABLE_TOLERANCES
+from rocklab.seismic.maps_summary import TOLERANCES as MAP_TOLERANCES
+from rocklab.shake_table.shake_table_summary import TOLERANCES as SHAKE_TABLE_TOLERANCES
 
 #: The sections of the numbers file that stages publish (``summaries/<section>.json``),
 #: each with the tolerances its stage declares (:func:`rocklab.summaries.differences`).

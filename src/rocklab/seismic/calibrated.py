@@ -235,7 +235,7 @@ def calibrated_model(diagnosis, name, alpha, R, form="linear"):
 
     Returns
     -------
-    rocklab.simulation.model.RockingModel
+    rocklab.simulation.rocking_model.RockingModel
 
     Raises
     ------
@@ -286,12 +286,12 @@ def map_wall_model(boundary, alpha, R, ext=(), values=None, base="analytic", for
     ext, values
         Names of causes and their parameters (:func:`rocklab.diagnosis.extended.rocking_model`).
     base : {"analytic", "zero", "two-sided-e"}
-        The literature base e (:meth:`rocklab.diagnosis.model.ModelParams.with_base`).
+        The literature base e (:meth:`rocklab.diagnosis.wall_model.ModelParams.with_base`).
     form : {"linear", "exact"}
 
     Returns
     -------
-    rocklab.simulation.model.RockingModel
+    rocklab.simulation.rocking_model.RockingModel
     """
     from rocklab.diagnosis.extended import rocking_model
 

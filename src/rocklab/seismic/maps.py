@@ -10,7 +10,7 @@ with interval ``dt D_S/D``).
 Form of the equation of motion
 ------------------------------
 The maps use Housner's piecewise-linear form (``form="linear"``, see
-:mod:`rocklab.simulation.model`).  Sect. 5 reads the maps through the scaling
+:mod:`rocklab.simulation.rocking_model`).  Sect. 5 reads the maps through the scaling
 equivalences of that model, and for the paper's wall (alpha = 0.1 rad) the
 linearisation changes the restoring moment by less than 0.2 %; the batch
 engine integrates the linear form in closed form per record interval, so the
@@ -48,7 +48,7 @@ from rocklab import __version__
 from rocklab.io import cf_attrs
 from rocklab.seismic import calibrated
 from rocklab.seismic.walls import ALPHA, MODELS, R, named_model
-from rocklab.simulation.model import OVERTURN
+from rocklab.simulation.rocking_model import OVERTURN
 
 log = logging.getLogger(__name__)
 
@@ -56,7 +56,7 @@ log = logging.getLogger(__name__)
 OVERTURNING_CRITERION = (
     "|theta| >= {overturn:.6g} rad (wall lying on the ground); after the record a wall still rocking is "
     "followed in free motion up to {tail:g} s while it leans beyond alpha or its energy can reach alpha "
-    "(rocklab.simulation.model)"
+    "(rocklab.simulation.rocking_model)"
 )
 
 

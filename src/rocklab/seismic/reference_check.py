@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from rocklab.simulation.model import OVERTURN
 from rocklab.simulation.reference import simulate_ground
+from rocklab.simulation.rocking_model import OVERTURN
 
 
 def _reference_one(args):
@@ -28,7 +28,7 @@ def reference_decisions(ag, dt, model, cells, *, rtol=1e-10, atol=1e-12, overtur
     ----------
     ag, dt : array_like, float
         Record [m/s^2] (polarity applied) and sample interval [s].
-    model : rocklab.simulation.model.RockingModel
+    model : rocklab.simulation.rocking_model.RockingModel
     cells : sequence of (float, float)
         Amplitude and duration scales.
     rtol, atol : float

@@ -4,7 +4,7 @@ The paper's five walls (:data:`MODELS`) are Housner's wall of one boundary
 with the causes of the catalogue that change its e (:func:`causes_of`); the
 calibrated walls of a campaign are named by
 :func:`rocklab.seismic.calibrated.name_pattern`.  :func:`named_model` builds
-either as the simulator's :class:`rocklab.simulation.model.RockingModel`,
+either as the simulator's :class:`rocklab.simulation.rocking_model.RockingModel`,
 which :func:`rocklab.seismic.maps.overturning_map` sweeps over the scaled
 records.
 """
@@ -47,7 +47,7 @@ def causes_of(name, eq17=AMPLITUDE_LAW_ONE_SIDED):
     causes : dict
         Cause of the catalogue (:mod:`rocklab.diagnosis.catalogue`) -> its values.
     base : {"analytic", "zero"}
-        The literature base e (:meth:`rocklab.diagnosis.model.ModelParams.with_base`).
+        The literature base e (:meth:`rocklab.diagnosis.wall_model.ModelParams.with_base`).
     """
     # imported here: the workflow reads MODELS at every start, without the diagnosis package (0.25 s)
     from rocklab.diagnosis.causes import restitution_amplitude, restitution_scale
@@ -86,7 +86,7 @@ def named_model(name, alpha=ALPHA, R=R, form="linear", eq17=None, diagnosis=None
 
     Returns
     -------
-    rocklab.simulation.model.RockingModel
+    rocklab.simulation.rocking_model.RockingModel
     """
     if calibrated.is_calibrated(name):
         if diagnosis is None:

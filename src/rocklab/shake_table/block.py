@@ -14,7 +14,7 @@ the block follows that one contact:
 
 - rocking angles alpha_+- = atan(b_+- / h), so the uplift threshold is
   g tan alpha_+- (the exact form of
-  :class:`rocklab.simulation.model.RockingModel`, theta > 0 on the +x edge);
+  :class:`rocklab.simulation.rocking_model.RockingModel`, theta > 0 on the +x edge);
 - frequency parameters p_+- = sqrt(m g R_+- / I_O,+-), I_O,+- = I_G + m R_+-^2
   (their geometric mean: the model has one p; they differ by under 3 %);
 - the coefficient of restitution of leaving edge +- for edge -+, from
@@ -64,7 +64,7 @@ from rocklab.physics import impact, restitution
 from rocklab.physics.law import Restitution
 from rocklab.physics.wall import G
 from rocklab.simulation.batch import ground_batch
-from rocklab.simulation.model import RockingModel
+from rocklab.simulation.rocking_model import RockingModel
 
 log = logging.getLogger(__name__)
 
@@ -127,7 +127,9 @@ def contact(block: dict, contact_plus_mm, contact_minus_mm) -> dict:
         ``alpha_plus``, ``alpha_minus`` [rad]; ``p_plus``, ``p_minus`` and
         their geometric mean ``p`` [rad/s]; ``e_plus``, ``e_minus`` [-], e of
         the impact on leaving the +x (-x) edge for the other
-        (:func:`rocklab.physics.restitution.two_sided_asymmetric`).
+        (:func:`rocklab.physics.restitution.two_sided_asymmetric`); ``energy_kept`` [-],
+        the share of kinetic energy either impact keeps
+        (:func:`rocklab.physics.restitution.energy_ratio_asymmetric`, the same both ways).
     """
     h, k = block["h_m"], block["k_g_m"]
     b = {"plus": 1e-3 * float(contact_plus_mm), "minus": 1e-3 * float(contact_minus_mm)}
@@ -138,6 +140,7 @@ def contact(block: dict, contact_plus_mm, contact_minus_mm) -> dict:
         out[f"p_{side}"] = math.sqrt(G * math.sqrt(r2) / (k**2 + r2))
         out[f"e_{side}"] = restitution.two_sided_asymmetric(b[side], b[other], h, k)
     out["p"] = math.sqrt(out["p_plus"] * out["p_minus"])
+    out["energy_kept"] = restitution.energy_ratio_asymmetric(b["plus"], b["minus"], h, k)
     return out
 
 
@@ -207,7 +210,7 @@ def outcome_grid(inputs, dts, block: dict, tests, grid_=None, specimen="") -> xr
     ----------
     inputs : sequence of ndarray
         Table accelerations [m/s^2] along +x, one per test
-        (:func:`rocklab.shake_table.records.block_input`).
+        (:func:`rocklab.shake_table.asu_data.block_input`).
     dts : sequence of float
         Their sample intervals [s].
     block : dict

@@ -33,7 +33,7 @@ Uncertainty and held-out evaluation
 -----------------------------------
 Earthquake records are the unit of resampling and of the folds: the scaled
 copies of one record, and its two horizontal components, are not
-independent tests (:func:`rocklab.shake_table.records.record_of`).
+independent tests (:func:`rocklab.shake_table.asu_data.record_of`).
 Intervals are percentiles of the fits to resampled records (bootstrap); the
 fragility of a test, its probability of overturning, is the mean of P_i over
 those fits.  The cross-validation (:func:`folds_by_group`) holds every test
@@ -48,7 +48,7 @@ import numpy as np
 from scipy import optimize
 
 from rocklab.diagnosis.parameters import Param
-from rocklab.dissipation.statistics import percentile_interval
+from rocklab.inference.intervals import percentile_interval
 from rocklab.shake_table.block import PARAMS
 
 #: Log-scatter of the contact half-widths from test to test [-] (ln units).

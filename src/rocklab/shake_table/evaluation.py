@@ -30,12 +30,12 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from rocklab.dissipation.statistics import percentile_interval
+from rocklab.inference.intervals import percentile_interval
 from rocklab.io import cf_attrs
 from rocklab.seismic.indices import map_indices
 from rocklab.seismic.maps import scales
+from rocklab.shake_table import asu_data
 from rocklab.shake_table import calibration as cal
-from rocklab.shake_table import records
 from rocklab.shake_table.block import (
     CONTACT_MINUS,
     CONTACT_PLUS,
@@ -85,13 +85,13 @@ def motion_table(folder, tests: pd.DataFrame) -> pd.DataFrame:
     """One row per test with a motion file: ground motion, PGA, PGV, peaks, offset and the sign check."""
     rows = []
     for _, row in tests[tests.motion_file != ""].iterrows():
-        st = records.read_motion(folder, row)
+        st = asu_data.read_motion(folder, row)
         acc = st.select(channel="ACC")[0].stats
         rows.append(
             {
                 "test": int(row.test),
                 "ground_motion": row.ground_motion,
-                **records.motion_measures(st),
+                **asu_data.motion_measures(st),
                 "offset_g": acc.offset_g,
                 "sign_gain": acc.sign_gain,
                 "sign_corr": acc.sign_corr,
@@ -117,7 +117,7 @@ def _problem(specimen, tests, motions, outcomes: xr.Dataset):
     if not np.array_equal(outcomes.test.values, df.test.values):
         raise ValueError(f"{specimen}: the outcome grid's tests are not those of the motion table")
     y = df[f"overturned_{specimen.lower()}"].to_numpy(bool)
-    groups = df.ground_motion.map(records.record_of).to_numpy(str)
+    groups = df.ground_motion.map(asu_data.record_of).to_numpy(str)
     return df, y, groups, cal.OutcomeLikelihood(outcomes.overturned.values, y, grid_of(outcomes))
 
 
@@ -128,7 +128,7 @@ def cross_validate(specimen, tests, motions, outcomes: xr.Dataset, k=5, n_boot=5
     ----------
     specimen : str
     tests : DataFrame
-        :func:`rocklab.shake_table.records.read_tests`.
+        :func:`rocklab.shake_table.asu_data.read_tests`.
     motions : DataFrame
         :func:`motion_table`.
     outcomes : xarray.Dataset
@@ -149,7 +149,7 @@ def cross_validate(specimen, tests, motions, outcomes: xr.Dataset, k=5, n_boot=5
     df, y, groups, lik = _problem(specimen, tests, motions, outcomes)
     fold = cal.folds_by_group(groups, k)
     nom = nominal(outcomes)
-    dem = records.dem_columns(tests, specimen)
+    dem = asu_data.dem_columns(tests, specimen)
     out = {m: np.zeros(y.size) for m in MODELS}
     for f in range(fold.max() + 1):
         te, tr = np.flatnonzero(fold == f), np.flatnonzero(fold != f)
@@ -249,7 +249,7 @@ def onset_edges(peak_plus_g, peak_minus_g, block) -> np.ndarray:
 
     The +x edge needs the table to accelerate towards -x by more than
     g tan alpha_+, the -x edge towards +x by more than g tan alpha_-
-    (:mod:`rocklab.simulation.model`, rocking onset).  ``block``: the
+    (:mod:`rocklab.simulation.rocking_model`, rocking onset).  ``block``: the
     body (:func:`rocklab.shake_table.block.specimen_block`), on its footprint.
     """
     fp = footprint(block)
@@ -388,11 +388,17 @@ def parameter_table(specimen, fit, block) -> pd.DataFrame:
 
     def derived(values):
         k = contact(block, values[CONTACT_PLUS.name], values[CONTACT_MINUS.name])
-        return [np.degrees(k["alpha_plus"]), np.degrees(k["alpha_minus"]), k["e_plus"], k["e_minus"]]
+        return [np.degrees(k["alpha_plus"]), np.degrees(k["alpha_minus"]), k["e_plus"], k["e_minus"], k["energy_kept"]]
 
     boot = np.array([derived(b) for b in fit["boot"]])
-    names = ("alpha_plus_deg", "alpha_minus_deg", "e_leaving_plus", "e_leaving_minus")
-    nulls = (np.degrees(fp["alpha_plus"]), np.degrees(fp["alpha_minus"]), fp["e_plus"], fp["e_minus"])
+    names = ("alpha_plus_deg", "alpha_minus_deg", "e_leaving_plus", "e_leaving_minus", "energy_kept")
+    nulls = (
+        np.degrees(fp["alpha_plus"]),
+        np.degrees(fp["alpha_minus"]),
+        fp["e_plus"],
+        fp["e_minus"],
+        fp["energy_kept"],
+    )
     for j, (name, value, nv) in enumerate(zip(names, derived(v), nulls)):
         lo, hi = percentile_interval(boot[:, j])
         rows.append(
@@ -447,8 +453,8 @@ def calibrated_map(ag, dt, block, values, record, n=41, lo=0.5, hi=1.5, specimen
 def block_inputs(folder, tests: pd.DataFrame, motions: pd.DataFrame):
     """The block input [m/s^2] and sample interval [s] of every test of ``motions``, in its order."""
     rows = tests.set_index("test").loc[list(motions.test)].reset_index()
-    traces = [records.read_motion(folder, row).select(channel="ACC")[0] for _, row in rows.iterrows()]
-    return [records.block_input(tr) for tr in traces], [tr.stats.delta for tr in traces]
+    traces = [asu_data.read_motion(folder, row).select(channel="ACC")[0] for _, row in rows.iterrows()]
+    return [asu_data.block_input(tr) for tr in traces], [tr.stats.delta for tr in traces]
 
 
 def calibration_tables(tests, motions, outcomes: dict, blocks: dict, folds=5, n_boot=200, n_boot_cv=50, seed=0):

@@ -2,7 +2,7 @@
 
 Every history runs the numba event-driven integrator
 :func:`rocklab.simulation.engine.run_history` (same conventions as the reference of
-:mod:`rocklab.simulation.model`: onset, impacts, rest, overturning); the histories are
+:mod:`rocklab.simulation.rocking_model`: onset, impacts, rest, overturning); the histories are
 spread over the cores with ``numba.prange``.  For the linear (Housner) form a
 step is one sample interval of the (time-scaled) record, integrated in closed
 form; impacts, onset and overturning are located inside it by bisection.  The
@@ -19,7 +19,7 @@ import numpy as np
 import xarray as xr
 
 from rocklab.simulation.engine import batch_kernel as _kernel
-from rocklab.simulation.model import OVERTURN, REST_TOL, RockingModel
+from rocklab.simulation.rocking_model import OVERTURN, REST_TOL, RockingModel
 
 
 def _model_arrays(models, overturn, rest_tol, substeps):
@@ -54,7 +54,7 @@ def overturning_batch(
     amplitude_scales, duration_scales : array_like
         A_S/A multiplies ``ag``; D_S/D multiplies ``dt``.
     overturn : float
-        Overturning rotation [rad] (default pi/2, see :mod:`rocklab.simulation.model`).
+        Overturning rotation [rad] (default pi/2, see :mod:`rocklab.simulation.rocking_model`).
     substeps : int
         RK4 steps per sample interval for the exact form (ignored by the
         linear form, which is exact per interval).
@@ -185,7 +185,7 @@ def free_batch(
     law : ndarray (n, 3, 3) or (n, 3, 4), optional
         Full flat laws (rows base +, base -, transverse; columns e0, a, b
         and optionally v_stick), see
-        :meth:`rocklab.simulation.model.RockingModel.numba_law`; applied before e_scale.
+        :meth:`rocklab.simulation.rocking_model.RockingModel.numba_law`; applied before e_scale.
     t_end, dt : float
         Duration [s] and step [s] (the closed form of the linear model is
         exact for any step; the exact form takes ``substeps`` RK4 steps).

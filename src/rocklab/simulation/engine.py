@@ -1,6 +1,6 @@
 """Numba event-driven engine: one rocking history, the record stepped sample by sample.
 
-Same conventions as :mod:`rocklab.simulation.model` (onset, impacts, rest,
+Same conventions as :mod:`rocklab.simulation.rocking_model` (onset, impacts, rest,
 overturning); :mod:`rocklab.simulation.batch` runs many histories over the
 cores.  The linear form is advanced in closed form per record interval (a
 state-transition matrix), the exact form by RK4 substeps.
@@ -17,7 +17,7 @@ from numba.np.unsafe.ndarray import to_fixed_tuple
 from rocklab.physics import flight
 
 _P_APOS, _P_ANEG, _P_P, _P_ZETA, _P_GAP, _P_ONE, _P_LIN, _P_OV, _P_VREST, _P_G, _P_SUB, _P_VR = range(12)
-#: Length of the parameter vector (:meth:`rocklab.simulation.model.RockingModel.numba_params`).
+#: Length of the parameter vector (:meth:`rocklab.simulation.rocking_model.RockingModel.numba_params`).
 _N_P = _P_VR + 1
 #: Samples of a record per block of :func:`_block_range`.
 _BLOCK = 16
@@ -87,13 +87,20 @@ def _advance(x, v, s, ga, gb, u, prm, l1, l2, zp, h, Fh):
 def _coefficient(law, row, v, prm):
     """Signed e of law row ``row`` (e0, a, b, v_stick) for a landing at v [rad/s].
 
-    ``e0 clip(a - b (v/thetadot_r)^2, 0, 1/|e0|)``
-    (:func:`rocklab.physics.impact.amplitude_factor`), and 0 for a landing
+    ``E clip(a - b (v/thetadot_r)^2, 0, 1/|E|)`` with E = e0 clipped to
+    [-1, 1] (:func:`rocklab.physics.impact.bounded_factor`: a scale, a
+    constant or a per-history e_scale beyond 1/|e| never makes an impact
+    create energy, as in :class:`rocklab.physics.impact.Scaled`;
+    :func:`rocklab.physics.impact.amplitude_factor`), and 0 for a landing
     slower than v_stick thetadot_r (:class:`rocklab.physics.impact.Sticking`).
     """
     e0, a, b = law[row, 0], law[row, 1], law[row, 2]
     if abs(v) < law[row, 3] * prm[_P_VR]:
         return 0.0
+    if e0 > 1.0:
+        e0 = 1.0
+    elif e0 < -1.0:
+        e0 = -1.0
     if a == 1.0 and b == 0.0:
         return e0
     r = abs(v) / prm[_P_VR]

@@ -1,9 +1,9 @@
-"""Event-driven reference integrator of :mod:`rocklab.simulation.model` (scipy's solve_ivp).
+"""Event-driven reference integrator of :mod:`rocklab.simulation.rocking_model` (scipy's solve_ivp).
 
 Converged to the tolerances given, slow: the yardstick of the numba engine
 (:mod:`rocklab.simulation.engine`) and the simulator of the impact laws the
 engine does not accept (:class:`rocklab.physics.impact.Custom`, nested
-amplitude laws: no flat form, :meth:`rocklab.simulation.model.RockingModel.numba_law`).
+amplitude laws: no flat form, :meth:`rocklab.simulation.rocking_model.RockingModel.numba_law`).
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 
 from rocklab._imports import lazy_module
-from rocklab.simulation.model import OVERTURN, REST_TOL, RockingHistory
+from rocklab.simulation.rocking_model import OVERTURN, REST_TOL, RockingHistory
 
 integrate = lazy_module("scipy.integrate")
 optimize = lazy_module("scipy.optimize")

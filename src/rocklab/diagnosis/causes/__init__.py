@@ -64,7 +64,7 @@ class Cause:
     estimate : callable, optional
         After-selection causes: ``estimate(tests, mp, seed) -> dict or None``,
         ``mp`` the chosen model of ``tests``
-        (:class:`rocklab.diagnosis.model.ModelParams`), with ``named`` (bool),
+        (:class:`rocklab.diagnosis.wall_model.ModelParams`), with ``named`` (bool),
         ``values`` (its parameters) and ``finding`` (the entry of the diagnosis).
     family : str, optional
         A generalised family (issue 12) rather than a listed cause: the
@@ -100,7 +100,7 @@ class Cause:
         member (:attr:`family`), read on part of the flights; where the
         member is named and the signature cannot be read, the member's form
         is untested, and the diagnosis says so as structure left
-        (:meth:`rocklab.diagnosis.problem.WallProblem.form_structure`).
+        (:meth:`rocklab.diagnosis.series_problem.WallProblem.form_structure`).
     not_identifiable : callable, optional
         ``not_identifiable(observed) -> str``: why the tests of a series
         (:class:`rocklab.diagnosis.evidence.Observed`) cannot tell the cause

@@ -1,7 +1,7 @@
 """A gap behind a one-sided wall: it swings inwards through g = gamma alpha (Fig. 12).
 
 Two-sided rocking on the inner hinge, Eq. 2 at the base, Eqs. 12-13 on the
-transverse walls (:func:`rocklab.diagnosis.model.impact_speeds`).
+transverse walls (:func:`rocklab.diagnosis.wall_model.impact_speeds`).
 """
 
 from __future__ import annotations

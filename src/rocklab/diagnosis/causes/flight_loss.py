@@ -82,7 +82,7 @@ def signature(ob):
     ``flight_damping`` has the wrong form: ``against_member`` says so; where
     the long flights lose more than :data:`UNMODELLED_LOSS` of their speed,
     a model without a loss in flight misses it: ``unmodelled``
-    (:meth:`rocklab.diagnosis.problem.WallProblem.form_structure`).  Short
+    (:meth:`rocklab.diagnosis.series_problem.WallProblem.form_structure`).  Short
     flights hide their loss in the measured e, so the listed loss's own
     signature, a median over all flights, can miss a drag.
     """

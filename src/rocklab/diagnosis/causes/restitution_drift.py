@@ -42,7 +42,7 @@ def column_of(name):
 
 def _place(tests, column):
     """n of each test: its place in the series, or in the range of a column of the test log
-    (of a model: :meth:`rocklab.diagnosis.model.ModelParams.place`)."""
+    (of a model: :meth:`rocklab.diagnosis.wall_model.ModelParams.place`)."""
     return np.array([t.order if column is None else t.log[column] for t in tests], float)
 
 

@@ -18,9 +18,9 @@ from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import BOTH, Cause
 from rocklab.diagnosis.errors import engineering_rows
 from rocklab.diagnosis.evidence import TestStack
-from rocklab.diagnosis.model import next_flight
 from rocklab.diagnosis.parameters import Param
-from rocklab.dissipation.statistics import MIN_BOOTSTRAP, expanded, percentile_interval, t_interval
+from rocklab.diagnosis.wall_model import next_flight
+from rocklab.inference.intervals import MIN_BOOTSTRAP, expanded, percentile_interval, t_interval
 from rocklab.lab.motion import odd_samples
 from rocklab.physics.flight import landing_speed, quarter_period
 from rocklab.physics.law import Stop
@@ -41,7 +41,7 @@ def _largest_apex_after_end(S: TestStack, mp, idx, window_s, n_max=200):
     """Largest apex the model predicts after the end of each test ``idx`` of ``S``, apexes from
     ``window_s`` / 10 to ``window_s`` after the end [rad] (0 if none).
 
-    From the last measured apex the flights follow by :func:`rocklab.diagnosis.model.next_flight`,
+    From the last measured apex the flights follow by :func:`rocklab.diagnosis.wall_model.next_flight`,
     all tests together, each until an apex past the window or below its noise threshold
     (:func:`end_of_motion`).
     """
@@ -77,7 +77,7 @@ def end_of_motion(S: TestStack, mp, min_ratio=3.0, window_s=1.0):
     The reduction ends the motion at the last flight it can measure; a wall
     that keeps rocking leaves smaller flights in the record after that, a
     wall that sticks does not.  From the last measured apex the model
-    predicts the flights that follow (:func:`rocklab.diagnosis.model.next_flight`);
+    predicts the flights that follow (:func:`rocklab.diagnosis.wall_model.next_flight`);
     their largest apex from a tenth of ``window_s`` after the end (past the
     last return) to ``window_s`` is compared with the largest high-passed
     |theta| of the record there (the settling drift removed).  When in most
@@ -166,12 +166,12 @@ def threshold(tests, mp, *, n_boot=200, seed=0, min_tests=3):
     narrow as e); the series' threshold is the geometric mean of the bracket
     centres, with a bootstrap (over tests) 95 % interval and the test-to-test
     spread of log speed (Fig. 18's scatter of the number of cycles); from
-    fewer than :data:`~rocklab.dissipation.statistics.MIN_BOOTSTRAP` stops
+    fewer than :data:`~rocklab.inference.intervals.MIN_BOOTSTRAP` stops
     the t interval of the mean log speed on their few degrees of freedom.  Where
     the brackets share a common part, one threshold fits every wall: the
     estimate is that part's geometric centre and the interval spans it
     (:func:`bracket_centre`, also used for the tests left out).  Gain:
-    the free run of the model ``mp`` of ``tests`` (:class:`rocklab.diagnosis.model.ModelParams`,
+    the free run of the model ``mp`` of ``tests`` (:class:`rocklab.diagnosis.wall_model.ModelParams`,
     :func:`rocklab.diagnosis.errors.engineering_rows`) with each test's threshold
     taken from the other tests (leave one out) against the model without it,
     in the number of impacts and the duration of rocking.

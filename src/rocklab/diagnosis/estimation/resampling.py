@@ -24,7 +24,7 @@ from rocklab.diagnosis.estimation.fitting import Fit, fit, linearised
 from rocklab.diagnosis.estimation.noise import deviance, finite_residuals, group_variances, predictive_dof
 from rocklab.diagnosis.estimation.problem import Problem
 from rocklab.diagnosis.estimation.systematic import by_group, systematic_uncertainty, widened
-from rocklab.dissipation.statistics import MIN_BOOTSTRAP, expanded, percentile_interval
+from rocklab.inference.intervals import MIN_BOOTSTRAP, expanded, percentile_interval
 
 optimize = lazy_module("scipy.optimize")
 stats = lazy_module("scipy.stats")
@@ -179,10 +179,10 @@ def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
     resample weighs each test by the times it was drawn; the interval is the
     2.5-97.5 % percentiles of the resamples at the position that gives them
     their nominal content
-    (:func:`~rocklab.dissipation.statistics.percentile_interval`: numpy's
+    (:func:`~rocklab.inference.intervals.percentile_interval`: numpy's
     default holds 90 % of 40 resamples), each side's distance from the
     estimate expanded for the few tests resampled
-    (:func:`~rocklab.dissipation.statistics.expanded`: Student's t on the
+    (:func:`~rocklab.inference.intervals.expanded`: Student's t on the
     tests less one, not the normal quantiles of the plain percentiles).  The resamples
     differ from the full fit by a few times its standard errors, where the
     residuals are linear in the parameters to well below those errors (the refit of every resample with its own noise
@@ -192,7 +192,7 @@ def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
 
     The cluster-robust t interval of the same linearisation
     (:func:`sandwich_intervals`) stands instead where the percentiles say
-    nothing: with fewer than :data:`~rocklab.dissipation.statistics.MIN_BOOTSTRAP`
+    nothing: with fewer than :data:`~rocklab.inference.intervals.MIN_BOOTSTRAP`
     tests (three tests give ten distinct resamples), for a parameter fitted
     on a bound (the bootstrap is inconsistent there, Andrews 2000: the
     resamples pile on the bound, and from a few tests their percentiles

@@ -20,7 +20,7 @@ from rocklab.diagnosis.estimation.fitting import fit
 from rocklab.diagnosis.estimation.problem import Problem
 from rocklab.diagnosis.estimation.resampling import Intervals, heldout, paired_difference, parameter_intervals
 from rocklab.diagnosis.estimation.structure import structure
-from rocklab.dissipation.statistics import MIN_BOOTSTRAP
+from rocklab.inference.intervals import MIN_BOOTSTRAP
 
 stats = lazy_module("scipy.stats")
 
@@ -42,7 +42,7 @@ def _improves(d):
     The mean exceeds twice its standard error, or every one of at least five
     tests improved (one-sided sign test, p <= 1/32): with few tests that
     differ in how much they gain, the standard error alone is too strict.
-    With fewer than :data:`~rocklab.dissipation.statistics.MIN_BOOTSTRAP`
+    With fewer than :data:`~rocklab.inference.intervals.MIN_BOOTSTRAP`
     tests the standard error rests on n - 1 degrees of freedom: the mean
     exceeds Student's t quantile of the same one-sided level (97.7 %, that
     of two normal standard errors) times it, 4.5 for three tests.

@@ -46,7 +46,7 @@ import numpy as np
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.estimation.fitting import Fit, linearised
 from rocklab.diagnosis.estimation.problem import Problem
-from rocklab.dissipation.statistics import simultaneous_factor
+from rocklab.inference.multiplicity import simultaneous_factor
 
 stats = lazy_module("scipy.stats")
 
@@ -160,7 +160,7 @@ def simultaneous(ci, x0, lower, upper, u_sys, k, df, level=0.95):
     Each side's statistical half-width, sqrt(h^2 - (z u_sys)^2), is widened
     by the Šidák factor of Student's t on ``df`` degrees of freedom (the
     units resampled, less one), its systematic part by that of the normal
-    quantile (:func:`rocklab.dissipation.statistics.simultaneous_factor`),
+    quantile (:func:`rocklab.inference.multiplicity.simultaneous_factor`),
     added again in quadrature by :func:`widened` and cut at the bounds: a
     side on its bound stays there.  For ``k`` = 1 the interval is ``ci``.
     """

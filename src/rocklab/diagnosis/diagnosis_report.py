@@ -5,7 +5,8 @@ from __future__ import annotations
 from rocklab.diagnosis.causes import stop_threshold
 from rocklab.diagnosis.result import BoundaryDiagnosis, CampaignDiagnosis
 from rocklab.disk import write_text
-from rocklab.dissipation.statistics import MIN_BOOTSTRAP, counted, note_lines, note_mark
+from rocklab.inference.intervals import MIN_BOOTSTRAP
+from rocklab.inference.notes import counted, note_lines, note_mark
 
 
 def write_diagnosis(diagnosis, json_path, md_path=None):

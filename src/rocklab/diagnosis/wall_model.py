@@ -12,7 +12,7 @@ flight-by-flight free run (:func:`next_flight`, :func:`free_run`).
 Design: the diagnosis needs the model of a whole series at once (per-test
 arrays, a value per test where a cause takes one), the exact simulator one
 wall; so :class:`ModelParams` is the model and the simulator's
-:class:`~rocklab.simulation.model.RockingModel` is derived from one of its
+:class:`~rocklab.simulation.rocking_model.RockingModel` is derived from one of its
 rows by :func:`simulator`, the one place where the model's restitution,
 gap and stop become impact laws of :mod:`rocklab.physics.impact`.  There is
 no second mapping of the causes: the calibrated walls of the maps are
@@ -41,8 +41,8 @@ from rocklab.physics.flight import (
     transit_time,
 )
 from rocklab.physics.wall import overturning_velocity
-from rocklab.simulation.model import RockingModel
 from rocklab.simulation.reference import simulate_free
+from rocklab.simulation.rocking_model import RockingModel
 
 #: A model wall is released at most this fraction below its instability angle.
 RELEASE_MARGIN = 1e-3
@@ -356,7 +356,7 @@ def free_run(S, mp: ModelParams, n_max=600):
 
 
 def simulator(mp: ModelParams, base="analytic") -> RockingModel:
-    """The exact simulator's :class:`rocklab.simulation.model.RockingModel` of one wall of the model
+    """The exact simulator's :class:`rocklab.simulation.rocking_model.RockingModel` of one wall of the model
     (a row of :class:`ModelParams`, :meth:`ModelParams.row`).
 
     ``base``: as :meth:`ModelParams.with_base`.  The impact laws are the

@@ -2,8 +2,8 @@
 
 The exact simulator's wall.  The causes of the diagnosis do not map
 themselves onto it: a wall of the diagnosis' model is derived from the
-one model, :class:`rocklab.diagnosis.model.ModelParams`, by
-:func:`rocklab.diagnosis.model.simulator` (the calibrated walls of the maps
+one model, :class:`rocklab.diagnosis.wall_model.ModelParams`, by
+:func:`rocklab.diagnosis.wall_model.simulator` (the calibrated walls of the maps
 too), from the causes' laws (:mod:`rocklab.physics.law`).
 
 Equation of motion (per unit I_O) on the hinge ``s = sign(theta)`` with

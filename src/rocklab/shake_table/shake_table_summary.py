@@ -13,8 +13,8 @@ import pandas as pd
 import xarray as xr
 
 from rocklab.shake_table import calibration
+from rocklab.shake_table.asu_data import SPECIMENS
 from rocklab.shake_table.block import C_NODES, CONTACT_NODES_MM
-from rocklab.shake_table.records import SPECIMENS
 from rocklab.summaries import LAST_DIGIT, Tolerance
 
 #: Held-out accuracy the calibrated block is asked for on each replica (issue 25).
@@ -77,7 +77,7 @@ def shake_table_summary(tables, outcomes, tests: pd.DataFrame) -> dict:
     outcomes : sequence of str or pathlib.Path
         The outcome grids of the specimens (``shake_table/outcomes_<specimen>.nc``).
     tests : DataFrame
-        tests.csv (:func:`rocklab.shake_table.records.read_tests`): the tests without a record.
+        tests.csv (:func:`rocklab.shake_table.asu_data.read_tests`): the tests without a record.
 
     Returns
     -------

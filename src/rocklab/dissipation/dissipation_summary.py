@@ -22,7 +22,7 @@ from rocklab.summaries import LAST_DIGIT, Tolerance
 TOLERANCES = {"*": LAST_DIGIT}
 #: How far two machines may take the campaign-level numbers apart: they are
 #: regressions of the series' fitted parameters (``diagnosis.json``), which
-#: carry the fits' tolerance (:data:`rocklab.diagnosis.summary.TOLERANCES`);
+#: carry the fits' tolerance (:data:`rocklab.diagnosis.diagnosis_summary.TOLERANCES`);
 #: measured, the Holm p values moved by 2e-6 of themselves.
 CAMPAIGN_LEVEL_TOLERANCES = {"*": Tolerance(abs=1e-6, rel=1e-3)}
 

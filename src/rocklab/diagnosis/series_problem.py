@@ -8,7 +8,7 @@ from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.estimation import Problem
 from rocklab.diagnosis.evidence import TestStack, covariates, log_ratio, noise_covariates, residuals
 from rocklab.diagnosis.extended import model_params
-from rocklab.diagnosis.model import base_params, free_run, log_columns
+from rocklab.diagnosis.wall_model import base_params, free_run, log_columns
 
 
 class WallProblem(Problem):
