@@ -188,3 +188,28 @@ def test_a_held_out_residual_is_scored_by_the_t_its_training_residuals_predict()
     R, X, tiny = {"g": np.array([1e-2])}, {"g": np.zeros(1)}, {"g": (1e-6, 0.0)}
     assert 12.0 < noise.deviance(R, X, tiny, {"g": 3}) - np.log(1e-6) < 17.0
     assert noise.deviance(R, X, tiny) - np.log(1e-6) == pytest.approx(100.0, rel=1e-3)
+
+
+def test_a_rejection_is_decided_on_its_step_and_worded_as_the_files_had_it():
+    """Issue 40, item 1: the selection decides on ``Rejection.by``; the sentence is only written."""
+    from rocklab.diagnosis.estimation.selection import RejectedBy, Rejection, sentences
+
+    cases = {
+        Rejection(RejectedBy.DESIGN, why="one contact depth"): "the design cannot identify it (one contact depth)",
+        Rejection(RejectedBy.SIGNATURE): "its signature in the data is absent",
+        Rejection(RejectedBy.INFORMATION_CRITERION, dbic=-3.04): "BIC -3.0",
+        Rejection(RejectedBy.HELD_OUT, gain=0.01234, se=0.0456): (
+            "held-out deviance gain 0.0123 within the noise (standard error 0.046)"
+        ),
+        Rejection(RejectedBy.INTERVAL): "95% interval within the smallest effect worth naming of its null value",
+        Rejection(RejectedBy.CARRIED, loss=1.5, se=0.25, carried_by="flight_damping"): (
+            "carried by flight_damping (removing it costs 1.5 +- 0.25 held out)"
+        ),
+    }
+    for rejection, text in cases.items():
+        assert rejection.sentence == text
+    assert {r.by for r in cases} == set(RejectedBy)
+    assert sentences({"a": Rejection(RejectedBy.SIGNATURE), "b": None}) == {
+        "a": "its signature in the data is absent",
+        "b": "",
+    }

@@ -27,9 +27,10 @@ from rocklab.cli.arguments import (
     write_dataset,
 )
 from rocklab.physics import impact, wall
+from rocklab.physics.boundary import Boundary
 from rocklab.simulation.rocking_model import OVERTURN, RockingModel
 
-LAWS = {"housner": impact.HousnerTwoSided, "one-sided": impact.OneSided, "zero": impact.Zero}
+LAWS = {"housner": impact.HousnerTwoSided, Boundary.ONE_SIDED: impact.OneSided, "zero": impact.Zero}
 
 #: Most output samples ``rocklab simulate`` writes (t_end x fs): 10^7 samples
 #: are 240 MB of history in memory, beyond what an analyst means to ask for.
@@ -73,7 +74,7 @@ def simulate_model(args):
         )
     else:
         alpha, p = args.alpha, args.p
-    if args.gap > 0 and args.boundary != "one-sided":
+    if args.gap > 0 and args.boundary != Boundary.ONE_SIDED:
         raise UsageError("--gap", "only for --boundary one-sided")
     if args.gap >= args.overturn:
         raise UsageError("--gap", f"must be < --overturn ({args.overturn:.4g} rad)")
@@ -173,7 +174,12 @@ def add_parser(sub):
     g.add_argument(
         "--alpha-neg", type=ANGLE, metavar="RAD", help="rocking angle of the negative hinge [rad] (default: alpha-rock)"
     )
-    g.add_argument("--boundary", choices=["two-sided", "one-sided"], default="two-sided", help="boundary condition")
+    g.add_argument(
+        "--boundary",
+        choices=list(Boundary),
+        default=Boundary.TWO_SIDED,
+        help="boundary condition",
+    )
     g.add_argument(
         "--gap",
         type=number(0.0, math.pi / 2, lo_closed=True),

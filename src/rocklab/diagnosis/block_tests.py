@@ -46,8 +46,10 @@ from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.causes import restitution_housner_loss
 from rocklab.diagnosis.discovery import discovery, family_against_listed
 from rocklab.diagnosis.estimation import Problem, beyond_the_catalogue, finite_mean, select_effects
+from rocklab.diagnosis.estimation.selection import sentences
 from rocklab.diagnosis.estimation.systematic import verdict_intervals
 from rocklab.physics import restitution
+from rocklab.physics.boundary import Boundary
 from rocklab.physics.impact import bounded_factor
 from rocklab.physics.law import Amplitude, HousnerLoss, Restitution
 
@@ -72,7 +74,7 @@ def candidates():
     null = catalogue.null_values()
     return tuple(
         c
-        for c in catalogue.for_boundary("two-sided")
+        for c in catalogue.for_boundary(Boundary.TWO_SIDED)
         if any(isinstance(law, IMPACT_LAWS) for law in c.laws(c.values(null)))
     )
 
@@ -328,8 +330,11 @@ def diagnose_group(trials: _Trials, *, n_boot=40, seed=0):
         "unexplained": bool(sel["structure"]) and not sel["weak"],
         "residual_structure": sel["structure"],
         "findings": findings,
-        "weak_evidence": {k: {"params": v["params"], "reason": v["reason"]} for k, v in sel["weak"].items()},
-        "rejected": sel["rejected"],
+        "weak_evidence": {
+            k: {"params": v["params"], "reason": v["reason"].sentence if v["reason"] else ""}
+            for k, v in sel["weak"].items()
+        },
+        "rejected": sentences(sel["rejected"]),
         "signatures": {k: v["text"] for k, v in sig.items()},
         "heldout": {
             "base": {k: finite_mean(v) for k, v in base_ho.items()},

@@ -17,6 +17,7 @@ structure.
 from __future__ import annotations
 
 from rocklab.diagnosis.causes import (
+    Stage,
     contact_gap,
     flight_damping,
     flight_loss,
@@ -62,7 +63,7 @@ def in_order(columns=()):
     i = families.index(restitution_drift.CAUSE) + 1
     families[i:i] = restitution_drift.along_log(tuple(columns))
     # the causes estimated after selection act last, on the chosen model as it is
-    later = [c for c in CAUSES if c.stage != "selection"]
+    later = [c for c in CAUSES if c.stage is not Stage.SELECTION]
     return [*(c for c in CAUSES if c not in later), *families, *later]
 
 
@@ -94,7 +95,7 @@ def null_values():
     return {q.name: q.null for c in in_order() for q in c.params}
 
 
-def for_boundary(boundary, stage="selection", families=False, columns=()):
+def for_boundary(boundary, stage=Stage.SELECTION, families=False, columns=()):
     """The causes of a stage that can occur in a boundary condition, in catalogue order (and the families,
     with a drift along each of the test log's ``columns``)."""
     return [

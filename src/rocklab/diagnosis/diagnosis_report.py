@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from rocklab.diagnosis.causes import stop_threshold
+from rocklab.diagnosis.catalogue import by_name
+from rocklab.diagnosis.causes import Stage
 from rocklab.diagnosis.result import BoundaryDiagnosis, CampaignDiagnosis
 from rocklab.disk import write_text
 from rocklab.inference.intervals import MIN_BOOTSTRAP
@@ -128,7 +129,7 @@ def diagnosis_markdown(diagnosis) -> str:
                     f"| {f.effect} | {_fmt_params(f)} | {_fmt_ci(f, notes)} | "
                     f"{_f(f.error_heldout['deviance_per_obs'], '.3g')} | "
                     f"{_f(g['deviance_per_obs'], '.3g')}; {'' if fr is None else f'{fr:.3f}'} | {ev} "
-                    f"{f.evidence.get('fit', '') if f.effect == stop_threshold.CAUSE.name else ''} |"
+                    f"{f.evidence.get('fit', '') if by_name(f.effect).stage is Stage.AFTER_SELECTION else ''} |"
                 )
             out += ["", *(line for note in note_lines(notes) for line in (note, ""))]
         for f in e.discovered:

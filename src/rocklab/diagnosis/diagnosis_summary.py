@@ -14,6 +14,7 @@ import numpy as np
 
 from rocklab.diagnosis.causes import stop_threshold
 from rocklab.diagnosis.result import CampaignDiagnosis, LimestoneDiagnosis
+from rocklab.physics.boundary import Boundary
 from rocklab.summaries import Tolerance
 
 #: How far two machines may take the diagnoses' numbers apart. A fit stops
@@ -31,7 +32,7 @@ from rocklab.summaries import Tolerance
 TOLERANCES = {"*": Tolerance(abs=1e-6, rel=1e-3)}
 
 #: The two boundary conditions and their keys in the summary.
-BOUNDARIES = {"two-sided": "two_sided", "one-sided": "one_sided"}
+BOUNDARIES = {b: b.key for b in Boundary}
 
 
 def _finding(f) -> dict:

@@ -25,6 +25,7 @@ from rocklab.lab import motion as chain
 from rocklab.lab.campaign import order_in_series
 from rocklab.lab.flight_fit import local_fit
 from rocklab.physics import restitution
+from rocklab.physics.boundary import Boundary
 from rocklab.physics.flight import apex_after, landing_speed, loss_deceleration, quarter_period, quarter_period_linear
 from rocklab.physics.wall import overturning_velocity
 
@@ -239,8 +240,7 @@ class MeasuredTest:
     @property
     def sides(self) -> np.ndarray:
         """Hinge left at impact k (+1 / -1, sign of theta before it)."""
-        k = np.arange(self.n_impacts)
-        return self.side0 * (np.ones(k.size) if self.boundary == "one-sided" else (-1.0) ** k)
+        return self.side0 * (-1.0) ** (np.arange(self.n_impacts) * (self.boundary == Boundary.TWO_SIDED))
 
 
 def measured_test(record) -> MeasuredTest:
@@ -589,7 +589,7 @@ def observe(tests) -> Observed:
     return Observed(
         tests=list(tests),
         S=S,
-        one_sided=tests[0].boundary == "one-sided",
+        one_sided=tests[0].boundary == Boundary.ONE_SIDED,
         alpha=alpha,
         p=p,
         big=big,

@@ -23,6 +23,7 @@ from rocklab.diagnosis.result import CampaignDiagnosis
 from rocklab.diagnosis.series import MIN_TESTS_TO_NAME, base_name, diagnose_records
 from rocklab.inference.intervals import mean_over_units, t_interval
 from rocklab.lab.hierarchy import plural
+from rocklab.physics.boundary import Boundary
 
 log = logging.getLogger(__name__)
 
@@ -289,7 +290,7 @@ def with_boundaries(entries, *, walls=None, thickness=None):
     """Series entries followed by one entry per boundary condition (:func:`diagnose_boundary`; ``walls``:
     series -> wall, ``thickness``: wall -> thickness [m])."""
     out = list(entries)
-    for b in ("two-sided", "one-sided"):
+    for b in tuple(Boundary):
         e = diagnose_boundary(out, b, walls=walls, thickness=thickness)
         if e is not None:
             out.append(e)

@@ -29,11 +29,12 @@ from rocklab.diagnosis.discovery import discovery
 from rocklab.diagnosis.errors import what_is_wrong
 from rocklab.diagnosis.estimation import beyond_the_catalogue, finite_mean, rivals, select_effects, stand_ins
 from rocklab.diagnosis.estimation.bias import model_bias, net_of_noise
-from rocklab.diagnosis.estimation.selection import supported
+from rocklab.diagnosis.estimation.selection import sentences, supported
 from rocklab.diagnosis.estimation.systematic import standard_error, verdict_intervals, widened
 from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_test, observe
 from rocklab.diagnosis.extended import engineering_errors, model_params, simulated_tests
 from rocklab.diagnosis.series_problem import WallProblem
+from rocklab.physics.boundary import Boundary
 
 log = logging.getLogger(__name__)
 
@@ -45,7 +46,7 @@ def base_name(boundary):
     """The base model of a boundary condition, in words."""
     return (
         "Housner e_an,2s (Eq. 2), nominal alpha, released from rest at theta0"
-        if boundary == "two-sided"
+        if boundary == Boundary.TWO_SIDED
         else "one-sided e_an,1s (Eq. 14), nominal alpha, released from rest at theta0"
     )
 
@@ -170,7 +171,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
     )
     base_err = engineering_errors(tests, n_history=n_history)
     base = {"model": base_name(boundary), "errors": base_err}
-    if boundary == "one-sided":
+    if boundary == Boundary.ONE_SIDED:
         base["alternatives"] = {
             "two-sided e (Hogan 1992)": engineering_errors(tests, base="two-sided-e", n_history=0),
             "e = 0 (Liberatore & Spera 2003)": engineering_errors(tests, base="zero", n_history=0),
@@ -284,8 +285,8 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
             if "catalogue" in sel
             else {}
         ),
-        "weak_evidence": {k: v["reason"] for k, v in sel["weak"].items()},
-        "rejected": sel["rejected"],
+        "weak_evidence": sentences({k: v["reason"] for k, v in sel["weak"].items()}),
+        "rejected": sentences(sel["rejected"]),
         "signatures": {k: v["text"] for k, v in sig.items()},
         **({"unnamed_estimates": unnamed} if (unnamed := unnamed_estimates(problem, sel, fits)) else {}),
         "heldout": {"base": _heldout_summary(sel["base"]), "model": _heldout_summary(sel["final"])},

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from rocklab.diagnosis import catalogue
+from rocklab.diagnosis.causes import Stage
 from rocklab.diagnosis.estimation import Problem
 from rocklab.diagnosis.evidence import TestStack, covariates, log_ratio, noise_covariates, residuals
 from rocklab.diagnosis.extended import model_params
@@ -20,7 +21,7 @@ class WallProblem(Problem):
         self.S = TestStack.of(self.tests)
         self.boundary = self.tests[0].boundary
         self.causes = tuple(catalogue.for_boundary(self.boundary, families=True, columns=log_columns(self.tests)))
-        self.after_selection = tuple(catalogue.for_boundary(self.boundary, "after selection"))
+        self.after_selection = tuple(catalogue.for_boundary(self.boundary, Stage.AFTER_SELECTION))
         self._sig = None
         self._cache = {}
 

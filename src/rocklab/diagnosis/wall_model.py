@@ -30,6 +30,7 @@ import numpy as np
 from rocklab.physics import impact as _impact
 from rocklab.physics import law as _law
 from rocklab.physics import restitution
+from rocklab.physics.boundary import Boundary
 from rocklab.physics.flight import (
     apex,
     apex_after,
@@ -178,7 +179,7 @@ def base_params(tests) -> ModelParams:
     return ModelParams(
         alpha=alpha,
         p=np.array([t.p for t in tests], float),
-        one_sided=np.array([t.boundary == "one-sided" for t in tests]),
+        one_sided=np.array([t.boundary == Boundary.ONE_SIDED for t in tests]),
         gap_model=np.zeros(alpha.shape, bool),
         e0=restitution.analytic([t.boundary for t in tests], alpha),
         c_pos=ones,
@@ -400,7 +401,7 @@ def simulator(mp: ModelParams, base="analytic") -> RockingModel:
     return RockingModel(
         alpha=float(mp.alpha),
         p=float(mp.p),
-        boundary="one-sided" if one else "two-sided",
+        boundary=Boundary.ONE_SIDED if one else Boundary.TWO_SIDED,
         impact=law,
         alpha_rock=float(mp.a_pos),
         alpha_neg=float(mp.a_neg),

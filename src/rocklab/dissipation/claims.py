@@ -57,6 +57,7 @@ from rocklab.diagnosis import catalogue
 from rocklab.lab.hierarchy import COVARIATE_LEVEL
 from rocklab.physics import restitution
 from rocklab.physics import wall as _wall
+from rocklab.physics.boundary import Boundary
 from rocklab.physics.law import Restitution
 
 optimize = lazy_module("scipy.optimize")
@@ -99,7 +100,7 @@ class Claim:
 #: The kinds of claim :func:`verdict` judges: no effect, the mean below a value, the mean close to it.
 CLAIM_KINDS = ("zero", "below", "near")
 #: The boundary conditions a claim can be on ('both': the boundary condition as a covariate).
-CLAIM_BOUNDARIES = ("two-sided", "one-sided", "both")
+CLAIM_BOUNDARIES = (Boundary.TWO_SIDED, Boundary.ONE_SIDED, "both")
 
 
 def read_claims(path=None):
@@ -189,8 +190,8 @@ DURATION_TOLERANCE = 0.05
 REFERENCE_RELEASE = 0.9
 #: The reference wall's restitution, as a scale of e_an: the paper's calibrated walls (Sects. 3, 5).
 REFERENCE_SCALE = {
-    "two-sided": restitution.CALIBRATED_RATIO_TWO_SIDED,
-    "one-sided": restitution.CALIBRATED_RATIO_ONE_SIDED,
+    Boundary.TWO_SIDED: restitution.CALIBRATED_RATIO_TWO_SIDED,
+    Boundary.ONE_SIDED: restitution.CALIBRATED_RATIO_ONE_SIDED,
 }
 #: Longest free rocking simulated [1/p]: a wall still rocking then is taken as never coming to rest.
 MAX_DURATION_P = 2000.0

@@ -90,6 +90,7 @@ from rocklab.inference.intervals import clustered_mean, mean_over_units, t_inter
 from rocklab.inference.multiplicity import holm
 from rocklab.lab.campaign import order_in_series
 from rocklab.lab.hierarchy import COVARIATE_LEVEL, UNIT_COLUMN, parent, plural, too_few_units
+from rocklab.physics.boundary import Boundary
 
 #: Per-test quantities of tests.csv modelled against the covariates.
 TEST_RESPONSES = ("e_ratio", "theta0_over_alpha")
@@ -499,7 +500,7 @@ COLUMNS = (
 
 
 def _covariates(boundary):
-    return [c for c in SERIES_COVARIATES if c != "contact_depth_mm" or boundary == "one-sided"]
+    return [c for c in SERIES_COVARIATES if c != "contact_depth_mm" or boundary == Boundary.ONE_SIDED]
 
 
 def campaign_effects(tests, diagnosis=None, qc=None, walls=None, claims=PAPER_CLAIMS):

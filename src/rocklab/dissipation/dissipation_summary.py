@@ -14,6 +14,7 @@ import pandas as pd
 
 from rocklab.dissipation.claims import margin_rule
 from rocklab.lab.hierarchy import MIN_DF, MIN_UNITS_PER_LEVEL
+from rocklab.physics.boundary import Boundary
 from rocklab.summaries import LAST_DIGIT, Tolerance
 
 #: How far two machines may take the dissipation summary apart: closed-form
@@ -27,7 +28,7 @@ TOLERANCES = {"*": LAST_DIGIT}
 CAMPAIGN_LEVEL_TOLERANCES = {"*": Tolerance(abs=1e-6, rel=1e-3)}
 
 #: The two boundary conditions and their keys in the summary.
-BOUNDARIES = {"two-sided": "two_sided", "one-sided": "one_sided"}
+BOUNDARIES = {b: b.key for b in Boundary}
 
 #: Quantities of ``summary.csv`` the pages quote.
 SUMMARY_QUANTITIES = (

@@ -64,6 +64,7 @@ from rocklab.inference.multiplicity import holm
 from rocklab.inference.notes import counted, note_lines, note_mark
 from rocklab.lab.hierarchy import COVARIATE_LEVEL, UNIT_COLUMN, too_few_units
 from rocklab.lab.validity import Verdict
+from rocklab.physics.boundary import Boundary
 from rocklab.physics.restitution import CALIBRATED_RATIO_ONE_SIDED
 
 stats = lazy_module("scipy.stats")
@@ -91,9 +92,9 @@ TABLE3_WINDOWS = {
 RATIO_COLUMNS = (*SERIES_COLUMNS, *TABLE3_WINDOWS)
 #: Table 3 of the paper (one-sided rocking only), e_exp / e_an,1s.
 PAPER_TABLE3 = {
-    ("one-sided", "e_ratio_complete"): CALIBRATED_RATIO_ONE_SIDED,
-    ("one-sided", "e_ratio_without_first_half_cycle"): 1.34,
-    ("one-sided", "e_ratio_first_half_cycle"): 0.72,
+    (Boundary.ONE_SIDED, "e_ratio_complete"): CALIBRATED_RATIO_ONE_SIDED,
+    (Boundary.ONE_SIDED, "e_ratio_without_first_half_cycle"): 1.34,
+    (Boundary.ONE_SIDED, "e_ratio_first_half_cycle"): 0.72,
 }
 
 
@@ -488,7 +489,7 @@ def campaign_tables(datasets, qc_df, walls, n_boot=4000, seed=0):
         ],
         ignore_index=True,
     )
-    one = tests[tests.boundary == "one-sided"]
+    one = tests[tests.boundary == Boundary.ONE_SIDED]
     effects = pd.concat(
         [
             factor_effect(one, "contact_depth_mm"),

@@ -13,8 +13,12 @@ is given from (:data:`MIN_BOOTSTRAP`).  The dissipation's tables
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import Any
+
 import numpy as np
 import pandas as pd
+from numpy.typing import ArrayLike
 
 from rocklab._imports import lazy_module
 from rocklab.lab.hierarchy import too_few_units
@@ -32,7 +36,7 @@ stats = lazy_module("scipy.stats")
 MIN_BOOTSTRAP = 5
 
 
-def t_interval(est, se, df, level=0.95, null=0.0):
+def t_interval(est: float, se: float, df: float, level: float = 0.95, null: float = 0.0) -> tuple[float, float, float]:
     """Two-sided Student's t interval of ``est`` and the p-value of ``est = null``."""
     if se == 0:
         return est, est, 1.0 if est == null else 0.0
@@ -40,7 +44,7 @@ def t_interval(est, se, df, level=0.95, null=0.0):
     return est - q * se, est + q * se, float(2 * stats.t.sf(abs(est - null) / se, df))
 
 
-def mean_over_units(values, units, level):
+def mean_over_units(values: ArrayLike, units: ArrayLike, level: str) -> tuple[float, float, int, str]:
     """The mean over units of ``level`` of ``values``, each unit the mean of its values
     (a wall the mean of its series), and its standard error on units - 1 df.
 
@@ -66,7 +70,7 @@ def mean_over_units(values, units, level):
     return float(by_unit.mean()), se, k, too_few_units(level, k, k - 1)
 
 
-def clustered_mean(values, units, level):
+def clustered_mean(values: ArrayLike, units: ArrayLike, level: str) -> tuple[float, float, float, int, str]:
     """The mean over all ``values`` and its standard error with the units of ``level`` as clusters.
 
     The cluster-robust standard error with the bias reduction CR2 of Bell &
@@ -119,18 +123,18 @@ def clustered_mean(values, units, level):
     return mean, se, df, k, too_few_units(level, k, k - 1)
 
 
-def interval_note(n, unit="tests"):
+def interval_note(n: int, unit: str = "tests") -> str:
     """Why a value resting on ``n`` ``unit`` has no bootstrap interval; "" when it has one."""
     return f"too few {unit} for an interval ({n} < {MIN_BOOTSTRAP})" if n < MIN_BOOTSTRAP else ""
 
 
-def no_interval_note(reason):
+def no_interval_note(reason: str) -> str:
     """The note of a value given without an interval because of :func:`rocklab.lab.hierarchy.too_few_units`'s
     ``reason``: "2 walls, 1 residual df (2 needed): no interval"; "" for no reason."""
     return f"{reason.removeprefix('not testable: ')}: no interval" if reason else ""
 
 
-def small_sample_expansion(n_units, level=0.95):
+def small_sample_expansion(n_units: int, level: float = 0.95) -> float:
     """The factor by which a percentile bootstrap interval over ``n_units`` resampled units is too narrow.
 
     The bootstrap distribution of a mean over n units has the spread of
@@ -151,7 +155,7 @@ def small_sample_expansion(n_units, level=0.95):
     return float(np.sqrt(n_units / (n_units - 1)) * stats.t.ppf(q, n_units - 1) / stats.norm.ppf(q))
 
 
-def expanded(interval, centre, n_units, level=0.95):
+def expanded(interval: Sequence[float], centre: float, n_units: int, level: float = 0.95) -> tuple[float, float]:
     """A percentile ``interval`` over ``n_units`` resampled units, each side's distance from the estimate
     ``centre`` widened by :func:`small_sample_expansion` (the expanded percentile interval with its
     quantiles read off a normal approximation: 40 resamples cannot reach the 0.3 % percentile that
@@ -166,7 +170,7 @@ def expanded(interval, centre, n_units, level=0.95):
     return float(centre - f * (centre - lo)), float(centre + f * (hi - centre))
 
 
-def percentile_interval(draws, level=0.95, axis=None):
+def percentile_interval(draws: ArrayLike, level: float = 0.95, axis: int | None = None) -> tuple[Any, Any]:
     """Percentile interval of resampled values whose expected content of their distribution is ``level``.
 
     The quantiles (1 -+ level) / 2 of the ``n`` draws at the plotting
@@ -187,7 +191,7 @@ def percentile_interval(draws, level=0.95, axis=None):
     return (float(lo), float(hi)) if np.ndim(lo) == 0 else (lo, hi)
 
 
-def bootstrap_ci(values, n_boot=4000, level=0.95, seed=0):
+def bootstrap_ci(values: ArrayLike, n_boot: int = 4000, level: float = 0.95, seed: int = 0) -> tuple[float, float]:
     """Percentile bootstrap interval of the mean (vectorised, seeded), expanded for its few values
     (:func:`expanded`).
 

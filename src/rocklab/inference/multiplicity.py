@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from rocklab._imports import lazy_module
 
 stats = lazy_module("scipy.stats")
 
 
-def simultaneous_factor(k, df, level=0.95):
+def simultaneous_factor(k: int, df: float, level: float = 0.95) -> float:
     """The factor that widens ``k`` intervals of ``level`` each into intervals that hold all ``k`` at ``level``.
 
     Šidák's rule: each interval at level^(1/k) (0.9747 for two at 95 %),
@@ -28,7 +29,7 @@ def simultaneous_factor(k, df, level=0.95):
     return float(stats.t.ppf(0.5 + joint / 2, df) / stats.t.ppf(0.5 + level / 2, df))
 
 
-def holm(pvalues):
+def holm(pvalues: ArrayLike) -> NDArray[np.float64]:
     """Holm step-down adjusted p-values (family-wise error control)."""
     p = np.asarray(pvalues, float)
     order = np.argsort(p)

@@ -24,6 +24,7 @@ import numpy as np
 import pandas as pd
 
 from rocklab.lab.raw_format import CONTROL, RawFormatError, campaign_file, check_identifier
+from rocklab.physics.boundary import Boundary
 
 SPECIMEN_COLUMNS = {
     "specimen": str,
@@ -54,7 +55,6 @@ TEST_COLUMNS = {
     "file": str,
     "note": str,
 }
-BOUNDARIES = ("two-sided", "one-sided")
 DIRECTIONS = ("push", "pull")
 
 #: Most tests of one reduction job (:meth:`Campaign.reduction_jobs`; the
@@ -397,11 +397,11 @@ def _row_problem(root, row, known_spec, known_setup) -> str | None:
     # no setup: a test no transducer recorded (its record says so, rocklab.lab.records)
     if row.setup and row.setup not in known_setup:
         return f"unknown setup {row.setup!r} (not in setups.csv)"
-    if row.boundary not in BOUNDARIES:
-        return f"boundary {row.boundary!r} is not one of {', '.join(BOUNDARIES)}"
+    if row.boundary not in set(Boundary):
+        return f"boundary {row.boundary!r} is not one of {', '.join(Boundary)}"
     if row.direction not in DIRECTIONS:
         return f"direction {row.direction!r} is not one of {', '.join(DIRECTIONS)}"
-    if row.boundary == "one-sided" and not row.contact_depth_mm > 0:
+    if row.boundary == Boundary.ONE_SIDED and not row.contact_depth_mm > 0:
         return "one-sided test without a positive contact_depth_mm"
     if not row.file:
         return "empty file"
@@ -547,12 +547,12 @@ class Campaign:
 
 def row_series(row) -> str:
     """Series of a row of tests.csv (:func:`series_id`)."""
-    return series_id(row.specimen, row.boundary, row.contact_depth_mm if row.boundary == "one-sided" else np.nan)
+    return series_id(row.specimen, row.boundary, row.contact_depth_mm if row.boundary == Boundary.ONE_SIDED else np.nan)
 
 
 def series_id(specimen, boundary, contact_depth_mm) -> str:
     """Series key: specimen + boundary + contact depth (docs/raw-format.md)."""
-    if boundary == "two-sided" or contact_depth_mm is None or not np.isfinite(contact_depth_mm):
+    if boundary == Boundary.TWO_SIDED or contact_depth_mm is None or not np.isfinite(contact_depth_mm):
         return f"{specimen}-2s"
     return f"{specimen}-1s-cd{int(round(contact_depth_mm))}"
 

@@ -55,7 +55,7 @@ def plural(level, n):
     return f"{n} {level}{'' if n == 1 or level.endswith('s') else 's'}"
 
 
-def too_few_units(level, n_units, df, per_level=None):
+def too_few_units(level: str, n_units: int, df: float, per_level: dict[str, int] | None = None) -> str:
     """Why a verdict on units of ``level`` cannot be given; "" when it can.
 
     Parameters

@@ -66,12 +66,11 @@ from rocklab.lab.channels import LOST_STATUSES
 from rocklab.lab.flight_fit import local_fit, model_value, model_velocity, odd_samples, root_tau, stationary_tau
 from rocklab.lab.release import screw_departure
 from rocklab.lab.rotation import unseen_impacts
+from rocklab.physics.boundary import Boundary
 from rocklab.physics.flight import quarter_period_linear
 
 #: Group of a reduced test's netCDF file that holds its stored motion.
 MOTION_GROUP = "motion"
-#: Boundary conditions of Sect. 2.1.
-BOUNDARIES = ("two-sided", "one-sided")
 #: Columns of :attr:`Motion.impacts`, in order.
 IMPACT_FIELDS = (
     "k",
@@ -301,8 +300,8 @@ def extract_motion(t, theta, fs, boundary, p, *, k_noise=10.0, ring_guard_s=0.06
     """
     from scipy.signal import find_peaks, savgol_filter  # imported here: see noise_level
 
-    if boundary not in BOUNDARIES:
-        raise ValueError(f"boundary must be one of {BOUNDARIES}, got {boundary!r}")
+    if boundary not in set(Boundary):
+        raise ValueError(f"boundary must be one of {tuple(b.value for b in Boundary)}, got {boundary!r}")
     t = np.asarray(t, float)
     theta = np.asarray(theta, float)
     noise = noise_level(theta, fs)
@@ -320,7 +319,7 @@ def extract_motion(t, theta, fs, boundary, p, *, k_noise=10.0, ring_guard_s=0.06
     # Flight extrema after the release: alternating signs in two-sided
     # rocking, positive only in one-sided rocking.
     pos = find_peaks(us[i_half:], prominence=hyst)[0] + i_half
-    if boundary == "two-sided":
+    if boundary == Boundary.TWO_SIDED:
         neg = find_peaks(-us[i_half:], prominence=hyst)[0] + i_half
         ext = np.r_[pos, neg]
         ext.sort(kind="stable")
@@ -346,7 +345,7 @@ def extract_motion(t, theta, fs, boundary, p, *, k_noise=10.0, ring_guard_s=0.06
     prev_after = t_rel
     for k, (a, b) in enumerate(zip(starts, ext), start=1):
         seg = u[a : b + 1]
-        if boundary == "two-sided":
+        if boundary == Boundary.TWO_SIDED:
             cr = _crossings(seg, 0, seg.size)
             if cr.size == 0:
                 break

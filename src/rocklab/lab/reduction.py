@@ -41,6 +41,7 @@ from rocklab.lab.records import (
     read_any_record,
 )
 from rocklab.physics import wall
+from rocklab.physics.boundary import Boundary
 
 log = logging.getLogger(__name__)
 
@@ -107,7 +108,7 @@ def test_metadata(campaign: Campaign, test_id: str) -> dict:
     alpha = float(wall.slenderness_angle(h, b))
     R = float(wall.half_diagonal(h, b)) / 1000.0
     p = float(wall.frequency_parameter(R))
-    cd = float(row.contact_depth_mm) if row.boundary == "one-sided" else np.nan
+    cd = float(row.contact_depth_mm) if row.boundary == Boundary.ONE_SIDED else np.nan
     return {
         "test_id": test_id,
         "specimen": row.specimen,

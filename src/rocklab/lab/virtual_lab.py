@@ -52,6 +52,7 @@ from rocklab.lab.virtual_record import (
     write_record,
 )
 from rocklab.physics import restitution, wall
+from rocklab.physics.boundary import Boundary
 
 #: Specimens like those of the real campaign (Table 2 of the paper).
 DEFAULT_SPECIMENS = pd.DataFrame(
@@ -114,7 +115,7 @@ class VirtualTest:
 
     test_id: str
     specimen: str = "1a"
-    boundary: str = "two-sided"
+    boundary: str = Boundary.TWO_SIDED
     direction: str = "push"
     contact_depth_mm: float | None = None
     fs: float = 400.0
@@ -137,7 +138,7 @@ class VirtualTest:
         """The transducer setup of the test (none for the other instruments)."""
         if self.instrument != "transducers":
             return ""
-        bc = "2s" if self.boundary == "two-sided" else f"1s-cd{self.contact_depth_mm:g}"
+        bc = "2s" if self.boundary == Boundary.TWO_SIDED else f"1s-cd{self.contact_depth_mm:g}"
         return f"S-{self.specimen}-{bc}"
 
 
@@ -205,7 +206,7 @@ def simulate_virtual_test(test: VirtualTest, specimen, layout, rng=None, t_end=4
 
     rng = np.random.default_rng(rng)
     h, b = specimen["height_mm"] / 1e3, specimen["thickness_mm"] / 1e3
-    one = test.boundary == "one-sided"
+    one = test.boundary == Boundary.ONE_SIDED
     if one and test.direction == "pull":
         raise ValueError("a one-sided wall can only be released from theta > 0 (push)")
     alpha = float(wall.slenderness_angle(h, b))
@@ -241,7 +242,7 @@ def simulate_virtual_test(test: VirtualTest, specimen, layout, rng=None, t_end=4
     base = imp[imp["kind"] == "base"] if len(imp) else imp
     ratios = (base["thetadot_after"] / base["thetadot_before"]).to_numpy() if len(base) else np.array([])
     # a one-sided wall with a gap rocks on the base impacts of Eq. 2
-    e_an = restitution.analytic("one-sided" if one and model.gap == 0 else "two-sided", alpha)
+    e_an = restitution.analytic(Boundary.ONE_SIDED if one and model.gap == 0 else Boundary.TWO_SIDED, alpha)
     reason, why = expected_verdict(
         test.faults, layout, specimen["thickness_mm"], test.release_ratio, truth["residual_top_mm"], test.instrument
     )
@@ -329,7 +330,7 @@ def series_records(
     """
     from rocklab.lab import kinematics
 
-    one = boundary == "one-sided"
+    one = boundary == Boundary.ONE_SIDED
     layout = usual_layout("S", specimen["length_mm"], specimen["height_mm"], specimen["thickness_mm"], one)
     X, F = transducer_geometry(layout)
     used = np.r_[np.ones(5), np.zeros(len(layout) - 5)]  # channel 5 monitors, it is no rigid-body input
@@ -418,7 +419,9 @@ def write_campaign(out_dir, tests, specimens=None, layouts=None, seed=0, t_end=4
         # the transducers' layout of a test that other instruments record: the same true motion, not written
         key = test.setup or replace(test, instrument="transducers").setup
         if key not in layouts:
-            layouts[key] = usual_layout(key, sp.length_mm, sp.height_mm, sp.thickness_mm, test.boundary == "one-sided")
+            layouts[key] = usual_layout(
+                key, sp.length_mm, sp.height_mm, sp.thickness_mm, test.boundary == Boundary.ONE_SIDED
+            )
         layout = layouts[key]
         t, E, truth = simulate_virtual_test(test, sp, layout, np.random.default_rng(ss), t_end)
         rel = f"tests/{test.test_id}.csv.gz"
@@ -526,7 +529,7 @@ def default_plan(n_tests=20, seed=0, fs_early=100.0):
     for k in range(n_tests):
         kw = special[k] if k < len(special) else {}
         one = kw.get("direction") != "pull" and k % 3 == 2
-        bc = dict(boundary="one-sided", contact_depth_mm=float(rng.choice([120, 260]))) if one else {}
+        bc = dict(boundary=Boundary.ONE_SIDED, contact_depth_mm=float(rng.choice([120, 260]))) if one else {}
         residual = kw.pop("residual_top_mm", float(rng.normal(0, 0.3)))
         plan.append(
             VirtualTest(

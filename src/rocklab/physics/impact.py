@@ -44,6 +44,7 @@ from collections.abc import Callable
 import numpy as np
 
 from rocklab.physics import restitution
+from rocklab.physics.boundary import Boundary
 from rocklab.physics.law import speed_factor
 from rocklab.physics.wall import overturning_velocity
 
@@ -282,7 +283,7 @@ class Custom(ImpactLaw):
 def analytic(boundary, gap=False) -> ImpactLaw:
     """The analytic law of the base impacts of a wall: Eq. 14 for a one-sided wall without a gap
     (a rebound), Eq. 2 otherwise (two-sided, or a one-sided wall swinging through a gap, Fig. 12)."""
-    return OneSided() if boundary == "one-sided" and not gap else HousnerTwoSided()
+    return OneSided() if boundary == Boundary.ONE_SIDED and not gap else HousnerTwoSided()
 
 
 def calibrated(law: ImpactLaw, c_pos=1.0, c_neg=1.0, a=1.0, b=0.0) -> ImpactLaw:

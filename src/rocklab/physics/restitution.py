@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from rocklab.physics.boundary import Boundary
 from rocklab.physics.flight import potential
 from rocklab.physics.wall import inertia_ratio
 
@@ -141,10 +142,10 @@ def analytic(boundary, alpha, mR2_over_Io=None):
     those names, broadcast against ``alpha``.
     """
     b = np.asarray(boundary)
-    unknown = set(np.unique(b)) - {"two-sided", "one-sided"}
+    unknown = set(np.unique(b)) - set(Boundary)
     if unknown:
         raise ValueError(f"unknown boundary {sorted(unknown)[0]!r}")
-    out = np.where(b == "one-sided", one_sided(alpha, mR2_over_Io), two_sided(alpha, mR2_over_Io))
+    out = np.where(b == Boundary.ONE_SIDED, one_sided(alpha, mR2_over_Io), two_sided(alpha, mR2_over_Io))
     return out if out.ndim else float(out)
 
 

@@ -14,11 +14,13 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
+from rocklab.physics.boundary import Boundary
+
 #: The panels of each row: (boundary, covariate, axis label).
 COLUMNS = (
-    ("two-sided", "h_over_b", "h/b"),
-    ("one-sided", "h_over_b", "h/b"),
-    ("one-sided", "contact_depth_mm", "contact depth CD (mm)"),
+    (Boundary.TWO_SIDED, "h_over_b", "h/b"),
+    (Boundary.ONE_SIDED, "h_over_b", "h/b"),
+    (Boundary.ONE_SIDED, "contact_depth_mm", "contact depth CD (mm)"),
 )
 #: Marker of each unit material (others get circles).
 MARKERS = {"clay brick": "s", "tuff": "^"}

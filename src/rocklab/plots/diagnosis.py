@@ -21,19 +21,20 @@ import numpy as np
 
 from rocklab.diagnosis import block_tests, measured_test, simulate_measured, stored_records
 from rocklab.diagnosis.catalogue import by_name
-from rocklab.diagnosis.causes import instability_angle, restitution_drift, stop_threshold
+from rocklab.diagnosis.causes import Stage, instability_angle, restitution_drift
 from rocklab.diagnosis.evidence import flight_time_alpha, in_series_order, observe
 from rocklab.diagnosis.extended import model_params
 from rocklab.diagnosis.result import CampaignDiagnosis
 from rocklab.diagnosis.wall_model import impact_speeds
 from rocklab.physics import restitution
+from rocklab.physics.boundary import Boundary
 from rocklab.physics.flight import quarter_period
 from rocklab.physics.wall import overturning_velocity
 
 #: Literature models of panel a: label -> base of :func:`rocklab.diagnosis.extended.rocking_model`.
 LITERATURE = {
-    "two-sided": {"Housner e_an,2s (Eq. 2)": "analytic"},
-    "one-sided": {
+    Boundary.TWO_SIDED: {"Housner e_an,2s (Eq. 2)": "analytic"},
+    Boundary.ONE_SIDED: {
         "e_an,1s (Eq. 14)": "analytic",
         "two-sided e (Hogan 1992)": "two-sided-e",
         "e = 0 (Liberatore & Spera 2003)": "zero",
@@ -74,7 +75,7 @@ def history_figure(test, entry):
         _plot(axes[1], t, th, test, color="C3", lw=0.9, label=f"{' + '.join(ext['effects'])}\n({params})")
     else:
         axes[1].text(0.5, 0.5, "no extension carried by the data", transform=axes[1].transAxes, ha="center")
-    n = "14" if test.boundary == "two-sided" else "15"
+    n = "14" if test.boundary == Boundary.TWO_SIDED else "15"
     axes[0].set_title(f"Fig. {n} - series {entry.key} ({test.boundary}): a, literature models")
     axes[1].set_title("b, the model extended by the causes the diagnosis found")
     for ax in axes:
@@ -144,8 +145,8 @@ def discovery_figure(tests, entry):
     ob = observe(tests)
     listed, listed_values = entry.listed_verdict or [], entry.listed_params or {}
     values = {k: v for f in entry.findings for k, v in f.params.items()}
-    # the stop acts on the free run's end, not on the laws drawn here
-    chosen = [f.effect for f in entry.findings if f.effect != stop_threshold.CAUSE.name]
+    # a cause estimated after selection (the stop) acts on the free run's end, not on the laws drawn here
+    chosen = [f.effect for f in entry.findings if by_name(f.effect).stage is Stage.SELECTION]
     fig, axes = plt.subplots(1, len(found), figsize=(7 * len(found), 4.5), squeeze=False)
     for ax, f in zip(axes[0], found):
         fam = by_name(f.effect).family
@@ -232,7 +233,7 @@ def series_figures(diagnosis, tests_by_series):
         out[e.key] = history_figure(measured_test(recs[0]), e)
         if e.discovered:
             out[f"discovered/{e.key}"] = discovery_figure(_series_tests(paths), e)
-    for name, boundary in (("fig14", "two-sided"), ("fig15", "one-sided")):
+    for name, boundary in (("fig14", Boundary.TWO_SIDED), ("fig15", Boundary.ONE_SIDED)):
         own = diagnosis.series_of(boundary)
         out[name] = out[max(own, key=lambda e: e.n_tests).key] if own else _empty(boundary)
     return out

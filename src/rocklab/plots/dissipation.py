@@ -16,8 +16,10 @@ import numpy as np
 import pandas as pd
 from matplotlib.ticker import MaxNLocator
 
+from rocklab.physics.boundary import Boundary
+
 #: Panels of the Sect. 3-4 figures, in the paper's order.
-PANELS = (("two-sided", "a", "2s"), ("one-sided", "b", "1s"))
+PANELS = ((Boundary.TWO_SIDED, "a", "2s"), (Boundary.ONE_SIDED, "b", "1s"))
 #: Marker colour of each contact depth (Fig. 13b).
 CD_COLORS = {60.0: "C0", 120.0: "C1", 260.0: "C2"}
 
@@ -58,7 +60,7 @@ def initial_rotation_by_test(tests):
         if len(d):
             ax.legend(fontsize=6, ncol=2, loc="center left", bbox_to_anchor=(1.01, 0.5))
         ax.grid(alpha=0.3)
-    axes["one-sided"].set_xlabel("time history, TH (test order within its series)")
+    axes[Boundary.ONE_SIDED].set_xlabel("time history, TH (test order within its series)")
     fig.set_layout_engine("tight")
     return fig
 
@@ -95,7 +97,7 @@ def ratio_vs_impacts(e_by_n, min_tests=5):
         ax.set_title(f"Fig. 11{letter} - {short}, {d.test_id.nunique()} tests")
         ax.legend(fontsize=7)
         ax.grid(alpha=0.3)
-    axes["one-sided"].set_xlabel("number of impacts, n")
+    axes[Boundary.ONE_SIDED].set_xlabel("number of impacts, n")
     fig.set_layout_engine("tight")
     return fig
 
@@ -114,7 +116,7 @@ def ratio_by_series(tests, series):
         x = dict(zip(s.series, range(len(s))))
         d = tests[tests.boundary == boundary]
         for r in s.itertuples():
-            if boundary == "one-sided":
+            if boundary == Boundary.ONE_SIDED:
                 color = CD_COLORS.get(r.contact_depth_mm, "k")
             else:
                 color = "C3" if getattr(r, "stands_apart", False) in (True, "True") else "k"
@@ -126,7 +128,7 @@ def ratio_by_series(tests, series):
             ax.errorbar(x[r.series], r.e_ratio_mean, yerr=err, fmt="s", color=color, ms=5, capsize=3)
         ax.axhline(1.0, color="0.5", lw=0.8)
         ax.axhline(d.e_ratio.mean(), color="k", ls="--", lw=0.8, label=f"mean of the tests, {d.e_ratio.mean():.3f}")
-        if boundary == "one-sided":
+        if boundary == Boundary.ONE_SIDED:
             for cd, c in CD_COLORS.items():
                 ax.plot([], [], "s", color=c, label=f"CD = {cd:g} mm")
         elif s.get("stands_apart", pd.Series(dtype=bool)).eq(True).any():
@@ -213,7 +215,7 @@ def centre_amplification(tests, ds=None, monitor=None, t_first_impact=None):
         ax1.set_title("Fig. 20a - no one-sided test with a monitor channel")
     ax1.set_xlabel("t [s]")
     ax1.set_ylabel("Δl [mm]")
-    d = tests[tests.boundary == "one-sided"].dropna(subset=["centre_amplification"])
+    d = tests[tests.boundary == Boundary.ONE_SIDED].dropna(subset=["centre_amplification"])
     x0 = 0
     for (cd, _name), g in d.groupby(["contact_depth_mm", "series"], sort=True):
         ax2.plot(x0 + np.arange(len(g)), g.centre_amplification, ".", ms=4, color=CD_COLORS.get(cd, "k"))
@@ -239,7 +241,7 @@ def centre_amplification(tests, ds=None, monitor=None, t_first_impact=None):
 
 def fig20_sample(tests):
     """Test of Fig. 20a: the first one-sided test with a monitor reading, or None."""
-    d = tests[(tests.boundary == "one-sided") & tests.centre_amplification.notna()]
+    d = tests[(tests.boundary == Boundary.ONE_SIDED) & tests.centre_amplification.notna()]
     return next(iter(d.test_id), None)
 
 
@@ -260,7 +262,7 @@ def dissipation_figures(tests, e_by_n, series, sample=None):
     """
     from rocklab.lab.motion import monitor_readings
 
-    both = ("two-sided", "one-sided")
+    both = tuple(Boundary)
     figs = {
         "fig10": initial_rotation_by_test(tests),
         "fig11": ratio_vs_impacts(e_by_n),
@@ -270,7 +272,7 @@ def dissipation_figures(tests, e_by_n, series, sample=None):
             "theta0_over_alpha",
             "θ0 / α",
             "Fig. 16",
-            lines={"two-sided": [(0.91, "paper, mean 0.91")], "one-sided": [(0.73, "paper, mean 0.73")]},
+            lines={Boundary.TWO_SIDED: [(0.91, "paper, mean 0.91")], Boundary.ONE_SIDED: [(0.73, "paper, mean 0.73")]},
         ),
         "fig17": series_means(
             series,

@@ -12,6 +12,7 @@ from collections.abc import Callable, Mapping
 
 from rocklab.lab.hierarchy import plural
 from rocklab.lab.validity import Verdict
+from rocklab.physics.boundary import Boundary
 from rocklab.report.environments import environment_moves, environment_sections
 from rocklab.report.format import NOT_MEASURED, markdown_table, show
 
@@ -75,7 +76,7 @@ def table3(n: Mapping) -> str:
         return f"{show(stats.get('mean'), '.3f')} ({note})" if note else _interval(stats, ".3f")
 
     rows, paper = [], None
-    for key, name in (("one_sided", "one-sided"), ("two_sided", "two-sided")):
+    for key, name in (("one_sided", Boundary.ONE_SIDED), ("two_sided", Boundary.TWO_SIDED)):
         t3 = n["dissipation"][key]["table3"]
         if not t3:
             continue
@@ -92,7 +93,7 @@ def stands_apart(n: Mapping) -> str:
     """Series whose mean e_exp/e_an stands apart within their boundary condition."""
     rows = [
         [name, s["series"], show(s["e_ratio_mean"], ".3f"), show(s["modified_z"], ".1f")]
-        for key, name in (("two_sided", "two-sided"), ("one_sided", "one-sided"))
+        for key, name in (("two_sided", Boundary.TWO_SIDED), ("one_sided", Boundary.ONE_SIDED))
         for s in n["dissipation"][key]["stands_apart"]
     ]
     return markdown_table(["boundary", "series", "e_exp/e_an", "modified z"], rows) if rows else "None."
@@ -111,7 +112,7 @@ def effects(n: Mapping) -> str:
             ),
             show(e["p"], ".2f") if e["p"] is not None else e["test"],
         ]
-        for key, name in (("two_sided", "two-sided"), ("one_sided", "one-sided"))
+        for key, name in (("two_sided", Boundary.TWO_SIDED), ("one_sided", Boundary.ONE_SIDED))
         for test, e in n["dissipation"]["effects"]["kruskal"].get(key, {}).items()
     ]
     return markdown_table(["boundary", "factor", "quantity", "means by level (units)", "p"], rows)

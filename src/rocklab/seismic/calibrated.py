@@ -52,13 +52,14 @@ import numpy as np
 import pandas as pd
 
 from rocklab.physics import wall
+from rocklab.physics.boundary import Boundary
 from rocklab.seismic.indices import FLIPPED_FRACTION
 from rocklab.seismic.reductions import record_reductions
 
 log = logging.getLogger(__name__)
 
 #: Prefix of the model names of a boundary condition (as the paper's models).
-PREFIX = {"two-sided": "2s", "one-sided": "1s"}
+PREFIX = {b: b.short for b in Boundary}
 #: Suffix of the calibrated wall with the findings of :data:`ABSOLUTE_SIZE` as absolute sizes.
 SIZES = "sizes"
 
@@ -313,7 +314,7 @@ def describe(diagnosis, name):
 
 #: The paper's "e alone" calibration of each boundary (Sect. 3, Table 3): the
 #: baseline the calibrated walls are compared with.
-E_ALONE = {"two-sided": "2s-0.95", "one-sided": "1s-1.05"}
+E_ALONE = {Boundary.TWO_SIDED: "2s-0.95", Boundary.ONE_SIDED: "1s-1.05"}
 
 #: Columns of ``results/maps/calibrated.csv`` (schema map_calibrated.schema.yaml).
 TABLE_COLUMNS = [

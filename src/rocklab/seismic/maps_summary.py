@@ -25,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from rocklab.physics.boundary import Boundary
 from rocklab.seismic.indices import FLIPPED_FRACTION
 from rocklab.summaries import Tolerance
 
@@ -214,7 +215,7 @@ def calibrated_summary(path, grid_n: int) -> dict | None:
         full = rows[rows["role"] == "calibrated"].iloc[0]
         sizes = rows[rows["role"] == "absolute sizes"]
         offs = rows[rows["role"] == "finding off"].sort_values("rank")
-        out["2s" if boundary == "two-sided" else "1s"] = {
+        out["2s" if boundary == Boundary.TWO_SIDED else "1s"] = {
             "e_alone": {"model": e_alone["model"], "N_O": e_alone["N_O_mean"], "scatter": e_alone["scatter_mean"]},
             "calibrated": {
                 "model": full["model"],

@@ -11,6 +11,7 @@ records.
 
 from __future__ import annotations
 
+from rocklab.physics.boundary import Boundary
 from rocklab.physics.restitution import (
     AMPLITUDE_LAW_ONE_SIDED,
     CALIBRATED_RATIO_ONE_SIDED,
@@ -24,11 +25,11 @@ R = 3.0
 
 #: The five maps of Sect. 5: name -> (boundary, description).
 MODELS = {
-    "2s-housner": ("two-sided", "two-sided, e = e_an,2s (Housner, Eq. 2); Fig. 21a"),
-    "2s-0.95": ("two-sided", "two-sided, e = 0.95 e_an,2s (experimentally calibrated, Sect. 3); Fig. 21b"),
-    "1s-zero": ("one-sided", "one-sided, e = 0 (Liberatore & Spera 2003: motion stops at impact); Fig. 23a"),
-    "1s-1.05": ("one-sided", "one-sided, e = 1.05 e_an,1s (Eq. 14 calibrated, Table 3); Fig. 23b"),
-    "1s-eq17": ("one-sided", "one-sided, e = e_an,1s (a - b (thetadot^-/thetadot_r)^2) (amplitude law, Eq. 17)"),
+    "2s-housner": (Boundary.TWO_SIDED, "two-sided, e = e_an,2s (Housner, Eq. 2); Fig. 21a"),
+    "2s-0.95": (Boundary.TWO_SIDED, "two-sided, e = 0.95 e_an,2s (experimentally calibrated, Sect. 3); Fig. 21b"),
+    "1s-zero": (Boundary.ONE_SIDED, "one-sided, e = 0 (Liberatore & Spera 2003: motion stops at impact); Fig. 23a"),
+    "1s-1.05": (Boundary.ONE_SIDED, "one-sided, e = 1.05 e_an,1s (Eq. 14 calibrated, Table 3); Fig. 23b"),
+    "1s-eq17": (Boundary.ONE_SIDED, "one-sided, e = e_an,1s (a - b (thetadot^-/thetadot_r)^2) (amplitude law, Eq. 17)"),
 }
 
 

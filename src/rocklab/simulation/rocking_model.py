@@ -74,6 +74,7 @@ import xarray as xr
 from rocklab.io import cf_attrs
 from rocklab.physics import flight, wall
 from rocklab.physics import impact as _impact
+from rocklab.physics.boundary import Boundary
 
 #: Rest threshold: |thetadot^+| below REST_TOL * thetadot_r (Eq. 16) is rest.
 REST_TOL = 1e-3
@@ -143,7 +144,7 @@ class RockingModel:
 
     alpha: float
     p: float
-    boundary: str = "two-sided"
+    boundary: str = Boundary.TWO_SIDED
     impact: _impact.ImpactLaw | None = None
     alpha_rock: float | None = None
     alpha_neg: float | None = None
@@ -156,11 +157,11 @@ class RockingModel:
     hinge_rounding: float = 0.0
 
     def __post_init__(self):
-        if self.boundary not in ("two-sided", "one-sided"):
+        if self.boundary not in set(Boundary):
             raise ValueError(f"boundary must be 'two-sided' or 'one-sided', not {self.boundary!r}")
         if self.form not in ("exact", "linear"):
             raise ValueError(f"form must be 'exact' or 'linear', not {self.form!r}")
-        if self.gap < 0 or (self.gap > 0 and self.boundary != "one-sided"):
+        if self.gap < 0 or (self.gap > 0 and self.boundary != Boundary.ONE_SIDED):
             raise ValueError("gap must be >= 0 and is only meaningful for one-sided rocking")
         if not -1.0 < self.hinge_rounding < 1.0:
             raise ValueError(f"hinge_rounding must be in (-1, 1), not {self.hinge_rounding!r}")
@@ -184,7 +185,7 @@ class RockingModel:
 
     @property
     def one_sided(self) -> bool:
-        return self.boundary == "one-sided"
+        return self.boundary == Boundary.ONE_SIDED
 
     @property
     def base_law(self) -> _impact.ImpactLaw:

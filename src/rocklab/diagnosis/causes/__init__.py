@@ -9,12 +9,24 @@ limestone blocks.  docs/diagnosis-method.md shows how to add one.
 
 from __future__ import annotations
 
+import enum
 from collections.abc import Callable
 from dataclasses import dataclass
 
 from rocklab.diagnosis.parameters import Param
+from rocklab.physics.boundary import Boundary
 
-BOTH = ("two-sided", "one-sided")
+BOTH = tuple(Boundary)
+
+
+class Stage(enum.StrEnum):
+    """When the diagnosis estimates a cause (its value is the word the catalogue's tables give)."""
+
+    #: A residual of the flights, selected by the engine with the other causes.
+    SELECTION = "selection"
+    #: Estimated once the chosen model is known, from what it leaves (the end of a free run: the
+    #: stop); it acts on no law a flight or an impact of the chosen model is drawn with.
+    AFTER_SELECTION = "after selection"
 
 
 def _no_signature(observed):
@@ -54,9 +66,9 @@ class Cause:
     replaces : tuple of str
         Causes it contains (Eq. 17's a is the plain scale): never fitted
         together.
-    stage : str
-        ``"selection"`` (a residual of the flights, selected by the engine)
-        or ``"after selection"`` (estimated once the chosen model is known,
+    stage : Stage
+        :attr:`Stage.SELECTION` (a residual of the flights, selected by the engine)
+        or :attr:`Stage.AFTER_SELECTION` (estimated once the chosen model is known,
         from what that model leaves: :attr:`unexplained` and :attr:`estimate`).
     unexplained : callable, optional
         After-selection causes: ``unexplained(stack, mp) -> list of str``,
@@ -117,7 +129,7 @@ class Cause:
     signature: Callable = _no_signature
     starts: Callable = _no_starts
     replaces: tuple[str, ...] = ()
-    stage: str = "selection"
+    stage: Stage = Stage.SELECTION
     unexplained: Callable | None = None
     estimate: Callable | None = None
     family: str | None = None

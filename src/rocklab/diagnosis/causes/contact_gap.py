@@ -10,6 +10,7 @@ import numpy as np
 
 from rocklab.diagnosis.causes import Cause
 from rocklab.diagnosis.parameters import Param
+from rocklab.physics.boundary import Boundary
 from rocklab.physics.law import Gap
 
 GAMMA = Param("gap_over_alpha", 0.0, 0.3, 0.0, practical=0.002)
@@ -42,7 +43,7 @@ CAUSE = Cause(
     law="one-sided: the wall swings inwards through a gap g = gamma alpha",
     params=(GAMMA,),
     laws=laws,
-    boundaries=("one-sided",),
+    boundaries=(Boundary.ONE_SIDED,),
     signature=signature,
     starts=starts,
     short="gap",

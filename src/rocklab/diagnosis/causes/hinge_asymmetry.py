@@ -8,6 +8,7 @@ import numpy as np
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import Cause
 from rocklab.diagnosis.parameters import Param
+from rocklab.physics.boundary import Boundary
 from rocklab.physics.law import Hinge, Restitution
 
 stats = lazy_module("scipy.stats")
@@ -83,7 +84,7 @@ CAUSE = Cause(
     law="alpha_+- = alpha_r exp(+-s_alpha/2), e_+- = e exp(+-s_e/2) on the hinge being left",
     params=(S_ALPHA, S_E),
     laws=laws,
-    boundaries=("two-sided",),
+    boundaries=(Boundary.TWO_SIDED,),
     signature=signature,
     starts=starts,
     on_ratios=on_ratios,

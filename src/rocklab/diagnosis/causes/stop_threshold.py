@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from rocklab._imports import lazy_module
-from rocklab.diagnosis.causes import BOTH, Cause
+from rocklab.diagnosis.causes import BOTH, Cause, Stage
 from rocklab.diagnosis.errors import engineering_rows
 from rocklab.diagnosis.evidence import TestStack
 from rocklab.diagnosis.parameters import Param
@@ -268,7 +268,7 @@ CAUSE = Cause(
     params=(V_STOP,),
     laws=laws,
     boundaries=BOTH,
-    stage="after selection",
+    stage=Stage.AFTER_SELECTION,
     unexplained=end_of_motion,
     estimate=estimate,
     short="stop",

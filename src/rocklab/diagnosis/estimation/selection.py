@@ -10,8 +10,11 @@ cannot identify (:func:`stand_ins`) or a rival the series cannot tell from it
 (:func:`rivals`) may stand in for is named with that caveat.
 """
 
+import enum
 import logging
+import math
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -28,6 +31,43 @@ log = logging.getLogger(__name__)
 
 #: BIC drop that is strong evidence for one model over another (Kass & Raftery 1995): what a cause needs to enter.
 BIC_MARGIN = 10.0
+
+
+class RejectedBy(enum.Enum):
+    """The step of the selection that turned a candidate down; its value is the sentence's template."""
+
+    DESIGN = "the design cannot identify it ({why})"
+    SIGNATURE = "its signature in the data is absent"
+    INFORMATION_CRITERION = "BIC {dbic:+.1f}"
+    HELD_OUT = "held-out deviance gain {gain:.3g} within the noise (standard error {se:.2g})"
+    INTERVAL = "95% interval within the smallest effect worth naming of its null value"
+    CARRIED = "carried by {by} (removing it costs {loss:.3g} +- {se:.2g} held out)"
+
+
+@dataclass(frozen=True)
+class Rejection:
+    """Why the selection turned a candidate down: the step (:class:`RejectedBy`) and the numbers its
+    sentence quotes.  Decisions read ``by``; only the files and the pages read :attr:`sentence`."""
+
+    by: RejectedBy
+    why: str = ""
+    dbic: float = math.nan
+    gain: float = math.nan
+    se: float = math.nan
+    loss: float = math.nan
+    carried_by: str = ""
+
+    @property
+    def sentence(self) -> str:
+        """The reason as results/diagnosis.json and the pages give it."""
+        return self.by.value.format(
+            why=self.why, dbic=self.dbic, gain=self.gain, se=self.se, loss=self.loss, by=self.carried_by
+        )
+
+
+def sentences(rejected: dict[str, "Rejection | None"]) -> dict[str, str]:
+    """Cause -> the sentence of its rejection ("" for none) of a selection's ``rejected`` or weak reasons."""
+    return {k: r.sentence if r is not None else "" for k, r in rejected.items()}
 
 
 def supported(signature, cause):
@@ -129,8 +169,9 @@ def select_effects(
         ``effects`` (chosen, in order of entry), ``fit`` (:class:`~rocklab.diagnosis.estimation.fitting.Fit`),
         ``ci`` (parameter intervals), ``base``/``final`` held-out results,
         ``steps`` (the held-out result after each entry), ``rejected``
-        (effect -> reason), ``structure`` (what the chosen model leaves) and
-        ``weak`` (candidates turned down that would remove all of it, none that did worse held out).
+        (effect -> :class:`Rejection`), ``structure`` (what the chosen model leaves) and
+        ``weak`` (candidates turned down that would remove all of it, none that did worse held out:
+        effect -> ``params`` and ``reason``, its :class:`Rejection` or None).
     """
     all_idx = np.arange(problem.n_tests)
     signature = signature or {}
@@ -171,24 +212,22 @@ def select_effects(
         cands = []
         for eff in candidates:
             ext = problem.combine(current, eff) if eff not in current else None
-            if ext is None or ext == current or rejected.get(eff, "").startswith("95%"):
+            if ext is None or ext == current or (eff in rejected and rejected[eff].by is RejectedBy.INTERVAL):
                 continue
             if not supported(signature, eff):
                 # never named without it: its fit, the costliest of all for a loss in flight, is not needed
                 why = signature[eff].get("not_identifiable")
-                rejected[eff] = (
-                    f"the design cannot identify it ({why})" if why else "its signature in the data is absent"
-                )
-                log.info("stage %d: %s rejected: %s", stage, eff, rejected[eff])
+                rejected[eff] = Rejection(RejectedBy.DESIGN, why=why) if why else Rejection(RejectedBy.SIGNATURE)
+                log.info("stage %d: %s rejected: %s", stage, eff, rejected[eff].sentence)
                 continue
             f = fit_of(ext)
             dbic = f.bic - cur_fit.bic
             if dbic > -bic_margin:
-                rejected[eff] = f"BIC {dbic:+.1f}"
+                rejected[eff] = Rejection(RejectedBy.INFORMATION_CRITERION, dbic=dbic)
             else:
                 cands.append((dbic, eff, ext, f))
                 continue
-            log.info("stage %d: %s rejected: %s", stage, eff, rejected[eff])
+            log.info("stage %d: %s rejected: %s", stage, eff, rejected[eff].sentence)
         cands = _in_order(cands, family_of, bic_margin)
         if cands:
             log.info(
@@ -202,18 +241,23 @@ def select_effects(
             d = cur_ho["deviance"] - ho["deviance"]
             gain, se = paired_difference(d)
             if not _improves(d):
-                rejected[eff] = f"held-out deviance gain {gain:.3g} within the noise (standard error {se:.2g})"
+                rejected[eff] = Rejection(RejectedBy.HELD_OUT, gain=gain, se=se)
                 if gain <= 0:
                     worse_held_out.add(eff)
                 else:
                     worse_held_out.discard(eff)
-                log.info("stage %d: %s (BIC %+.1f) rejected: %s", stage, eff, dbic, rejected[eff])
+                log.info("stage %d: %s (BIC %+.1f) rejected: %s", stage, eff, dbic, rejected[eff].sentence)
                 continue
             c = parameter_intervals(problem, f, n_boot=n_boot, seed=seed)
             if not _null_excluded(problem, eff, c):
-                rejected[eff] = "95% interval within the smallest effect worth naming of its null value"
+                rejected[eff] = Rejection(RejectedBy.INTERVAL)
                 log.info(
-                    "stage %d: %s (BIC %+.1f, held-out gain %.3g) rejected: %s", stage, eff, dbic, gain, rejected[eff]
+                    "stage %d: %s (BIC %+.1f, held-out gain %.3g) rejected: %s",
+                    stage,
+                    eff,
+                    dbic,
+                    gain,
+                    rejected[eff].sentence,
                 )
                 continue
             rejected.pop(eff, None)
@@ -241,8 +285,8 @@ def select_effects(
             ho = heldout(problem, ext, f)
             loss, se = paired_difference(ho["deviance"] - cur_ho["deviance"])
             if not _improves(ho["deviance"] - cur_ho["deviance"]) or f.bic - cur_fit.bic < bic_margin:
-                rejected[old] = f"carried by {eff} (removing it costs {loss:.3g} +- {se:.2g} held out)"
-                log.info("stage %d: %s removed: %s", stage, old, rejected[old])
+                rejected[old] = Rejection(RejectedBy.CARRIED, loss=loss, se=se, carried_by=eff)
+                log.info("stage %d: %s removed: %s", stage, old, rejected[old].sentence)
                 steps.pop(old)
                 current, cur_fit, cur_ho = ext, f, ho
                 ci = parameter_intervals(problem, f, n_boot=n_boot, seed=seed) if ext else Intervals()
@@ -259,7 +303,7 @@ def select_effects(
             if ext is not None and ext != current and supported(signature, eff):
                 f = fit_of(ext)
                 if not structure(problem, all_idx, ext, f.values):
-                    weak[eff] = {"params": f.values, "reason": rejected.get(eff, "")}
+                    weak[eff] = {"params": f.values, "reason": rejected.get(eff)}
     log.info(
         "chosen: %s; structure left: %s; weak evidence for: %s",
         "+".join(current) or "the base model",
@@ -318,7 +362,7 @@ def beyond_the_catalogue(problem: Problem, sel, *, signature, n_boot=40, seed=0,
     """
     # weak evidence for a listed cause that the held-out test or the bootstrap turned down stands; one the
     # information criterion turned down removes the structure only with a worse fit: a form it lacks
-    if any(not w["reason"].startswith("BIC") for w in sel["weak"].values()):
+    if any(w["reason"] is None or w["reason"].by is not RejectedBy.INFORMATION_CRITERION for w in sel["weak"].values()):
         return sel
     if problem.candidates(True) == problem.candidates():
         return sel
