@@ -41,9 +41,8 @@ import numpy as np
 from rocklab.lab.instrument import InstrumentMotion, health
 from rocklab.lab.records import InertialRecord
 from rocklab.lab.rotation import bridge
+from rocklab.physics.constants import G
 
-#: Standard gravity [m/s^2].
-G = 9.81
 #: Stretch at each end of the record taken as rest (the hold, the final rest) [s].
 REST_S = 0.5
 #: Largest accelerometer bias left after the zeroing [m/s^2] ("a few mm/s^2", docs/raw-format.md).

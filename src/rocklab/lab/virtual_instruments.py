@@ -25,8 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-from rocklab.lab.inertial import G
 from rocklab.lab.records import INERTIAL_COLUMNS, INERTIAL_UNITS, ROTATION_UNITS
+from rocklab.physics.constants import G
 
 #: The instruments of a virtual test (``# record:`` of its file; transducers have none).
 INSTRUMENTS = ("transducers", "rotation", "inertial")

@@ -11,10 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from rocklab.physics.constants import G
 from rocklab.physics.flight import potential
-
-#: Standard gravity [m/s^2].
-G = 9.80665
 
 
 def slenderness_angle(height, thickness):

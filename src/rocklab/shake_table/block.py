@@ -61,8 +61,8 @@ import xarray as xr
 from rocklab.diagnosis.causes import restitution_scale
 from rocklab.diagnosis.parameters import Param
 from rocklab.physics import impact, restitution
+from rocklab.physics.constants import G
 from rocklab.physics.law import Restitution
-from rocklab.physics.wall import G
 from rocklab.simulation.batch import ground_batch
 from rocklab.simulation.rocking_model import RockingModel
 

@@ -12,8 +12,7 @@ import re
 import numpy as np
 from obspy import Stream, Trace, UTCDateTime
 
-#: Standard gravity [m/s^2] (same value as ``rocklab.physics.wall.G``).
-G = 9.80665
+from rocklab.physics.constants import G
 
 #: Factor from each accepted acceleration unit to m/s^2.
 UNIT_FACTORS = {"g": G, "m/s2": 1.0, "cm/s2": 0.01, "gal": 0.01, "mm/s2": 1e-3}

@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._text import G
+from rocklab.physics.constants import G
 
 
 def cumulative_trapezoid(y, dx):
