@@ -632,6 +632,16 @@ def test_dissipation_numbers(tiny_results):
     assert d["effects"]["push_pull"]["2b-2s"]["e_ratio"]["relative_change_pct"] == pytest.approx(-0.08)
 
 
+def test_table_3_of_the_page_is_the_table_3_of_the_results(tiny_results):
+    """Issue 40, item 3: one rendering of Table 3, the page's from the numbers and results/table3.md
+    from table3.csv (rocklab.dissipation.statistics.table3_markdown), the same labels and cells."""
+    from rocklab.dissipation.statistics import table3_markdown
+
+    page = tables.table3(numbers_of(tiny_results))
+    assert page == table3_markdown(pd.read_csv(tiny_results / "table3.csv"))
+    assert "| complete " in page and "(3 tests, 2 series, 2 walls)" in page
+
+
 def test_diagnosis_numbers_pool_the_stop_gain_over_tests(tiny_results):
     d = numbers_of(tiny_results)["diagnosis"]
     two = d["two_sided"]

@@ -214,7 +214,7 @@ def table3_markdown(t3):
     A value resting on too few walls for an interval
     (:func:`boundary_summary`) is marked, and the reason follows the table.
     """
-    t3 = t3.assign(ci_note=t3.ci_note.fillna(""))
+    t3 = t3.assign(ci_note=t3.ci_note.astype(object).fillna(""))
     cells, notes = interval_cells(t3)
     wide = t3.assign(cell=cells).pivot(index="boundary", columns="window", values="cell")
     wide = wide[[w for w in TABLE3_WINDOWS.values() if w in wide]]

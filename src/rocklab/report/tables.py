@@ -10,6 +10,9 @@ from __future__ import annotations
 import functools
 from collections.abc import Callable, Mapping
 
+import pandas as pd
+
+from rocklab.dissipation.statistics import TABLE3_WINDOWS, table3_markdown
 from rocklab.lab.hierarchy import plural
 from rocklab.lab.validity import Verdict
 from rocklab.physics.boundary import Boundary
@@ -38,10 +41,6 @@ def _of(section: str) -> Callable[[Callable[[Mapping], str]], Callable[[Mapping]
     return decorate
 
 
-def _interval(stats: Mapping, spec: str) -> str:
-    return f"{show(stats.get('mean'), spec)} [{show(stats.get('ci_low'), spec)}, {show(stats.get('ci_high'), spec)}]"
-
-
 @_of("quality_control")
 def qc_series(n: Mapping) -> str:
     """Verdicts of every series (``series.csv``)."""
@@ -60,32 +59,16 @@ def qc_series(n: Mapping) -> str:
 
 @_of("dissipation")
 def table3(n: Mapping) -> str:
-    """Table 3 of the paper: e_exp/e_an by window (mean over tests, 95 % interval on walls), both boundary
-    conditions and the paper; a value without an interval says why."""
-    columns = ["e_ratio_complete", "e_ratio_without_first_half_cycle", "e_ratio_first_half_cycle"]
-    header = [
-        "boundary",
-        "tests (series, walls)",
-        "whole history",
-        "disregarding the first half cycle",
-        "first half cycle only",
+    """Table 3 of the paper from the page's numbers, as results/table3.md has it
+    (:func:`rocklab.dissipation.statistics.table3_markdown`, the one rendering of the table)."""
+    rows = [
+        {"boundary": str(b), "column": column, "window": TABLE3_WINDOWS[column], **stats}
+        for b in (Boundary.ONE_SIDED, Boundary.TWO_SIDED)
+        for column, stats in (n["dissipation"][b.key]["table3"] or {}).items()
     ]
-
-    def cell(stats):
-        note = stats.get("ci_note")
-        return f"{show(stats.get('mean'), '.3f')} ({note})" if note else _interval(stats, ".3f")
-
-    rows, paper = [], None
-    for key, name in (("one_sided", Boundary.ONE_SIDED), ("two_sided", Boundary.TWO_SIDED)):
-        t3 = n["dissipation"][key]["table3"]
-        if not t3:
-            continue
-        first = t3.get(columns[0], {})
-        counts = ", ".join(show(first.get(k)) for k in ("n_series", "n_walls"))
-        rows.append([name, f"{show(first.get('n_tests'))} ({counts})"] + [cell(t3.get(c, {})) for c in columns])
-        if all(t3.get(c, {}).get("paper") is not None for c in columns):
-            paper = [f"{name}, paper", ""] + [show(t3[c]["paper"]) for c in columns]
-    return markdown_table(header, rows + ([paper] if paper else []))
+    if not rows:
+        return "No valid test."
+    return table3_markdown(pd.DataFrame(rows).astype({"paper": float}))
 
 
 @_of("dissipation")
