@@ -22,6 +22,8 @@ calibrated walls' sixteen maps; every move within a fifth of its tolerance.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pandas as pd
 
@@ -114,7 +116,10 @@ def _record_comparison(comparison: pd.DataFrame) -> dict:
     shipped record."""
     c = comparison.astype({"table4_differences": str, "reason": str}).replace({"nan": ""})
     missing = c[c["table4_match"].isna() & c["table4_row"].notna()].drop_duplicates("table4_row")
-    out = {"missing_rows": [f"{int(r.table4_row)} ({r.record})" for r in missing.itertuples()], "by_comparison": {}}
+    out: dict[str, Any] = {
+        "missing_rows": [f"{int(r.table4_row)} ({r.record})" for r in missing.itertuples()],
+        "by_comparison": {},
+    }
     for (baseline, model), rows in c.groupby(["baseline", "model"], sort=False):
         mapped = rows[rows["N_O_baseline"].notna()]
         defined = mapped[mapped["in_paper_range"].notna()]
@@ -155,7 +160,7 @@ def maps_summary(summary_csv, reductions_csv, comparison_csv) -> dict:
     records = list(dict.fromkeys(summary["record"]))
     models = list(dict.fromkeys(summary["model"]))
     s = summary.set_index(["record", "model"])
-    out = {
+    out: dict[str, Any] = {
         "models": models,
         "records": records,
         "n_cells": s["n_cells"].iloc[0] if len(s) else None,
@@ -209,7 +214,7 @@ def calibrated_summary(path, grid_n: int) -> dict | None:
     table = pd.read_csv(path)
     if table.empty:
         return None
-    out = {}
+    out: dict[str, Any] = {}
     for boundary, rows in table.groupby("boundary", sort=False):
         e_alone = rows[rows["role"] == "e alone"].iloc[0]
         full = rows[rows["role"] == "calibrated"].iloc[0]
