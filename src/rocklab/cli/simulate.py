@@ -39,19 +39,19 @@ MAX_SAMPLES = 10_000_000
 
 def _impact_law(args, alpha):
     """The impact law the options ask for (None: the model's default) and its checks."""
-    law = None
+    law = base = None
     if args.impact is not None:
-        law = LAWS[args.impact]()
+        law = base = LAWS[args.impact]()
     if args.e_scale != 1.0:
-        law = impact.calibrated(law or impact.analytic(args.boundary, args.gap > 0), args.e_scale, args.e_scale)
+        base = law or impact.analytic(args.boundary, args.gap > 0)
+        law = impact.calibrated(base, args.e_scale, args.e_scale)
     if args.amplitude_law is not None:
         a, b = check_eq17(args.amplitude_law, "--amplitude-law")
         law = impact.AmplitudeLaw(law or impact.OneSided(), a, b)
-    elif law is not None:
+    elif base is not None:
         # Eq. 17's bracket is a law of the speed, clipped where it reaches
         # |e| = 1; a scale or a constant past it would be clipped everywhere
         # (rocklab.physics.impact.bounded_factor): asked for, it is a mistake
-        base = law.law if isinstance(law, impact.Scaled) else law
         e0 = np.abs(base.flat(alpha)[:, 0]).max() * args.e_scale
         if e0 > 1.0:
             raise UsageError(

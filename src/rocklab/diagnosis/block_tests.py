@@ -46,7 +46,7 @@ from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.causes import restitution_housner_loss
 from rocklab.diagnosis.discovery import discovery, family_against_listed
 from rocklab.diagnosis.estimation import Problem, beyond_the_catalogue, finite_mean, select_effects
-from rocklab.diagnosis.estimation.selection import sentences
+from rocklab.diagnosis.estimation.selection import sentence_of, sentences
 from rocklab.diagnosis.estimation.systematic import verdict_intervals
 from rocklab.physics import restitution
 from rocklab.physics.boundary import Boundary
@@ -331,8 +331,7 @@ def diagnose_group(trials: _Trials, *, n_boot=40, seed=0):
         "residual_structure": sel["structure"],
         "findings": findings,
         "weak_evidence": {
-            k: {"params": v["params"], "reason": v["reason"].sentence if v["reason"] else ""}
-            for k, v in sel["weak"].items()
+            k: {"params": v["params"], "reason": sentence_of(v["reason"])} for k, v in sel["weak"].items()
         },
         "rejected": sentences(sel["rejected"]),
         "signatures": {k: v["text"] for k, v in sig.items()},

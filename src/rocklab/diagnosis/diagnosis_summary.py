@@ -31,9 +31,6 @@ from rocklab.summaries import Tolerance
 #: less than 2e-6 of itself; the limestone blocks' fits not at all.
 TOLERANCES = {"*": Tolerance(abs=1e-6, rel=1e-3)}
 
-#: The two boundary conditions and their keys in the summary.
-BOUNDARIES = {b: b.key for b in Boundary}
-
 
 def _finding(f) -> dict:
     return {
@@ -95,7 +92,7 @@ def diagnosis_summary(path) -> dict:
     d = CampaignDiagnosis.from_json(path)
     series = d.series
     out = {"series": [], "n_series": len(series), "n_unexplained": len(d.unexplained)}
-    out.update({key: None for key in BOUNDARIES.values()})
+    out.update({b.key: None for b in Boundary})
     for s in series:
         out["series"].append(
             {
@@ -108,7 +105,7 @@ def diagnosis_summary(path) -> dict:
         )
     for e in d.boundaries:
         mine = d.series_of(e.boundary)
-        out[BOUNDARIES[e.boundary]] = {
+        out[Boundary(e.boundary).key] = {
             "n_tests": e.n_tests,
             "n_series": e.n_series,
             "n_impacts": e.n_impacts,

@@ -27,9 +27,6 @@ TOLERANCES = {"*": LAST_DIGIT}
 #: measured, the Holm p values moved by 2e-6 of themselves.
 CAMPAIGN_LEVEL_TOLERANCES = {"*": Tolerance(abs=1e-6, rel=1e-3)}
 
-#: The two boundary conditions and their keys in the summary.
-BOUNDARIES = {b: b.key for b in Boundary}
-
 #: Quantities of ``summary.csv`` the pages quote.
 SUMMARY_QUANTITIES = (
     "e_ratio",
@@ -62,11 +59,11 @@ def _laws(laws: pd.DataFrame, series: pd.DataFrame) -> dict:
     """Amplitude laws pooled by boundary condition, and the median R² of the
     series' own fits of the peak law."""
     pooled = laws[laws["grouping"] == "boundary"]
-    out = {key: {} for key in BOUNDARIES.values()}
+    out = {b.key: {} for b in Boundary}
     for r in pooled.itertuples():
-        out[BOUNDARIES[r.boundary]][r.law] = {"a": r.a, "b": r.b, "r2": r.r2, "n": r.n}
+        out[Boundary(r.boundary).key][r.law] = {"a": r.a, "b": r.b, "r2": r.r2, "n": r.n}
     per_series = laws[(laws["grouping"] == "series") & (laws["law"] == "peak")]
-    boundary = per_series["series"].map(series.set_index("series")["boundary"].map(BOUNDARIES))
+    boundary = per_series["series"].map(series.set_index("series")["boundary"].map(lambda b: Boundary(b).key))
     for key, r2 in per_series.groupby(boundary)["r2"]:
         out[key].setdefault("peak", {})["series_median_r2"] = r2.median()
     return out
@@ -84,7 +81,7 @@ def _effects(effects: pd.DataFrame) -> dict:
         levels = ast.literal_eval(r.levels)
         means = ast.literal_eval(r.level_means)
         units = ast.literal_eval(r.n_units)
-        out["kruskal"].setdefault(BOUNDARIES[r.boundary], {})[f"{r.factor}__{r.value}"] = {
+        out["kruskal"].setdefault(Boundary(r.boundary).key, {})[f"{r.factor}__{r.value}"] = {
             "p": r.p,
             "unit_level": r.unit_level,
             "test": r.test,
@@ -122,7 +119,8 @@ def dissipation_summary(tables) -> dict:
     """
     summary, table3, tests, series = (pd.read_csv(tables[k]) for k in ("summary", "table3", "tests", "series"))
     out = {}
-    for boundary, key in BOUNDARIES.items():
+    for boundary in Boundary:
+        key = boundary.key
         rows = summary[summary["boundary"] == boundary].set_index("quantity")
         t = tests[tests["boundary"] == boundary]
         s = series[series["boundary"] == boundary]

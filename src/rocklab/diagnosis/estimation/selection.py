@@ -65,9 +65,14 @@ class Rejection:
         )
 
 
+def sentence_of(rejection: "Rejection | None") -> str:
+    """The sentence of a rejection as the files give it, "" for none (a weak candidate never turned down)."""
+    return rejection.sentence if rejection is not None else ""
+
+
 def sentences(rejected: dict[str, "Rejection | None"]) -> dict[str, str]:
-    """Cause -> the sentence of its rejection ("" for none) of a selection's ``rejected`` or weak reasons."""
-    return {k: r.sentence if r is not None else "" for k, r in rejected.items()}
+    """Cause -> :func:`sentence_of` its rejection, of a selection's ``rejected`` or weak reasons."""
+    return {k: sentence_of(r) for k, r in rejected.items()}
 
 
 def supported(signature, cause):
