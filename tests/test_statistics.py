@@ -359,3 +359,25 @@ def test_boundary_summary_and_table3():
     md = table3_markdown(table3(df, WALLS))
     assert "disregarding the first half cycle" in md and "one-sided, paper" in md
     assert md.count("\n") == 4  # header, rule, two boundaries, the paper's row
+
+
+def test_a_series_whose_tests_were_all_rejected_leaves_the_pooled_laws_whole():
+    from rocklab.dissipation.dissipation_summary import _laws
+
+    # series.csv has no boundary for a series without a valid test, and no law of it
+    series = pd.DataFrame({"series": ["1a-2s", "2a-2s", "3b-1s-cd260"], "boundary": ["two-sided", "two-sided", None]})
+    laws = pd.DataFrame(
+        {
+            "series": ["1a-2s", "2a-2s", None],
+            "law": "peak",
+            "a": [1.0, 0.96, 0.98],
+            "b": [0.12, 0.03, 0.07],
+            "r2": [0.2, 0.4, 0.3],
+            "n": [37, 47, 84],
+            "grouping": ["series", "series", "boundary"],
+            "boundary": [None, None, "two-sided"],
+        }
+    )
+    out = _laws(laws, series)
+    assert out["two_sided"]["peak"]["series_median_r2"] == pytest.approx(0.3)
+    assert out["two_sided"]["peak"]["a"] == 0.98 and out["one_sided"] == {}

@@ -63,7 +63,9 @@ def _laws(laws: pd.DataFrame, series: pd.DataFrame) -> dict:
     for r in pooled.itertuples():
         out[Boundary(r.boundary).key][r.law] = {"a": r.a, "b": r.b, "r2": r.r2, "n": r.n}
     per_series = laws[(laws["grouping"] == "series") & (laws["law"] == "peak")]
-    boundary = per_series["series"].map(series.set_index("series")["boundary"].map(lambda b: Boundary(b).key))
+    # a series whose tests were all rejected has no boundary in series.csv, and no law
+    known = series.dropna(subset=["boundary"]).set_index("series")["boundary"]
+    boundary = per_series["series"].map(known.map(lambda b: Boundary(b).key))
     for key, r2 in per_series.groupby(boundary)["r2"]:
         out[key].setdefault("peak", {})["series_median_r2"] = r2.median()
     return out
