@@ -26,7 +26,7 @@ import pandas as pd
 import yaml
 
 from rocklab.config import SCHEMA, schema_defaults
-from rocklab.diagnosis import diagnose_records, jsonable, stored_records, with_boundaries
+from rocklab.diagnosis import CampaignDiagnosis, diagnose_records, jsonable, stored_records, with_boundaries
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -46,16 +46,16 @@ def main():
         series[key] = {
             "cpu_s": time.process_time() - c0,
             "wall_s": time.perf_counter() - t0,
-            "verdict": entry["verdict"] if entry else None,
-            "unexplained": entry["unexplained"] if entry else None,
-            "discovered": [f["effect"] for f in entry["findings"] if f.get("discovered")] if entry else [],
+            "verdict": entry.verdict if entry else None,
+            "unexplained": entry.unexplained if entry else None,
+            "discovered": [f.effect for f in entry.discovered] if entry else [],
         }
         entries += [entry] if entry else []
         print(f"{key}: {series[key]['cpu_s']:.2f} s CPU")
     # the checkpoint reads the series' entries back from their JSON files
-    entries = json.loads(json.dumps(jsonable(entries)))
+    entries = CampaignDiagnosis.from_dict(json.loads(json.dumps(jsonable(CampaignDiagnosis(entries).to_dict()))))
     c0 = time.process_time()
-    with_boundaries(entries, seed=cfg["seed"])
+    with_boundaries(entries)
     boundaries_cpu_s = time.process_time() - c0
     # the workflow's jobs: one per boundary condition, then the checkpoint summing them up
     bench = args.results / "benchmarks"

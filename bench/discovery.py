@@ -372,8 +372,11 @@ def run_cell(row, n_boot, noise_mm=NOISE_MM):
     finally:
         logger.removeHandler(parts)
         logger.setLevel(level)
-    if entry is None:
-        entry = {"verdict": [], "findings": [], "unexplained": False, "too_small": "no test of two impacts"}
+    entry = (
+        {"verdict": [], "findings": [], "unexplained": False, "too_small": "no test of two impacts"}
+        if entry is None
+        else entry.to_dict()
+    )
     scored = score(jsonable(entry), truth, parts.parts)
     out = {**row, "h_over_b": float(sp["height_mm"] / sp["thickness_mm"]), **scored}
     out["n_impacts"] = int(entry.get("n_impacts", 0))

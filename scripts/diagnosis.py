@@ -7,7 +7,7 @@ from rocklab.summaries import write_summary
 
 job = jobs.start(snakemake)
 series = CampaignDiagnosis.of_series_files(snakemake.input)
-entries = with_boundaries(series.to_dict(), walls=snakemake.params.walls, thickness=snakemake.params.thickness)
-write_diagnosis(entries, snakemake.output.json, snakemake.output.md)
-write_summary(diagnosis_summary(snakemake.output.json), snakemake.output.docs_summary)
+diagnosis = with_boundaries(series, walls=snakemake.params.walls, thickness=snakemake.params.thickness)
+write_diagnosis(diagnosis, snakemake.output.json, snakemake.output.md)
+write_summary(diagnosis_summary(diagnosis), snakemake.output.docs_summary)
 job.finish()

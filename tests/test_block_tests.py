@@ -40,36 +40,36 @@ def synthetic_events(
     ],
 )
 def test_hidden_restitution_effects_in_block_ratios(kw, effect, truth):
-    e = B.diagnose_blocks(synthetic_events(**kw), n_boot=20)["all"]
-    assert e["verdict"] == ([effect] if effect else []) and not e["unexplained"], (e["verdict"], e["rejected"])
-    for f in e["findings"]:
+    e = B.diagnose_blocks(synthetic_events(**kw), n_boot=20).all
+    assert e.verdict == ([effect] if effect else []) and not e.unexplained, (e.verdict, e.rejected)
+    for f in e.findings:
         for k, x in truth.items():
-            lo, hi = f["ci95"][k]
-            assert lo - 0.1 * abs(x) <= x <= hi + 0.1 * abs(x), (k, x, f["params"][k], (lo, hi))
-        assert f["gain"]["deviance"] > 0
+            lo, hi = f.ci95[k]
+            assert lo - 0.1 * abs(x) <= x <= hi + 0.1 * abs(x), (k, x, f.params[k], (lo, hi))
+        assert f.gain["deviance_per_obs"] > 0
 
 
 def test_limestone_blocks():
     ev = B.read_events()
     assert len(ev) == 7519 and ev.groupby(["group", "trial"]).ngroups == 134
     res = B.diagnose_blocks(ev, n_boot=10)
-    assert len(res["groups"]) == 12
-    a = res["all"]
-    assert a["n_tests"] == 134 and a["verdict"] == []
+    assert len(res.groups) == 12
+    a = res.all
+    assert a.n_tests == 134 and a.verdict == []
     # the stockiest blocks lose less, the slenderest more; but slenderness varies between 12 block groups,
     # not 134 trials: over the group means the trend has p = 0.016 (4.5e-5 over trials), short of the
     # signature's 1 % gate, and the structure tests at group level find no trend left
-    st = res["slenderness"]
+    st = res.slenderness
     assert st["slope"] > 0 and st["n_groups"] == 12 and st["n_trials"] == 134
     assert 0.01 < st["p"] < 0.03
-    assert not a["residual_structure"] and not a["unexplained"]
+    assert not a.residual_structure and not a.unexplained
     # the family affine in Housner's loss, folds and resamples by block group: about half to nine tenths of
     # Housner's loss plus ~2 % per impact, no closed form of the library, its held-out gain within the noise
-    (fam,) = a["families"]
-    lam, delta = fam["ci95"]["loss_fraction"], fam["ci95"]["loss_constant"]
+    (fam,) = a.families
+    lam, delta = fam.ci95["loss_fraction"], fam.ci95["loss_constant"]
     assert lam[1] < 1.0 and 0.005 < delta[0] and delta[1] < 0.05, fam
-    assert fam["reduces_to"] == "no closed form of the library" and fam["dbic_vs_base"] < -10
-    assert not fam["discovered"] and not a["weak_evidence"]
+    assert fam.reduces_to == "no closed form of the library" and fam.dbic_vs_base < -10
+    assert not fam.discovered and not a.weak_evidence
     assert B.blocks_markdown(res).startswith("# Restitution of the UMinho limestone blocks")
 
 
@@ -91,15 +91,15 @@ def test_an_impact_law_affine_in_housners_loss_is_discovered(loss_fraction, loss
     ev = synthetic_events(
         loss_fraction=loss_fraction, loss_constant=loss_constant, noise=noise, groups=(4, 6, 8, 10, 12, 15), n_trials=15
     )
-    a = B.diagnose_blocks(ev, n_boot=20)["all"]
-    assert a["verdict"] == ["restitution_housner_loss"] and not a["unexplained"], (a["verdict"], a["rejected"])
-    (f,) = a["findings"]
-    assert f["discovered"] and f["reduces_to"] == "no closed form of the library"
+    a = B.diagnose_blocks(ev, n_boot=20).all
+    assert a.verdict == ["restitution_housner_loss"] and not a.unexplained, (a.verdict, a.rejected)
+    (f,) = a.findings
+    assert f.discovered and f.reduces_to == "no closed form of the library"
     for k, x in (("loss_fraction", loss_fraction), ("loss_constant", loss_constant)):
-        lo, hi = f["ci95"][k]
-        assert lo - 0.1 * abs(x) <= x <= hi + 0.1 * abs(x), (k, x, f["params"][k], (lo, hi))
-    assert f["heldout_gain"]["vs_base"] > 2 * f["heldout_gain"]["vs_base_se"]
-    assert a["families"][0]["discovered"]
+        lo, hi = f.ci95[k]
+        assert lo - 0.1 * abs(x) <= x <= hi + 0.1 * abs(x), (k, x, f.params[k], (lo, hi))
+    assert f.heldout_gain["vs_base"] > 2 * f.heldout_gain["vs_base_se"]
+    assert a.families[0].discovered
 
 
 def test_a_subtle_housner_loss_on_six_block_groups_is_named_at_group_level():
@@ -113,11 +113,11 @@ def test_a_subtle_housner_loss_on_six_block_groups_is_named_at_group_level():
     slendernesses is named with the truth inside its intervals, its held-out
     gain over the block groups left out in turn beyond the noise."""
     ev = synthetic_events(loss_fraction=0.8, loss_constant=0.01, noise=0.02, groups=(4, 6, 8, 10, 12, 15), n_trials=15)
-    a = B.diagnose_blocks(ev, n_boot=20)["all"]
-    assert a["rejected"]["restitution_amplitude"] == "its signature in the data is absent"
-    assert a["verdict"] == ["restitution_housner_loss"] and not a["unexplained"], (a["verdict"], a["rejected"])
-    (f,) = a["findings"]
+    a = B.diagnose_blocks(ev, n_boot=20).all
+    assert a.rejected["restitution_amplitude"] == "its signature in the data is absent"
+    assert a.verdict == ["restitution_housner_loss"] and not a.unexplained, (a.verdict, a.rejected)
+    (f,) = a.findings
     for k, x in (("loss_fraction", 0.8), ("loss_constant", 0.01)):
-        lo, hi = f["ci95"][k]
-        assert lo <= x <= hi, (k, x, f["params"][k], (lo, hi))
-    assert f["heldout_gain"]["vs_base"] > 2 * f["heldout_gain"]["vs_base_se"]
+        lo, hi = f.ci95[k]
+        assert lo <= x <= hi, (k, x, f.params[k], (lo, hi))
+    assert f.heldout_gain["vs_base"] > 2 * f.heldout_gain["vs_base_se"]

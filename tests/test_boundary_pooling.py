@@ -7,6 +7,8 @@ to better than the bias they share, and the pooled interval must hold the
 truth all the same.
 """
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from scipy import stats
@@ -33,19 +35,19 @@ def four_walls():
 
 
 def test_the_pooled_intervals_hold_what_every_series_holds(four_walls):
-    walls = {e["key"]: e["key"][:2] for e in four_walls}
+    walls = {e.key: e.key[:2] for e in four_walls}
     b = D.diagnose_boundary(four_walls, "two-sided", walls=walls)
-    assert set(b["verdict"]) == set(TRUTH)
+    assert set(b.verdict) == set(TRUTH)
     narrow = 0
-    for f in b["findings"]:
-        for k, truth in TRUTH[f["effect"]].items():
-            lo, hi = f["ci95"][k]
-            assert lo <= truth <= hi, (f["effect"], k, truth, lo, hi)
+    for f in b.findings:
+        for k, truth in TRUTH[f.effect].items():
+            lo, hi = f.ci95[k]
+            assert lo <= truth <= hi, (f.effect, k, truth, lo, hi)
             # the series agree to better than the bias they share: their scatter alone misses the truth
-            mine = [next(g for g in e["findings"] if g["effect"] == f["effect"]) for e in four_walls]
-            _, (lo, hi), *_ = pooled_parameter({e["key"]: g["params"][k] for e, g in zip(four_walls, mine)}, walls)
+            mine = [next(g for g in e.findings if g.effect == f.effect) for e in four_walls]
+            _, (lo, hi), *_ = pooled_parameter({e.key: g.params[k] for e, g in zip(four_walls, mine)}, walls)
             narrow += not lo <= truth <= hi
-            assert f["u_systematic"][k] == pytest.approx(np.mean([g["u_systematic"][k] for g in mine]))
+            assert f.u_systematic[k] == pytest.approx(np.mean([g.u_systematic[k] for g in mine]))
     assert narrow >= 1
 
 
@@ -79,26 +81,29 @@ def test_a_series_short_of_naming_a_cause_its_data_show_counts_at_its_own_estima
     """A wall whose data carry a cause's signature but lack the held-out power to name it (a one-sided
     wall of eight impacts) says how large the cause is: the boundary pools it there, not at the null value
     (issue 24, item 6: pooling without selection, 'with their own estimates')."""
-    walls = {e["key"]: e["key"][:2] for e in four_walls}
+    walls = {e.key: e.key[:2] for e in four_walls}
     key, name = "instability_angle", "alpha_r_over_alpha"
-    own = [next(f for f in e["findings"] if f["effect"] == key)["params"][name] for e in four_walls]
+    own = [next(f for f in e.findings if f.effect == key).params[name] for e in four_walls]
 
     def unnamed(e, estimates):
-        out = {**e, "verdict": [v for v in e["verdict"] if v != key]}
-        out["findings"] = [f for f in e["findings"] if f["effect"] != key]
-        return {**out, "unnamed_estimates": estimates} if estimates else out
+        return replace(
+            e,
+            verdict=[v for v in e.verdict if v != key],
+            findings=[f for f in e.findings if f.effect != key],
+            unnamed_estimates=estimates or e.unnamed_estimates,
+        )
 
     def pooled(entries):
         b = D.diagnose_boundary(entries, "two-sided", walls=walls)
-        return next(f for f in b["findings"] if f["effect"] == key)
+        return next(f for f in b.findings if f.effect == key)
 
     f = pooled([unnamed(four_walls[0], {key: {name: own[0]}}), *four_walls[1:]])
-    assert f["params"][name] == pytest.approx(np.mean(own))
-    assert f["n_series"] == 3 and "1 at their own estimates" in f["evidence"]["pooled"]
+    assert f.params[name] == pytest.approx(np.mean(own))
+    assert f.n_series == 3 and "1 at their own estimates" in f.evidence["pooled"]
     # its systematic part is the namers' mean, not nothing: the chain and the model are theirs
-    u = [next(g for g in e["findings"] if g["effect"] == key)["u_systematic"][name] for e in four_walls[1:]]
-    assert f["u_systematic"][name] == pytest.approx(np.mean(u))
+    u = [next(g for g in e.findings if g.effect == key).u_systematic[name] for e in four_walls[1:]]
+    assert f.u_systematic[name] == pytest.approx(np.mean(u))
     # without the signature's estimate the series counts at the null value (the cause absent there)
     f = pooled([unnamed(four_walls[0], None), *four_walls[1:]])
-    assert f["params"][name] == pytest.approx(np.mean([1.0, *own[1:]]))
-    assert "1 at its null value" in f["evidence"]["pooled"]
+    assert f.params[name] == pytest.approx(np.mean([1.0, *own[1:]]))
+    assert "1 at its null value" in f.evidence["pooled"]

@@ -21,6 +21,7 @@ from rocklab.dissipation.covariates import (
     within_series_row,
 )
 from rocklab.dissipation.regression import ols
+from rocklab.inference.verdicts import ClaimVerdict
 from rocklab.io import validate_table
 from rocklab.lab.campaign import order_in_series
 from rocklab.lab.hierarchy import MIN_DF, too_few_units
@@ -209,7 +210,7 @@ def test_no_planted_effect_gives_no_contradiction_and_no_support_beyond_the_data
     # the one effect planted: the two boundary conditions have different means
     assert row(table, "both", "boundary").verdict == "contradicted"
     effects = ~table.covariate.isin(["boundary", "mean"])
-    tested = table[~table.verdict.str.startswith("not testable") & effects]
+    tested = table[(table.verdict != ClaimVerdict.NOT_TESTABLE) & effects]
     assert not (tested.verdict == "contradicted").any(), tested[tested.verdict == "contradicted"]
     # with it a property of the wall or specimen cannot be shown negligible
     for covariate in ("h_over_b", "unit", "contact_depth_mm"):
@@ -273,10 +274,13 @@ def test_a_single_level_covariate_is_not_testable_never_judged():
     table = campaign_effects(synthetic_tests(seed=8, units="clay brick"))
     for boundary in ("two-sided", "one-sided"):
         r = row(table, boundary, "unit")
-        assert r.verdict == "not testable: only one level (clay brick) among 4 walls"
+        assert (r.verdict, r.why_not_testable) == (
+            ClaimVerdict.NOT_TESTABLE,
+            "only one level (clay brick) among 4 walls",
+        )
         assert np.isnan(r.estimate) and np.isnan(r.p)
     # every test pushed: the direction has one level
-    assert row(table, "two-sided", "direction").verdict == "not testable: only one level (push)"
+    assert row(table, "two-sided", "direction").why_not_testable == "only one level (push)"
 
 
 def test_a_material_on_three_walls_one_of_them_tuff_is_not_testable_with_the_walls_counted():
@@ -284,21 +288,21 @@ def test_a_material_on_three_walls_one_of_them_tuff_is_not_testable_with_the_wal
     tests = synthetic_tests(seed=9)
     tests = tests[tests.specimen.isin(["1a", "1b", "2a", "2b", "3a", "3b"])]
     r = row(campaign_effects(tests), "one-sided", "unit")
-    assert r.verdict == "not testable: 2 walls of clay brick, 1 wall of tuff (2 walls a level needed)"
+    assert r.why_not_testable == "2 walls of clay brick, 1 wall of tuff (2 walls a level needed)"
     assert r.n_units == 3 and r.n_series == 18
 
 
 def test_the_units_a_verdict_needs():
     assert too_few_units("wall", 4, 2, {"clay brick": 2, "tuff": 2}) == ""
-    assert too_few_units("wall", 3, 1, {"clay brick": 2, "tuff": 1}).startswith("not testable: 2 walls of clay")
-    assert too_few_units("series", 2, 1) == "not testable: 2 series, 1 residual df (2 needed)"
+    assert too_few_units("wall", 3, 1, {"clay brick": 2, "tuff": 1}).startswith("2 walls of clay")
+    assert too_few_units("series", 2, 1) == "2 series, 1 residual df (2 needed)"
 
 
 def test_direction_tested_in_one_series_only_is_not_testable():
     tests = with_test_order(synthetic_tests(seed=10))
     tests.loc[tests.series.eq("1a-2s") & (tests.order > 0.5), "direction"] = "pull"
     r = within_series_row(tests[tests.boundary == "two-sided"], "two-sided", "e_ratio", "direction")
-    assert r["verdict"] == "not testable: varies within 1 series (2 needed)"
+    assert (r["verdict"], r["why_not_testable"]) == ("not testable", "varies within 1 series (2 needed)")
 
 
 # --- margins ------------------------------------------------------------------------------------

@@ -243,37 +243,37 @@ def _hidden(kind):
 @pytest.mark.parametrize("name", _hidden(lambda truth: not truth))
 def test_null_campaign_names_nothing(diagnosed, name):
     e = diagnosed[name]
-    assert e["verdict"] == [] and not e["unexplained"], (e["verdict"], e["residual_structure"])
-    assert e["what_is_wrong"].startswith("the base model explains the data within the noise")
+    assert e.verdict == [] and not e.unexplained, (e.verdict, e.residual_structure)
+    assert e.what_is_wrong.startswith("the base model explains the data within the noise")
 
 
 @pytest.mark.parametrize("name", _hidden(bool))
 def test_hidden_causes_named_recovered_with_a_gain(diagnosed, name):
     truth = SCENARIOS[name][3]
     e = diagnosed[name]
-    assert set(truth) <= set(e["verdict"]), (e["verdict"], e["rejected"])
-    assert not e["unexplained"], e["residual_structure"]
+    assert set(truth) <= set(e.verdict), (e.verdict, e.rejected)
+    assert not e.unexplained, e.residual_structure
     # nothing beyond what was hidden, save the scale that a hinge asymmetry of e or alpha splits
-    extra = set(e["verdict"]) - set(truth)
+    extra = set(e.verdict) - set(truth)
     assert extra <= {"restitution_scale", "instability_angle"} and (not extra or "hinge_asymmetry" in truth), extra
-    for f in e["findings"]:
-        for k, x in truth.get(f["effect"], {}).items():
-            lo, hi = f["ci95"][k]
+    for f in e.findings:
+        for k, x in truth.get(f.effect, {}).items():
+            lo, hi = f.ci95[k]
             tol = 0.02 * abs(x) + 1e-4
-            assert lo - tol <= x <= hi + tol, (f["effect"], k, x, f["params"][k], (lo, hi))
-        if f["effect"] == "stop_threshold":  # a censoring at the end, not a residual: its own measures
-            assert f["gain"]["n_impacts_rms"] > 0 and f["gain"]["duration_pct_rms"] > 0
+            assert lo - tol <= x <= hi + tol, (f.effect, k, x, f.params[k], (lo, hi))
+        if f.effect == "stop_threshold":  # a censoring at the end, not a residual: its own measures
+            assert f.gain["n_impacts_rms"] > 0 and f.gain["duration_pct_rms"] > 0
         else:
-            assert f["gain"]["deviance_per_obs"] > 0
-    h = e["heldout"]
+            assert f.gain["deviance_per_obs"] > 0
+    h = e.heldout
     assert h["model"]["free_run_log_peak_rms"] < h["base"]["free_run_log_peak_rms"]
 
 
 def test_effect_outside_the_catalogue_is_flagged(diagnosed):
     e = diagnosed["wearing"]
-    assert e["unexplained"] and e["residual_structure"]
+    assert e.unexplained and e.residual_structure
     # a wear within each test is no drift between tests: no family named for it
-    assert "restitution_drift" not in e["verdict"]
+    assert "restitution_drift" not in e.verdict
 
 
 #: The scenarios that hide a family's member outside the catalogue: prefix -> the family.
@@ -288,15 +288,15 @@ DISCOVERED = {
 def test_a_family_hidden_is_discovered(diagnosed, name):
     family = next(v for k, v in DISCOVERED.items() if name.startswith(k))
     e = diagnosed[name]
-    f = next(f for f in e["findings"] if f["effect"] == family)
-    assert f["discovered"] and f["reduces_to"] == "no closed form of the library"
-    assert family not in e["listed_verdict"]
-    g = f["heldout_gain"]
+    f = next(f for f in e.findings if f.effect == family)
+    assert f.discovered and f.reduces_to == "no closed form of the library"
+    assert family not in e.listed_verdict
+    g = f.heldout_gain
     assert g["vs_best_listed"] > 2 * g["vs_best_listed_se"] and g["vs_base"] >= g["vs_best_listed"]
-    assert all(not x["discovered"] for x in e["findings"] if x is not f)
+    assert all(not x.discovered for x in e.findings if x is not f)
     assert f"Discovered beyond the catalogue: {f['effect']}" in D.diagnosis_markdown([e])
     # never with the listed member it holds (a drifting scale, a constant angle)
-    assert D.catalogue.by_name(family).family not in e["verdict"]
+    assert D.catalogue.by_name(family).family not in e.verdict
 
 
 @pytest.mark.parametrize("name", ["rounding-0.3-noise-0.002", "speed-affine", "driftlog-temperature"])
@@ -323,27 +323,27 @@ def test_a_discovery_is_drawn_against_the_data_and_the_best_listed(diagnosed, na
 
 
 def test_an_impact_law_of_the_speed_is_discovered_with_its_closed_form(diagnosed):
-    f = next(f for f in diagnosed["speed-affine"]["findings"] if f["effect"] == "restitution_speed")
-    assert f["discovered"] and f["reduces_to"].startswith("affine in the speed: e/e_an = 0.900 +0.100")
+    f = next(f for f in diagnosed["speed-affine"].findings if f.effect == "restitution_speed")
+    assert f.discovered and f.reduces_to.startswith("affine in the speed: e/e_an = 0.900 +0.100")
     # a bump: the flexible law with no closed form, or the structure flagged; never Eq. 17 or the scale alone
     e = diagnosed["speed-bump"]
-    found = next((f for f in e["findings"] if f["effect"] == "restitution_speed"), None)
+    found = next((f for f in e.findings if f.effect == "restitution_speed"), None)
     if found is not None:
-        assert found["discovered"] and found["reduces_to"] == "no closed form of the library"
+        assert found.discovered and found.reduces_to == "no closed form of the library"
     else:
-        assert e["unexplained"] and e["residual_structure"]
+        assert e.unexplained and e.residual_structure
 
 
 def test_a_stop_is_named_only_where_the_walls_stop_dead(diagnosed):
-    assert "end of motion" not in " ".join(diagnosed["null-2s"]["residual_structure"])
-    assert all("stop_threshold" not in e["verdict"] for k, e in diagnosed.items() if k != "sticking")
+    assert "end of motion" not in " ".join(map(str, diagnosed["null-2s"].residual_structure))
+    assert all("stop_threshold" not in e.verdict for k, e in diagnosed.items() if k != "sticking")
     e = diagnosed["sticking"]
-    f = next(f for f in e["findings"] if f["effect"] == "stop_threshold")
-    base, model = e["base"]["errors"], e["extended"]["errors"]
+    f = next(f for f in e.findings if f.effect == "stop_threshold")
+    base, model = e.base.errors, e.extended["errors"]
     # Housner's model rocks on far longer; with the threshold the free run stops with the wall
     assert base["duration_s"]["model"] > 1.2 * base["duration_s"]["measured"]
     assert model["duration_s"]["model"] == pytest.approx(model["duration_s"]["measured"], rel=0.05)
-    assert f["params"]["spread_log"] < 0.1  # one threshold: only the bracket's width spreads it
+    assert f.params["spread_log"] < 0.1  # one threshold: only the bracket's width spreads it
 
 
 def test_stop_speeds_bracket_the_sticking_landing():
@@ -394,22 +394,22 @@ def test_stop_speeds_bracket_the_sticking_landing():
 
 def test_what_is_wrong_is_consistent_with_the_numbers(diagnosed):
     e = diagnosed["instability+scale"]
-    err = e["base"]["errors"]
+    err = e.base.errors
     # Housner's e (0.95 too high) keeps the simulation rocking; the instability angle
     # lengthens the measured quarter period
     assert err["n_impacts"]["model"] > err["n_impacts"]["measured"]
-    assert e["what_is_wrong"].startswith(
+    assert e.what_is_wrong.startswith(
         f"the simulation keeps rocking for {err['duration_s']['model']:.1f} s ({err['n_impacts']['model']:.0f} impacts)"
     )
     assert err["decay_pct"]["model"] < err["decay_pct"]["measured"]
     assert err["first_quarter_p"]["model"] < err["first_quarter_p"]["measured"]
-    ext = e["extended"]["errors"]
+    ext = e.extended["errors"]
     assert abs(ext["flight_time_pct"]) < 0.5 and abs(ext["decay_pct"]["model"] - ext["decay_pct"]["measured"]) < 0.5
-    assert diagnosed["null-2s"]["base"]["errors"]["rms_theta_over_alpha"] < 0.05
+    assert diagnosed["null-2s"].base.errors["rms_theta_over_alpha"] < 0.05
 
 
 def test_signatures_without_a_fit(diagnosed):
-    assert "negative rotations" in diagnosed["gap-0.05"]["signatures"]["contact_gap"]
+    assert "negative rotations" in diagnosed["gap-0.05"].signatures["contact_gap"]
     s = D.signatures(
         [D.measured_test(r) for r in virtual_series("s", "two-sided", {"impact": H()}, alpha_ratio=0.85, n=2)]
     )
@@ -541,37 +541,33 @@ def test_boundary_entries_json_and_markdown(diagnosed, tmp_path):
     keys = ("instability+scale", "instability+scale-noisy", "null-2s", "null-2s-noisy", "instability-0.95")
     series = [dict(diagnosed[k], boundary="two-sided") for k in keys]
     b = D.diagnose_boundary(series, "two-sided")
-    assert b["scope"] == "boundary" and b["n_tests"] == 30 and b["n_series"] == b["n_series_diagnosed"] == 5
-    assert b["verdict"] == ["instability_angle"]
-    f = next(f for f in b["findings"] if f["effect"] == "instability_angle")
-    assert f["n_series"] == 3 and f["n_tests"] == 18 and f["evidence"]["series"] == "named in 3 of 5 series"
+    assert b.scope == "boundary" and b.n_tests == 30 and b.n_series == b.n_series_diagnosed == 5
+    assert b.verdict == ["instability_angle"]
+    f = next(f for f in b.findings if f.effect == "instability_angle")
+    assert f.n_series == 3 and f.n_tests == 18 and f.evidence["series"] == "named in 3 of 5 series"
     # three series name it, two do not: all five pooled, those two at the null value (no winner's curse)
-    named = [e["findings"] for e in series if "instability_angle" in e["verdict"]]
-    values = [next(f for f in fs if f["effect"] == "instability_angle")["params"]["alpha_r_over_alpha"] for fs in named]
-    assert f["params"]["alpha_r_over_alpha"] == pytest.approx((sum(values) + 2 * 1.0) / 5)
-    assert f["params"]["alpha_r_over_alpha"] == pytest.approx((0.9 + 0.9 + 0.95 + 1 + 1) / 5, abs=2e-3)
+    named = [e.findings for e in series if "instability_angle" in e.verdict]
+    values = [next(f for f in fs if f.effect == "instability_angle").params["alpha_r_over_alpha"] for fs in named]
+    assert f.params["alpha_r_over_alpha"] == pytest.approx((sum(values) + 2 * 1.0) / 5)
+    assert f.params["alpha_r_over_alpha"] == pytest.approx((0.9 + 0.9 + 0.95 + 1 + 1) / 5, abs=2e-3)
     # a t interval over the five series (4 df), widened by the systematic part they share: the mean of
     # theirs, the two at the null value with none
     x = np.array([*values, 1.0, 1.0])
     half = stats.t.ppf(0.975, 4) * x.std(ddof=1) / np.sqrt(5)
-    u = [
-        next(f for f in fs if f["effect"] == "instability_angle")["u_systematic"]["alpha_r_over_alpha"] for fs in named
-    ]
-    assert f["u_systematic"]["alpha_r_over_alpha"] == pytest.approx(sum(u) / 5)
+    u = [next(f for f in fs if f.effect == "instability_angle").u_systematic["alpha_r_over_alpha"] for fs in named]
+    assert f.u_systematic["alpha_r_over_alpha"] == pytest.approx(sum(u) / 5)
     half = np.hypot(half, stats.norm.ppf(0.975) * sum(u) / 5)
-    assert f["ci95"]["alpha_r_over_alpha"] == pytest.approx([x.mean() - half, x.mean() + half])
+    assert f.ci95["alpha_r_over_alpha"] == pytest.approx([x.mean() - half, x.mean() + half])
     # with the walls known, the walls are the units: two walls, one residual df, no interval
-    walls = dict(zip((e["key"] for e in series), "11122"))
+    walls = dict(zip((e.key for e in series), "11122"))
     fw = next(
-        f
-        for f in D.diagnose_boundary(series, "two-sided", walls=walls)["findings"]
-        if f["effect"] == "instability_angle"
+        f for f in D.diagnose_boundary(series, "two-sided", walls=walls).findings if f.effect == "instability_angle"
     )
-    assert fw["ci95"] == {} and "2 walls, 1 residual df" in fw["ci_note"]
+    assert fw.ci95 == {} and "2 walls, 1 residual df" in fw.ci_note
     entries = list(diagnosed.values()) + [b]
     for e in entries:
         assert {"scope", "key", "n_tests", "base", "what_is_wrong", "verdict", "unexplained", "findings"} <= set(e)
-        for f in e["findings"]:
+        for f in e.findings:
             assert {"effect", "params", "ci95", "evidence", "error_heldout", "gain"} <= set(f)
     D.write_diagnosis(entries, tmp_path / "diagnosis.json", tmp_path / "diagnosis.md")
     assert len(json.loads((tmp_path / "diagnosis.json").read_text())) == len(entries)

@@ -99,16 +99,16 @@ def hidden_chip():
 
 def test_without_the_toy_the_listed_causes_need_two_parameters(hidden_chip):
     e = D.diagnose_series(hidden_chip, key="toy", n_boot=10, n_history=0)
-    assert e["verdict"] == ["restitution_scale", "hinge_asymmetry"], e["verdict"]
+    assert e.verdict == ["restitution_scale", "hinge_asymmetry"], e.verdict
 
 
 def test_a_toy_cause_added_to_the_catalogue_is_named(with_toy, hidden_chip):
     e = D.diagnose_series(hidden_chip, key="toy", n_boot=10, n_history=0)
-    assert e["verdict"] == ["chipped_hinge"], (e["verdict"], e["rejected"])
-    f = e["findings"][0]
-    lo, hi = f["ci95"]["chip"]
-    assert lo - 1e-4 <= 0.05 <= hi + 1e-4, (f["params"], (lo, hi))
-    assert f["gain"]["deviance_per_obs"] > 0
+    assert e.verdict == ["chipped_hinge"], (e.verdict, e.rejected)
+    f = e.findings[0]
+    lo, hi = f.ci95["chip"]
+    assert lo - 1e-4 <= 0.05 <= hi + 1e-4, (f.params, (lo, hi))
+    assert f.gain["deviance_per_obs"] > 0
 
 
 @pytest.mark.parametrize("cause", catalogue.in_order(("temperature",)), ids=lambda c: c.name)

@@ -142,9 +142,9 @@ def test_a_law_of_the_impact_speed_on_three_tests_is_not_read_as_eq17():
     wall = vl.DEFAULT_SPECIMENS.set_index("specimen").loc["1a"]
     records = vl.series_records("speed", wall, "two-sided", model, n=3, fs=400.0, seed=121, t_end=400.0)
     entry = D.diagnose_records(records, "speed", n_boot=40, n_history=0, seed=0)
-    assert entry["verdict"] == ["restitution_speed"]
-    assert entry["listed_verdict"] == ["restitution_amplitude"]
-    (finding,) = entry["findings"]
+    assert entry.verdict == ["restitution_speed"]
+    assert entry.listed_verdict == ["restitution_amplitude"]
+    (finding,) = entry.findings
     for j, g in enumerate(knots):
-        lo, hi = finding["ci95"][f"g{j}"]
+        lo, hi = finding.ci95[f"g{j}"]
         assert lo <= g <= hi

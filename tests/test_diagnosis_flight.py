@@ -216,24 +216,24 @@ def diagnosed():
 def test_a_loss_in_flight_of_another_form_is_discovered(diagnosed, name):
     _, _, truth, member = SCENARIOS[name]
     e = diagnosed[name]
-    assert "flight_loss" in e["verdict"] and not e["unexplained"], (e["verdict"], e["residual_structure"])
+    assert "flight_loss" in e.verdict and not e.unexplained, (e.verdict, e.residual_structure)
     # the listed causes alone took it for the viscous loss, or missed it (the filter hides a short
     # flight's loss in the measured e, and a median over all flights sees none)
-    assert "flight_loss" not in e["listed_verdict"] and set(e["listed_verdict"]) <= {
+    assert "flight_loss" not in e.listed_verdict and set(e.listed_verdict) <= {
         "flight_damping",
         "restitution_scale",
         "restitution_amplitude",
     }
-    f = next(f for f in e["findings"] if f["effect"] == "flight_loss")
-    assert f["discovered"] and f["reduces_to"].startswith(member)
+    f = next(f for f in e.findings if f.effect == "flight_loss")
+    assert f.discovered and f.reduces_to.startswith(member)
     for k, x in truth.items():
-        lo, hi = f["ci95"][k]
+        lo, hi = f.ci95[k]
         tol = 0.02 * abs(x) + 1e-4
-        assert lo - tol <= x <= hi + tol, (k, x, f["params"][k], (lo, hi))
-    g = f["heldout_gain"]
+        assert lo - tol <= x <= hi + tol, (k, x, f.params[k], (lo, hi))
+    g = f.heldout_gain
     assert g["vs_best_listed"] > 2 * g["vs_best_listed_se"] and g["vs_base"] >= g["vs_best_listed"]
     # the curve of the figure: the family closer to the long flights' losses than the listed viscous loss
-    c = f["curve"]
+    c = f.curve
     x, y = np.array(c["measured"]["x"]), np.array(c["measured"]["y"])
     rms = {k: np.sqrt(np.mean((y - np.interp(x, c[k]["x"], c[k]["y"])) ** 2)) for k in ("family", "best_listed")}
     assert rms["family"] < rms["best_listed"], rms
@@ -242,15 +242,15 @@ def test_a_loss_in_flight_of_another_form_is_discovered(diagnosed, name):
 def test_a_viscous_loss_is_still_the_listed_flight_damping():
     recs = virtual_series("visc", "two-sided", {"impact": H(), "flight_damping": 0.01}, seed=7, noise_mm=0.01)
     e = D.diagnose_series(recs, key="visc", n_boot=10, n_history=0)
-    assert e["verdict"] == ["flight_damping"] and not e["unexplained"] and "listed_verdict" not in e
-    assert not e["residual_structure"] and "dry friction" in e["signatures"]["flight_loss"]
+    assert e.verdict == ["flight_damping"] and not e.unexplained and e.listed_verdict is None
+    assert not e.residual_structure and "dry friction" in e.signatures["flight_loss"]
 
 
 def test_the_figure_of_a_discovered_flight_loss(diagnosed):
     from rocklab.plots.diagnosis import family_curve_figure
 
     name = "friction-0.02-noise-0.002"
-    f = next(f for f in diagnosed[name]["findings"] if f["effect"] == "flight_loss")
+    f = next(f for f in diagnosed[name].findings if f.effect == "flight_loss")
     fig = family_curve_figure(D.Finding.from_dict(f), name)
     labels = [line.get_label() for line in fig.axes[0].get_lines()]
     assert len(labels) == 3 and "dry friction" in labels[2] and labels[1].startswith("best listed member")
@@ -293,13 +293,17 @@ def test_a_viscous_loss_on_short_flights_is_not_identifiable():
 
 
 def test_a_named_viscous_loss_whose_form_cannot_be_read_is_structure_left():
+    from rocklab.diagnosis.result import Structure
     from rocklab.diagnosis.series_problem import WallProblem
 
     recs = virtual_series("fl", "two-sided", {"flight_damping": 0.01}, n=3, seed=1)
     problem = WallProblem([D.measured_test(r) for r in recs])
     assert problem.signature.get("flight_loss")
-    assert not [s for s in problem.form_structure(("flight_damping",)) if "untested" in s]
+    assert not [s for s in problem.form_structure(("flight_damping",)) if "untested" in s.sentence]
     problem._sig = {k: v for k, v in problem.signature.items() if k != "flight_loss"}
     assert problem.form_structure(("flight_damping",)) == [
-        "flight_damping: its form is untested, the signature of flight_loss cannot be read in these tests"
+        Structure(
+            "flight_damping",
+            "flight_damping: its form is untested, the signature of flight_loss cannot be read in these tests",
+        )
     ]

@@ -463,7 +463,7 @@ def tiny_results(tmp_path):
                     "base": base(0.985, 0.97),
                     "what_is_wrong": "e too high",
                     "unexplained": True,
-                    "residual_structure": ["impact: bias +0.011"],
+                    "residual_structure": [{"where": "impact", "sentence": "impact: bias +0.011"}],
                     "rejected": {},
                     "signatures": {},
                 },
@@ -646,11 +646,13 @@ def test_diagnosis_numbers_pool_the_stop_gain_over_tests(tiny_results):
     d = numbers_of(tiny_results)["diagnosis"]
     two = d["two_sided"]
     # base = error + gain per series: 10 (10 tests) and 20 (30 tests); model 2 and 4
-    assert two["stop_heldout"]["n_impacts_rms"]["base"] == pytest.approx(
+    assert two["after_selection"]["stop_threshold"]["heldout"]["n_impacts_rms"]["base"] == pytest.approx(
         math.sqrt((10 * 100 + 30 * 400) / 40), rel=1e-5
     )
-    assert two["stop_heldout"]["n_impacts_rms"]["model"] == pytest.approx(math.sqrt((10 * 4 + 30 * 16) / 40), rel=1e-5)
-    assert two["no_stop"] == ["5c-2s"]
+    assert two["after_selection"]["stop_threshold"]["heldout"]["n_impacts_rms"]["model"] == pytest.approx(
+        math.sqrt((10 * 4 + 30 * 16) / 40), rel=1e-5
+    )
+    assert two["after_selection"]["stop_threshold"]["not_named"] == ["5c-2s"]
     assert two["minority"] == [{"series": "2b-2s", "effect": "hinge_asymmetry", "params": {"s_alpha": 0.03}}]
     assert d["series"][2]["verdict"] == "none" and d["n_unexplained"] == 0
     lime = numbers_of(tiny_results)["limestone"]

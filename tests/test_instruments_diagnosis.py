@@ -71,17 +71,15 @@ def diagnosed(tmp_path_factory):
 def test_every_instrument_names_the_hidden_effects_with_intervals_that_meet(diagnosed, name):
     truth = SCENARIOS[name][2]
     for kind in INSTRUMENTS:
-        assert set(truth) <= set(diagnosed[name, kind]["verdict"]), (kind, diagnosed[name, kind]["verdict"])
+        assert set(truth) <= set(diagnosed[name, kind].verdict), (kind, diagnosed[name, kind].verdict)
     for effect, params in truth.items():
-        found = {
-            kind: next(f for f in diagnosed[name, kind]["findings"] if f["effect"] == effect) for kind in INSTRUMENTS
-        }
+        found = {kind: next(f for f in diagnosed[name, kind].findings if f.effect == effect) for kind in INSTRUMENTS}
         for k in params:
-            lo = max(f["ci95"][k][0] for f in found.values())
-            hi = min(f["ci95"][k][1] for f in found.values())
+            lo = max(f.ci95[k][0] for f in found.values())
+            hi = min(f.ci95[k][1] for f in found.values())
             # one wall, one value: the instruments' intervals meet within the tolerance of tests/test_diagnosis.py
             # (2 % of the value; the bootstrap intervals of 6 noise-light tests are narrower than the few 1e-4
             # by which an integrated rate or a bridged rotation moves a parameter, so they need not overlap)
             tol = 0.02 * abs(params[k]) + 1e-4
-            assert lo <= hi + tol, (effect, k, {i: f["ci95"][k] for i, f in found.items()})
-            assert all(abs(f["params"][k] - params[k]) <= tol for f in found.values())
+            assert lo <= hi + tol, (effect, k, {i: f.ci95[k] for i, f in found.items()})
+            assert all(abs(f.params[k] - params[k]) <= tol for f in found.values())

@@ -240,3 +240,33 @@ def test_a_claim_on_a_mean_is_judged_on_the_number_table_3_quotes():
             assert (row.estimate, row.ci_low, row.ci_high, row.df) == pytest.approx(
                 (table["mean"], table.ci_low, table.ci_high, table.df), rel=1e-5
             )
+
+
+#: Each record of the files and the definition of its object in the schemas.
+RECORDS = [
+    (R.DIAGNOSIS_SCHEMA, "series_entry", R.SeriesDiagnosis),
+    (R.DIAGNOSIS_SCHEMA, "boundary_entry", R.BoundaryDiagnosis),
+    (R.DIAGNOSIS_SCHEMA, "finding", R.Finding),
+    (R.DIAGNOSIS_SCHEMA, "pooled_finding", R.PooledFinding),
+    (R.DIAGNOSIS_SCHEMA, "base", R.BaseRun),
+    (R.DIAGNOSIS_SCHEMA, "structure", R.Structure),
+    (R.LIMESTONE_SCHEMA, "block_entry", R.BlockDiagnosis),
+    (R.LIMESTONE_SCHEMA, "finding", R.Finding),
+    (R.LIMESTONE_SCHEMA, "family", R.FamilyComparison),
+    (R.LIMESTONE_SCHEMA, "structure", R.Structure),
+    (R.LIMESTONE_SCHEMA, None, R.LimestoneDiagnosis),
+]
+
+
+@pytest.mark.parametrize(("schema", "name", "record"), RECORDS, ids=lambda x: getattr(x, "__name__", None))
+def test_each_object_holds_the_keys_of_its_schema_in_their_order_and_requires_what_it_requires(schema, name, record):
+    """Issue 40: the schema and the object cannot disagree, field by field: the same keys in the same
+    order, and the keys a file must have are those the object always writes (all but ``_optional``)."""
+    from dataclasses import fields
+
+    doc = yaml.safe_load(Path(schema).read_text())
+    d = doc if name is None else doc["$defs"][name]
+    names = [f.name for f in fields(record)]
+    assert list(d["properties"]) == names
+    assert d.get("additionalProperties") is False
+    assert sorted(d.get("required", [])) == sorted(n for n in names if n not in record._optional)

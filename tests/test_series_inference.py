@@ -106,17 +106,17 @@ def _series_at_100_hz(name, model, seed):
 def test_three_tests_at_100_hz_losing_7_percent_of_e_name_it(seed):
     recs = _series_at_100_hz("loss", {"impact": I.Scaled(H(), 0.93)}, seed)
     e = D.diagnose_series(recs, key="loss", n_boot=40, n_history=0)
-    assert "too_small" not in e and e["n_tests"] == 3 and e["verdict"] == ["restitution_scale"]
-    f = e["findings"][0]
-    lo, hi = f["ci95"]["c"]
-    assert lo <= f["params"]["c"] <= hi and lo <= 0.93 <= hi and hi < 1.0 - 0.005
+    assert e.too_small is None and e.n_tests == 3 and e.verdict == ["restitution_scale"]
+    f = e.findings[0]
+    lo, hi = f.ci95["c"]
+    assert lo <= f.params["c"] <= hi and lo <= 0.93 <= hi and hi < 1.0 - 0.005
 
 
 @pytest.mark.parametrize("seed", [2, 3])
 def test_a_null_series_of_three_tests_names_nothing(seed):
     recs = _series_at_100_hz("null", {"impact": H()}, seed)
     e = D.diagnose_series(recs, key="null", n_boot=40, n_history=0)
-    assert "too_small" not in e and e["verdict"] == [] and not e["unexplained"]
+    assert e.too_small is None and e.verdict == [] and not e.unexplained
 
 
 def test_quiet_records_of_a_null_stocky_wall_name_nothing():
@@ -130,13 +130,13 @@ def test_quiet_records_of_a_null_stocky_wall_name_nothing():
     stocky = pd.Series({"length_mm": 1130.0, "height_mm": 492.0, "thickness_mm": 123.0}, name="st")
     recs = vl.series_records("null", stocky, "one-sided", {}, n=10, fs=200.0, seed=75, t_end=400.0, noise_mm=0.0002)
     e = D.diagnose_records(recs, "null", n_boot=40, n_history=0)
-    assert e["verdict"] == [] and not e["unexplained"]
+    assert e.verdict == [] and not e.unexplained
 
 
 def test_one_test_names_nothing_and_says_why():
     recs = virtual_series("one", "two-sided", {"impact": I.Scaled(H(), 0.93)}, n=1, seed=5)
     e = D.diagnose_series(recs, key="one", n_boot=10, n_history=0)
-    assert e["verdict"] == [] and e["too_small"].startswith("one test") and MIN_TESTS_TO_NAME == 2
+    assert e.verdict == [] and e.too_small.startswith("one test") and MIN_TESTS_TO_NAME == 2
 
 
 @pytest.fixture(scope="module")
@@ -150,11 +150,11 @@ def friction():
 
 def test_a_loss_at_its_bound_has_an_interval_that_holds_it_as_wide_as_refits_say(friction):
     recs, e = friction
-    f = next(f for f in e["findings"] if f["effect"] == "flight_loss")
-    for k, x in f["params"].items():
-        lo, hi = f["ci95"][k]
+    f = next(f for f in e.findings if f.effect == "flight_loss")
+    for k, x in f.params.items():
+        lo, hi = f.ci95[k]
         assert lo <= x <= hi, (k, x, lo, hi)
-    assert f["ci95"]["zeta"][0] == 0.0 and f["ci95"]["kappa_alpha"][0] == 0.0
+    assert f.ci95["zeta"][0] == 0.0 and f.ci95["kappa_alpha"][0] == 0.0
     # the jackknife of full refits, each leaving a test out (the better of a cold and a warm start: a cold
     # one can stop at a worse optimum): a 95 % interval spans some four of its standard errors; one
     # narrower than a single one is narrower than the tests carry
@@ -167,5 +167,5 @@ def test_a_loss_at_its_bound_has_an_interval_that_holds_it_as_wide_as_refits_say
     ]
     jack = np.array([[f.values[k] for k in full.values] for f in refits])
     se = np.sqrt((n - 1) / n * np.sum((jack - jack.mean(axis=0)) ** 2, axis=0))
-    width = np.array([np.diff(f["ci95"][k])[0] for k in f["params"]])
-    assert np.all(width >= se), dict(zip(f["params"], zip(width, se)))
+    width = np.array([np.diff(f.ci95[k])[0] for k in f.params])
+    assert np.all(width >= se), dict(zip(f.params, zip(width, se)))

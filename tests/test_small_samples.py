@@ -13,6 +13,7 @@ import logging
 import os
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -102,38 +103,38 @@ def series_of():
 
 def test_a_two_test_series_names_its_causes_on_one_degree_of_freedom(series_of):
     e = D.diagnose_records(series_of(2), "tiny", n_boot=10, n_history=0)
-    assert e["n_tests"] == 2 and "too_small" not in e
-    assert e["verdict"] == ["instability_angle", "restitution_scale"]
+    assert e.n_tests == 2 and e.too_small is None
+    assert e.verdict == ["instability_angle", "restitution_scale"]
     # a drift between tests is a slope over tests: two tests cannot carry it, and the entry says so
-    assert list(e["not_identifiable"]) == ["restitution_drift"]
-    assert e["not_identifiable"]["restitution_drift"].endswith("needs 4 of them, the series has 2")
+    assert list(e.not_identifiable) == ["restitution_drift"]
+    assert e.not_identifiable["restitution_drift"].endswith("needs 4 of them, the series has 2")
     assert "Not identifiable in this series, its absence from the verdict says nothing: restitution_drift (a drift" in (
         D.diagnosis_markdown([e])
     )
     truth = {"alpha_r_over_alpha": 0.9, "c": 0.95}
-    for f in e["findings"]:
-        for k, (lo, hi) in f["ci95"].items():
-            assert lo <= f["params"][k] <= hi and lo <= truth[k] <= hi and f["n_tests"] == 2
+    for f in e.findings:
+        for k, (lo, hi) in f.ci95.items():
+            assert lo <= f.params[k] <= hi and lo <= truth[k] <= hi and f.n_tests == 2
             # the verdict's two values together: each side at least as far out, by up to Student's Šidák
             # factor on 1 df (1.98) where the side is statistical
-            j_lo, j_hi = f["ci95_joint"][k]
+            j_lo, j_hi = f.ci95_joint[k]
             assert j_lo <= lo and hi <= j_hi and (j_hi - j_lo) <= 1.98 * (hi - lo)
             assert (j_lo, j_hi) != (lo, hi) or lo == 0.0
     b = D.diagnose_boundary([e], "two-sided")
-    assert b["verdict"] == e["verdict"] and b["n_series_diagnosed"] == 1 and "too_small" not in b
+    assert b.verdict == e.verdict and b.n_series_diagnosed == 1 and b.too_small is None
     # one series is one unit: its parameters pass to the boundary without an interval, and say why
-    assert all(not f["ci95"] and "1 series, 0 residual df" in f["ci_note"] for f in b["findings"])
+    assert all(not f.ci95 and "1 series, 0 residual df" in f.ci_note for f in b.findings)
 
 
 def test_a_one_test_series_names_nothing(series_of):
     e = D.diagnose_records(series_of(1), "tiny", n_boot=10, n_history=0)
-    assert e["n_tests"] == 1 and e["verdict"] == [] and e["findings"] == []
-    assert e["too_small"].startswith("one test: nothing varies between tests")
-    assert "extended" not in e and e["sample_test"].startswith("small-")
+    assert e.n_tests == 1 and e.verdict == [] and e.findings == []
+    assert e.too_small.startswith("one test: nothing varies between tests")
+    assert e.extended is None and e.sample_test.startswith("small-")
     b = D.diagnose_boundary([e], "two-sided")
-    assert b["verdict"] == [] and b["n_series"] == 1 and b["n_series_diagnosed"] == 0
-    assert b["too_small_series"] == ["tiny"] and "too_small" in b and b["heldout"] is None
-    assert "explains the data" not in b["what_is_wrong"]
+    assert b.verdict == [] and b.n_series == 1 and b.n_series_diagnosed == 0
+    assert b.too_small_series == ["tiny"] and b.too_small is not None and b.heldout is None
+    assert "explains the data" not in b.what_is_wrong
     md = D.diagnosis_markdown([e, b])
     assert md.count("**Verdict: too small to name a cause**") == 2 and "[" not in md
 
@@ -189,27 +190,27 @@ class _Collect(logging.Handler):
 
 def test_a_normal_series_names_its_causes_with_their_counts(diagnosed_six):
     e, _ = diagnosed_six
-    assert "too_small" not in e and set(e["verdict"]) >= {"instability_angle", "restitution_scale"}
-    assert "not_identifiable" not in e
-    for f in e["findings"]:
-        if f["effect"] != "stop_threshold":
-            assert f["n_tests"] == 6 and f["ci95"]
+    assert e.too_small is None and set(e.verdict) >= {"instability_angle", "restitution_scale"}
+    assert e.not_identifiable is None
+    for f in e.findings:
+        if f.effect != "stop_threshold":
+            assert f.n_tests == 6 and f.ci95
     assert "(6 tests) |" in D.diagnosis_markdown([e])
 
 
 def test_a_boundary_of_few_series_gives_values_without_intervals(diagnosed_six):
     e, _ = diagnosed_six
-    few = [dict(e, key=f"s{i}") for i in range(2)]
+    few = [replace(e, key=f"s{i}") for i in range(2)]
     b = D.diagnose_boundary(few, "two-sided")
-    f = next(f for f in b["findings"] if f["effect"] == "instability_angle")
-    assert f["ci95"] == {} and f["ci_note"] == "alpha_r_over_alpha: 2 series, 1 residual df (2 needed): no interval"
-    assert f["n_series"] == 2 and f["n_tests"] == 12
+    f = next(f for f in b.findings if f.effect == "instability_angle")
+    assert f.ci95 == {} and f.ci_note == "alpha_r_over_alpha: 2 series, 1 residual df (2 needed): no interval"
+    assert f.n_series == 2 and f.n_tests == 12
     md = D.diagnosis_markdown([b])
     assert "none† (12 tests, 2 series)" in md and "† alpha_r_over_alpha: 2 series, 1 residual df" in md
-    many = D.diagnose_boundary([*few, dict(e, key="s2")], "two-sided")
-    f = next(f for f in many["findings"] if f["effect"] == "instability_angle")
-    lo, hi = f["ci95"]["alpha_r_over_alpha"]
-    assert lo <= f["params"]["alpha_r_over_alpha"] <= hi and "ci_note" not in f
+    many = D.diagnose_boundary([*few, replace(e, key="s2")], "two-sided")
+    f = next(f for f in many.findings if f.effect == "instability_angle")
+    lo, hi = f.ci95["alpha_r_over_alpha"]
+    assert lo <= f.params["alpha_r_over_alpha"] <= hi and f.ci_note is None
     assert "(18 tests, 3 series)" in D.diagnosis_markdown([many])
 
 
@@ -222,7 +223,7 @@ def test_the_log_of_a_diagnosis_names_every_candidate(diagnosed_six):
             assert f"fit {cause.name}" in text or f"{cause.name} rejected: its signature" in text, cause.name
     assert "fit base model" in text and "BIC" in text
     assert any(line.startswith("bootstrap of ") and "10 resamples of 6 tests" in line for line in lines)
-    for eff in e["verdict"]:
+    for eff in e.verdict:
         assert eff in text
     assert any("accepted" in line for line in lines) and any("rejected" in line for line in lines)
     assert "stop_threshold" in text and "chosen: " in text

@@ -45,9 +45,11 @@ from rocklab.data import LIMESTONE
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.causes import restitution_housner_loss
 from rocklab.diagnosis.discovery import discovery, family_against_listed
-from rocklab.diagnosis.estimation import Problem, beyond_the_catalogue, finite_mean, select_effects
+from rocklab.diagnosis.estimation import Problem, beyond_the_catalogue, select_effects
+from rocklab.diagnosis.estimation.resampling import heldout_gain, heldout_means
 from rocklab.diagnosis.estimation.selection import sentence_of, sentences
 from rocklab.diagnosis.estimation.systematic import verdict_intervals
+from rocklab.diagnosis.result import BlockDiagnosis, Finding, LimestoneDiagnosis
 from rocklab.physics import restitution
 from rocklab.physics.boundary import Boundary
 from rocklab.physics.impact import bounded_factor
@@ -267,7 +269,7 @@ def signatures(trials: _Trials):
     return out
 
 
-def diagnose_group(trials: _Trials, *, n_boot=40, seed=0):
+def diagnose_group(trials: _Trials, *, n_boot=40, seed=0) -> BlockDiagnosis:
     """Diagnosis of one block group (or of all, pooled): what Housner's e gets wrong, the causes, the gain."""
     several = np.ptp(trials.alpha) > 0
     problem = BlockProblem(by_group(trials) if several else trials)
@@ -285,105 +287,98 @@ def diagnose_group(trials: _Trials, *, n_boot=40, seed=0):
         own = [q.name for q in problem.params((eff,))]
         st = sel["steps"][eff]
         findings.append(
-            {
-                "effect": eff,
-                "params": {k: sel["fit"].values[k] for k in own},
-                "ci95": {k: sel["ci"][k] for k in own if k in sel["ci"]},
-                "u_systematic": {k: sel["ci"].u_sys[k] for k in own if k in sel["ci"].u_sys},
-                "n_tests": len(trials.ids),
-                "evidence": {
+            Finding(
+                effect=eff,
+                params={k: sel["fit"].values[k] for k in own},
+                ci95={k: sel["ci"][k] for k in own if k in sel["ci"]},
+                u_systematic={k: sel["ci"].u_sys[k] for k in own if k in sel["ci"].u_sys},
+                n_tests=len(trials.ids),
+                evidence={
                     "signature": sig[eff]["text"],
                     "fit": f"held-out deviance per impact lowered by {st['gain']:.3g} (standard error "
                     f"{st['se']:.2g}), dBIC = {st['dbic']:.1f}",
                 },
-                "error_heldout": {k: finite_mean(v) for k, v in st["heldout"].items()},
-                "gain": {k: finite_mean(base_ho[k]) - finite_mean(st["heldout"][k]) for k in base_ho}
-                | {"deviance": st["gain"]},
+                error_heldout=heldout_means(st["heldout"]),
+                gain=heldout_gain(base_ho, st["heldout"], st["gain"]),
                 **discovery(problem, eff, sel),
-            }
+            )
         )
     params = {q.name: q for q in problem.params(tuple(sel["effects"]))}
     verdict_intervals(findings, params, dict.fromkeys(sel["effects"], problem.n_tests))
     hb = 1.0 / np.tan(trials.alpha)
     one = np.ptp(hb) == 0
     families = [c for c in problem.candidates(True) if c not in problem.candidates()]
-    return {
-        "scope": "block group" if one else "all blocks",
-        "key": f"H/B = {hb[0]:.0f}" if one else f"H/B = {hb.min():.0f}-{hb.max():.0f}",
-        "h_over_b": float(hb[0]) if one else None,
-        "n_tests": len(trials.ids),
-        "n_impacts": int(np.isfinite(trials.r).sum()),
-        "base": {
+    return BlockDiagnosis(
+        scope="block group" if one else "all blocks",
+        key=f"H/B = {hb[0]:.0f}" if one else f"H/B = {hb.min():.0f}-{hb.max():.0f}",
+        h_over_b=float(hb[0]) if one else None,
+        n_tests=len(trials.ids),
+        n_impacts=int(np.isfinite(trials.r).sum()),
+        base={
             "model": "Housner e_an = 1 - 3/2 sin^2 alpha (Eq. 2)",
             "e_an": e_an,
             "measured_median_ratio": measured,
             "measured_geometric_mean_ratio": decay_meas,
         },
-        "what_is_wrong": (
+        what_is_wrong=(
             f"Housner's e is {e_an:.3f} where the measured ratios have median {measured:.3f} and "
             f"geometric mean {decay_meas:.3f} over the first {N_IMPACTS} impacts: the impact speed "
             f"after {N_IMPACTS} impacts is {100 * e_an**N_IMPACTS:.0f}% of the first in the model, "
             f"{100 * decay_meas**N_IMPACTS:.0f}% measured"
         ),
-        "verdict": sel["effects"],
-        **({"listed_verdict": sel["catalogue"]["effects"]} if "catalogue" in sel else {}),
-        "unexplained": bool(sel["structure"]) and not sel["weak"],
-        "residual_structure": sel["structure"],
-        "findings": findings,
-        "weak_evidence": {
-            k: {"params": v["params"], "reason": sentence_of(v["reason"])} for k, v in sel["weak"].items()
-        },
-        "rejected": sentences(sel["rejected"]),
-        "signatures": {k: v["text"] for k, v in sig.items()},
-        "heldout": {
-            "base": {k: finite_mean(v) for k, v in base_ho.items()},
-            "model": {k: finite_mean(v) for k, v in final_ho.items()},
-        },
+        verdict=list(sel["effects"]),
+        listed_verdict=sel["catalogue"]["effects"] if "catalogue" in sel else None,
+        unexplained=bool(sel["structure"]) and not sel["weak"],
+        residual_structure=sel["structure"],
+        findings=findings,
+        weak_evidence={k: {"params": v["params"], "reason": sentence_of(v["reason"])} for k, v in sel["weak"].items()},
+        rejected=sentences(sel["rejected"]),
+        signatures={k: v["text"] for k, v in sig.items()},
+        heldout={"base": heldout_means(base_ho), "model": heldout_means(final_ho)},
         # the families of the impact law, named or not: what a form outside the catalogue gives
-        "families": [family_against_listed(problem, f, sel, n_boot=n_boot, seed=seed, fits=fits) for f in families],
-    }
+        families=[family_against_listed(problem, f, sel, n_boot=n_boot, seed=seed, fits=fits) for f in families],
+    )
 
 
-def diagnose_blocks(events=None, *, n_boot=40, seed=0):
+def diagnose_blocks(events=None, *, n_boot=40, seed=0) -> LimestoneDiagnosis:
     """Diagnose every block group of the limestone tables."""
     events = read_events() if events is None else events
     groups = group_trials(events)
     entries = [diagnose_group(t, n_boot=n_boot, seed=seed) for t in groups.values()]
     every = pooled(groups)
-    return {
-        "all": diagnose_group(every, n_boot=n_boot, seed=seed),
-        "groups": entries,
-        "slenderness": restitution_housner_loss.slenderness_trend(every),
-        "source": "Colombo et al., UMinho free-rocking limestone blocks, DOI 10.60756/uminho-jh25 (CC BY 4.0)",
-    }
+    return LimestoneDiagnosis(
+        all=diagnose_group(every, n_boot=n_boot, seed=seed),
+        groups=entries,
+        slenderness=restitution_housner_loss.slenderness_trend(every),
+        source="Colombo et al., UMinho free-rocking limestone blocks, DOI 10.60756/uminho-jh25 (CC BY 4.0)",
+    )
 
 
-def blocks_markdown(result) -> str:
+def blocks_markdown(result: LimestoneDiagnosis) -> str:
     """Readable report of :func:`diagnose_blocks`."""
-    a = result["all"]
+    a = result.all
+    structure = "; ".join(map(str, a.residual_structure))
     out = [
         "# Restitution of the UMinho limestone blocks",
         "",
-        f"Data: {result['source']}.",
+        f"Data: {result.source}.",
         "",
-        f"All {a['n_tests']} trials ({a['n_impacts']} impacts), one calibration for every slenderness: "
-        f"verdict **{', '.join(a['verdict']) or 'none'}**"
+        f"All {a.n_tests} trials ({a.n_impacts} impacts), one calibration for every slenderness: "
+        f"verdict **{', '.join(a.verdict) or 'none'}**"
         + "".join(
-            f"; {f['effect']}: "
+            f"; {f.effect}: "
             + ", ".join(
-                f"{k} = {v:.4g} [{f['ci95'][k][0]:.4g}, {f['ci95'][k][1]:.4g}]"
-                for k, v in f["params"].items()
-                if k in f["ci95"]
+                f"{k} = {v:.4g} [{f.ci95[k][0]:.4g}, {f.ci95[k][1]:.4g}]" for k, v in f.params.items() if k in f.ci95
             )
-            for f in a["findings"]
+            for f in a.findings
         )
-        + f"; held-out ratio rms {a['heldout']['base']['ratio_rms']:.4f} → {a['heldout']['model']['ratio_rms']:.4f}"
-        + (f"; **unexplained**: {'; '.join(a['residual_structure'])}" if a["unexplained"] else "")
+        + f"; held-out ratio rms {a.heldout['base']['ratio_rms']:.4f} → {a.heldout['model']['ratio_rms']:.4f}"
+        + (f"; **unexplained**: {structure}" if a.unexplained else "")
         + "".join(
-            f"; structure remains ({'; '.join(a['residual_structure'])}) that {k} "
+            f"; structure remains ({structure}) that {k} "
             f"({', '.join(f'{n} = {x:.4g}' for n, x in w['params'].items())}) would remove, short of the "
             f"evidence to name it ({w['reason']})"
-            for k, w in a["weak_evidence"].items()
+            for k, w in a.weak_evidence.items()
         )
         + ".",
         "",
@@ -391,34 +386,34 @@ def blocks_markdown(result) -> str:
         "| held-out ratio rms base → model | unexplained |",
         "|---|---|---|---|---|---|---|---|",
     ]
-    for e in result["groups"]:
+    for e in result.groups:
         pars = "; ".join(
-            f"{k} = {v:.4g} [{f['ci95'][k][0]:.4g}, {f['ci95'][k][1]:.4g}]"
-            for f in e["findings"]
-            for k, v in f["params"].items()
-            if k in f["ci95"]
+            f"{k} = {v:.4g} [{f.ci95[k][0]:.4g}, {f.ci95[k][1]:.4g}]"
+            for f in e.findings
+            for k, v in f.params.items()
+            if k in f.ci95
         )
-        h = e["heldout"]
+        h = e.heldout
         out.append(
-            f"| {e['h_over_b']:.0f} | {e['n_tests']} | {e['base']['e_an']:.3f} | "
-            f"{e['base']['measured_median_ratio']:.3f} | {', '.join(e['verdict']) or 'none'} | {pars} | "
+            f"| {e.h_over_b:.0f} | {e.n_tests} | {e.base['e_an']:.3f} | "
+            f"{e.base['measured_median_ratio']:.3f} | {', '.join(e.verdict) or 'none'} | {pars} | "
             f"{h['base']['ratio_rms']:.4f} → {h['model']['ratio_rms']:.4f} | "
-            f"{'; '.join(e['residual_structure']) if e['unexplained'] else 'no'}"
-            f"{' (weak: ' + ', '.join(e['weak_evidence']) + ')' if e['weak_evidence'] else ''} |"
+            f"{'; '.join(map(str, e.residual_structure)) if e.unexplained else 'no'}"
+            f"{' (weak: ' + ', '.join(e.weak_evidence) + ')' if e.weak_evidence else ''} |"
         )
-    for fam in a.get("families", []):
-        g, ci = fam["heldout_gain"], fam["ci95"]
+    for fam in a.families:
+        g, ci = fam.heldout_gain, fam.ci95
         out += [
             "",
-            f"Beyond the catalogue, {fam['effect']} ({fam['form']}): "
-            + ", ".join(f"{k} = {v:.4g} [{ci[k][0]:.4g}, {ci[k][1]:.4g}]" for k, v in fam["params"].items())
-            + f"; {fam['reduces_to']}; dBIC {fam['dbic_vs_base']:+.1f} against Housner's e, "
-            f"{fam['dbic_vs_best_listed']:+.1f} against the best listed cause ({fam['best_listed']}); held-out "
+            f"Beyond the catalogue, {fam.effect} ({fam.form}): "
+            + ", ".join(f"{k} = {v:.4g} [{ci[k][0]:.4g}, {ci[k][1]:.4g}]" for k, v in fam.params.items())
+            + f"; {fam.reduces_to}; dBIC {fam.dbic_vs_base:+.1f} against Housner's e, "
+            f"{fam.dbic_vs_best_listed:+.1f} against the best listed cause ({fam.best_listed}); held-out "
             f"deviance gain per impact {g['vs_base']:.3g} (standard error {g['vs_base_se']:.2g}) against Housner's e, "
-            f"{g['vs_best_listed']:.3g} ({g['vs_best_listed_se']:.2g}) against {fam['best_listed']}: "
-            + ("**discovered**." if fam["discovered"] else "not named (weak evidence at most)."),
+            f"{g['vs_best_listed']:.3g} ({g['vs_best_listed_se']:.2g}) against {fam.best_listed}: "
+            + ("**discovered**." if fam.discovered else "not named (weak evidence at most)."),
         ]
-    st = result["slenderness"]
+    st = result.slenderness
     out += [
         "",
         f"Mean over the trials of each block group of their median r/e_an against (B/H)^2 (the variable of "
@@ -427,5 +422,5 @@ def blocks_markdown(result) -> str:
         + ", ".join(f"{k}: {v:.3f}" for k, v in st["levels"].items())
         + ".",
     ]
-    out += [""] + [f"- H/B = {e['h_over_b']:.0f}: {e['what_is_wrong']}." for e in result["groups"]]
+    out += [""] + [f"- H/B = {e.h_over_b:.0f}: {e.what_is_wrong}." for e in result.groups]
     return "\n".join(out) + "\n"

@@ -68,9 +68,18 @@ def in_order(columns=()):
 
 
 def by_name(name):
-    """The cause of the catalogue called ``name`` (a drift along a column of the test log too)."""
+    """The cause of the catalogue called ``name`` (a drift along a column of the test log too).
+
+    With :func:`log_columns_of`, the one reading of a cause's name: elsewhere a cause is its object.
+    """
     column = restitution_drift.column_of(name)
     return next(c for c in in_order(() if column is None else (column,)) if c.name == name)
+
+
+def log_columns_of(names):
+    """The columns of the test log that the causes called ``names`` follow (a drift along one), which a
+    model of them needs whether or not its tests have them (:attr:`~rocklab.diagnosis.causes.Cause.log_column`)."""
+    return {c for name in names if (c := restitution_drift.column_of(name)) is not None}
 
 
 def laws(ext, values=None, columns=()):

@@ -89,11 +89,11 @@ def diagnosis_markdown(diagnosis) -> str:
         if e.too_small:
             line = f"**Verdict: too small to name a cause** — {e.too_small}"
         elif e.unexplained:
-            line += " — **unexplained** structure remains: " + "; ".join(e.residual_structure)
+            line += " — **unexplained** structure remains: " + "; ".join(map(str, e.residual_structure))
         elif weak:
             line += (
                 " — structure remains ("
-                + "; ".join(e.residual_structure)
+                + "; ".join(map(str, e.residual_structure))
                 + ") that "
                 + " or ".join(weak)
                 + " would remove, short of the evidence to name it: "

@@ -9,10 +9,12 @@ Written by the diagnosis jobs beside ``diagnosis.json`` and
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 
-from rocklab.diagnosis.causes import stop_threshold
+from rocklab.diagnosis import catalogue
+from rocklab.diagnosis.causes import Stage
 from rocklab.diagnosis.result import CampaignDiagnosis, LimestoneDiagnosis
 from rocklab.physics.boundary import Boundary
 from rocklab.summaries import Tolerance
@@ -41,45 +43,38 @@ def _finding(f) -> dict:
     }
 
 
-def _stop_gain(series_entries) -> dict | None:
-    """Held-out errors of the free run with and without the stop threshold,
-    pooled over the series that name it: the root of the test-weighted mean
-    of each series' squared rms error."""
-    rows = []
-    for s in series_entries:
-        f = s.finding(stop_threshold.CAUSE.name)
-        if f is not None:
-            err, gain = f.error_heldout, f.gain
-            rows.append(
-                (
-                    s.n_tests,
-                    err["n_impacts_rms"] + gain["n_impacts_rms"],
-                    err["n_impacts_rms"],
-                    err["duration_pct_rms"] + gain["duration_pct_rms"],
-                    err["duration_pct_rms"],
-                )
-            )
-    if not rows:
+def _after_selection_gain(series_entries, effect) -> dict | None:
+    """Held-out errors of the free run with and without a cause estimated after selection
+    (:attr:`rocklab.diagnosis.causes.Stage.AFTER_SELECTION`), pooled over the series that name
+    it: for each error its finding measures (the free run's, not a deviance), the root of the
+    test-weighted mean of each series' squared rms error, ``base`` without the cause (error +
+    gain) and ``model`` with it."""
+    named = [(s.n_tests, f) for s in series_entries if (f := s.finding(effect)) is not None]
+    if not named:
         return None
-    n, *cols = np.asarray(rows, dtype=float).T
+    measures = [k for k, v in named[0][1].error_heldout.items() if v is not None]
+    n = np.array([w for w, _ in named], dtype=float)
 
     def pooled(x):
-        return math.sqrt(np.sum(n * x**2) / np.sum(n))
+        return math.sqrt(np.sum(n * np.asarray(x, dtype=float) ** 2) / np.sum(n))
 
     return {
-        "n_impacts_rms": {"base": pooled(cols[0]), "model": pooled(cols[1])},
-        "duration_pct_rms": {"base": pooled(cols[2]), "model": pooled(cols[3])},
+        k: {
+            "base": pooled([f.error_heldout[k] + f.gain[k] for _, f in named]),
+            "model": pooled([f.error_heldout[k] for _, f in named]),
+        }
+        for k in measures
     }
 
 
-def diagnosis_summary(path) -> dict:
+def diagnosis_summary(diagnosis: CampaignDiagnosis | str | Path) -> dict:
     """The model diagnosis of the campaign by boundary condition and series.
 
     Parameters
     ----------
-    path : str or pathlib.Path
-        ``diagnosis.json`` as written by :func:`rocklab.diagnosis.write_diagnosis`:
-        the one place of the docs that reads its keys.
+    diagnosis : CampaignDiagnosis, str or pathlib.Path
+        The diagnosis, or ``diagnosis.json`` as written by :func:`rocklab.diagnosis.write_diagnosis`:
+        the one place of the docs that reads its fields.
 
     Returns
     -------
@@ -87,9 +82,10 @@ def diagnosis_summary(path) -> dict:
         ``series`` (the verdict of each), ``n_series``, ``n_unexplained`` and per
         boundary (``two_sided``, ``one_sided``; ``None`` where the campaign has
         none) the base model's errors, the causes named with their intervals, the
-        held-out errors, the stop threshold's gain and the minority causes.
+        held-out errors, the gain of each cause estimated after selection (``after_selection``) and
+        the minority causes.
     """
-    d = CampaignDiagnosis.from_json(path)
+    d = CampaignDiagnosis.of(diagnosis)
     series = d.series
     out = {"series": [], "n_series": len(series), "n_unexplained": len(d.unexplained)}
     out.update({b.key: None for b in Boundary})
@@ -118,8 +114,16 @@ def diagnosis_summary(path) -> dict:
             "heldout": e.heldout,
             # absent where no series was large enough to extend the model
             "extended": (e.extended or {}).get("statement"),
-            "stop_heldout": _stop_gain(mine),
-            "no_stop": [s.key for s in mine if stop_threshold.CAUSE.name not in s.verdict],
+            # each cause estimated once the model is chosen (the stop): what it gains, and the series
+            # that do not name it
+            "after_selection": {
+                c.name: {
+                    "heldout": _after_selection_gain(mine, c.name),
+                    "not_named": [s.key for s in mine if c.name not in s.verdict],
+                }
+                for c in catalogue.CAUSES
+                if c.stage is Stage.AFTER_SELECTION
+            },
             "minority": [{"series": s.key, "effect": f.effect, "params": f.params} for s, f in d.minority(e.boundary)],
         }
     return out
@@ -143,15 +147,16 @@ def _family(families) -> dict | None:
     }
 
 
-def limestone_summary(path) -> dict:
+def limestone_summary(diagnosis: LimestoneDiagnosis | str | Path) -> dict:
     """The restitution diagnosis of the UMinho limestone blocks.
 
     Parameters
     ----------
-    path : str or pathlib.Path
+    diagnosis : LimestoneDiagnosis, str or pathlib.Path
+        The diagnosis (:func:`rocklab.diagnosis.block_tests.diagnose_blocks`), or
         ``limestone_diagnosis.json`` as written by the rule ``limestone_diagnosis``.
     """
-    d = LimestoneDiagnosis.from_json(path)
+    d = diagnosis if isinstance(diagnosis, LimestoneDiagnosis) else LimestoneDiagnosis.from_json(diagnosis)
     a = d.all
     return {
         "source": d.source,
@@ -164,7 +169,7 @@ def limestone_summary(path) -> dict:
         "what_is_wrong": a.what_is_wrong,
         "verdict": ", ".join(a.verdict) or "none",
         "unexplained": bool(a.unexplained),
-        "residual_structure": "; ".join(a.residual_structure) or "none",
+        "residual_structure": "; ".join(map(str, a.residual_structure)) or "none",
         "rejected": a.rejected,
         "signatures": a.signatures,
         "heldout_ratio_rms": {"base": a.heldout["base"]["ratio_rms"], "model": a.heldout["model"]["ratio_rms"]},

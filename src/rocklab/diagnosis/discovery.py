@@ -11,9 +11,10 @@ blocks).
 import numpy as np
 
 from rocklab.diagnosis.estimation import Problem, fit, heldout, paired_gain, parameter_intervals
+from rocklab.diagnosis.result import FamilyComparison
 
 
-def family_against_listed(problem: Problem, family, sel, *, n_boot=40, seed=0, fits=None):
+def family_against_listed(problem: Problem, family, sel, *, n_boot=40, seed=0, fits=None) -> FamilyComparison:
     """A family fitted whether named or not, against the base model and the best listed cause.
 
     The fit of ``family`` on all tests, its bootstrap intervals, the closed
@@ -35,24 +36,24 @@ def family_against_listed(problem: Problem, family, sel, *, n_boot=40, seed=0, f
     ci = parameter_intervals(problem, f, n_boot=n_boot, seed=seed)
     vs_base, se_base = paired_gain(sel["base"]["deviance"], ho["deviance"])
     vs_best, se_best = paired_gain(heldout(problem, (best,), fits[(best,)])["deviance"], ho["deviance"])
-    return {
-        "effect": family,
-        "form": cause.law,
-        "params": f.values,
-        "ci95": ci,
-        "reduces_to": cause.closed_form(f.values, ci),
-        "discovered": family in sel["effects"],
-        "best_listed": best,
-        "best_listed_params": fits[(best,)].values,
-        "dbic_vs_base": f.bic - fits[()].bic if () in fits else None,
-        "dbic_vs_best_listed": f.bic - fits[(best,)].bic,
-        "heldout_gain": {
+    return FamilyComparison(
+        effect=family,
+        form=cause.law,
+        params=f.values,
+        ci95=ci,
+        reduces_to=cause.closed_form(f.values, ci),
+        discovered=family in sel["effects"],
+        best_listed=best,
+        best_listed_params=fits[(best,)].values,
+        dbic_vs_base=f.bic - fits[()].bic if () in fits else None,
+        dbic_vs_best_listed=f.bic - fits[(best,)].bic,
+        heldout_gain={
             "vs_base": vs_base,
             "vs_base_se": se_base,
             "vs_best_listed": vs_best,
             "vs_best_listed_se": se_best,
         },
-    }
+    )
 
 
 def discovery(problem: Problem, eff, sel):

@@ -17,7 +17,6 @@ from dataclasses import replace
 import numpy as np
 
 from rocklab.diagnosis import catalogue
-from rocklab.diagnosis.causes.restitution_drift import column_of
 from rocklab.diagnosis.errors import engineering_rows, history_rms, summarise_rows
 from rocklab.diagnosis.estimation import finite_mean
 from rocklab.diagnosis.evidence import measured_test
@@ -34,7 +33,7 @@ def model_params(tests, ext=(), values=None, base=None) -> ModelParams:
     ``tests`` already made (the causes replace its arrays, never change them).
     """
     # a drift along a column of the test log that these tests (the maps' wall) lack still acts
-    columns = set(log_columns(tests)) | {column_of(c) for c in ext if column_of(c)}
+    columns = set(log_columns(tests)) | catalogue.log_columns_of(ext)
     return model_of(tests, catalogue.laws(ext, values, tuple(sorted(columns))), base)
 
 

@@ -19,9 +19,9 @@ import numpy as np
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.errors import what_is_wrong
 from rocklab.diagnosis.estimation.systematic import widened
-from rocklab.diagnosis.result import CampaignDiagnosis
+from rocklab.diagnosis.result import BaseRun, BoundaryDiagnosis, CampaignDiagnosis, PooledFinding, Structure
 from rocklab.diagnosis.series import MIN_TESTS_TO_NAME, base_name, diagnose_records
-from rocklab.inference.intervals import mean_over_units, t_interval
+from rocklab.inference.intervals import mean_over_units, no_interval_note, t_interval
 from rocklab.lab.hierarchy import plural
 from rocklab.physics.boundary import Boundary
 
@@ -100,7 +100,7 @@ def pooled_parameter(values, walls=None, u_sys=None, bounds=(-np.inf, np.inf)):
     u_sys = u_sys or {}
     u_shared, *_ = mean_over_units([u_sys.get(s, 0.0) for s in values], units, level)
     if note:
-        return m, None, level, k, note.removeprefix("not testable: ") + ": no interval", u_shared
+        return m, None, level, k, no_interval_note(note), u_shared
     lo, hi, _ = t_interval(m, se, k - 1)
     return m, widened([float(lo), float(hi)], m, *bounds, u_shared), level, k, "", u_shared
 
@@ -142,7 +142,7 @@ def _pooled_text(units, n_values, n_unnamed, n_own, n_null):
     return f"{head}; of the {n_unnamed} that did not name it, " + ", ".join(h for h in how if h)
 
 
-def diagnose_boundary(entries, boundary, *, walls=None, thickness=None):
+def diagnose_boundary(entries, boundary, *, walls=None, thickness=None) -> BoundaryDiagnosis | None:
     """One boundary condition from the diagnoses of its series.
 
     ``entries``: a :class:`~rocklab.diagnosis.result.CampaignDiagnosis` or
@@ -200,12 +200,12 @@ def diagnose_boundary(entries, boundary, *, walls=None, thickness=None):
                 ci[name] = interval
         note = "; ".join(f"{k}: {v}" for k, v in notes.items())
         findings.append(
-            {
-                "effect": eff,
-                "params": params,
-                "ci95": ci,
-                "u_systematic": shared,
-                "evidence": {
+            PooledFinding(
+                effect=eff,
+                params=params,
+                ci95=ci,
+                u_systematic=shared,
+                evidence={
                     "series": f"named in {len(lst)} of {of_series}",
                     "pooled": _pooled_text(
                         plural(level, max(units.values())), len(values), len(usable) - len(lst), len(own), n_null
@@ -215,18 +215,19 @@ def diagnose_boundary(entries, boundary, *, walls=None, thickness=None):
                         for n in params
                     },
                 },
-                "error_heldout": {"deviance_per_obs": _wmean([f.error_heldout["deviance_per_obs"] for _, f in lst], w)},
-                "gain": {k: _wmean([f.gain.get(k) for _, f in lst], w) for k in lst[0][1].gain},
-                "n_series": len(lst),
-                "n_tests": int(w.sum()),
-                **({"ci_note": note} if note else {}),
-            }
+                error_heldout={"deviance_per_obs": _wmean([f.error_heldout["deviance_per_obs"] for _, f in lst], w)},
+                gain={k: _wmean([f.gain.get(k) for _, f in lst], w) for k in lst[0][1].gain},
+                n_series=len(lst),
+                n_tests=int(w.sum()),
+                ci_note=note or None,
+            )
         )
-    findings.sort(key=lambda f: (-f["n_series"], -(f["gain"]["deviance_per_obs"] or 0)))
+    findings.sort(key=lambda f: (-f.n_series, -(f.gain["deviance_per_obs"] or 0)))
     flagged = [e.key for e in usable if e.unexplained]
     kinds = {}
     for e in usable:
-        for k in {st.split(":")[0] for st in e.residual_structure}:
+        # sorted: ties keep one order whatever the hashing of the process
+        for k in sorted({st.where for st in e.residual_structure}):
             kinds[k] = kinds.get(k, 0) + 1
     w_used = [e.n_tests for e in usable]
     ho = (
@@ -246,58 +247,56 @@ def diagnose_boundary(entries, boundary, *, walls=None, thickness=None):
         ext_statement = what_is_wrong(ext_err, "the extended model")[0]
     if usable and not findings and not flagged and not off:
         statement = "the base model explains the data within the noise: " + statement
-    out = {
-        "scope": "boundary",
-        "key": boundary,
-        "boundary": boundary,
-        "n_tests": n_tests,
-        "n_series": len(ser),
-        "n_series_diagnosed": len(usable),
-        "too_small_series": small,
-        "n_impacts": int(sum(e.n_impacts for e in ser)),
-        "base": {"model": base_name(boundary), "errors": base_err},
-        "what_is_wrong": statement,
-        "verdict": [f["effect"] for f in findings],
-        "unexplained": bool(usable) and len(flagged) >= 0.5 * len(usable),
-        "residual_structure": [
-            f"{k} in {n} of {len(usable)} series" for k, n in sorted(kinds.items(), key=lambda x: -x[1])
-        ],
-        "unexplained_series": flagged,
-        "findings": findings,
-        "heldout": ho,
-        "series_verdicts": verdicts,
-        **({"extended": {"statement": ext_statement, "n_series": len(extended)}} if ext_statement else {}),
-    }
-    if walls is not None and thickness is not None:
-        out["wall_thickness_m"] = float(np.mean([thickness[w] for w in {walls[e.key] for e in ser}]))
-    if not usable:
-        out["too_small"] = (
+    kinds_left = sorted(kinds.items(), key=lambda x: -x[1])
+    out = BoundaryDiagnosis(
+        scope="boundary",
+        key=boundary,
+        boundary=boundary,
+        n_tests=n_tests,
+        n_series=len(ser),
+        n_series_diagnosed=len(usable),
+        too_small_series=small,
+        n_impacts=int(sum(e.n_impacts for e in ser)),
+        base=BaseRun(model=base_name(boundary), errors=base_err),
+        what_is_wrong=statement,
+        verdict=[f.effect for f in findings],
+        unexplained=bool(usable) and len(flagged) >= 0.5 * len(usable),
+        residual_structure=[Structure(k, f"{k} in {n} of {len(usable)} series") for k, n in kinds_left],
+        unexplained_series=flagged,
+        findings=findings,
+        heldout=ho,
+        series_verdicts=verdicts,
+        extended={"statement": ext_statement, "n_series": len(extended)} if ext_statement else None,
+        too_small=None
+        if usable
+        else (
             f"none of its {len(ser)} series has the {MIN_TESTS_TO_NAME} tests "
             "of two impacts or more a series needs to name one"
-        )
+        ),
+        wall_thickness_m=float(np.mean([thickness[w] for w in {walls[e.key] for e in ser}]))
+        if walls is not None and thickness is not None
+        else None,
+    )
     log.info(
         "boundary %s: %d series (%d too small to name a cause), %d tests; verdict %s",
         boundary,
         len(ser),
         len(small),
         n_tests,
-        ", ".join(out["verdict"]) or "none",
+        ", ".join(out.verdict) or "none",
     )
     return out
 
 
-def with_boundaries(entries, *, walls=None, thickness=None):
+def with_boundaries(entries, *, walls=None, thickness=None) -> CampaignDiagnosis:
     """Series entries followed by one entry per boundary condition (:func:`diagnose_boundary`; ``walls``:
     series -> wall, ``thickness``: wall -> thickness [m])."""
-    out = list(entries)
-    for b in tuple(Boundary):
-        e = diagnose_boundary(out, b, walls=walls, thickness=thickness)
-        if e is not None:
-            out.append(e)
-    return out
+    series = CampaignDiagnosis.of(entries)
+    pooled = (diagnose_boundary(series, b, walls=walls, thickness=thickness) for b in Boundary)
+    return CampaignDiagnosis([*series.entries, *(e for e in pooled if e is not None)])
 
 
-def diagnose_campaign(series_records, *, n_boot=40, n_history=2, by_boundary=True, seed=0):
+def diagnose_campaign(series_records, *, n_boot=40, n_history=2, by_boundary=True, seed=0) -> CampaignDiagnosis:
     """Diagnose every series and every boundary condition of a campaign.
 
     Parameters
@@ -310,12 +309,12 @@ def diagnose_campaign(series_records, *, n_boot=40, n_history=2, by_boundary=Tru
 
     Returns
     -------
-    list of dict
+    CampaignDiagnosis
         The content of results/diagnosis.json.
     """
     entries = [
         diagnose_records(recs, sid, n_boot=n_boot, n_history=n_history, seed=seed)
         for sid, recs in series_records.items()
     ]
-    entries = [e for e in entries if e is not None]
-    return with_boundaries(entries) if by_boundary else entries
+    series = CampaignDiagnosis([e for e in entries if e is not None])
+    return with_boundaries(series) if by_boundary else series

@@ -18,14 +18,19 @@ object                      file
 :class:`BoundaryDiagnosis`  an entry of one boundary condition, its series summed up
                             (:func:`~rocklab.diagnosis.pooling.diagnose_boundary`)
 :class:`Finding`            a cause a series (or a limestone block group) names
+:class:`Structure`          structure a model leaves, where and in words
 :class:`PooledFinding`      a cause named in enough series of a boundary condition
 :class:`LimestoneDiagnosis` results/limestone_diagnosis.json
                             (:func:`~rocklab.diagnosis.block_tests.diagnose_blocks`)
 ==========================  =========================================================
 
-The diagnosis computes plain dicts (the ``to_dict`` form); ``from_dict``
-makes the object of one, refusing a key it does not know.  A key that the
-diagnosis writes only in some cases is None here where the file lacks it.
+The diagnosis builds these objects where it computes them (the series in
+:func:`~rocklab.diagnosis.series.diagnose_series`, the boundary conditions
+in :func:`~rocklab.diagnosis.pooling.diagnose_boundary`, the blocks in
+:func:`~rocklab.diagnosis.block_tests.diagnose_blocks`) and hands them on
+to the writer, the figures and the pages; ``to_dict`` is the file's form and
+``from_dict`` makes the object of one, refusing a key it does not know.  A key
+that the diagnosis writes only in some cases is None here where the file lacks it.
 Every field but the one that says what a record is (an entry's ``scope``,
 a finding's ``effect``) has an empty default, so that a program may hold
 part of a result (the maps need only the findings of a boundary
@@ -181,6 +186,22 @@ class _Document:
         return cls.from_dict(document)
 
 
+@dataclass(frozen=True)
+class Structure(_Record):
+    """Structure a model leaves in the data: ``where`` it is (a residual group such as ``impact``,
+    or the cause whose form it questions) and the ``sentence`` that says it in numbers.
+
+    The diagnosis of a boundary condition counts its series' structure by ``where``
+    (:func:`rocklab.diagnosis.pooling.diagnose_boundary`); the pages print the sentence.
+    """
+
+    where: str
+    sentence: str
+
+    def __str__(self) -> str:
+        return self.sentence
+
+
 @dataclass
 class Finding(_Record):
     """A cause named by the data of one series (or of the limestone blocks).
@@ -318,7 +339,7 @@ class SeriesDiagnosis(_Entry):
             "extended",
         }
     )
-    _nested = {"base": BaseRun, "findings": [Finding]}
+    _nested = {"base": BaseRun, "findings": [Finding], "residual_structure": [Structure]}
 
     scope: str
     key: str | None = None
@@ -331,7 +352,7 @@ class SeriesDiagnosis(_Entry):
     verdict: list[str] = field(default_factory=list)
     not_identifiable: dict[str, str] | None = None
     unexplained: bool = False
-    residual_structure: list[str] = field(default_factory=list)
+    residual_structure: list[Structure] = field(default_factory=list)
     findings: list[Finding] = field(default_factory=list)
     listed_verdict: list[str] | None = None
     listed_params: dict[str, float | None] | None = None
@@ -355,7 +376,7 @@ class BoundaryDiagnosis(_Entry):
     """
 
     _optional = frozenset({"extended", "too_small", "wall_thickness_m"})
-    _nested = {"base": BaseRun, "findings": [PooledFinding]}
+    _nested = {"base": BaseRun, "findings": [PooledFinding], "residual_structure": [Structure]}
 
     scope: str
     key: str | None = None
@@ -369,7 +390,7 @@ class BoundaryDiagnosis(_Entry):
     what_is_wrong: str | None = None
     verdict: list[str] = field(default_factory=list)
     unexplained: bool = False
-    residual_structure: list[str] = field(default_factory=list)
+    residual_structure: list[Structure] = field(default_factory=list)
     unexplained_series: list[str] = field(default_factory=list)
     findings: list[PooledFinding] = field(default_factory=list)
     heldout: dict[str, dict] | None = None
@@ -506,7 +527,7 @@ class BlockDiagnosis(_Entry):
     """The diagnosis of one group of limestone trials (one H/B) or of all of them."""
 
     _optional = frozenset({"listed_verdict"})
-    _nested = {"findings": [Finding], "families": [FamilyComparison]}
+    _nested = {"findings": [Finding], "families": [FamilyComparison], "residual_structure": [Structure]}
 
     scope: str
     key: str | None = None
@@ -518,7 +539,7 @@ class BlockDiagnosis(_Entry):
     verdict: list[str] = field(default_factory=list)
     listed_verdict: list[str] | None = None
     unexplained: bool = False
-    residual_structure: list[str] = field(default_factory=list)
+    residual_structure: list[Structure] = field(default_factory=list)
     findings: list[Finding] = field(default_factory=list)
     weak_evidence: dict[str, dict] = field(default_factory=dict)
     rejected: dict[str, str] = field(default_factory=dict)

@@ -27,12 +27,14 @@ import numpy as np
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.discovery import discovery
 from rocklab.diagnosis.errors import what_is_wrong
-from rocklab.diagnosis.estimation import beyond_the_catalogue, finite_mean, rivals, select_effects, stand_ins
+from rocklab.diagnosis.estimation import beyond_the_catalogue, rivals, select_effects, stand_ins
 from rocklab.diagnosis.estimation.bias import model_bias, net_of_noise
+from rocklab.diagnosis.estimation.resampling import heldout_gain, heldout_means
 from rocklab.diagnosis.estimation.selection import sentences, supported
 from rocklab.diagnosis.estimation.systematic import standard_error, verdict_intervals, widened
 from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_test, observe
 from rocklab.diagnosis.extended import engineering_errors, model_params, simulated_tests
+from rocklab.diagnosis.result import BaseRun, Finding, SeriesDiagnosis
 from rocklab.diagnosis.series_problem import WallProblem
 from rocklab.physics.boundary import Boundary
 
@@ -49,23 +51,6 @@ def base_name(boundary):
         if boundary == Boundary.TWO_SIDED
         else "one-sided e_an,1s (Eq. 14), nominal alpha, released from rest at theta0"
     )
-
-
-def _gain(before, after):
-    """Held-out engineering errors of the base model minus those after an extension (per measure)."""
-    out = {}
-    for k in before:
-        b, a = finite_mean(before[k]), finite_mean(after[k])
-        if k != "deviance":
-            out[k] = None if b is None or a is None else b - a
-    return out
-
-
-def _heldout_summary(ho):
-    return {
-        "deviance_per_obs": finite_mean(ho["deviance"]),
-        **{k: finite_mean(v) for k, v in ho.items() if k != "deviance"},
-    }
 
 
 def not_identifiable(tests, named=()):
@@ -127,7 +112,7 @@ def unnamed_estimates(problem, sel, fits):
     return out
 
 
-def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, seed=0):
+def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, seed=0) -> SeriesDiagnosis:
     """Diagnosis of one series: base model, what it gets wrong, causes, gain.
 
     Parameters
@@ -144,7 +129,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
 
     Returns
     -------
-    dict
+    SeriesDiagnosis
         One entry of results/diagnosis.json; each finding carries
         ``n_tests``, the tests its interval rests on.  With fewer than
         :data:`MIN_TESTS_TO_NAME` tests of two impacts or more the entry
@@ -170,12 +155,16 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         sum(t.n_impacts for t in tests),
     )
     base_err = engineering_errors(tests, n_history=n_history)
-    base = {"model": base_name(boundary), "errors": base_err}
-    if boundary == Boundary.ONE_SIDED:
-        base["alternatives"] = {
+    base = BaseRun(
+        model=base_name(boundary),
+        errors=base_err,
+        alternatives={
             "two-sided e (Hogan 1992)": engineering_errors(tests, base="two-sided-e", n_history=0),
             "e = 0 (Liberatore & Spera 2003)": engineering_errors(tests, base="zero", n_history=0),
         }
+        if boundary == Boundary.ONE_SIDED
+        else None,
+    )
     statement, off = what_is_wrong(base_err, "the simulation")
     log.info("base model: %s", statement)
     head = {
@@ -192,18 +181,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
             "and a cause is named only where the interval of its parameter clears its null value"
         )
         log.warning("%s %s is too small to name a cause: %s", scope, key, why)
-        return {
-            **head,
-            "what_is_wrong": statement,
-            "too_small": why,
-            "verdict": [],
-            "unexplained": False,
-            "residual_structure": [],
-            "findings": [],
-            "weak_evidence": {},
-            "rejected": {},
-            "sample_test": _sample_test(tests),
-        }
+        return SeriesDiagnosis(**head, what_is_wrong=statement, too_small=why, sample_test=_sample_test(tests))
     problem = WallProblem(tests)
     sig = problem.signature
     fits = {}
@@ -214,26 +192,27 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
     for eff in effects:
         own = [q.name for q in catalogue.by_name(eff).params]
         st = sel["steps"][eff]
+        cause = catalogue.by_name(eff)
         findings.append(
-            {
-                "effect": eff,
-                "params": {k: values[k] for k in own},
-                "ci95": {k: sel["ci"][k] for k in own if k in sel["ci"]},
-                "n_tests": len(tests),
-                "evidence": {
+            Finding(
+                effect=eff,
+                params={k: values[k] for k in own},
+                ci95={k: sel["ci"][k] for k in own if k in sel["ci"]},
+                n_tests=len(tests),
+                evidence={
                     "signature": sig.get(eff, {}).get("text", ""),
                     "fit": f"held-out deviance per observation lowered by {st['gain']:.3g} "
                     f"(standard error {st['se']:.2g}), dBIC = {st['dbic']:.1f}",
                 },
-                "error_heldout": _heldout_summary(st["heldout"]),
-                "gain": _gain(sel["base"], st["heldout"]) | {"deviance_per_obs": st["gain"]},
+                error_heldout=heldout_means(st["heldout"]),
+                gain=heldout_gain(sel["base"], st["heldout"], st["gain"]),
+                curve=cause.curve(tests, values, sel["catalogue"]["fit"].values)
+                if cause.curve is not None and "catalogue" in sel
+                else None,
                 **discovery(problem, eff, sel),
-            }
+            )
         )
-        cause = catalogue.by_name(eff)
-        if cause.curve is not None and "catalogue" in sel:
-            findings[-1]["curve"] = cause.curve(tests, values, sel["catalogue"]["fit"].values)
-    findings.sort(key=lambda f: -f["gain"]["deviance_per_obs"])
+    findings.sort(key=lambda f: -f.gain["deviance_per_obs"])
     # the causes estimated once the chosen model is known, from what it leaves
     structure = list(sel["structure"])
     ext, ext_values = list(effects), dict(values)
@@ -241,7 +220,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         mp = model_params(tests, effects, values)
         left = cause.unexplained(problem.S, mp)
         found = cause.estimate(tests, mp, seed=seed) if left else None
-        log.info("%s: %s; %s", cause.name, "; ".join(left) or "nothing left for it", _estimated(left, found))
+        log.info("%s: %s; %s", cause.name, "; ".join(map(str, left)) or "nothing left for it", _estimated(left, found))
         if found is not None and found["named"]:
             structure = [st for st in structure if st not in left]
             findings.append(found["finding"])
@@ -249,12 +228,12 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
             ext_values.update(found["values"])
     bias = _with_model_bias(tests, findings, sel, ext, ext_values, seed)
     for f in findings:
-        pulls = sel["ci"].u_sys if f["effect"] in sel["effects"] else {}
+        pulls = sel["ci"].u_sys if f.effect in sel["effects"] else {}
         u_model = bias.get("u_model", {})
-        f["u_systematic"] = {k: float(np.hypot(pulls.get(k, 0.0), u_model.get(k, 0.0))) for k in f["ci95"]}
-    params = {q.name: q for f in findings for q in catalogue.by_name(f["effect"]).params}
-    verdict_intervals(findings, params, {f["effect"]: f["n_tests"] for f in findings})
-    blind = not_identifiable(tests, [f["effect"] for f in findings])
+        f.u_systematic = {k: float(np.hypot(pulls.get(k, 0.0), u_model.get(k, 0.0))) for k in f.ci95}
+    params = {q.name: q for f in findings for q in catalogue.by_name(f.effect).params}
+    verdict_intervals(findings, params, {f.effect: f.n_tests for f in findings})
+    blind = not_identifiable(tests, [f.effect for f in findings])
     # a cause the design cannot identify is never named, and a rival these tests cannot tell from a named
     # cause was never tested against it: a named cause whose effect either could produce is named with
     # that caveat, not with confidence; a rival the data prefer is a form the selection missed
@@ -271,41 +250,41 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
     for y, xs in rival.items():
         caveats[y] = caveats.get(y, {}) | xs
     for y, xs in caveats.items():
-        next(f for f in findings if f["effect"] == y)["may_stand_in_for"] = xs
-    entry = {
+        next(f for f in findings if f.effect == y).may_stand_in_for = xs
+    listed = "catalogue" in sel
+    unnamed = unnamed_estimates(problem, sel, fits)
+    ext_err = engineering_errors(tests, ext, ext_values, n_history=n_history) if ext else None
+    entry = SeriesDiagnosis(
         **head,
-        "what_is_wrong": (verdict_text + ": " if verdict_text else "") + statement,
-        "verdict": [f["effect"] for f in findings],
-        **({"not_identifiable": blind} if blind else {}),
-        "unexplained": unexplained,
-        "residual_structure": structure,
-        "findings": findings,
-        **(
-            {"listed_verdict": sel["catalogue"]["effects"], "listed_params": sel["catalogue"]["fit"].values}
-            if "catalogue" in sel
-            else {}
-        ),
-        "weak_evidence": sentences({k: v["reason"] for k, v in sel["weak"].items()}),
-        "rejected": sentences(sel["rejected"]),
-        "signatures": {k: v["text"] for k, v in sig.items()},
-        **({"unnamed_estimates": unnamed} if (unnamed := unnamed_estimates(problem, sel, fits)) else {}),
-        "heldout": {"base": _heldout_summary(sel["base"]), "model": _heldout_summary(sel["final"])},
-        **({"model_bias": bias} if bias else {}),
-    }
-    if ext:
-        ext_err = engineering_errors(tests, ext, ext_values, n_history=n_history)
-        entry["extended"] = {
+        what_is_wrong=(verdict_text + ": " if verdict_text else "") + statement,
+        verdict=[f.effect for f in findings],
+        not_identifiable=blind or None,
+        unexplained=unexplained,
+        residual_structure=structure,
+        findings=findings,
+        listed_verdict=sel["catalogue"]["effects"] if listed else None,
+        listed_params=sel["catalogue"]["fit"].values if listed else None,
+        weak_evidence=sentences({k: v["reason"] for k, v in sel["weak"].items()}),
+        rejected=sentences(sel["rejected"]),
+        signatures={k: v["text"] for k, v in sig.items()},
+        unnamed_estimates=unnamed or None,
+        heldout={"base": heldout_means(sel["base"]), "model": heldout_means(sel["final"])},
+        model_bias=bias or None,
+        extended={
             "effects": ext,
             "params": ext_values,
             "errors": ext_err,
             "statement": what_is_wrong(ext_err, "the extended model")[0],
         }
-    entry["sample_test"] = _sample_test(tests)
+        if ext
+        else None,
+        sample_test=_sample_test(tests),
+    )
     log.info(
         "%s %s: verdict %s%s in %.1f s",
         scope,
         key,
-        ", ".join(entry["verdict"]) or "none",
+        ", ".join(entry.verdict) or "none",
         "; unexplained structure" if unexplained else "",
         time.perf_counter() - t0,
     )
@@ -336,18 +315,18 @@ def _with_model_bias(tests, findings, sel, ext, values, seed):
     # noise its interval gives (systematic.standard_error)
     mp = model_params(simulated, sel["effects"], sel["fit"].values)
     for f in findings:
-        cause = catalogue.by_name(f["effect"])
-        if f["effect"] in sel["effects"] or cause.estimate is None:
+        cause = catalogue.by_name(f.effect)
+        if f.effect in sel["effects"] or cause.estimate is None:
             continue
         again = cause.estimate(simulated, mp, seed=seed)
-        for k, ci in f["ci95"].items() if again is not None else ():
-            b[k] = float(again["values"][k] - f["params"][k])
-            u[k] = float(net_of_noise(b[k], standard_error(ci, df=f["n_tests"] - 1)))
+        for k, ci in f.ci95.items() if again is not None else ():
+            b[k] = float(again["values"][k] - f.params[k])
+            u[k] = float(net_of_noise(b[k], standard_error(ci, df=f.n_tests - 1)))
     for f in findings:
-        bounds = {q.name: q for q in catalogue.by_name(f["effect"]).params}
-        for k, ci in f["ci95"].items():
+        bounds = {q.name: q for q in catalogue.by_name(f.effect).params}
+        for k, ci in f.ci95.items():
             q = bounds[k]
-            f["ci95"][k] = widened(ci, f["params"][k], q.lower, q.upper, u.get(k, 0.0))
+            f.ci95[k] = widened(ci, f.params[k], q.lower, q.upper, u.get(k, 0.0))
     return {"b": b, "u_model": u}
 
 
@@ -357,7 +336,7 @@ def _estimated(left, found):
         return "not estimated"
     if found is None:
         return "no estimate"
-    return f"{'named' if found['named'] else 'not named'}: {found['finding']['evidence']['fit']}"
+    return f"{'named' if found['named'] else 'not named'}: {found['finding'].evidence['fit']}"
 
 
 def _sample_test(tests):
@@ -365,7 +344,7 @@ def _sample_test(tests):
     return tests[int(np.argmax([t.n_impacts for t in tests]))].test_id
 
 
-def diagnose_records(records, key, *, n_boot=40, n_history=2, seed=0):
+def diagnose_records(records, key, *, n_boot=40, n_history=2, seed=0) -> SeriesDiagnosis | None:
     """:func:`diagnose_series` of one series' records, or None when none of its
     tests has two impacts or more (nothing to compare a model with)."""
     tests = [r if isinstance(r, MeasuredTest) else measured_test(r) for r in records]

@@ -9,6 +9,7 @@ from rocklab.diagnosis.causes import Stage
 from rocklab.diagnosis.estimation import Problem
 from rocklab.diagnosis.evidence import TestStack, covariates, log_ratio, noise_covariates, residuals
 from rocklab.diagnosis.extended import model_params
+from rocklab.diagnosis.result import Structure
 from rocklab.diagnosis.wall_model import base_params, free_run, log_columns
 
 
@@ -55,11 +56,16 @@ class WallProblem(Problem):
         for c in self.causes:
             sig = self.signature.get(c.name) or {}
             if c.family in ext and sig.get("against_member"):
-                out.append(sig["against_member"])
+                out.append(Structure(c.name, sig["against_member"]))
             elif c.family in ext and c.checks_form and (not sig or sig.get("not_identifiable")):
-                out.append(f"{c.family}: its form is untested, the signature of {c.name} cannot be read in these tests")
+                out.append(
+                    Structure(
+                        c.family,
+                        f"{c.family}: its form is untested, the signature of {c.name} cannot be read in these tests",
+                    )
+                )
             elif c.family and not {c.name, c.family} & set(ext) and sig.get("unmodelled"):
-                out.append(sig["unmodelled"])
+                out.append(Structure(c.name, sig["unmodelled"]))
         return out
 
     @property

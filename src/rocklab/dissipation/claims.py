@@ -54,6 +54,7 @@ import pandas as pd
 from rocklab._imports import lazy_module
 from rocklab.data import data_path
 from rocklab.diagnosis import catalogue
+from rocklab.inference.verdicts import ClaimVerdict
 from rocklab.lab.hierarchy import COVARIATE_LEVEL
 from rocklab.physics import restitution
 from rocklab.physics import wall as _wall
@@ -152,7 +153,7 @@ def read_claims(path=None):
 PAPER_CLAIMS = read_claims()
 
 
-def verdict(kind, low, high, p, value=0.0, margin=0.0, alpha=0.05):
+def verdict(kind, low, high, p, value=0.0, margin=0.0, alpha=0.05) -> ClaimVerdict:
     """The verdict on a claim from an interval [low, high] and the p-value.
 
     Parameters
@@ -166,19 +167,20 @@ def verdict(kind, low, high, p, value=0.0, margin=0.0, alpha=0.05):
 
     Returns
     -------
-    str
-        'supported', 'contradicted' or 'inconclusive'.
+    ClaimVerdict
+        Supported, contradicted or inconclusive.
     """
+    V = ClaimVerdict
     if kind == "zero":
         if p < alpha:
-            return "contradicted"
-        return "supported" if -margin <= low and high <= margin else "inconclusive"
+            return V.CONTRADICTED
+        return V.SUPPORTED if -margin <= low and high <= margin else V.INCONCLUSIVE
     if kind == "below":
-        return "supported" if high < value else "contradicted" if low >= value else "inconclusive"
+        return V.SUPPORTED if high < value else V.CONTRADICTED if low >= value else V.INCONCLUSIVE
     if kind == "near":
         if value - margin <= low and high <= value + margin:
-            return "supported"
-        return "contradicted" if high < value - margin or low > value + margin else "inconclusive"
+            return V.SUPPORTED
+        return V.CONTRADICTED if high < value - margin or low > value + margin else V.INCONCLUSIVE
     raise ValueError(f"unknown kind of claim {kind!r}")
 
 

@@ -88,6 +88,7 @@ from rocklab.dissipation.claims import PAPER_CLAIMS, claim_text, margin_of, verd
 from rocklab.dissipation.regression import ols
 from rocklab.inference.intervals import clustered_mean, mean_over_units, t_interval
 from rocklab.inference.multiplicity import holm
+from rocklab.inference.verdicts import ClaimVerdict
 from rocklab.lab.campaign import order_in_series
 from rocklab.lab.hierarchy import COVARIATE_LEVEL, UNIT_COLUMN, parent, plural, too_few_units
 from rocklab.physics.boundary import Boundary
@@ -305,23 +306,23 @@ def fit_level(frame, covariate):
     -------
     fit : LevelFit or None
     reason : str
-        "" when fitted, else "not testable: ..." (one level, constant within
+        "" when fitted, else why it is not testable (one level, constant within
         every parent, too few units: :func:`rocklab.lab.hierarchy.too_few_units`).
     units : pandas.DataFrame
         The units the fit rests on (:func:`unit_values`).
     """
     level = COVARIATE_LEVEL[covariate]
     if covariate not in frame or frame[covariate].isna().any():
-        return None, "not testable: not known for every series", frame.iloc[:0]
+        return None, "not known for every series", frame.iloc[:0]
     units = unit_values(frame, covariate)
     if parent(level) in UNIT_COLUMN:
         units = units[units.groupby("parent").unit_id.transform("size") > 1].reset_index(drop=True)
         if units.empty:
-            return None, f"not testable: no {parent(level)} holds two {level}s with a value", units
+            return None, f"no {parent(level)} holds two {level}s with a value", units
     levels = sorted(units[covariate].unique())
     if len(levels) < 2:
         only = f" ({_level_text(levels[0])})" if levels else ""
-        return None, f"not testable: only one level{only} among {plural(level, len(units))}", units
+        return None, f"only one level{only} among {plural(level, len(units))}", units
     parents = sorted(units.parent.unique())
     base = np.column_stack([(units.parent == p).to_numpy(float) for p in parents])
     if covariate in NUMERIC:
@@ -333,7 +334,7 @@ def fit_level(frame, covariate):
         per_level = {_level_text(v): int((units[covariate] == v).sum()) for v in levels}
     X = np.column_stack([base, *new.values()])
     if np.linalg.matrix_rank(X) < X.shape[1]:
-        return None, f"not testable: constant within every {parent(level)} of {plural(level, len(units))}", units
+        return None, f"constant within every {parent(level)} of {plural(level, len(units))}", units
     df = len(units) - X.shape[1]
     reason = too_few_units(level, len(units), df, per_level)
     if reason:
@@ -341,6 +342,11 @@ def fit_level(frame, covariate):
     coef, cov, df = ols(units.value.to_numpy(float), X)
     columns = {label: base.shape[1] + i for i, label in enumerate(new)}
     return LevelFit(units, covariate, level, X, columns, coef, cov, df), "", units
+
+
+def _not_testable(reason):
+    """The fields of a row that gets no verdict, and why."""
+    return {"model": "", "verdict": ClaimVerdict.NOT_TESTABLE, "why_not_testable": reason}
 
 
 def _row(boundary, response, source, covariate, **kw):
@@ -358,7 +364,7 @@ def covariate_rows(frame, boundary, response, source, covariate):
         n_units=len(units),
     )
     if fit is None:
-        return [_row(boundary, response, source, covariate, model="", verdict=reason, **common)]
+        return [_row(boundary, response, source, covariate, **_not_testable(reason), **common)]
     up = parent(level)
     within = f" + a mean per {up}" if up in UNIT_COLUMN else ""
     model = f"{level} means ~ {covariate}{within}, OLS ({plural(level, len(units))})"
@@ -412,7 +418,7 @@ def wall_mean_row(values, walls, **row):
     m, se, k, reason = mean_over_units(values, walls, "wall")
     row |= dict(unit_level="wall", n_units=k)
     if reason:
-        return row | {"model": "", "verdict": reason}
+        return row | _not_testable(reason)
     lo, hi, p = t_interval(m, se, k - 1, null=null)
     return row | dict(estimate=m, se=se, ci_low=lo, ci_high=hi, p=p, df=k - 1)
 
@@ -426,10 +432,10 @@ def within_series_row(tests, boundary, response, covariate):
     if len(effects) < 2:
         levels = sorted(tests[covariate].dropna().unique())
         if covariate == "direction" and len(levels) < 2:
-            why = f"not testable: only one level ({levels[0]})" if levels else "not testable: no values"
+            why = f"only one level ({levels[0]})" if levels else "no values"
         else:
-            why = f"not testable: varies within {len(effects)} series (2 needed)"
-        return _row(boundary, response, "tests", covariate, model="", verdict=why, unit_level="wall",
+            why = f"varies within {len(effects)} series (2 needed)"
+        return _row(boundary, response, "tests", covariate, **_not_testable(why), unit_level="wall",
                     n_units=used.wall.nunique(), **common)  # fmt: skip
     wall = used.groupby("series").wall.first().reindex(effects.index)
     model = "within-series effect per series, mean over walls of their series' (t)"
@@ -446,7 +452,7 @@ def mean_row(frame, boundary, response, source, value):
     row = _row(boundary, response, source, "mean", n_series=len(frame), n_tests=int(n.sum()), term="mean over tests",
                unit_level="wall", n_units=k)  # fmt: skip
     if reason:
-        return row | {"model": "", "verdict": reason}
+        return row | _not_testable(reason)
     lo, hi, p = t_interval(m, se, df, null=value)
     model = "mean over tests, walls as clusters (CR2, Imbens-Kolesar df, t)"
     return row | dict(model=model, estimate=m, se=se, ci_low=lo, ci_high=hi, p=p, df=df)
@@ -464,7 +470,7 @@ def _judge(rows, claims):
     for r in rows:
         r.setdefault("statement", by_effect.get((r["boundary"], r["response"], r["covariate"]), ""))
     table = pd.DataFrame(rows)
-    for c in ("term", "model", "verdict"):
+    for c in ("term", "model", "verdict", "why_not_testable"):
         table[c] = table[c].fillna("") if c in table else ""
     for c in ("estimate", "se", "ci_low", "ci_high", "slope", "p", "df", "span_low", "span_high"):
         table[c] = table[c].astype(float) if c in table else np.nan
@@ -493,7 +499,7 @@ def _judge(rows, claims):
 
 #: Columns of campaign_effects.csv, in order (workflow/schemas/campaign_effects.schema.yaml).
 COLUMNS = (
-    "statement", "boundary", "response", "source", "covariate", "term", "claim", "verdict",
+    "statement", "boundary", "response", "source", "covariate", "term", "claim", "verdict", "why_not_testable",
     "estimate", "ci_low", "ci_high", "p", "p_holm", "df", "unit_level", "n_units", "n_series", "n_tests",
     "slope", "span_low", "span_high", "claimed_value", "margin", "verdict_level", "model", "paper",
 )  # fmt: skip

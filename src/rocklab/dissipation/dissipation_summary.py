@@ -13,6 +13,7 @@ import ast
 import pandas as pd
 
 from rocklab.dissipation.claims import margin_rule
+from rocklab.inference.verdicts import ClaimVerdict
 from rocklab.lab.hierarchy import MIN_DF, MIN_UNITS_PER_LEVEL
 from rocklab.physics.boundary import Boundary
 from rocklab.summaries import LAST_DIGIT, Tolerance
@@ -167,12 +168,12 @@ def campaign_level_summary(path) -> dict:
     """
     table = pd.read_csv(path, keep_default_na=False, na_values=[""])
     fields = (
-        "verdict", "estimate", "ci_low", "ci_high", "p", "p_holm", "unit_level", "n_units", "n_series", "n_tests",
-        "margin", "term", "claim",
+        "verdict", "why_not_testable", "estimate", "ci_low", "ci_high", "p", "p_holm", "unit_level", "n_units",
+        "n_series", "n_tests", "margin", "term", "claim",
     )  # fmt: skip
     stated = table[table["statement"].fillna("") != ""]
     rest = table[table["statement"].fillna("") == ""]
-    judged = rest[~rest["verdict"].str.startswith("not testable")]
+    judged = rest[rest["verdict"] != ClaimVerdict.NOT_TESTABLE]
     return {
         # the margins by boundary condition and response (rocklab.dissipation.claims.margin_of) and their rule
         "margins": {
@@ -197,7 +198,7 @@ def campaign_level_summary(path) -> dict:
             for _, r in stated.iterrows()
         },
         "n_statements": len(stated),
-        "n_supported": int((stated["verdict"] == "supported").sum()),
+        "n_supported": int((stated["verdict"] == ClaimVerdict.SUPPORTED).sum()),
         "n_effects": len(rest),
         "n_judged": len(judged),
         "n_not_testable": len(rest) - len(judged),
@@ -215,6 +216,6 @@ def campaign_level_summary(path) -> dict:
                 "p_holm": r["p_holm"],
                 "n_series": r["n_series"],
             }
-            for _, r in judged[judged["verdict"] == "contradicted"].iterrows()
+            for _, r in judged[judged["verdict"] == ClaimVerdict.CONTRADICTED].iterrows()
         ],
     }

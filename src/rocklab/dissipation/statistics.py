@@ -62,6 +62,7 @@ from rocklab.inference.intervals import (
 )
 from rocklab.inference.multiplicity import holm
 from rocklab.inference.notes import counted, note_lines, note_mark
+from rocklab.inference.verdicts import ClaimVerdict
 from rocklab.lab.hierarchy import COVARIATE_LEVEL, UNIT_COLUMN, too_few_units
 from rocklab.lab.validity import Verdict
 from rocklab.physics.boundary import Boundary
@@ -380,7 +381,7 @@ def factor_effect(tests_df, factor, value="e_ratio", walls=None, within="boundar
                 "statistic": H,
                 "p": p,
                 "systematic": bool(p < p_crit),
-                "test": reason or f"Kruskal-Wallis on {level} means",
+                "test": f"{ClaimVerdict.NOT_TESTABLE}: {reason}" if reason else f"Kruskal-Wallis on {level} means",
             }
         )
     return pd.DataFrame(rows)

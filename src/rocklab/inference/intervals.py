@@ -131,7 +131,7 @@ def interval_note(n: int, unit: str = "tests") -> str:
 def no_interval_note(reason: str) -> str:
     """The note of a value given without an interval because of :func:`rocklab.lab.hierarchy.too_few_units`'s
     ``reason``: "2 walls, 1 residual df (2 needed): no interval"; "" for no reason."""
-    return f"{reason.removeprefix('not testable: ')}: no interval" if reason else ""
+    return f"{reason}: no interval" if reason else ""
 
 
 def small_sample_expansion(n_units: int, level: float = 0.95) -> float:

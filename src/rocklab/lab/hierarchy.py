@@ -72,15 +72,15 @@ def too_few_units(level: str, n_units: int, df: float, per_level: dict[str, int]
     Returns
     -------
     str
-        "not testable: ..." naming the units counted, or "".
+        Why, naming the units counted ("2 walls, 1 residual df (2 needed)"), or "".
     """
     if per_level is not None:
         short = {k: n for k, n in per_level.items() if n < MIN_UNITS_PER_LEVEL}
         if short:
             counts = ", ".join(f"{plural(level, n)} of {k}" for k, n in per_level.items())
-            return f"not testable: {counts} ({MIN_UNITS_PER_LEVEL} {level}s a level needed)"
+            return f"{counts} ({MIN_UNITS_PER_LEVEL} {level}s a level needed)"
     if df < MIN_DF:
-        return f"not testable: {plural(level, n_units)}, {df} residual df ({MIN_DF} needed)"
+        return f"{plural(level, n_units)}, {df} residual df ({MIN_DF} needed)"
     return ""
 
 

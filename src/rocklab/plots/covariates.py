@@ -14,6 +14,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
+from rocklab.inference.verdicts import ClaimVerdict
 from rocklab.physics.boundary import Boundary
 
 #: The panels of each row: (boundary, covariate, axis label).
@@ -56,7 +57,9 @@ def covariate_figure(fits, effects=None):
             ax = axes[i, j]
             fit = fits.get((boundary, response), {}).get(covariate)
             if fit is None:
-                ax.text(0.5, 0.5, "not testable", ha="center", va="center", transform=ax.transAxes, color="0.5")
+                ax.text(
+                    0.5, 0.5, ClaimVerdict.NOT_TESTABLE, ha="center", va="center", transform=ax.transAxes, color="0.5"
+                )
                 ax.set_yticks([])
             else:
                 part = fit.partial()

@@ -21,7 +21,7 @@ import numpy as np
 
 from rocklab.diagnosis import block_tests, measured_test, simulate_measured, stored_records
 from rocklab.diagnosis.catalogue import by_name
-from rocklab.diagnosis.causes import Stage, instability_angle, restitution_drift
+from rocklab.diagnosis.causes import Stage, instability_angle
 from rocklab.diagnosis.evidence import flight_time_alpha, in_series_order, observe
 from rocklab.diagnosis.extended import model_params
 from rocklab.diagnosis.result import CampaignDiagnosis
@@ -149,7 +149,8 @@ def discovery_figure(tests, entry):
     chosen = [f.effect for f in entry.findings if by_name(f.effect).stage is Stage.SELECTION]
     fig, axes = plt.subplots(1, len(found), figsize=(7 * len(found), 4.5), squeeze=False)
     for ax, f in zip(axes[0], found):
-        fam = by_name(f.effect).family
+        cause = by_name(f.effect)
+        fam = cause.family
         pars = ", ".join(f"{k} = {v:.3g}" for k, v in f.params.items())
         lab = f"{f.effect} (discovered): {pars}\n{f.reduces_to}"
         lab_listed = f"best listed: {' + '.join(listed) or 'the base model'}"
@@ -166,8 +167,8 @@ def discovery_figure(tests, entry):
                 ax.plot(A[0] / ob.alpha[0, 0], y[0], style, lw=1.5, label=label)
             ax.set_xlabel("apex of the flight / alpha")
             ax.set_ylabel("alpha_r / alpha from the flight time (Housner)")
-        elif f.effect.startswith(restitution_drift.NAME):
-            column = restitution_drift.column_of(f.effect)
+        elif cause.drifts:
+            column = cause.log_column
             n = np.array([t.order if column is None else t.log.get(column, np.nan) for t in tests])
             med = np.array([np.median(ob.ratio[i][ob.ok[i]]) if ob.ok[i].any() else np.nan for i in range(len(tests))])
             ax.plot(n, med, "ko", ms=4, label="measured, per test (median over its impacts)")

@@ -123,15 +123,14 @@ def boundary_findings(diagnosis, boundary):
         family the maps' wall can hold, or left off, with a warning in the log.
     """
     from rocklab.diagnosis.catalogue import by_name
-    from rocklab.diagnosis.result import BoundaryDiagnosis, CampaignDiagnosis
+    from rocklab.diagnosis.result import CampaignDiagnosis
 
     diagnosis = CampaignDiagnosis.of(diagnosis)
     entry = diagnosis.boundary(boundary)
     if entry is None:
         from rocklab.diagnosis.pooling import diagnose_boundary
 
-        pooled = diagnose_boundary(diagnosis, boundary)
-        entry = None if pooled is None else BoundaryDiagnosis.from_dict(pooled)
+        entry = diagnose_boundary(diagnosis, boundary)
     if entry is None:
         return {}
     # a finding also reports statistics of its parameters (spread_log): only the cause's own parameters

@@ -71,7 +71,7 @@ class Cause:
         or :attr:`Stage.AFTER_SELECTION` (estimated once the chosen model is known,
         from what that model leaves: :attr:`unexplained` and :attr:`estimate`).
     unexplained : callable, optional
-        After-selection causes: ``unexplained(stack, mp) -> list of str``,
+        After-selection causes: ``unexplained(stack, mp) -> list of Structure``,
         what the model ``mp`` leaves that this cause would explain.
     estimate : callable, optional
         After-selection causes: ``estimate(tests, mp, seed) -> dict or None``,
@@ -113,6 +113,14 @@ class Cause:
         member is named and the signature cannot be read, the member's form
         is untested, and the diagnosis says so as structure left
         (:meth:`rocklab.diagnosis.series_problem.WallProblem.form_structure`).
+    drifts : bool
+        The cause changes from test to test of a series, along the test's
+        place in it or along :attr:`log_column` (its figure draws it so).
+    log_column : str, optional
+        The column of the test log a drifting cause follows (None: the
+        test's place in its series); a model of the cause needs that column
+        even on a wall whose tests lack it (the maps' wall stands for the
+        middle of the series).
     not_identifiable : callable, optional
         ``not_identifiable(observed) -> str``: why the tests of a series
         (:class:`rocklab.diagnosis.evidence.Observed`) cannot tell the cause
@@ -139,6 +147,8 @@ class Cause:
     short: str | None = None
     on_the_maps: tuple[str | None, str] | None = None
     checks_form: bool = False
+    drifts: bool = False
+    log_column: str | None = None
     not_identifiable: Callable | None = None
 
     def holds(self, ci, name, value):

@@ -34,7 +34,9 @@ MIN_TESTS = MIN_DF + 2
 
 
 def column_of(name):
-    """The test log's column a drift named ``name`` follows (None: the test order, or no drift)."""
+    """The test log's column a drift named ``name`` follows (None: the test order, or no drift): the
+    reading of a name, for :func:`rocklab.diagnosis.catalogue.by_name` alone (a cause says it as
+    :attr:`~rocklab.diagnosis.causes.Cause.log_column`)."""
     if name.startswith(f"{NAME}[") and name.endswith("]"):
         return name[len(NAME) + 1 : -1]
     return None
@@ -89,6 +91,8 @@ def _cause(column, others=()):
         family=restitution_scale.CAUSE.name,
         closed_form=closed_form,
         short="drift",
+        drifts=True,
+        log_column=column,
         not_identifiable=too_few_tests,
     )
 

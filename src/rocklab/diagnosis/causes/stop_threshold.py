@@ -19,6 +19,7 @@ from rocklab.diagnosis.causes import BOTH, Cause, Stage
 from rocklab.diagnosis.errors import engineering_rows
 from rocklab.diagnosis.evidence import TestStack
 from rocklab.diagnosis.parameters import Param
+from rocklab.diagnosis.result import Finding, Structure
 from rocklab.diagnosis.wall_model import next_flight
 from rocklab.inference.intervals import MIN_BOOTSTRAP, expanded, percentile_interval, t_interval
 from rocklab.lab.motion import odd_samples
@@ -86,7 +87,7 @@ def end_of_motion(S: TestStack, mp, min_ratio=3.0, window_s=1.0):
 
     Returns
     -------
-    list of str
+    list of Structure
         One statement, or none.
     """
     ratios, speeds = [], []
@@ -106,9 +107,12 @@ def end_of_motion(S: TestStack, mp, min_ratio=3.0, window_s=1.0):
     r = np.array(ratios)
     if r.size >= 3 and np.mean(r > min_ratio) > 0.5:
         return [
-            f"end of motion: the walls stop dead where the model rocks on to {np.median(r):.0f} times what "
-            f"the record shows ({int(np.sum(r > min_ratio))} of {r.size} tests; last measured impact at "
-            f"{np.median(speeds):.2f} thetadot_r)"
+            Structure(
+                NAME,
+                f"end of motion: the walls stop dead where the model rocks on to {np.median(r):.0f} times what "
+                f"the record shows ({int(np.sum(r > min_ratio))} of {r.size} tests; last measured impact at "
+                f"{np.median(speeds):.2f} thetadot_r)",
+            )
         ]
     return []
 
@@ -230,17 +234,17 @@ def threshold(tests, mp, *, n_boot=200, seed=0, min_tests=3):
 
 
 def finding(stop):
-    """The entry of :func:`rocklab.diagnosis.series.diagnose_series` for a threshold of :func:`threshold`."""
+    """The finding (:class:`rocklab.diagnosis.result.Finding`) of a threshold of :func:`threshold`."""
     (n0, n1), (d0, d1) = stop["n_impacts_rms"], stop["duration_pct_rms"]
     n = stop["n_observed"]
     note = f"t interval of {n} stops ({n - 1} degrees of freedom)" if n < MIN_BOOTSTRAP else ""
-    return {
-        "effect": NAME,
-        "params": {"v_stop_over_vr": stop["v_stop_over_vr"], "spread_log": stop["spread_log"]},
-        "ci95": {"v_stop_over_vr": stop["ci95"]},
-        "n_tests": stop["n_observed"],
-        **({"ci_note": note} if note else {}),
-        "evidence": {
+    return Finding(
+        effect=NAME,
+        params={"v_stop_over_vr": stop["v_stop_over_vr"], "spread_log": stop["spread_log"]},
+        ci95={"v_stop_over_vr": stop["ci95"]},
+        n_tests=stop["n_observed"],
+        ci_note=note or None,
+        evidence={
             "signature": f"{stop['n_observed']} of {stop['n_tests']} walls stop dead at a landing of "
             f"{stop['v_stop_over_vr']:.3f} thetadot_r (test to test x/÷ "
             f"{math.exp(stop['spread_log']):.2f}) where the model's next flight would "
@@ -248,9 +252,9 @@ def finding(stop):
             "fit": f"held-out rms error of the number of impacts {n0:.1f} -> {n1:.1f}, "
             f"of the rocking duration {d0:.1f} % -> {d1:.1f} %",
         },
-        "error_heldout": {"deviance_per_obs": None, "n_impacts_rms": n1, "duration_pct_rms": d1},
-        "gain": {"deviance_per_obs": None, "n_impacts_rms": n0 - n1, "duration_pct_rms": d0 - d1},
-    }
+        error_heldout={"deviance_per_obs": None, "n_impacts_rms": n1, "duration_pct_rms": d1},
+        gain={"deviance_per_obs": None, "n_impacts_rms": n0 - n1, "duration_pct_rms": d0 - d1},
+    )
 
 
 def estimate(tests, mp, seed=0):

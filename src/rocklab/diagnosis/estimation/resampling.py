@@ -58,6 +58,27 @@ def finite_mean(x):
     return float(np.nanmean(x)) if np.isfinite(x).any() else None
 
 
+def heldout_means(ho) -> dict[str, float | None]:
+    """The held-out errors of :func:`heldout` as a finding or an entry quotes them: the mean held-out
+    deviance per observation (``deviance_per_obs``), then the mean of each engineering measure."""
+    return {
+        "deviance_per_obs": finite_mean(ho["deviance"]),
+        **{k: finite_mean(v) for k, v in ho.items() if k != "deviance"},
+    }
+
+
+def heldout_gain(before, after, paired) -> dict[str, float | None]:
+    """What a model gains on another, held out: the mean error of each engineering measure before
+    (:func:`heldout` of the other model) minus after, and ``deviance_per_obs``, the ``paired`` gain
+    of the held-out deviance per observation (:func:`paired_gain`)."""
+    out: dict[str, float | None] = {}
+    for k in before:
+        b, a = finite_mean(before[k]), finite_mean(after[k])
+        if k != "deviance":
+            out[k] = None if b is None or a is None else b - a
+    return out | {"deviance_per_obs": paired}
+
+
 def _folds(n, k_max=5):
     k = n if n <= 6 else k_max
     idx = np.arange(n)

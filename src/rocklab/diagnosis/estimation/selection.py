@@ -23,6 +23,7 @@ from rocklab.diagnosis.estimation.fitting import fit
 from rocklab.diagnosis.estimation.problem import Problem
 from rocklab.diagnosis.estimation.resampling import Intervals, heldout, paired_difference, parameter_intervals
 from rocklab.diagnosis.estimation.structure import structure
+from rocklab.diagnosis.result import Structure
 from rocklab.inference.intervals import MIN_BOOTSTRAP
 
 stats = lazy_module("scipy.stats")
@@ -312,7 +313,7 @@ def select_effects(
     log.info(
         "chosen: %s; structure left: %s; weak evidence for: %s",
         "+".join(current) or "the base model",
-        "; ".join(found) or "none",
+        "; ".join(map(str, found)) or "none",
         ", ".join(weak) or "none",
     )
     return {
@@ -345,7 +346,7 @@ def _wrong_forms(problem: Problem, sel, signature, fits, bic_margin=BIC_MARGIN):
             continue
         dbic = _in_place_of(problem, sel, c.name, c.family, fits)
         if dbic is not None and dbic < -bic_margin:
-            out.append(f"{c.name} in place of {c.family} lowers the BIC by {-dbic:.0f}")
+            out.append(Structure(c.name, f"{c.name} in place of {c.family} lowers the BIC by {-dbic:.0f}"))
     return out
 
 
@@ -378,7 +379,9 @@ def beyond_the_catalogue(problem: Problem, sel, *, signature, n_boot=40, seed=0,
     left = [st for st in sel["structure"] if st not in after] + _wrong_forms(problem, sel, signature, fits)
     if not left:
         return sel
-    log.info("structure left by the listed causes (%s): the generalised families are searched", "; ".join(left))
+    log.info(
+        "structure left by the listed causes (%s): the generalised families are searched", "; ".join(map(str, left))
+    )
     wide = select_effects(problem, signature=signature, n_boot=n_boot, seed=seed, families=True, fits=fits)
     families = set(problem.candidates(True)) - set(problem.candidates())
     named = [e for e in wide["effects"] if e in families]
@@ -485,7 +488,9 @@ def rivals(problem: Problem, sel, signature, *, fits=None, bic_margin=BIC_MARGIN
             )
             if dbic <= -bic_margin and _improves(-d):
                 out.setdefault(y, {})[x] = f"{numbers}: the data prefer it"
-                preferred.append(f"{x} in place of {y}: {numbers}, a better form the selection did not reach")
+                preferred.append(
+                    Structure(x, f"{x} in place of {y}: {numbers}, a better form the selection did not reach")
+                )
                 log.info("the data prefer %s in place of %s: %s", x, y, numbers)
             else:
                 out.setdefault(y, {})[x] = f"{numbers}: these tests cannot tell them apart"

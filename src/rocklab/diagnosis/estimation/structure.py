@@ -6,6 +6,7 @@ import numpy as np
 
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.estimation.problem import Problem
+from rocklab.diagnosis.result import Structure
 
 stats = lazy_module("scipy.stats")
 
@@ -31,7 +32,7 @@ def structure(problem: Problem, idx, ext, values):
 
     Returns
     -------
-    list of str
+    list of Structure
     """
     sub = problem.subset(idx)
     R = problem.residuals(sub, ext, values)
@@ -49,7 +50,7 @@ def structure(problem: Problem, idx, ext, values):
         means = np.array([np.median(r[i][ok[i]]) for i in tests_with])
         t = stats.ttest_1samp(means, 0.0)
         if np.isfinite(t.pvalue) and t.pvalue < STRUCTURE_P and abs(means.mean()) > size:
-            found.append(f"{g}: bias {means.mean():+.3f} (p = {t.pvalue:.1g})")
+            found.append(Structure(g, f"{g}: bias {means.mean():+.3f} (p = {t.pvalue:.1g})"))
         for label, x in cov.get(g, {}).items():
             x = np.broadcast_to(x, r.shape)
             xo = np.where(ok, x, np.nan)[tests_with]
@@ -62,7 +63,9 @@ def structure(problem: Problem, idx, ext, values):
             else:
                 slope, p_val, span = within_slope(r, x, ok)
             if np.isfinite(p_val) and p_val < STRUCTURE_P and abs(slope * span) > size:
-                found.append(f"{g}: trend with {label} {slope * span:+.3f} over the range (p = {p_val:.1g})")
+                found.append(
+                    Structure(g, f"{g}: trend with {label} {slope * span:+.3f} over the range (p = {p_val:.1g})")
+                )
     return found + problem.form_structure(ext) + problem.extra_structure(sub, ext, values)
 
 

@@ -179,7 +179,7 @@ def verdict_intervals(findings, params, n_units, level=0.95):
 
     Parameters
     ----------
-    findings : list of dict
+    findings : list of rocklab.diagnosis.result.Finding
         With ``effect``, ``params``, ``ci95`` and, where known, ``u_systematic`` (none: the interval is all
         statistical).
     params : dict
@@ -187,14 +187,14 @@ def verdict_intervals(findings, params, n_units, level=0.95):
     n_units : dict
         Effect -> the units (tests, the tests that show a stop, block groups) its intervals rest on.
     """
-    k = sum(len(f["ci95"]) for f in findings)
+    k = sum(len(f.ci95) for f in findings)
     for f in findings:
-        u = f.get("u_systematic") or {}
-        df = n_units[f["effect"]] - 1
-        f["ci95_joint"] = {
+        u = f.u_systematic or {}
+        df = n_units[f.effect] - 1
+        f.ci95_joint = {
             name: simultaneous(
-                ci, f["params"][name], params[name].lower, params[name].upper, u.get(name, 0.0), k, df, level
+                ci, f.params[name], params[name].lower, params[name].upper, u.get(name, 0.0), k, df, level
             )
-            for name, ci in f["ci95"].items()
+            for name, ci in f.ci95.items()
             if ci is not None
         }
