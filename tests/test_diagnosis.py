@@ -306,7 +306,7 @@ def test_a_discovery_is_drawn_against_the_data_and_the_best_listed(diagnosed, na
 
     boundary, model, kw, _ = SCENARIOS[name]
     recs = virtual_series(name, boundary, model, seed=list(SCENARIOS).index(name), **kw)
-    entry = D.SeriesDiagnosis.from_dict(diagnosed[name])
+    entry = diagnosed[name]
     fig = discovery_figure(in_series_order([D.measured_test(r) for r in recs]), entry)
     data, found, listed = fig.axes[0].lines
     assert "(discovered)" in found.get_label() and listed.get_label().startswith("best listed")

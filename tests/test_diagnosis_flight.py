@@ -251,11 +251,11 @@ def test_the_figure_of_a_discovered_flight_loss(diagnosed):
 
     name = "friction-0.02-noise-0.002"
     f = next(f for f in diagnosed[name].findings if f.effect == "flight_loss")
-    fig = family_curve_figure(D.Finding.from_dict(f), name)
+    fig = family_curve_figure(f, name)
     labels = [line.get_label() for line in fig.axes[0].get_lines()]
     assert len(labels) == 3 and "dry friction" in labels[2] and labels[1].startswith("best listed member")
-    assert f"Discovered beyond the catalogue: flight_loss, {f['family']}" in D.diagnosis_markdown([diagnosed[name]])
-    json.dumps(diagnosed[name])  # the curve is plain lists
+    assert f"Discovered beyond the catalogue: flight_loss, {f.family}" in D.diagnosis_markdown([diagnosed[name]])
+    json.dumps(D.jsonable(diagnosed[name].to_dict()))  # the curve is plain lists
 
 
 def test_the_closed_form_a_family_reduces_to():

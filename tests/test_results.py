@@ -270,3 +270,39 @@ def test_each_object_holds_the_keys_of_its_schema_in_their_order_and_requires_wh
     assert list(d["properties"]) == names
     assert d.get("additionalProperties") is False
     assert sorted(d.get("required", [])) == sorted(n for n in names if n not in record._optional)
+
+
+def _definition(schema, *path):
+    """The JSON schema of an object at ``path`` (keys into the schema, "$defs" and "properties" included)."""
+    d = yaml.safe_load(Path(schema).read_text())
+    for key in path:
+        d = d[key]
+    return d
+
+
+#: The nested objects that stay mappings in the objects, and their shapes (TypedDict).
+SHAPES = [
+    (R.DIAGNOSIS_SCHEMA, ("$defs", "measured_and_model"), R.MeasuredAndModel),
+    (R.DIAGNOSIS_SCHEMA, ("$defs", "heldout"), R.HeldOut),
+    (R.DIAGNOSIS_SCHEMA, ("$defs", "series_entry", "properties", "model_bias"), R.ModelBias),
+    (R.DIAGNOSIS_SCHEMA, ("$defs", "series_entry", "properties", "extended"), R.SeriesExtended),
+    (R.DIAGNOSIS_SCHEMA, ("$defs", "boundary_entry", "properties", "extended"), R.BoundaryExtended),
+    (R.DIAGNOSIS_SCHEMA, ("$defs", "pooled_finding", "properties", "evidence"), R.PooledEvidence),
+    (R.LIMESTONE_SCHEMA, ("$defs", "block_entry", "properties", "base"), R.BlockBase),
+    (R.LIMESTONE_SCHEMA, ("properties", "slenderness"), R.Slenderness),
+    (
+        R.LIMESTONE_SCHEMA,
+        ("$defs", "block_entry", "properties", "weak_evidence", "additionalProperties"),
+        R.WeakEvidence,
+    ),
+]
+
+
+@pytest.mark.parametrize(("schema", "path", "shape"), SHAPES, ids=lambda x: getattr(x, "__name__", None))
+def test_each_nested_mapping_has_the_keys_of_its_schema(schema, path, shape):
+    """Issue 40: the nested objects typed key by key (no mapping of anything in the result objects) as
+    their schemas say: the same keys in the same order, required where the schema requires them."""
+    d = _definition(schema, *path)
+    assert list(d["properties"]) == list(shape.__annotations__)
+    assert d.get("additionalProperties") is False
+    assert set(d.get("required", [])) == set(shape.__required_keys__)

@@ -274,7 +274,7 @@ def diagnose_group(trials: _Trials, *, n_boot=40, seed=0) -> BlockDiagnosis:
     several = np.ptp(trials.alpha) > 0
     problem = BlockProblem(by_group(trials) if several else trials)
     sig = signatures(trials)
-    fits = {}
+    fits: dict = {}
     sel = select_effects(problem, signature=sig, n_boot=n_boot, seed=seed, fits=fits)
     sel = beyond_the_catalogue(problem, sel, signature=sig, n_boot=n_boot, seed=seed, fits=fits)
     e_an = float(np.median(restitution.two_sided(trials.alpha)))

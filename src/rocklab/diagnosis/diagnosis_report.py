@@ -120,7 +120,7 @@ def diagnosis_markdown(diagnosis) -> str:
                 "| gain (deviance/obs; free-run log-peak rms) | evidence |",
                 "|---|---|---|---|---|---|",
             ]
-            notes = {}
+            notes: dict[str, str] = {}
             for f in e.findings:
                 g = f.gain
                 fr = g.get("free_run_log_peak_rms")

@@ -87,10 +87,11 @@ def diagnosis_summary(diagnosis: CampaignDiagnosis | str | Path) -> dict:
     """
     d = CampaignDiagnosis.of(diagnosis)
     series = d.series
-    out = {"series": [], "n_series": len(series), "n_unexplained": len(d.unexplained)}
+    rows: list[dict] = []
+    out: dict = {"series": rows, "n_series": len(series), "n_unexplained": len(d.unexplained)}
     out.update({b.key: None for b in Boundary})
     for s in series:
-        out["series"].append(
+        rows.append(
             {
                 "series": s.key,
                 "boundary": s.boundary,
@@ -158,12 +159,14 @@ def limestone_summary(diagnosis: LimestoneDiagnosis | str | Path) -> dict:
     """
     d = diagnosis if isinstance(diagnosis, LimestoneDiagnosis) else LimestoneDiagnosis.from_json(diagnosis)
     a = d.all
+    # every block group has its slenderness (the pooled entry of all blocks has none)
+    h_over_b = [float(g.h_over_b) for g in d.groups if g.h_over_b is not None]
     return {
         "source": d.source,
         "n_tests": a.n_tests,
         "n_impacts": a.n_impacts,
         "n_groups": len(d.groups),
-        "h_over_b": {"min": min(g.h_over_b for g in d.groups), "max": max(g.h_over_b for g in d.groups)},
+        "h_over_b": {"min": min(h_over_b), "max": max(h_over_b)},
         "e_an": a.base["e_an"],
         "measured_median_ratio": a.base["measured_median_ratio"],
         "what_is_wrong": a.what_is_wrong,
@@ -177,7 +180,7 @@ def limestone_summary(diagnosis: LimestoneDiagnosis | str | Path) -> dict:
         "family": _family(a.families),
         "groups": [
             {
-                "h_over_b": round(g.h_over_b),
+                "h_over_b": round(hb),
                 "n_tests": g.n_tests,
                 "e_an": g.base["e_an"],
                 "measured_median_ratio": g.base["measured_median_ratio"],
@@ -186,6 +189,6 @@ def limestone_summary(diagnosis: LimestoneDiagnosis | str | Path) -> dict:
                 "ratio_rms_base": g.heldout["base"]["ratio_rms"],
                 "ratio_rms_model": g.heldout["model"]["ratio_rms"],
             }
-            for g in d.groups
+            for g, hb in zip(d.groups, h_over_b, strict=True)
         ],
     }

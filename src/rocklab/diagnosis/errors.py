@@ -69,7 +69,7 @@ def engineering_rows(tests, mp: ModelParams, n_max=600):
 
 def history_rms(test: MeasuredTest, model: RockingModel):
     """RMS of (theta_model - theta_measured) / alpha over the measured motion (the exact simulator ``model``)."""
-    if test.t is None:
+    if test.t is None or test.theta is None:
         return np.nan
     t, th = simulate_test(test, model)
     sel = (test.t >= test.t_release) & (test.t <= test.t_end)

@@ -19,7 +19,16 @@ import numpy as np
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.errors import what_is_wrong
 from rocklab.diagnosis.estimation.systematic import widened
-from rocklab.diagnosis.result import BaseRun, BoundaryDiagnosis, CampaignDiagnosis, PooledFinding, Structure
+from rocklab.diagnosis.result import (
+    BaseRun,
+    BoundaryDiagnosis,
+    BoundaryExtended,
+    CampaignDiagnosis,
+    HeldOut,
+    PooledEvidence,
+    PooledFinding,
+    Structure,
+)
 from rocklab.diagnosis.series import MIN_TESTS_TO_NAME, base_name, diagnose_records
 from rocklab.inference.intervals import mean_over_units, no_interval_note, t_interval
 from rocklab.lab.hierarchy import plural
@@ -172,7 +181,7 @@ def diagnose_boundary(entries, boundary, *, walls=None, thickness=None) -> Bound
     w_all = np.array([e.n_tests for e in ser], float)
     n_tests = int(w_all.sum())
     base_err = _merge_errors([e.base.errors for e in ser], w_all)
-    counts = {}
+    counts: dict[str, list] = {}
     for e in usable:
         for f in e.findings:
             counts.setdefault(f.effect, []).append((e, f))
@@ -205,16 +214,16 @@ def diagnose_boundary(entries, boundary, *, walls=None, thickness=None) -> Bound
                 params=params,
                 ci95=ci,
                 u_systematic=shared,
-                evidence={
-                    "series": f"named in {len(lst)} of {of_series}",
-                    "pooled": _pooled_text(
+                evidence=PooledEvidence(
+                    series=f"named in {len(lst)} of {of_series}",
+                    pooled=_pooled_text(
                         plural(level, max(units.values())), len(values), len(usable) - len(lst), len(own), n_null
                     ),
-                    "range": {
+                    range={
                         n: [float(min(f.params[n] for _, f in lst)), float(max(f.params[n] for _, f in lst))]
                         for n in params
                     },
-                },
+                ),
                 error_heldout={"deviance_per_obs": _wmean([f.error_heldout["deviance_per_obs"] for _, f in lst], w)},
                 gain={k: _wmean([f.gain.get(k) for _, f in lst], w) for k in lst[0][1].gain},
                 n_series=len(lst),
@@ -222,19 +231,19 @@ def diagnose_boundary(entries, boundary, *, walls=None, thickness=None) -> Bound
                 ci_note=note or None,
             )
         )
-    findings.sort(key=lambda f: (-f.n_series, -(f.gain["deviance_per_obs"] or 0)))
+    findings.sort(key=lambda f: (-(f.n_series or 0), -(f.gain["deviance_per_obs"] or 0)))
     flagged = [e.key for e in usable if e.unexplained]
-    kinds = {}
+    kinds: dict[str, int] = {}
     for e in usable:
         # sorted: ties keep one order whatever the hashing of the process
         for k in sorted({st.where for st in e.residual_structure}):
             kinds[k] = kinds.get(k, 0) + 1
     w_used = [e.n_tests for e in usable]
     ho = (
-        {
-            m: {k: _wmean([e.heldout[m][k] for e in usable], w_used) for k in usable[0].heldout[m]}
-            for m in ("base", "model")
-        }
+        HeldOut(
+            base={k: _wmean([e.heldout["base"][k] for e in usable], w_used) for k in usable[0].heldout["base"]},
+            model={k: _wmean([e.heldout["model"][k] for e in usable], w_used) for k in usable[0].heldout["model"]},
+        )
         if usable
         else None
     )
@@ -266,7 +275,7 @@ def diagnose_boundary(entries, boundary, *, walls=None, thickness=None) -> Bound
         findings=findings,
         heldout=ho,
         series_verdicts=verdicts,
-        extended={"statement": ext_statement, "n_series": len(extended)} if ext_statement else None,
+        extended=BoundaryExtended(statement=ext_statement, n_series=len(extended)) if ext_statement else None,
         too_small=None
         if usable
         else (

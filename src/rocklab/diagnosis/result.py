@@ -45,7 +45,7 @@ import json
 from dataclasses import dataclass, field, fields
 from functools import cache
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import ClassVar, Protocol, TypedDict
 
 import numpy as np
 
@@ -107,8 +107,10 @@ class _Record:
     that hold records (a class) or lists of records (a one-element list).
     """
 
-    _optional: ClassVar[frozenset] = frozenset()
-    _nested: ClassVar[dict] = {}
+    _optional: ClassVar[frozenset[str]] = frozenset()
+    _nested: ClassVar[dict[str, type[_Record] | list[type[_Record]]]] = {}
+    # what makes the subclasses dataclasses, for the type checker
+    __dataclass_fields__: ClassVar[dict]
 
     def to_dict(self) -> dict:
         """The JSON object, keys in the file's order."""
@@ -156,6 +158,10 @@ class _Document:
     #: What the file holds, in words (for the errors).
     title: ClassVar[str]
 
+    def to_dict(self) -> dict | list:
+        """The JSON document (the record's, or a list of entries)."""
+        raise NotImplementedError
+
     def to_json(self, path) -> None:
         """Write the file as the diagnosis always has: ``json.dumps(..., indent=1)``, no final newline.
 
@@ -184,6 +190,106 @@ class _Document:
             raise ValueError(f"{path}: not a readable {cls.title} ({err})") from err
         validate(document, cls.schema, str(path))
         return cls.from_dict(document)
+
+
+# The nested objects of the files that stay mappings in the objects (their keys are measures or
+# parameters by name): their shapes, key by key, as the schemas give them.
+
+#: A number of the files: a float, or None where it is not finite (:func:`jsonable`).
+Number = float | None
+
+
+class MeasuredAndModel(TypedDict):
+    """A measure of the tests and of the model's free run (means over the tests)."""
+
+    measured: Number
+    model: Number
+
+
+#: Engineering errors of a free run (:func:`rocklab.diagnosis.errors.engineering_errors`): a measure to
+#: its measured and model values, or to an error.
+Errors = dict[str, MeasuredAndModel | Number]
+
+
+class HeldOut(TypedDict):
+    """Held-out errors (measure -> mean over the tests) of the base model and of the chosen model."""
+
+    base: dict[str, Number]
+    model: dict[str, Number]
+
+
+class ModelBias(TypedDict, total=False):
+    """The bias of the model at the fit (:mod:`rocklab.diagnosis.estimation.bias`), by parameter, or why
+    it was not measured."""
+
+    b: dict[str, float]
+    u_model: dict[str, float]
+    not_measured: str
+
+
+class SeriesExtended(TypedDict):
+    """The base model with the causes found, and its engineering errors."""
+
+    effects: list[str]
+    params: dict[str, Number]
+    errors: Errors
+    statement: str
+
+
+class BoundaryExtended(TypedDict):
+    """The extended models of a boundary condition's series, summed up."""
+
+    statement: str
+    n_series: int
+
+
+class PooledEvidence(TypedDict):
+    """Why a cause is named for a boundary condition: its series, its pooling, its range over them."""
+
+    series: str
+    pooled: str
+    range: dict[str, list[float]]
+
+
+class CurveLine(TypedDict):
+    """One line of a discovered form's figure: points and their label."""
+
+    x: list[float]
+    y: list[float]
+    label: str
+
+
+#: A discovered form's curve against the data: ``measured``, ``family``, ``best_listed`` lines and the
+#: axes' labels ``x`` and ``y``.
+Curve = dict[str, CurveLine | str]
+
+
+class BlockBase(TypedDict):
+    """Housner's e_an (Eq. 2) against the measured ratios of a block group."""
+
+    model: str
+    e_an: Number
+    measured_median_ratio: Number
+    measured_geometric_mean_ratio: Number
+
+
+class WeakEvidence(TypedDict):
+    """A cause that would remove the structure left, short of the evidence: its parameters and why."""
+
+    params: dict[str, Number]
+    reason: str
+
+
+class Slenderness(TypedDict):
+    """The block groups' mean of the per-trial median r/e_an against (B/H)^2."""
+
+    intercept: Number
+    slope: Number
+    slope_se: Number
+    p: Number
+    n_groups: int
+    n_trials: int
+    levels: dict[str, Number]
 
 
 @dataclass(frozen=True)
@@ -236,9 +342,9 @@ class Finding(_Record):
 
     effect: str
     params: dict[str, float | None] = field(default_factory=dict)
-    ci95: dict[str, list] = field(default_factory=dict)
+    ci95: dict[str, list[Number]] = field(default_factory=dict)
     u_systematic: dict[str, float] | None = None
-    ci95_joint: dict[str, list] | None = None
+    ci95_joint: dict[str, list[Number]] | None = None
     n_tests: int | None = None
     ci_note: str | None = None
     evidence: dict[str, str] = field(default_factory=dict)
@@ -250,7 +356,7 @@ class Finding(_Record):
     reduces_to: str | None = None
     best_listed: list[str] | None = None
     heldout_gain: dict[str, float | None] | None = None
-    curve: dict[str, Any] | None = None
+    curve: Curve | None = None
 
 
 @dataclass
@@ -269,9 +375,9 @@ class PooledFinding(_Record):
 
     effect: str
     params: dict[str, float | None] = field(default_factory=dict)
-    ci95: dict[str, list] = field(default_factory=dict)
+    ci95: dict[str, list[Number]] = field(default_factory=dict)
     u_systematic: dict[str, float] | None = None
-    evidence: dict[str, Any] = field(default_factory=dict)
+    evidence: PooledEvidence = field(default_factory=lambda: PooledEvidence(series="", pooled="", range={}))
     error_heldout: dict[str, float | None] = field(default_factory=dict)
     gain: dict[str, float | None] = field(default_factory=dict)
     n_series: int | None = None
@@ -288,8 +394,15 @@ class BaseRun(_Record):
     _optional = frozenset({"alternatives"})
 
     model: str | None = None
-    errors: dict[str, Any] = field(default_factory=dict)
-    alternatives: dict[str, dict] | None = None
+    errors: Errors = field(default_factory=dict)
+    alternatives: dict[str, Errors] | None = None
+
+
+class _HasFindings(Protocol):
+    """An entry's fields its methods read (declared by each subclass, in the file's order)."""
+
+    findings: list
+    verdict: list[str]
 
 
 @dataclass
@@ -297,16 +410,16 @@ class _Entry(_Record):
     """What every entry of results/diagnosis.json has (see the subclasses)."""
 
     @property
-    def named(self) -> list:
+    def named(self: _HasFindings) -> list:
         """The findings that name a cause (those of the verdict), in the entry's order."""
         return [f for f in self.findings if f.effect in self.verdict]
 
-    def finding(self, effect):
+    def finding(self: _HasFindings, effect: str):
         """The finding of a cause, None where the entry has none."""
         return next((f for f in self.findings if f.effect == effect), None)
 
     @property
-    def discovered(self) -> list:
+    def discovered(self: _HasFindings) -> list:
         """The findings of a form discovered beyond the catalogue."""
         return [f for f in self.findings if getattr(f, "discovered", None)]
 
@@ -360,9 +473,9 @@ class SeriesDiagnosis(_Entry):
     rejected: dict[str, str] = field(default_factory=dict)
     signatures: dict[str, str] | None = None
     unnamed_estimates: dict[str, dict[str, float]] | None = None
-    heldout: dict[str, dict] | None = None
-    model_bias: dict[str, Any] | None = None
-    extended: dict[str, Any] | None = None
+    heldout: HeldOut | None = None
+    model_bias: ModelBias | None = None
+    extended: SeriesExtended | None = None
     sample_test: str | None = None
 
 
@@ -393,9 +506,9 @@ class BoundaryDiagnosis(_Entry):
     residual_structure: list[Structure] = field(default_factory=list)
     unexplained_series: list[str] = field(default_factory=list)
     findings: list[PooledFinding] = field(default_factory=list)
-    heldout: dict[str, dict] | None = None
+    heldout: HeldOut | None = None
     series_verdicts: dict[str, list[str]] = field(default_factory=dict)
-    extended: dict[str, Any] | None = None
+    extended: BoundaryExtended | None = None
     too_small: str | None = None
     wall_thickness_m: float | None = None
 
@@ -482,7 +595,7 @@ class CampaignDiagnosis(_Document):
     @property
     def sample_tests(self) -> set[str]:
         """The sample test of every series (the test its figure draws)."""
-        return {e.sample_test for e in self.series}
+        return {e.sample_test for e in self.series if e.sample_test is not None}
 
     @property
     def unexplained(self) -> list[SeriesDiagnosis]:
@@ -512,7 +625,7 @@ class FamilyComparison(_Record):
     effect: str
     form: str | None = None
     params: dict[str, float | None] = field(default_factory=dict)
-    ci95: dict[str, list] = field(default_factory=dict)
+    ci95: dict[str, list[Number]] = field(default_factory=dict)
     reduces_to: str | None = None
     discovered: bool | None = None
     best_listed: str | None = None
@@ -534,17 +647,21 @@ class BlockDiagnosis(_Entry):
     h_over_b: float | None = None
     n_tests: int | None = None
     n_impacts: int | None = None
-    base: dict[str, Any] = field(default_factory=dict)
+    base: BlockBase = field(
+        default_factory=lambda: BlockBase(
+            model="", e_an=None, measured_median_ratio=None, measured_geometric_mean_ratio=None
+        )
+    )
     what_is_wrong: str | None = None
     verdict: list[str] = field(default_factory=list)
     listed_verdict: list[str] | None = None
     unexplained: bool = False
     residual_structure: list[Structure] = field(default_factory=list)
     findings: list[Finding] = field(default_factory=list)
-    weak_evidence: dict[str, dict] = field(default_factory=dict)
+    weak_evidence: dict[str, WeakEvidence] = field(default_factory=dict)
     rejected: dict[str, str] = field(default_factory=dict)
     signatures: dict[str, str] = field(default_factory=dict)
-    heldout: dict[str, dict] = field(default_factory=dict)
+    heldout: HeldOut = field(default_factory=lambda: HeldOut(base={}, model={}))
     families: list[FamilyComparison] = field(default_factory=list)
 
 
@@ -558,5 +675,9 @@ class LimestoneDiagnosis(_Record, _Document):
 
     all: BlockDiagnosis
     groups: list[BlockDiagnosis]
-    slenderness: dict[str, Any] = field(default_factory=dict)
+    slenderness: Slenderness = field(
+        default_factory=lambda: Slenderness(
+            intercept=None, slope=None, slope_se=None, p=None, n_groups=0, n_trials=0, levels={}
+        )
+    )
     source: str | None = None

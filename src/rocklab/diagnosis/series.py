@@ -34,7 +34,7 @@ from rocklab.diagnosis.estimation.selection import sentences, supported
 from rocklab.diagnosis.estimation.systematic import standard_error, verdict_intervals, widened
 from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_test, observe
 from rocklab.diagnosis.extended import engineering_errors, model_params, simulated_tests
-from rocklab.diagnosis.result import BaseRun, Finding, SeriesDiagnosis
+from rocklab.diagnosis.result import BaseRun, Finding, HeldOut, SeriesDiagnosis, SeriesExtended
 from rocklab.diagnosis.series_problem import WallProblem
 from rocklab.physics.boundary import Boundary
 
@@ -184,7 +184,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         return SeriesDiagnosis(**head, what_is_wrong=statement, too_small=why, sample_test=_sample_test(tests))
     problem = WallProblem(tests)
     sig = problem.signature
-    fits = {}
+    fits: dict = {}
     sel = select_effects(problem, signature=sig, n_boot=n_boot, seed=seed, fits=fits)
     sel = beyond_the_catalogue(problem, sel, signature=sig, n_boot=n_boot, seed=seed, fits=fits)
     effects, values = sel["effects"], sel["fit"].values
@@ -212,7 +212,8 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
                 **discovery(problem, eff, sel),
             )
         )
-    findings.sort(key=lambda f: -f.gain["deviance_per_obs"])
+    # a cause selected has its paired deviance gain
+    findings.sort(key=lambda f: -(f.gain["deviance_per_obs"] or 0.0))
     # the causes estimated once the chosen model is known, from what it leaves
     structure = list(sel["structure"])
     ext, ext_values = list(effects), dict(values)
@@ -268,15 +269,12 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         rejected=sentences(sel["rejected"]),
         signatures={k: v["text"] for k, v in sig.items()},
         unnamed_estimates=unnamed or None,
-        heldout={"base": heldout_means(sel["base"]), "model": heldout_means(sel["final"])},
+        heldout=HeldOut(base=heldout_means(sel["base"]), model=heldout_means(sel["final"])),
         model_bias=bias or None,
-        extended={
-            "effects": ext,
-            "params": ext_values,
-            "errors": ext_err,
-            "statement": what_is_wrong(ext_err, "the extended model")[0],
-        }
-        if ext
+        extended=SeriesExtended(
+            effects=ext, params=ext_values, errors=ext_err, statement=what_is_wrong(ext_err, "the extended model")[0]
+        )
+        if ext and ext_err is not None
         else None,
         sample_test=_sample_test(tests),
     )

@@ -183,7 +183,7 @@ def campaign_statements(n: Mapping) -> str:
             f"{e['term']}: {_effect_cell(e)}" if e["term"] else _effect_cell(e),
             show(e["p_holm"], ".2g"),
             f"{plural(e['unit_level'], e['n_units'])} ({show(e['n_series'])}, {show(e['n_tests'])})",
-            f"**{e['verdict']}**" + (f": {e['why_not_testable']}" if e["why_not_testable"] else ""),
+            f"**{e['verdict']}{': ' + e['why_not_testable'] if e['why_not_testable'] else ''}**",
         ]
         for e in (c["statements"][key] for key in c["order"])
     ]

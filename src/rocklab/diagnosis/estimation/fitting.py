@@ -124,6 +124,8 @@ def fit(problem: Problem, idx, ext, x0=None, n_irls=None) -> Fit:
         if best is None or m2ll < best.m2ll:
             n_obs = int(sum(m.sum() for m in masks.values()))
             best = Fit(tuple(ext), dict(zip(names, map(float, x))), var, m2ll, n_obs, passes, converged)
+    # the first pass always gives a fit: best is None before it only
+    assert best is not None
     log.debug("fit %s on %d tests: %s, %d passes", ext, len(idx), best.values, best.passes)
     return best
 
@@ -135,7 +137,7 @@ def _jacobian(problem: Problem, sub, ext, values):
     arrays (one per parameter of ``ext``, like the residuals).
     """
     R = problem.residuals(sub, ext, values)
-    J = {g: [] for g in R}
+    J: dict[str, list[np.ndarray]] = {g: [] for g in R}
     for q in problem.params(ext):
         # the step least_squares takes (diff_step 1e-5, relative), away from the nearer bound
         h = 1e-5 * max(abs(values[q.name]), 1.0)
@@ -168,7 +170,8 @@ def linearised(problem: Problem, sub, fitted: Fit):
     lo = np.array([q.lower for q in plist], float) - x0
     hi = np.array([q.upper for q in plist], float) - x0
     tests = range(len(next(iter(R.values()))))
-    A, y = [[] for _ in tests], [[] for _ in tests]
+    A: list[list[np.ndarray]] = [[] for _ in tests]
+    y: list[list[np.ndarray]] = [[] for _ in tests]
     for g, r in R.items():
         if g not in fitted.var:
             continue

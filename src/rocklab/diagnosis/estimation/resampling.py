@@ -119,7 +119,7 @@ def heldout(problem: Problem, ext, fitted: Fit | None = None):
         fitted = fitted or fit(problem, np.arange(n), ext)
         names, x0, lo, hi, A, y = linearised(problem, every, fitted)
     dev = np.full(n, np.nan)
-    meas = {}
+    meas: dict[str, np.ndarray] = {}
     for held in _folds(n):
         train = np.setdiff1d(np.arange(n), held) if n > 1 else held
         values = {}

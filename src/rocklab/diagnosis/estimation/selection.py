@@ -205,11 +205,13 @@ def select_effects(
     candidates = problem.candidates(families)
     family_of = {c.name: c.family for c in problem.causes if getattr(c, "family", None)}
     log.info("selection over %d tests, candidates %s", problem.n_tests, ", ".join(candidates))
-    current = ()
+    current: tuple[str, ...] = ()
     cur_fit = fit_of(current)
     cur_ho = heldout(problem, current)
     base_ho = cur_ho
-    steps, rejected, ci = {}, {}, Intervals()
+    steps: dict[str, dict] = {}
+    rejected: dict[str, Rejection] = {}
+    ci = Intervals()
     # candidates that predicted the tests left out worse than the model they would join: no evidence for them
     worse_held_out = set()
     for stage in range(1, max_effects + 1):
@@ -285,8 +287,8 @@ def select_effects(
             )
             break
         # removal: a cause that entered earlier may be carried by the new one
-        for old in [e for e in current if e != eff and e in steps]:
-            ext = tuple(e for e in current if e != old)
+        for old in [c for c in current if c != eff and c in steps]:
+            ext = tuple(c for c in current if c != old)
             f = fit_of(ext)
             ho = heldout(problem, ext, f)
             loss, se = paired_difference(ho["deviance"] - cur_ho["deviance"])
@@ -424,7 +426,7 @@ def stand_ins(problem: Problem, sel, hidden, *, fits=None, bic_margin=BIC_MARGIN
         Named cause -> {cause it may stand in for: why that one is not identifiable}; only causes that may.
     """
     fits = {} if fits is None else fits
-    out = {}
+    out: dict[str, dict[str, str]] = {}
     for x, why in hidden.items():
         if x not in problem.candidates(True):
             continue
@@ -469,7 +471,8 @@ def rivals(problem: Problem, sel, signature, *, fits=None, bic_margin=BIC_MARGIN
     fits = {} if fits is None else fits
     family = {c.name: getattr(c, "family", None) for c in problem.causes}
     named = tuple(sel["effects"])
-    out, preferred = {}, []
+    out: dict[str, dict[str, str]] = {}
+    preferred: list[Structure] = []
     for y in named:
         for x in problem.candidates(True):
             if x in named or family.get(x) == y or family.get(y) == x or not supported(signature, x):

@@ -94,7 +94,7 @@ def by_group(problem: Problem, fitted: Fit):
         Group -> (A_g, y_g), its rows stacked over the tests.
     """
     every = problem.subset(np.arange(problem.n_tests))
-    memo = {}
+    memo: dict = {}
     parts = {g: linearised(_Groups(problem, [g], memo), every, fitted) for g in fitted.var}
     names, x0, lo, hi = next(iter(parts.values()))[:4]
     A = [np.concatenate([p[4][i] for p in parts.values()]) for i in range(problem.n_tests)]
