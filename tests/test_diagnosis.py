@@ -294,7 +294,7 @@ def test_a_family_hidden_is_discovered(diagnosed, name):
     g = f.heldout_gain
     assert g["vs_best_listed"] > 2 * g["vs_best_listed_se"] and g["vs_base"] >= g["vs_best_listed"]
     assert all(not x.discovered for x in e.findings if x is not f)
-    assert f"Discovered beyond the catalogue: {f['effect']}" in D.diagnosis_markdown([e])
+    assert f"Discovered beyond the catalogue: {f.effect}" in D.diagnosis_markdown([e])
     # never with the listed member it holds (a drifting scale, a constant angle)
     assert D.catalogue.by_name(family).family not in e.verdict
 
@@ -539,7 +539,7 @@ def test_free_run_matches_the_exact_simulator(kw, ext, values, boundary, rtol):
 
 def test_boundary_entries_json_and_markdown(diagnosed, tmp_path):
     keys = ("instability+scale", "instability+scale-noisy", "null-2s", "null-2s-noisy", "instability-0.95")
-    series = [dict(diagnosed[k], boundary="two-sided") for k in keys]
+    series = [dataclasses.replace(diagnosed[k], boundary="two-sided") for k in keys]
     b = D.diagnose_boundary(series, "two-sided")
     assert b.scope == "boundary" and b.n_tests == 30 and b.n_series == b.n_series_diagnosed == 5
     assert b.verdict == ["instability_angle"]
@@ -566,8 +566,9 @@ def test_boundary_entries_json_and_markdown(diagnosed, tmp_path):
     assert fw.ci95 == {} and "2 walls, 1 residual df" in fw.ci_note
     entries = list(diagnosed.values()) + [b]
     for e in entries:
-        assert {"scope", "key", "n_tests", "base", "what_is_wrong", "verdict", "unexplained", "findings"} <= set(e)
-        for f in e.findings:
+        keys = e.to_dict()
+        assert {"scope", "key", "n_tests", "base", "what_is_wrong", "verdict", "unexplained", "findings"} <= set(keys)
+        for f in keys["findings"]:
             assert {"effect", "params", "ci95", "evidence", "error_heldout", "gain"} <= set(f)
     D.write_diagnosis(entries, tmp_path / "diagnosis.json", tmp_path / "diagnosis.md")
     assert len(json.loads((tmp_path / "diagnosis.json").read_text())) == len(entries)

@@ -229,10 +229,20 @@ def _diagnosis_entries():
         "unexplained": False,
         "residual_structure": [],
         "unexplained_series": [],
-        "findings": [{**stop(None, None), "evidence": {"range": {"v_stop_over_vr": [0.09, 0.12]}}, "n_series": 2}],
+        "findings": [
+            {
+                **stop(None, None),
+                "evidence": {
+                    "series": "named in 2 of 3 series",
+                    "pooled": "over 3 series",
+                    "range": {"v_stop_over_vr": [0.09, 0.12]},
+                },
+                "n_series": 2,
+            }
+        ],
         "series_verdicts": {},
         "heldout": {"base": heldout, "model": heldout},
-        "extended": {"statement": "the extended model rocks as long as the wall."},
+        "extended": {"statement": "the extended model rocks as long as the wall.", "n_series": 3},
     }
     asym = {
         "effect": "hinge_asymmetry",
