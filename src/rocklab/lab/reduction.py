@@ -388,7 +388,7 @@ def _reduce_instrument(
         kind, m = "inertial", inertial.inertial_motion(rec, meta["alpha"], meta["p"])
         used = " ".join(INERTIAL_COLUMNS)
     units = {"theta": "rad", "phi": "rad", "v": "mm", "w": "mm"}
-    dof = [m.theta, m.phi, m.v, m.w]
+    dof = [getattr(m, k) for k in DOF_LONG_NAMES]
     data = {k: ("time", x, {"units": units[k], "long_name": DOF_LONG_NAMES[k]}) for k, x in zip(DOF_LONG_NAMES, dof)}
     ds = xr.Dataset(
         {**data, **m.variables},
