@@ -35,6 +35,8 @@ def lazy_module(name: str) -> ModuleType:
     spec = importlib.util.find_spec(name)
     if spec is None:
         raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+    if spec.loader is None:  # LazyLoader needs a loader to wrap (a namespace package has one since 3.11)
+        raise ImportError(f"module {name!r} has no loader", name=name)
     loader = importlib.util.LazyLoader(spec.loader)
     spec.loader = loader
     module = importlib.util.module_from_spec(spec)

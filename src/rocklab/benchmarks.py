@@ -12,7 +12,9 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 import yaml
@@ -20,11 +22,11 @@ import yaml
 from rocklab.io import benchmark_times
 
 
-def _benchmarks(results: Path) -> dict:
+def _benchmarks(results: Path) -> dict[str, dict[str, float]]:
     """Job times of the workflow from Snakemake's benchmark files: one entry
     per single-job rule (``<rule>.tsv``) and one per folder of jobs
     (``<folder>/<job>.tsv``, keyed ``<folder>_jobs``)."""
-    out = {}
+    out: dict[str, dict[str, float]] = {}
     for job in benchmark_times(results).itertuples():
         rule = f"{job.stage}_jobs" if "/" in job.job else job.stage
         entry = out.setdefault(rule, {"jobs": 0, "total_s": 0.0, "longest_s": 0.0})
@@ -34,12 +36,13 @@ def _benchmarks(results: Path) -> dict:
     return out
 
 
-def _bench(results: Path, name: str):
+def _bench(results: Path, name: str) -> Any:
+    """The JSON of the benchmark ``name`` (``results/bench/<name>.json``), None where it did not run."""
     path = results / "bench" / f"{name}.json"
     return json.loads(path.read_text()) if path.is_file() else None
 
 
-def _scale(bench: dict) -> dict:
+def _scale(bench: Mapping[str, Any]) -> dict[str, Any]:
     """The smallest and largest campaign of ``bench/scale.py`` and the line through them."""
     runs = {"small": bench["runs"][0], "large": bench["runs"][-1]}
     keys = {"n_tests": "n_tests", "s": "wall_s", "cpu_s": "cpu_s", "peak_mb": "peak_rss_tree_mb"}
@@ -87,7 +90,7 @@ MAP_CELLS = 801
 MAP_JOB_MODELS = {"overturning_maps": 5, "calibrated_maps": 9}
 
 
-def slurm_profile(root) -> dict:
+def slurm_profile(root: str | Path) -> dict[str, Any]:
     """What the SLURM profile of the checkout ``root`` asks for each job: ``mem_mb``,
     ``runtime`` [min] and ``cpus_per_task`` by default, ``jobs`` (at most at once),
     and the map jobs' ``threads`` and ``records_per_job`` (its ``maps.yaml``)."""
@@ -101,7 +104,9 @@ def _waves(jobs: int, slots: int) -> int:
     return math.ceil(jobs / max(slots, 1))
 
 
-def campaign_projection(scale: dict, profile: dict, n_embedded: int, max_tests_per_job: int) -> dict:
+def campaign_projection(
+    scale: Mapping[str, Any], profile: Mapping[str, Any], n_embedded: int, max_tests_per_job: int
+) -> dict[str, Any]:
     """A campaign :data:`CAMPAIGN_FACTOR` times the embedded one on a SLURM cluster.
 
     From the two campaigns of ``bench/scale.py`` (``scale``): each stage's
@@ -117,7 +122,7 @@ def campaign_projection(scale: dict, profile: dict, n_embedded: int, max_tests_p
     """
     small, large = scale["runs"][0], scale["runs"][-1]
     n = CAMPAIGN_FACTOR * n_embedded
-    stages = {}
+    stages: dict[str, dict[str, float]] = {}
     for stage, s_large in large["stage_s"].items():
         s_small = small["stage_s"].get(stage, 0.0)
         slope = (s_large - s_small) / (large["n_tests"] - small["n_tests"])
@@ -144,7 +149,7 @@ def campaign_projection(scale: dict, profile: dict, n_embedded: int, max_tests_p
     }
 
 
-def maps_projection(maps: dict, profile: dict) -> dict:
+def maps_projection(maps: Mapping[str, Any], profile: Mapping[str, Any]) -> dict[str, Any]:
     """Every map model of every shipped record on :data:`MAP_CELLS` x
     :data:`MAP_CELLS` cells on a SLURM cluster.
 
@@ -180,7 +185,7 @@ def maps_projection(maps: dict, profile: dict) -> dict:
     }
 
 
-def performance_summary(results, checkout=None) -> dict:
+def performance_summary(results: str | Path, checkout: str | Path | None = None) -> dict[str, Any]:
     """Timings: the workflow's job times and, when measured, ``make bench``.
 
     Parameters
@@ -203,7 +208,7 @@ def performance_summary(results, checkout=None) -> dict:
     """
     results = Path(results)
     jobs = _benchmarks(results)
-    out = {
+    out: dict[str, Any] = {
         "jobs": jobs,
         "n_jobs": sum(j["jobs"] for j in jobs.values()),
         "total_job_s": sum(j["total_s"] for j in jobs.values()),
@@ -215,7 +220,14 @@ def performance_summary(results, checkout=None) -> dict:
         else None
     )
     sim = _bench(results, "simulator")
-    keys = ("histories", "t_batch_s", "t_reference_s", "speedup", "overturned_batch", "overturned_reference")
+    keys: tuple[str, ...] = (
+        "histories",
+        "t_batch_s",
+        "t_reference_s",
+        "speedup",
+        "overturned_batch",
+        "overturned_reference",
+    )
     out["simulator"] = (
         {
             **{k: sim[k] for k in keys},
@@ -277,12 +289,12 @@ def performance_summary(results, checkout=None) -> dict:
 SHOWN_MOVES = 25
 
 
-def _environments(bench: dict) -> dict:
+def _environments(bench: Mapping[str, Any]) -> dict[str, Any]:
     """The published numbers under other floating-point environments (``bench/environments.py``):
     per section, the floats, how many moved and the nearest any came to its tolerance; the moves
     nearest their tolerance one by one."""
     moves = bench["moves"]
-    sections = {}
+    sections: dict[str, dict[str, Any]] = {}
     for section, n in bench["n_floats"].items():
         mine = [m for m in moves if m["number"].split(".", 1)[0] == section]
         sections[section] = {
@@ -306,12 +318,12 @@ def _environments(bench: dict) -> dict:
     }
 
 
-def _miss(cell) -> str:
+def _miss(cell: Mapping[str, Any]) -> str:
     """What a series of ``bench/discovery.py`` got wrong, in words ("" where it was named right); a series
     whose design cannot carry its hidden cause says so and why."""
     if cell["named_right"]:
         return ""
-    out = []
+    out: list[str] = []
     if cell["not_identifiable"]:
         out.append(f"not identifiable: {cell['why_not_identifiable']}")
     elif cell["missing"]:
@@ -329,16 +341,33 @@ def _miss(cell) -> str:
     return "; ".join(out)
 
 
-def _discovery(bench: dict) -> dict:
+def _discovery(bench: Mapping[str, Any]) -> dict[str, Any]:
     """The calibration of the diagnosis (``bench/discovery.py``): its four rates against their targets, each
     with its binomial interval, the series whose design cannot carry their cause, and one row per series
     with what it missed."""
-    keys = ("n_series", "n_null", "n_caused", "n_not_identifiable", "not_identifiable", "n_params_named")
+    keys: tuple[str, ...] = (
+        "n_series",
+        "n_null",
+        "n_caused",
+        "n_not_identifiable",
+        "not_identifiable",
+        "n_params_named",
+    )
     keys += ("n_params_widened_by_systematic", "n_skipped", "design", "design_seeds", "wall_s", "workers")
     keys += ("named_right_rate", "false_name_rate_null", "confident_misname_rate", "coverage_95", "pass")
     keys += ("named_right_ci95", "false_name_ci95", "confident_misname_ci95", "coverage_ci95")
     keys += ("verdict_right_rate", "verdict_right_ci95", "named_right_marginal_rate", "named_right_at_coverage")
-    cols = ("design_seed", "cause", "boundary", "fs", "wall", "h_over_b", "n_tests", "n_impacts", "verdict")
+    cols: tuple[str, ...] = (
+        "design_seed",
+        "cause",
+        "boundary",
+        "fs",
+        "wall",
+        "h_over_b",
+        "n_tests",
+        "n_impacts",
+        "verdict",
+    )
     cols += ("named_right",)
     return {
         **{k: bench[k] for k in keys},
@@ -348,7 +377,9 @@ def _discovery(bench: dict) -> dict:
     }
 
 
-def _projection(scale, maps, checkout) -> dict:
+def _projection(
+    scale: Mapping[str, Any] | None, maps: Mapping[str, Any] | None, checkout: str | Path
+) -> dict[str, Any]:
     """:func:`campaign_projection` and :func:`maps_projection` of the
     benchmarks that ran (``None`` for one that did not), on the profile and
     the workflow's configuration of the checkout."""
@@ -372,13 +403,13 @@ def _projection(scale, maps, checkout) -> dict:
         "models": sum(MAP_JOB_MODELS.values()),
         "profile": profile,
         "campaign": campaign_projection(scale, profile, n_embedded, config["max_tests_per_job"])
-        if has_stages
+        if has_stages and scale is not None
         else None,
         "maps": maps_projection(maps, profile) if maps else None,
     }
 
 
-def shake_table_times(results) -> dict | None:
+def shake_table_times(results: str | Path) -> dict[str, Any] | None:
     """Wall-clock and CPU time of each job of the target ``shake_table`` [s]; None where it did not run.
 
     Under a loaded machine the CPU time is the one that compares from run to run.

@@ -27,9 +27,11 @@ from __future__ import annotations
 import logging
 import sys
 import zlib
+from collections.abc import Callable, Hashable, Iterable, Iterator, Mapping
 from datetime import UTC, datetime
 from numbers import Number
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, overload
 
 import numpy as np
 import yaml
@@ -38,9 +40,18 @@ from rocklab import __version__
 from rocklab._imports import lazy_module
 from rocklab.disk import SPACE_ERRNOS, atomic_output, no_space, write_text
 
-# bound lazily: a job that writes report pages needs neither
-jsonschema = lazy_module("jsonschema")
-pd = lazy_module("pandas")
+if TYPE_CHECKING:
+    import jsonschema
+    import pandas as pd
+    import xarray as xr
+else:
+    # bound lazily: a job that writes report pages needs neither
+    jsonschema = lazy_module("jsonschema")
+    pd = lazy_module("pandas")
+
+#: A variable as :func:`write_netcdf` stores it (:func:`_stored_variable`):
+#: dimensions, data, attributes, fill value and compression.
+Stored = tuple[tuple[Hashable, ...], np.ndarray, dict[str, Any], Any, dict[str, Any]]
 
 #: The version of the CF conventions that rocklab's netCDF files follow.
 CF_CONVENTIONS = "CF-1.8"
@@ -55,13 +66,14 @@ class _JobLog(logging.FileHandler):
     """A job's log file, which a full disk silences rather than floods: the
     failed write that stops the job says what happened (:class:`NoSpace`)."""
 
-    def handleError(self, record):
-        if isinstance(sys.exc_info()[1], OSError) and sys.exc_info()[1].errno in SPACE_ERRNOS:
+    def handleError(self, record: logging.LogRecord) -> None:
+        exc = sys.exc_info()[1]
+        if isinstance(exc, OSError) and exc.errno in SPACE_ERRNOS:
             return
         super().handleError(record)
 
 
-def setup_logging(path):
+def setup_logging(path: str | Path) -> None:
     """Send log records and warnings of this process to ``path``.
 
     Raises
@@ -81,7 +93,7 @@ def setup_logging(path):
     logging.captureWarnings(True)
 
 
-def cf_attrs(title, source) -> dict:
+def cf_attrs(title: str, source: str) -> dict[str, str]:
     """Global attributes of a rocklab netCDF file (CF section 2.6.2).
 
     Parameters
@@ -129,7 +141,7 @@ ROOT_ONLY = ("Conventions", "history")
 ATTRIBUTE_TYPES = (str, Number, np.ndarray, np.number, list, tuple, bytes)
 
 
-def write_netcdf(ds, path, groups=None):
+def write_netcdf(ds: xr.Dataset, path: str | Path, groups: Mapping[str, xr.Dataset] | None = None) -> None:
     """Write a dataset compressed, through a temporary file (:func:`atomic_output`),
     so an interrupted run never leaves a truncated output that looks complete.
 
@@ -184,7 +196,7 @@ def write_netcdf(ds, path, groups=None):
                 _write_with_xarray(g, tmp, name)
 
 
-def _stored_variable(var):
+def _stored_variable(var: xr.Variable) -> Stored | None:
     """A variable as :func:`write_netcdf` stores it, encoded as xarray would.
 
     Returns
@@ -212,7 +224,7 @@ def _stored_variable(var):
     return None
 
 
-def _compresses(data):
+def _compresses(data: np.ndarray) -> bool:
     """Whether zlib at :data:`COMPRESSION`'s level is worth its time on ``data`` (:data:`COMPRESSION_WORTH`)."""
     # from the middle: a record's first and last samples are often the wall at rest, which any coder packs
     flat = np.ascontiguousarray(data).reshape(-1)
@@ -221,19 +233,31 @@ def _compresses(data):
     return len(zlib.compress(probe, COMPRESSION["complevel"])) < COMPRESSION_WORTH * len(probe)
 
 
-def _write_variables(stored, attrs, tmp, path, groups=None):
+def _write_variables(
+    stored: Mapping[Hashable, Stored | None],
+    attrs: Mapping[str, Any],
+    tmp: Path,
+    path: Path,
+    groups: Mapping[str, tuple[Mapping[str, Any], Mapping[Hashable, Stored | None]]] | None = None,
+) -> None:
     """Write :func:`_stored_variable`'s variables and the global ``attrs`` to
     ``tmp`` (for ``path``), and each of ``groups`` (name: its attributes and
     stored variables) as a group."""
     import netCDF4
 
     with netCDF4.Dataset(tmp, "w", format="NETCDF4") as nc:
-        parts = [(nc, attrs, stored, str(path))]
-        for name, (group_attrs, group_stored) in (groups or {}).items():
-            parts.append((nc.createGroup(name), group_attrs, group_stored, f"{path}, group {name}"))
+        # (netCDF4 dataset or group, its attributes, its variables, where in words);
+        # the names are xarray's, any hashable (str in rocklab's datasets)
+        parts: list[tuple[Any, Mapping[str, Any], Mapping[Hashable, Stored | None], str]] = [
+            (nc, attrs, stored, str(path))
+        ]
+        for group, (group_attrs, group_stored) in (groups or {}).items():
+            parts.append((nc.createGroup(group), group_attrs, group_stored, f"{path}, group {group}"))
         for where, where_attrs, variables, label in parts:
             _set_attributes(where, where_attrs, label)
-            for name, (dims, data, var_attrs, fill, compression) in variables.items():
+            for name, entry in variables.items():
+                assert entry is not None  # written directly: every variable stored
+                dims, data, var_attrs, fill, compression = entry
                 for dim, size in zip(dims, data.shape):
                     if dim not in where.dimensions:
                         where.createDimension(dim, size)
@@ -244,11 +268,12 @@ def _write_variables(stored, attrs, tmp, path, groups=None):
         for where, _, variables, _ in parts:
             where.set_auto_maskandscale(False)
             where.set_auto_chartostring(False)
-            for name, (_, data, *_) in variables.items():
-                where.variables[name][...] = data
+            for name, entry in variables.items():
+                assert entry is not None
+                where.variables[name][...] = entry[1]
 
 
-def _set_attributes(obj, attrs, where):
+def _set_attributes(obj: Any, attrs: Mapping[str, Any], where: str) -> None:
     """Set the attributes of a netCDF4 dataset or variable as xarray would."""
     for key, value in attrs.items():
         if isinstance(value, (bool, np.bool_)) or not isinstance(value, ATTRIBUTE_TYPES):
@@ -262,10 +287,10 @@ def _set_attributes(obj, attrs, where):
             obj.setncattr(key, value)
 
 
-def _write_with_xarray(ds, tmp, group=None):
+def _write_with_xarray(ds: xr.Dataset, tmp: Path, group: str | None = None) -> None:
     """:func:`write_netcdf`'s encoding through ``xarray.Dataset.to_netcdf``
     (into ``group`` of the file ``tmp`` already holds, if given)."""
-    encoding = {
+    encoding: dict[Hashable, dict[str, Any]] = {
         name: dict(COMPRESSION)
         for name, var in ds.variables.items()
         if var.dtype.kind in "fiu" and var.ndim and _compresses(var.values)
@@ -276,7 +301,7 @@ def _write_with_xarray(ds, tmp, group=None):
     ds.assign(text).to_netcdf(tmp, engine="netcdf4", encoding=encoding, group=group, mode="a" if group else "w")
 
 
-def benchmark_times(results) -> pd.DataFrame:
+def benchmark_times(results: str | Path) -> pd.DataFrame:
     """The jobs of a workflow run from Snakemake's benchmark files.
 
     Parameters
@@ -311,12 +336,12 @@ def benchmark_times(results) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=["stage", "job", "s", "cpu_s"])
 
 
-def _attributes(obj) -> dict:
+def _attributes(obj: Any) -> dict[str, Any]:
     """The attributes of a netCDF4 dataset or variable, as xarray gives them."""
     return {k: obj.getncattr(k) for k in obj.ncattrs()}
 
 
-def read_dataset(path, variables=None, group=None):
+def read_dataset(path: str | Path, variables: Iterable[str] | None = None, group: str | None = None) -> xr.Dataset:
     """A netCDF file loaded into memory (closed), as
     ``xarray.open_dataset(path)[variables].load()`` gives it.
 
@@ -346,10 +371,22 @@ def read_dataset(path, variables=None, group=None):
     KeyError
         Naming the file and the variables it lacks.
     """
-    return _read(path, variables, group=group)
+    ds = _read(path, variables, group=group)
+    assert ds is not None and not isinstance(ds, tuple)  # no keep, no also: the dataset
+    return ds
 
 
-def _read(path, variables=None, keep=None, group=None, also=None):
+#: What :func:`load_datasets` keeps: a test of these global attributes or not.
+Keep = Callable[[dict[str, Any]], Any]
+
+
+def _read(
+    path: str | Path,
+    variables: Iterable[str] | None = None,
+    keep: Keep | None = None,
+    group: str | None = None,
+    also: str | None = None,
+) -> xr.Dataset | tuple[xr.Dataset, xr.Dataset] | None:
     """:func:`read_dataset`; None where ``keep(global attributes)`` is false.
 
     ``also``: a group read from the same open file (all its variables), the
@@ -362,10 +399,14 @@ def _read(path, variables=None, keep=None, group=None, also=None):
         ds = _from_handle(root, path, variables, keep, group)
         if ds is None or also is None:
             return ds
-        return ds, _from_handle(root, path, None, None, also)
+        group_ds = _from_handle(root, path, None, None, also)
+        assert group_ds is not None  # no keep
+        return ds, group_ds
 
 
-def _from_handle(root, path, variables, keep, group):
+def _from_handle(
+    root: Any, path: str | Path, variables: Iterable[str] | None, keep: Keep | None, group: str | None
+) -> xr.Dataset | None:
     """:func:`_read` of one group (the root if None) of the open file ``root``."""
     import xarray as xr
 
@@ -382,16 +423,17 @@ def _from_handle(root, path, variables, keep, group):
     dims = {dim for name in wanted for dim in nc.variables[name].dimensions}
     names = [n for n, v in nc.variables.items() if n in wanted or (n in dims and v.dimensions == (n,))]
     decoded = {name: _decoded_variable(nc.variables[name]) for name in names}
-    if any(v is None for v in decoded.values()) or "coordinates" in attrs:
+    complete = {name: var for name, var in decoded.items() if var is not None}
+    if len(complete) < len(decoded) or "coordinates" in attrs:
         # from this handle: netCDF-C can crash on a file opened twice at once
         ds = xr.open_dataset(xr.backends.NetCDF4DataStore(root, group=group))
         return (ds if variables is None else ds[wanted]).load()
     # xarray's order: the data variables, then the coordinates
-    coords = {name: var for name, var in decoded.items() if var.dims == (name,)}
-    return xr.Dataset({n: v for n, v in decoded.items() if n not in coords}, coords, attrs)
+    coords = {name: var for name, var in complete.items() if var.dims == (name,)}
+    return xr.Dataset({n: v for n, v in complete.items() if n not in coords}, coords, attrs)
 
 
-def _decoded_variable(var):
+def _decoded_variable(var: Any) -> xr.Variable | None:
     """A netCDF4 variable as an ``xarray.Variable`` decoded as xarray would
     (:func:`read_dataset`); None for one that xarray decodes otherwise."""
     import xarray as xr
@@ -428,12 +470,13 @@ def _decoded_variable(var):
     return xr.Variable(dims, data, attrs)
 
 
-def load_schema(path):
+def load_schema(path: str | Path) -> dict[str, Any]:
+    """The JSON schema at ``path`` (YAML, ``workflow/schemas``)."""
     with open(path) as fh:
         return yaml.safe_load(fh)
 
 
-def validate_table(df: pd.DataFrame, schema) -> None:
+def validate_table(df: pd.DataFrame, schema: str | Path | Mapping[str, Any]) -> None:
     """Check every row of a table against a JSON schema (``workflow/schemas``).
 
     Raises
@@ -455,20 +498,48 @@ def validate_table(df: pd.DataFrame, schema) -> None:
             raise jsonschema.ValidationError(f"row {i + 1}, {col}: {err.message}")
 
 
-def write_table(df: pd.DataFrame, path, schema=None, float_format="%.6g") -> None:
+def write_table(
+    df: pd.DataFrame,
+    path: str | Path,
+    schema: str | Path | Mapping[str, Any] | None = None,
+    float_format: str = "%.6g",
+) -> None:
     """Validate (when a schema is given) and write a CSV table."""
     if schema is not None:
         validate_table(df, schema)
     write_text(path, df.to_csv(index=False, float_format=float_format))
 
 
-def valid_test_ids(qc_path) -> list:
+def valid_test_ids(qc_path: str | Path) -> list[str]:
     """Test ids that ``qc.csv`` marks valid, in its order."""
     qc = pd.read_csv(qc_path, keep_default_na=False)
     return qc.test_id[qc.valid.astype(str) == "True"].tolist()
 
 
-def load_datasets(paths, keep=None, variables=None, group=None, also=None):
+@overload
+def load_datasets(
+    paths: Iterable[str | Path],
+    keep: Keep | None = None,
+    variables: Iterable[str] | None = None,
+    group: str | None = None,
+    also: None = None,
+) -> Iterator[xr.Dataset]: ...
+@overload
+def load_datasets(
+    paths: Iterable[str | Path],
+    keep: Keep | None = None,
+    variables: Iterable[str] | None = None,
+    group: str | None = None,
+    *,
+    also: str,
+) -> Iterator[tuple[xr.Dataset, xr.Dataset]]: ...
+def load_datasets(
+    paths: Iterable[str | Path],
+    keep: Keep | None = None,
+    variables: Iterable[str] | None = None,
+    group: str | None = None,
+    also: str | None = None,
+) -> Iterator[xr.Dataset | tuple[xr.Dataset, xr.Dataset]]:
     """Yield the netCDF files at ``paths`` (their ``group`` if given) loaded
     into memory (files closed, :func:`read_dataset`), those for whose
     attributes ``keep(attrs)`` is true if given; with ``also``, each as the
@@ -479,7 +550,30 @@ def load_datasets(paths, keep=None, variables=None, group=None, also=None):
             yield ds
 
 
-def valid_tests(paths, qc_path=None, variables=None, group=None, also=None):
+@overload
+def valid_tests(
+    paths: Iterable[str | Path],
+    qc_path: str | Path | None = None,
+    variables: Iterable[str] | None = None,
+    group: str | None = None,
+    also: None = None,
+) -> Iterator[xr.Dataset]: ...
+@overload
+def valid_tests(
+    paths: Iterable[str | Path],
+    qc_path: str | Path | None = None,
+    variables: Iterable[str] | None = None,
+    group: str | None = None,
+    *,
+    also: str,
+) -> Iterator[tuple[xr.Dataset, xr.Dataset]]: ...
+def valid_tests(
+    paths: Iterable[str | Path],
+    qc_path: str | Path | None = None,
+    variables: Iterable[str] | None = None,
+    group: str | None = None,
+    also: str | None = None,
+) -> Iterator[xr.Dataset | tuple[xr.Dataset, xr.Dataset]]:
     """Yield the reduced datasets of the valid tests, loaded.
 
     Valid: marked so in ``qc.csv``, or without it by the test's own verdict
@@ -490,6 +584,6 @@ def valid_tests(paths, qc_path=None, variables=None, group=None, also=None):
     ``also``: a group read with it, each test then a pair (:func:`load_datasets`).
     """
     if qc_path is None:
-        return load_datasets(paths, lambda attrs: int(attrs.get("valid", 0)), variables, group, also)
+        return load_datasets(paths, lambda attrs: int(attrs.get("valid", 0)), variables, group, also=also)
     valid = set(valid_test_ids(qc_path))
     return load_datasets((p for p in paths if Path(p).stem in valid), variables=variables, group=group, also=also)

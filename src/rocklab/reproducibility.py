@@ -25,6 +25,7 @@ import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from rocklab import summaries
 
@@ -60,7 +61,9 @@ ENVIRONMENTS: dict[str, dict[str, str]] = {
 SECOND_ENVIRONMENT = "generic"
 
 
-def environment(name: str, numba_cache: str | os.PathLike | None = None, base: Mapping | None = None) -> dict:
+def environment(
+    name: str, numba_cache: str | os.PathLike[str] | None = None, base: Mapping[str, str] | None = None
+) -> dict[str, str]:
     """The process environment of a run under ``ENVIRONMENTS[name]``.
 
     ``numba_cache``: a folder for numba's compiled kernels (``NUMBA_CACHE_DIR``),
@@ -90,13 +93,14 @@ class Move:
 
     section: str
     path: str
-    values: dict
+    values: dict[str, Any]
     spread: float
     tolerance: summaries.Tolerance | None
     admitted: bool
 
     @property
     def key(self) -> str:
+        """The number's dotted path in the numbers file, section first."""
         return f"{self.section}.{self.path}"
 
     @property
@@ -109,7 +113,9 @@ class Move:
         return self.spread / allowed if allowed > 0 else (0.0 if self.spread == 0 else float("inf"))
 
 
-def moves(numbers: Mapping[str, Mapping], tolerances: Mapping[str, Mapping]) -> list[Move]:
+def moves(
+    numbers: Mapping[str, Mapping[str, Any]], tolerances: Mapping[str, Mapping[str, summaries.Tolerance]]
+) -> list[Move]:
     """Every number that differs between the runs of ``numbers`` (environment ->
     numbers file), section by section (``tolerances``: section -> its
     stage's tolerances), in order of section and path.
@@ -124,7 +130,8 @@ def moves(numbers: Mapping[str, Mapping], tolerances: Mapping[str, Mapping]) -> 
         trees = {e: dict(summaries.leaves(n[section])) for e, n in numbers.items() if n.get(section) is not None}
         envs = list(trees)
         for path in sorted(set().union(*(t.keys() for t in trees.values()))):
-            values = {e: trees[e].get(path) for e in envs}
+            # a leaf of a summary: a number, a text, a list's item, None (not measured or not in this run)
+            values: dict[str, Any] = {e: trees[e].get(path) for e in envs}
             distinct = {repr(v) for v in values.values()}
             if len(distinct) == 1:
                 continue

@@ -24,10 +24,10 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from fnmatch import fnmatchcase
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -37,7 +37,7 @@ from rocklab.disk import write_text
 SIGNIFICANT = 6
 
 
-def number(x):
+def number(x: Any) -> float | int | bool | None:
     """A float kept to :data:`SIGNIFICANT` digits, an int as is, NaN as ``None``."""
     if x is None:
         return None
@@ -51,7 +51,7 @@ def number(x):
     return float(f"{x:.{SIGNIFICANT}g}")
 
 
-def rounded(x):
+def rounded(x: Any) -> Any:
     """``x`` with every number passed through :func:`number`, mappings with text keys."""
     if isinstance(x, Mapping):
         return {str(k): rounded(v) for k, v in x.items()}
@@ -62,17 +62,17 @@ def rounded(x):
     return number(x)
 
 
-def dumps(tree) -> str:
+def dumps(tree: Any) -> str:
     """A summary's text: sorted keys, so that a change shows as a diff."""
     return json.dumps(tree, indent=1, sort_keys=True, ensure_ascii=False) + "\n"
 
 
-def write_summary(summary, path) -> None:
+def write_summary(summary: Any, path: str | Path) -> None:
     """Write a stage's summary (:func:`rounded`) as JSON at ``path``."""
     write_text(path, dumps(rounded(summary)))
 
 
-def read_summary(path):
+def read_summary(path: str | Path) -> Any:
     """A summary file, or ``None`` where the stage did not run (no file)."""
     path = Path(path)
     return json.loads(path.read_text()) if path.is_file() else None
@@ -109,7 +109,7 @@ def tolerance(path: str, tolerances: Mapping[str, Tolerance]) -> Tolerance | Non
     return next((tol for pattern, tol in tolerances.items() if fnmatchcase(path, pattern)), None)
 
 
-def leaves(tree, path: str = ""):
+def leaves(tree: Any, path: str = "") -> Iterator[tuple[str, Any]]:
     """Every (dotted path, value) of a summary that is not a mapping or a list."""
     if isinstance(tree, Mapping):
         for k, v in tree.items():
@@ -121,12 +121,12 @@ def leaves(tree, path: str = ""):
         yield path.lstrip("."), tree
 
 
-def undeclared(summary, tolerances: Mapping[str, Tolerance]) -> list[str]:
+def undeclared(summary: Any, tolerances: Mapping[str, Tolerance]) -> list[str]:
     """Dotted paths of the floats of ``summary`` whose stage declares no tolerance."""
     return [p for p, v in leaves(summary) if isinstance(v, float) and tolerance(p, tolerances) is None]
 
 
-def differences(a, b, tolerances: Mapping[str, Tolerance] = {}, path: str = "") -> list[str]:
+def differences(a: Any, b: Any, tolerances: Mapping[str, Tolerance] = {}, path: str = "") -> list[str]:
     """Dotted paths where the summaries ``a`` (new) and ``b`` (old) differ
     beyond the tolerance of the quantity (:func:`tolerance`), and the floats
     whose stage declares none (compared at no tolerance at all: each such
@@ -144,6 +144,6 @@ def differences(a, b, tolerances: Mapping[str, Tolerance] = {}, path: str = "") 
     declared = tolerance(key, tolerances)
     if measured and declared is None:
         return [f"{key}: a float with no declared tolerance ({b!r} committed, {a!r} from the results)"]
-    if a == b or (measured and numeric and declared.admits(a, b)):
+    if a == b or (measured and numeric and declared is not None and declared.admits(a, b)):
         return []
     return [f"{key}: {b!r} committed, {a!r} from the results"]

@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import shlex
 import sys
+from collections.abc import Sequence
 from datetime import UTC, datetime
 
 from rocklab import __version__
@@ -45,7 +46,7 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv=None) -> int:
+def main(argv: Sequence[str] | None = None) -> int:
     """Run ``rocklab`` with ``argv`` (default ``sys.argv[1:]``) and return its exit status.
 
     Usage errors exit (``SystemExit``) with status 2 after one line on stderr.
@@ -53,10 +54,11 @@ def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     args = build_parser().parse_args(argv)
     args.history = f"{datetime.now(UTC):%Y-%m-%dT%H:%M:%SZ}: rocklab {shlex.join(argv)}"
+    parser: argparse.ArgumentParser = args.parser  # the subcommand's (its add_parser sets it)
     try:
         return args.func(args)
     except UsageError as err:
-        args.parser.error(str(err))
+        parser.error(str(err))
     except CommandError as err:
-        print(f"{args.parser.prog}: {err}", file=sys.stderr)
+        print(f"{parser.prog}: {err}", file=sys.stderr)
         return 1

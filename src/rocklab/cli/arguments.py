@@ -11,9 +11,14 @@ from __future__ import annotations
 import argparse
 import math
 import tempfile
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, NoReturn
 
 import numpy as np
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 
 class UsageError(Exception):
@@ -27,7 +32,7 @@ class UsageError(Exception):
         What is wrong with it.
     """
 
-    def __init__(self, option, message):
+    def __init__(self, option: str, message: str) -> None:
         super().__init__(f"{option}: {message}")
 
 
@@ -42,7 +47,7 @@ class Parser(argparse.ArgumentParser):
     analyst reading a log wants the option and what is wrong, on one line.
     """
 
-    def error(self, message):
+    def error(self, message: str) -> NoReturn:
         required = "the following arguments are required: "
         if message.startswith(required):
             message = f"{message.removeprefix(required)}: required"
@@ -53,7 +58,7 @@ class HelpFormatter(argparse.RawDescriptionHelpFormatter):
     """Help with every option's default (those without one say why in their text),
     and the description and examples laid out as written."""
 
-    def _get_help_string(self, action):
+    def _get_help_string(self, action: argparse.Action) -> str:
         text = action.help or ""
         no_default = action.default is None or action.default is False or action.default == argparse.SUPPRESS
         if not no_default and "%(default)" not in text and "(default:" not in text:
@@ -66,11 +71,18 @@ class HelpFormatter(argparse.RawDescriptionHelpFormatter):
 _NAMES = {math.pi / 2: "pi/2"}
 
 
-def _show(x):
+def _show(x: float) -> str:
     return _NAMES.get(x, f"{x:g}")
 
 
-def number(lo=None, hi=None, *, lo_closed=False, hi_closed=False, kind=float):
+def number(
+    lo: float | None = None,
+    hi: float | None = None,
+    *,
+    lo_closed: bool = False,
+    hi_closed: bool = False,
+    kind: Callable[[str], float] = float,
+) -> Callable[[str], float]:
     """An argparse ``type``: a finite number of ``kind`` within bounds.
 
     Parameters
@@ -94,7 +106,7 @@ def number(lo=None, hi=None, *, lo_closed=False, hi_closed=False, kind=float):
     else:
         rule = "finite"
 
-    def convert(text):
+    def convert(text: str) -> float:
         try:
             x = kind(text)
         except ValueError:
@@ -121,7 +133,7 @@ COUNT = number(1, lo_closed=True, kind=int)
 # --- checks shared by the commands ----------------------------------------------------------
 
 
-def check_wall(args, second):
+def check_wall(args: argparse.Namespace, second: str) -> str:
     """Say which way the wall was given: ``"hb"`` (height, thickness) or ``"alpha"``.
 
     Parameters
@@ -147,14 +159,14 @@ def check_wall(args, second):
     return "hb" if given_hb else "alpha"
 
 
-def add_eq17_option(group, flag, text, default):
+def add_eq17_option(group: argparse._ArgumentGroup, flag: str, text: str, default: str) -> None:
     """Add an option taking the coefficients A, B of Eq. 17 (checked by :func:`check_eq17`)."""
     group.add_argument(
         flag, type=FINITE, nargs=2, metavar=("A", "B"), help=f"{text}, A > 0, B >= 0 [-] (default: {default})"
     )
 
 
-def check_eq17(values, option):
+def check_eq17(values: Sequence[float], option: str) -> tuple[float, float]:
     """The coefficients (A, B) of Eq. 17, e times (A - B (thetadot/thetadot_r)^2): A > 0
     (else e = 0 at every impact), B >= 0 (else e grows with the amplitude)."""
     a, b = values
@@ -165,7 +177,7 @@ def check_eq17(values, option):
     return a, b
 
 
-def check_writable(path, option):
+def check_writable(path: str | Path, option: str) -> Path:
     """Check that ``path`` can be written, before anything is computed.
 
     Its folder must exist and accept a new file (tried, so that it holds for
@@ -190,7 +202,7 @@ def check_writable(path, option):
     return path
 
 
-def check_figure_format(path, option="--figure"):
+def check_figure_format(path: str | Path, option: str = "--figure") -> None:
     """Check that matplotlib can write a figure named ``path`` (by its suffix)."""
     from matplotlib.backend_bases import FigureCanvasBase
 
@@ -200,7 +212,7 @@ def check_figure_format(path, option="--figure"):
         raise UsageError(option, f"{path}: unknown figure format {suffix!r}; use one of {', '.join(sorted(kinds))}")
 
 
-def write_dataset(ds, path, option, history):
+def write_dataset(ds: xr.Dataset, path: str | Path, option: str, history: str) -> None:
     """Write ``ds`` to ``path`` (through a temporary file), with the command in ``history``."""
     from rocklab.io import write_netcdf
 
@@ -211,7 +223,7 @@ def write_dataset(ds, path, option, history):
         raise CommandError(f"{option}: cannot write {path}: {err}") from None
 
 
-def read_record(args):
+def read_record(args: argparse.Namespace) -> tuple[np.ndarray, float, str]:
     """Ground acceleration [m/s^2], its sample interval [s] and its name.
 
     Every record is read by :func:`rocklab.seismic.accelerograms.load_record`.
@@ -273,7 +285,7 @@ def read_record(args):
     return np.asarray(ag, float), float(dt), str(name)
 
 
-def _columns(path):
+def _columns(path: str | Path) -> int | None:
     """Numbers on the first non-blank line of a text file (None where that line holds anything else)."""
     try:
         with open(path, encoding="ascii") as fh:
@@ -283,7 +295,7 @@ def _columns(path):
         return None
 
 
-def add_record_options(group, required):
+def add_record_options(group: argparse._ArgumentGroup, required: bool) -> None:
     """Add ``--record``, ``--dt`` and ``--units`` to ``group`` (read by :func:`read_record`)."""
     group.add_argument(
         "--record",

@@ -7,9 +7,13 @@ progress on stderr (:class:`ProgressBar`).
 
 from __future__ import annotations
 
+import argparse
 import inspect
 import sys
 import time
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any, TextIO
 
 from rocklab.cli.arguments import (
     ANGLE,
@@ -48,14 +52,14 @@ class ProgressBar:
         Characters of the bar.
     """
 
-    def __init__(self, label="", stream=None, width=30):
+    def __init__(self, label: str = "", stream: TextIO | None = None, width: int = 30) -> None:
         self.label, self.width = label, int(width)
         self.stream = sys.stderr if stream is None else stream
         self.tty = self.stream.isatty()
         self.shown = -1
         self.t0 = time.perf_counter()
 
-    def __call__(self, done, total):
+    def __call__(self, done: int, total: int) -> None:
         """Show that ``done`` units of work out of ``total`` are complete."""
         pct = min(max(100 * int(done) // int(total), 0), 100) if total else 100
         step = pct if self.tty else pct - pct % 10
@@ -74,7 +78,7 @@ class ProgressBar:
         self.stream.flush()
 
 
-def map_models(args):
+def map_models(args: argparse.Namespace) -> list[str]:
     """Names of the maps asked for (``--model``, ``--all-models``) and their checks."""
     from rocklab.seismic.walls import MODELS
 
@@ -89,9 +93,9 @@ def map_models(args):
     return models
 
 
-def _map_outputs(args, models):
+def _map_outputs(args: argparse.Namespace, models: Sequence[str]) -> dict[str, Path]:
     """netCDF path of each map (``-o``, ``{model}`` filled) and the figure path, checked."""
-    paths = {}
+    paths: dict[str, Path] = {}
     if args.output is not None:
         if len(models) > 1 and "{model}" not in args.output:
             raise UsageError("--output", "several maps need {model} in the file name, e.g. -o map_{model}.nc")
@@ -104,7 +108,7 @@ def _map_outputs(args, models):
     return paths
 
 
-def _format_indices(ix):
+def _format_indices(ix: Mapping[str, Any]) -> str:
     if not ix["n_overturned"]:
         return f"N_O = 0 (no overturning in {ix['n_cells']} histories)"
     return (
@@ -113,7 +117,7 @@ def _format_indices(ix):
     )
 
 
-def overturning_maps(args) -> int:
+def overturning_maps(args: argparse.Namespace) -> int:
     """Compute overturning maps (Sect. 5), write them and print their indices.
 
     Returns
@@ -129,8 +133,10 @@ def overturning_maps(args) -> int:
 
     if args.hi <= args.lo:
         raise UsageError("--hi", f"must be > --lo (got --lo {args.lo:g} --hi {args.hi:g})")
-    if args.threads is not None and args.threads > numba.config.NUMBA_NUM_THREADS:
-        raise UsageError("--threads", f"at most {numba.config.NUMBA_NUM_THREADS} on this machine (NUMBA_NUM_THREADS)")
+    # numba.core.config sets its options at run time (from the environment): not in its types
+    most = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]
+    if args.threads is not None and args.threads > most:
+        raise UsageError("--threads", f"at most {most} on this machine (NUMBA_NUM_THREADS)")
     if check_wall(args, "--R") == "hb":
         alpha = float(wall.slenderness_angle(args.height, args.thickness))
         half_diagonal = float(wall.half_diagonal(args.height, args.thickness))
@@ -197,7 +203,8 @@ models (Sect. 5):
 """
 
 
-def add_parser(sub):
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Add ``rocklab map`` to the subcommands ``sub`` (:data:`rocklab.cli.COMMANDS`)."""
     from rocklab.seismic.maps import overturning_map
     from rocklab.seismic.walls import ALPHA, MODELS, R
 

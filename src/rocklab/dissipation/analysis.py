@@ -32,11 +32,16 @@ Conventions
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import Any
+
 import numpy as np
 import pandas as pd
+import xarray as xr
+from numpy.typing import ArrayLike
 
 from rocklab.dissipation.regression import ols
-from rocklab.lab.motion import extract_motion, motion_from_dataset, stored_motion
+from rocklab.lab.motion import Motion, extract_motion, motion_from_dataset, stored_motion
 from rocklab.physics import restitution
 from rocklab.physics.flight import quarter_period_linear
 from rocklab.physics.wall import no_sliding_friction, overturning_velocity
@@ -63,7 +68,11 @@ IMPACT_COLUMNS = ["k", "t_s", "peak_before_over_alpha", "thetadot_before", "thet
 E_BY_N_COLUMNS = ["n", "peak_over_alpha", "e_exp_eq10", "e_exp_eq11", "e_ratio_eq10", "e_ratio_eq11"]
 
 
-def e_by_n(peaks, theta0, alpha_ind, alpha, e_an):
+#: What :func:`motion_tables` gives: the test's summary, its impacts and its e_exp after n impacts.
+MotionTables = tuple[dict[str, Any], pd.DataFrame, pd.DataFrame]
+
+
+def e_by_n(peaks: ArrayLike, theta0: float, alpha_ind: float, alpha: float, e_an: float) -> pd.DataFrame:
     """e_exp after n = 1..N impacts by Eqs. 10 and 11 (Fig. 11).
 
     Parameters
@@ -95,14 +104,14 @@ def e_by_n(peaks, theta0, alpha_ind, alpha, e_an):
     )
 
 
-def per_impact_e(peaks, theta0, alpha_ind):
+def per_impact_e(peaks: ArrayLike, theta0: float, alpha_ind: float) -> np.ndarray:
     """e_k by Eq. 11 with n = 1 from peak k-1 to peak k (peak 0 = theta0)."""
     peaks = np.asarray(peaks, float)
     before = np.r_[theta0, peaks[:-1]]
     return restitution.experimental_pena(peaks, before, alpha_ind, 1)
 
 
-def table3_windows(peaks, theta0, alpha_ind, e_an):
+def table3_windows(peaks: ArrayLike, theta0: float, alpha_ind: float, e_an: float) -> dict[str, float]:
     """e_exp / |e_an| by Eq. 11 over the windows of Table 3.
 
     complete: theta0 to peak N (n = N); without the first half cycle: peak 1
@@ -123,7 +132,18 @@ def table3_windows(peaks, theta0, alpha_ind, e_an):
     }
 
 
-def analyse_motion(t, theta, fs, boundary, alpha, p, direction, *, alpha_ind=None, **motion_kw):
+def analyse_motion(
+    t: ArrayLike,
+    theta: ArrayLike,
+    fs: float,
+    boundary: str,
+    alpha: float,
+    p: float,
+    direction: str,
+    *,
+    alpha_ind: float | None = None,
+    **motion_kw: Any,
+) -> MotionTables:
     """:func:`motion_tables` of a free-rocking record (Sects. 3-4).
 
     Parameters
@@ -141,7 +161,9 @@ def analyse_motion(t, theta, fs, boundary, alpha, p, direction, *, alpha_ind=Non
     return motion_tables(m, boundary, alpha, p, direction, alpha_ind=alpha_ind)
 
 
-def motion_tables(m, boundary, alpha, p, direction, *, alpha_ind=None):
+def motion_tables(
+    m: Motion, boundary: str, alpha: float, p: float, direction: str, *, alpha_ind: float | None = None
+) -> MotionTables:
     """Energy dissipation of one free-rocking motion (Sects. 3-4).
 
     Parameters
@@ -228,7 +250,7 @@ def motion_tables(m, boundary, alpha, p, direction, *, alpha_ind=None):
     return summary, impacts, e_n
 
 
-def _amplitude_line(x, y):
+def _amplitude_line(x: np.ndarray, y: np.ndarray) -> dict[str, float]:
     """y = a - b x by least squares (:func:`~rocklab.dissipation.regression.ols`): a, b, R^2, standard errors, n."""
     ok = np.isfinite(x) & np.isfinite(y)
     x, y = x[ok], y[ok]
@@ -249,7 +271,9 @@ def _amplitude_line(x, y):
     )
 
 
-def amplitude_law_fit(impacts_df, tests_df, by=("series",), law="peak"):
+def amplitude_law_fit(
+    impacts_df: pd.DataFrame, tests_df: pd.DataFrame, by: Sequence[str] = ("series",), law: str = "peak"
+) -> pd.DataFrame:
     """Fit the amplitude law of Eq. 15 or Eq. 17 by group, with R^2.
 
     e_exp_k / |e_an| = a - b x, x = peak_before_over_alpha (``law="peak"``,
@@ -298,7 +322,7 @@ def amplitude_law_fit(impacts_df, tests_df, by=("series",), law="peak"):
     return pd.DataFrame(rows)
 
 
-def no_sliding_check(h_over_b, mu_s=0.6):
+def no_sliding_check(h_over_b: ArrayLike, mu_s: float = 0.6) -> pd.DataFrame:
     """No-sliding condition of free rocking, Eq. 9 (Shenton 1996).
 
     Returns a DataFrame with h_over_b, mu_required = 3 zeta / (1 + 4 zeta^2),
@@ -313,7 +337,7 @@ def no_sliding_check(h_over_b, mu_s=0.6):
 META_COLUMNS = ["test_id", "series", "specimen", "boundary", "contact_depth_mm"]
 
 
-def analyse_stored_motion(ds):
+def analyse_stored_motion(ds: xr.Dataset) -> MotionTables:
     """:func:`motion_tables` of a stored motion (:func:`rocklab.lab.motion.stored_motion`).
 
     Returns the three tables of :func:`motion_tables`, each carrying the
@@ -338,6 +362,6 @@ def analyse_stored_motion(ds):
     )
 
 
-def analyse_reduced_test(ds):
+def analyse_reduced_test(ds: xr.Dataset) -> MotionTables:
     """:func:`analyse_stored_motion` of a reduced test (``rocklab.lab.reduction``)."""
     return analyse_stored_motion(stored_motion(ds))

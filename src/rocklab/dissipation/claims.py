@@ -44,9 +44,11 @@ from __future__ import annotations
 
 import csv
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from functools import cache
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -60,6 +62,9 @@ from rocklab.physics import restitution
 from rocklab.physics import wall as _wall
 from rocklab.physics.boundary import Boundary
 from rocklab.physics.law import Restitution
+
+if TYPE_CHECKING:
+    from rocklab.simulation.rocking_model import RockingModel
 
 optimize = lazy_module("scipy.optimize")
 
@@ -104,7 +109,7 @@ CLAIM_KINDS = ("zero", "below", "near")
 CLAIM_BOUNDARIES = (Boundary.TWO_SIDED, Boundary.ONE_SIDED, "both")
 
 
-def read_claims(path=None):
+def read_claims(path: str | Path | None = None) -> tuple[Claim, ...]:
     """The campaign-wide statements in a CSV file, checked, as :class:`Claim` objects.
 
     Parameters
@@ -131,7 +136,7 @@ def read_claims(path=None):
         reader = csv.DictReader(fh)
         if reader.fieldnames != columns:
             raise ValueError(f"{path}: columns {reader.fieldnames}, expected {columns}")
-        claims = []
+        claims: list[Claim] = []
         for line, row in enumerate(reader, start=2):
             where = f"{path}, line {line}"
             for column, known in (("boundary", CLAIM_BOUNDARIES), ("covariate", covariates), ("kind", CLAIM_KINDS)):
@@ -145,7 +150,8 @@ def read_claims(path=None):
                 raise ValueError(f"{where}: value {row['value']!r} is no finite number")
             if row["key"] in {c.key for c in claims}:
                 raise ValueError(f"{where}: key {row['key']!r} repeated")
-            claims.append(Claim(**{**row, "value": value}))
+            given: dict[str, Any] = {**row, "value": value}
+            claims.append(Claim(**given))
     return tuple(claims)
 
 
@@ -153,7 +159,9 @@ def read_claims(path=None):
 PAPER_CLAIMS = read_claims()
 
 
-def verdict(kind, low, high, p, value=0.0, margin=0.0, alpha=0.05) -> ClaimVerdict:
+def verdict(
+    kind: str, low: float, high: float, p: float, value: float = 0.0, margin: float = 0.0, alpha: float = 0.05
+) -> ClaimVerdict:
     """The verdict on a claim from an interval [low, high] and the p-value.
 
     Parameters
@@ -191,7 +199,7 @@ DURATION_TOLERANCE = 0.05
 #: Release of the reference wall from rest [alpha]: the two-sided walls' mean instability displacement (Sect. 3).
 REFERENCE_RELEASE = 0.9
 #: The reference wall's restitution, as a scale of e_an: the paper's calibrated walls (Sects. 3, 5).
-REFERENCE_SCALE = {
+REFERENCE_SCALE: dict[str, float] = {
     Boundary.TWO_SIDED: restitution.CALIBRATED_RATIO_TWO_SIDED,
     Boundary.ONE_SIDED: restitution.CALIBRATED_RATIO_ONE_SIDED,
 }
@@ -203,14 +211,14 @@ MARGINS_FILE = "claim_margins.csv"
 MARGIN_COLUMNS = ("cause", "parameter", "boundary", "reference", "duration_p", "margin")
 
 
-def reference_value(cause, parameter, boundary):
+def reference_value(cause: str, parameter: str, boundary: str) -> float:
     """Value of a parameter on the reference wall: its null, the calibrated ratio for the restitution scale."""
     if (cause, parameter) == ("restitution_scale", "c"):
         return REFERENCE_SCALE[boundary]
     return next(q.null for q in catalogue.by_name(cause).params if q.name == parameter)
 
 
-def reference_wall(boundary, cause=None, values=None):
+def reference_wall(boundary: str, cause: str | None = None, values: Mapping[str, float] | None = None) -> RockingModel:
     """The reference wall's simulator, with ``cause`` of the catalogue at ``values`` (null where missing).
 
     The maps' wall (:mod:`rocklab.seismic.walls`) with the paper's calibrated
@@ -233,7 +241,7 @@ def reference_wall(boundary, cause=None, values=None):
     return simulator(model_of([wall], laws).row(0))
 
 
-def free_rocking_duration(model):
+def free_rocking_duration(model: RockingModel) -> float:
     """p D: the free-rocking duration to rest of ``model`` released from rest at :data:`REFERENCE_RELEASE` alpha.
 
     The exact simulator (:func:`rocklab.simulation.reference.simulate_free`);
@@ -253,7 +261,7 @@ def free_rocking_duration(model):
     return math.inf if h.overturned or h.t_rest is None else float(h.t_rest * model.p)
 
 
-def outcome_margin(cause, parameter, boundary, tolerance=DURATION_TOLERANCE):
+def outcome_margin(cause: str, parameter: str, boundary: str, tolerance: float = DURATION_TOLERANCE) -> float:
     """The smallest change of a parameter that changes the reference wall's free-rocking duration by ``tolerance``.
 
     From the parameter's reference value (:func:`reference_value`) towards
@@ -279,7 +287,7 @@ def outcome_margin(cause, parameter, boundary, tolerance=DURATION_TOLERANCE):
     v0 = reference_value(cause, parameter, boundary)
     d0 = free_rocking_duration(reference_wall(boundary, cause, {parameter: v0}))
 
-    def excess(change, sign):
+    def excess(change: float, sign: float) -> float:
         d = free_rocking_duration(reference_wall(boundary, cause, {parameter: v0 + sign * change}))
         return (abs(d / d0 - 1.0) if math.isfinite(d) else 1.0) - tolerance
 
@@ -297,7 +305,7 @@ def outcome_margin(cause, parameter, boundary, tolerance=DURATION_TOLERANCE):
     return best
 
 
-def margin_table():
+def margin_table() -> pd.DataFrame:
     """:func:`outcome_margin` of every parameter of the catalogue in each boundary condition it occurs in.
 
     Returns
@@ -306,7 +314,7 @@ def margin_table():
         :data:`MARGIN_COLUMNS`: the parameter's reference value, the
         reference wall's p D and the margin (NaN: none).
     """
-    rows = []
+    rows: list[tuple[Any, ...]] = []
     for c in catalogue.in_order():
         for q in c.params:
             for b in c.boundaries:
@@ -317,12 +325,12 @@ def margin_table():
 
 
 @cache
-def margins():
+def margins() -> pd.DataFrame:
     """The shipped :func:`margin_table` (``rocklab/data/claim_margins.csv``)."""
     return pd.read_csv(data_path(MARGINS_FILE))
 
 
-def margin_rule():
+def margin_rule() -> dict[str, Any]:
     """The rule of the margins in numbers, for the docs: tolerance, reference wall, its durations.
 
     Returns
@@ -352,7 +360,7 @@ def margin_rule():
     }
 
 
-def margin_of(response, boundary="both"):
+def margin_of(response: str, boundary: str = "both") -> float:
     """The equivalence margin of "no effect" and "close to" on ``response``, in its units.
 
     One rule for every statement (:func:`outcome_margin`): the smallest
@@ -374,7 +382,7 @@ def margin_of(response, boundary="both"):
     return float(found.min()) if len(found) else math.nan
 
 
-def claim_text(kind, value, margin):
+def claim_text(kind: str, value: float, margin: float) -> str:
     """The claim of a row in words: "no effect", "mean below 1", "mean within 0.0031 of 1" (the margin to
     two digits: the table's ``margin`` column holds it whole)."""
     words = {"zero": "no effect", "below": f"mean below {value:g}", "near": f"mean within {margin:.2g} of {value:g}"}

@@ -78,13 +78,15 @@ simultaneous (Bonferroni) interval at 1 - 0.05/m (``verdict_level``).
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
 from scipy import stats
 
-from rocklab.dissipation.claims import PAPER_CLAIMS, claim_text, margin_of, verdict
+from rocklab.dissipation.claims import PAPER_CLAIMS, Claim, claim_text, margin_of, verdict
 from rocklab.dissipation.regression import ols
 from rocklab.inference.intervals import clustered_mean, mean_over_units, t_interval
 from rocklab.inference.multiplicity import holm
@@ -92,6 +94,9 @@ from rocklab.inference.verdicts import ClaimVerdict
 from rocklab.lab.campaign import order_in_series
 from rocklab.lab.hierarchy import COVARIATE_LEVEL, UNIT_COLUMN, parent, plural, too_few_units
 from rocklab.physics.boundary import Boundary
+
+if TYPE_CHECKING:
+    from rocklab.diagnosis.result import CampaignDiagnosis
 
 #: Per-test quantities of tests.csv modelled against the covariates.
 TEST_RESPONSES = ("e_ratio", "theta0_over_alpha")
@@ -111,7 +116,7 @@ ALPHA = 0.05
 # --- the tables -------------------------------------------------------------------------------
 
 
-def with_test_order(tests, qc=None):
+def with_test_order(tests: pd.DataFrame, qc: pd.DataFrame | None = None) -> pd.DataFrame:
     """tests.csv with the test's place in its series (``order``, 0 first to 1 last).
 
     Parameters
@@ -128,13 +133,13 @@ def with_test_order(tests, qc=None):
         ``tests`` with an ``order`` column.
     """
     every = qc if qc is not None else tests
-    order = {}
+    order: dict[str, float] = {}
     for _, ids in every.groupby("series").test_id:
         order |= order_in_series(ids.astype(str).tolist())
     return tests.assign(order=tests.test_id.astype(str).map(order))
 
 
-def with_walls(tests, walls=None):
+def with_walls(tests: pd.DataFrame, walls: Mapping[str, str] | None = None) -> pd.DataFrame:
     """tests.csv with the wall of each test's specimen (``wall``).
 
     Parameters
@@ -160,7 +165,7 @@ def with_walls(tests, walls=None):
     return tests.assign(wall=tests.specimen.map(walls).astype(str))
 
 
-def series_values(tests, diagnosis=None):
+def series_values(tests: pd.DataFrame, diagnosis: CampaignDiagnosis | None = None) -> pd.DataFrame:
     """One value per series and response: the mean of its tests, or the diagnosis' estimate.
 
     Parameters
@@ -203,11 +208,11 @@ def series_values(tests, diagnosis=None):
 # --- the models -------------------------------------------------------------------------------
 
 
-def _level_text(v):
+def _level_text(v: object) -> str:
     return f"{v:g}" if isinstance(v, (int, float, np.integer, np.floating)) else str(v)
 
 
-def unit_values(frame, covariate):
+def unit_values(frame: pd.DataFrame, covariate: str) -> pd.DataFrame:
     """The series values of ``frame`` as one value per unit of the covariate's level.
 
     A unit's value is the mean of its series' values; its covariate, its
@@ -270,12 +275,12 @@ class LevelFit:
     covariate: str
     level: str
     X: np.ndarray
-    columns: dict
+    columns: dict[str, int]
     coef: np.ndarray
     cov: np.ndarray
     df: int
 
-    def partial(self, n=50):
+    def partial(self, n: int = 50) -> dict[str, np.ndarray]:
         """The effect of a numeric covariate with the parents' means averaged out (a partial plot).
 
         Returns
@@ -299,7 +304,7 @@ class LevelFit:
         return {"x": self.X[:, j], "y": y, "grid": grid, "line": line, "low": line - q * se, "high": line + q * se}
 
 
-def fit_level(frame, covariate):
+def fit_level(frame: pd.DataFrame, covariate: str) -> tuple[LevelFit | None, str, pd.DataFrame]:
     """:class:`LevelFit` of one covariate on the series values ``frame``, or why it cannot be tested.
 
     Returns
@@ -344,16 +349,18 @@ def fit_level(frame, covariate):
     return LevelFit(units, covariate, level, X, columns, coef, cov, df), "", units
 
 
-def _not_testable(reason):
+def _not_testable(reason: str) -> dict[str, Any]:
     """The fields of a row that gets no verdict, and why."""
     return {"model": "", "verdict": ClaimVerdict.NOT_TESTABLE, "why_not_testable": reason}
 
 
-def _row(boundary, response, source, covariate, **kw):
+def _row(boundary: str, response: str, source: str, covariate: str, **kw: Any) -> dict[str, Any]:
     return {"boundary": boundary, "response": response, "source": source, "covariate": covariate, **kw}
 
 
-def covariate_rows(frame, boundary, response, source, covariate):
+def covariate_rows(
+    frame: pd.DataFrame, boundary: str, response: str, source: str, covariate: str
+) -> list[dict[str, Any]]:
     """The effect of one series covariate on one response at its level (:func:`fit_level`), one row per term."""
     fit, reason, units = fit_level(frame, covariate)
     level = COVARIATE_LEVEL[covariate]
@@ -388,7 +395,7 @@ def covariate_rows(frame, boundary, response, source, covariate):
     return rows
 
 
-def within_series_effects(tests, response, covariate):
+def within_series_effects(tests: pd.DataFrame, response: str, covariate: str) -> pd.Series:
     """The effect of a within-series covariate in each series that varies in it.
 
     ``order``: the OLS slope of the response on the test's place (0 to 1),
@@ -400,7 +407,7 @@ def within_series_effects(tests, response, covariate):
     pandas.Series
         Effect by series.
     """
-    out = {}
+    out: dict[Any, float] = {}
     for s, g in tests.dropna(subset=[response, covariate]).groupby("series"):
         if covariate == "direction":
             push, pull = g[g.direction == "push"][response], g[g.direction == "pull"][response]
@@ -411,7 +418,7 @@ def within_series_effects(tests, response, covariate):
     return pd.Series(out, dtype=float)
 
 
-def wall_mean_row(values, walls, **row):
+def wall_mean_row(values: pd.Series, walls: pd.Series, **row: Any) -> dict[str, Any]:
     """The mean over walls of ``values`` (one per series: each wall the mean of its series) with a t
     interval on walls - 1 df, as a row; "not testable" below the units a verdict needs."""
     null = row.pop("null", 0.0)
@@ -423,7 +430,7 @@ def wall_mean_row(values, walls, **row):
     return row | dict(estimate=m, se=se, ci_low=lo, ci_high=hi, p=p, df=k - 1)
 
 
-def within_series_row(tests, boundary, response, covariate):
+def within_series_row(tests: pd.DataFrame, boundary: str, response: str, covariate: str) -> dict[str, Any]:
     """The campaign-wide within-series effect: the mean over walls of the series' effects (t, walls - 1 df)."""
     effects = within_series_effects(tests, response, covariate)
     used = tests[tests.series.isin(effects.index)]
@@ -442,7 +449,7 @@ def within_series_row(tests, boundary, response, covariate):
     return wall_mean_row(effects, wall, **_row(boundary, response, "tests", covariate, model=model, **common))
 
 
-def mean_row(frame, boundary, response, source, value):
+def mean_row(frame: pd.DataFrame, boundary: str, response: str, source: str, value: float) -> dict[str, Any]:
     """The mean over tests (each series' value weighing its tests) with its cluster-robust t interval, the
     walls as clusters, and the p-value of mean = value: the estimate and interval of Table 3
     (:func:`rocklab.inference.intervals.clustered_mean`, CR2 on Imbens-Kolesar df), one estimate of
@@ -461,7 +468,7 @@ def mean_row(frame, boundary, response, source, value):
 # --- verdicts ---------------------------------------------------------------------------------
 
 
-def _judge(rows, claims):
+def _judge(rows: list[dict[str, Any]], claims: Sequence[Claim]) -> pd.DataFrame:
     """Verdicts of every row, each family (the paper's statements; the exploratory "no effect" checks)
     corrected for its own multiplicity: p Holm-adjusted, and a claim supported only by its simultaneous
     (Bonferroni) interval at 1 - ALPHA/m, m the family's judged rows."""
@@ -505,11 +512,17 @@ COLUMNS = (
 )  # fmt: skip
 
 
-def _covariates(boundary):
+def _covariates(boundary: str) -> list[str]:
     return [c for c in SERIES_COVARIATES if c != "contact_depth_mm" or boundary == Boundary.ONE_SIDED]
 
 
-def campaign_effects(tests, diagnosis=None, qc=None, walls=None, claims=PAPER_CLAIMS):
+def campaign_effects(
+    tests: pd.DataFrame,
+    diagnosis: CampaignDiagnosis | None = None,
+    qc: pd.DataFrame | None = None,
+    walls: Mapping[str, str] | None = None,
+    claims: Sequence[Claim] = PAPER_CLAIMS,
+) -> pd.DataFrame:
     """Every parameter of the campaign against every covariate, and the paper's statements judged.
 
     Parameters
@@ -563,7 +576,12 @@ def campaign_effects(tests, diagnosis=None, qc=None, walls=None, claims=PAPER_CL
     return table[list(COLUMNS)].reset_index(drop=True)
 
 
-def series_fits(tests, diagnosis=None, qc=None, walls=None):
+def series_fits(
+    tests: pd.DataFrame,
+    diagnosis: CampaignDiagnosis | None = None,
+    qc: pd.DataFrame | None = None,
+    walls: Mapping[str, str] | None = None,
+) -> dict[tuple[str, str], dict[str, LevelFit]]:
     """The fits of the numeric covariates at their level, for the figures.
 
     Returns
@@ -573,7 +591,7 @@ def series_fits(tests, diagnosis=None, qc=None, walls=None):
         covariates that could be fitted only.
     """
     values = series_values(with_walls(with_test_order(tests, qc), walls), diagnosis)
-    out = {}
+    out: dict[tuple[str, str], dict[str, LevelFit]] = {}
     for (boundary, response), frame in values.groupby(["boundary", "response"], sort=True):
         fits = {c: fit_level(frame, c)[0] for c in _covariates(boundary) if c in NUMERIC}
         out[(boundary, response)] = {c: f for c, f in fits.items() if f is not None}

@@ -9,6 +9,9 @@ pages ``docs/dissipation.md`` and ``docs/diagnosis.md`` quote them.
 from __future__ import annotations
 
 import ast
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
 
 import pandas as pd
 
@@ -39,7 +42,7 @@ SUMMARY_QUANTITIES = (
 )
 
 
-def _stats(row) -> dict:
+def _stats(row: Mapping[str, Any]) -> dict[str, Any]:
     """Mean and 95 % interval (on walls, :func:`rocklab.dissipation.statistics.boundary_summary`) of one row
     of ``summary.csv`` or ``table3.csv``, the units it rests on, and why it has no interval ("" when it has)."""
     note = row["ci_note"]
@@ -56,11 +59,11 @@ def _stats(row) -> dict:
     }
 
 
-def _laws(laws: pd.DataFrame, series: pd.DataFrame) -> dict:
+def _laws(laws: pd.DataFrame, series: pd.DataFrame) -> dict[str, dict[str, dict[str, Any]]]:
     """Amplitude laws pooled by boundary condition, and the median R² of the
     series' own fits of the peak law."""
     pooled = laws[laws["grouping"] == "boundary"]
-    out = {b.key: {} for b in Boundary}
+    out: dict[str, dict[str, dict[str, Any]]] = {b.key: {} for b in Boundary}
     for r in pooled.itertuples():
         out[Boundary(r.boundary).key][r.law] = {"a": r.a, "b": r.b, "r2": r.r2, "n": r.n}
     per_series = laws[(laws["grouping"] == "series") & (laws["law"] == "peak")]
@@ -72,14 +75,14 @@ def _laws(laws: pd.DataFrame, series: pd.DataFrame) -> dict:
     return out
 
 
-def _level(value) -> str:
+def _level(value: object) -> str:
     """A factor level as text: contact depth 60.0 -> '60', 'clay brick' as is."""
     return f"{value:g}" if isinstance(value, (int, float)) else str(value)
 
 
-def _effects(effects: pd.DataFrame) -> dict:
+def _effects(effects: pd.DataFrame) -> dict[str, dict[str, Any]]:
     """Kruskal-Wallis tests by boundary and factor, on the units of the factor's level; push/pull by series."""
-    out = {"kruskal": {}, "push_pull": {}}
+    out: dict[str, dict[str, Any]] = {"kruskal": {}, "push_pull": {}}
     for r in effects[effects["factor"] != "push/pull"].itertuples():
         levels = ast.literal_eval(r.levels)
         means = ast.literal_eval(r.level_means)
@@ -101,7 +104,7 @@ def _effects(effects: pd.DataFrame) -> dict:
     return out
 
 
-def dissipation_summary(tables) -> dict:
+def dissipation_summary(tables: Mapping[str, str | Path]) -> dict[str, Any]:
     """The boundary summaries, Table 3, the amplitude laws, the effects and the outliers.
 
     Parameters
@@ -121,7 +124,7 @@ def dissipation_summary(tables) -> dict:
         the factors' effects.
     """
     summary, table3, tests, series = (pd.read_csv(tables[k]) for k in ("summary", "table3", "tests", "series"))
-    out = {}
+    out: dict[str, Any] = {}
     for boundary in Boundary:
         key = boundary.key
         rows = summary[summary["boundary"] == boundary].set_index("quantity")
@@ -158,7 +161,7 @@ def dissipation_summary(tables) -> dict:
     return out
 
 
-def campaign_level_summary(path) -> dict:
+def campaign_level_summary(path: str | Path) -> dict[str, Any]:
     """Issue 12, item 2: the paper's campaign-wide statements tested and the effects found.
 
     Parameters

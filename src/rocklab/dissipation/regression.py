@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 
-def ols(y, X):
+def ols(y: np.ndarray, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
     """Ordinary least squares with Student's t inference.
 
     Parameters

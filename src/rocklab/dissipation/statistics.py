@@ -46,6 +46,8 @@ the tables of Sects. 3-4 that apply them.
 from __future__ import annotations
 
 import logging
+from collections.abc import Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -67,6 +69,9 @@ from rocklab.lab.hierarchy import COVARIATE_LEVEL, UNIT_COLUMN, too_few_units
 from rocklab.lab.validity import Verdict
 from rocklab.physics.boundary import Boundary
 from rocklab.physics.restitution import CALIBRATED_RATIO_ONE_SIDED
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 stats = lazy_module("scipy.stats")
 
@@ -99,7 +104,13 @@ PAPER_TABLE3 = {
 }
 
 
-def boundary_summary(tests_df, columns, walls, by="series", within="boundary"):
+def boundary_summary(
+    tests_df: pd.DataFrame,
+    columns: Sequence[str],
+    walls: Mapping[str, str],
+    by: str = "series",
+    within: str = "boundary",
+) -> pd.DataFrame:
     """Mean of per-test quantities by boundary condition, with its 95 % interval on walls.
 
     The estimate is the mean over the tests (the paper's); its interval is
@@ -159,7 +170,7 @@ def boundary_summary(tests_df, columns, walls, by="series", within="boundary"):
     return pd.DataFrame(rows)
 
 
-def table3(tests_df, walls):
+def table3(tests_df: pd.DataFrame, walls: Mapping[str, str]) -> pd.DataFrame:
     """Table 3: e_exp / |e_an| over the paper's three windows, by boundary.
 
     The paper gives the one-sided row only (1.05, 1.34, 0.72); the
@@ -186,7 +197,7 @@ def table3(tests_df, walls):
     return out
 
 
-def interval_cells(stats, fmt=".3f"):
+def interval_cells(stats: pd.DataFrame, fmt: str = ".3f") -> tuple[list[str], list[str]]:
     """Markdown cells "mean [low, high] (n tests, k series, w walls)" of :func:`boundary_summary` rows, and
     their notes.
 
@@ -199,7 +210,8 @@ def interval_cells(stats, fmt=".3f"):
     cells : list of str
     notes : list of str
     """
-    notes, cells = {}, []
+    notes: dict[str, str] = {}
+    cells: list[str] = []
     for r in stats.itertuples():
         n = f"({counted(r.n_tests, 'test')}, {counted(r.n_series, 'series')}, {counted(r.n_walls, 'wall')})"
         if r.ci_note:
@@ -209,7 +221,7 @@ def interval_cells(stats, fmt=".3f"):
     return cells, note_lines(notes)
 
 
-def table3_markdown(t3):
+def table3_markdown(t3: pd.DataFrame) -> str:
     """Table 3 as markdown: one row per boundary, mean [95 % CI on walls] (tests, series, walls), the paper's row.
 
     A value resting on too few walls for an interval
@@ -225,7 +237,13 @@ def table3_markdown(t3):
     return "\n\n".join([table, *notes]) if notes else table
 
 
-def series_stats(tests_df, columns=RATIO_COLUMNS, by="series", n_boot=4000, seed=0):
+def series_stats(
+    tests_df: pd.DataFrame,
+    columns: Sequence[str] = RATIO_COLUMNS,
+    by: str = "series",
+    n_boot: int = 4000,
+    seed: int = 0,
+) -> pd.DataFrame:
     """Mean, sd, bootstrap 95 % CI and count of each ratio by series.
 
     Returns
@@ -241,7 +259,7 @@ def series_stats(tests_df, columns=RATIO_COLUMNS, by="series", n_boot=4000, seed
     rows = []
     for key, g in tests_df.groupby(by, sort=True):
         row = {by: key, "n": len(g)}
-        short = {}
+        short: dict[int, list[str]] = {}
         for c in cols:
             x = g[c].to_numpy(float)
             n = int(np.isfinite(x).sum())
@@ -265,7 +283,14 @@ def series_stats(tests_df, columns=RATIO_COLUMNS, by="series", n_boot=4000, seed
     return pd.DataFrame(rows)
 
 
-def flag_outlying_series(tests_df, value="e_ratio", by="series", within="boundary", z_crit=3.5, p_crit=0.05):
+def flag_outlying_series(
+    tests_df: pd.DataFrame,
+    value: str = "e_ratio",
+    by: str = "series",
+    within: str = "boundary",
+    z_crit: float = 3.5,
+    p_crit: float = 0.05,
+) -> pd.DataFrame:
     """Series that stand apart from the others (see module docstring).
 
     Returns one row per series: within-group, n, mean, modified_z (over the
@@ -279,12 +304,12 @@ def flag_outlying_series(tests_df, value="e_ratio", by="series", within="boundar
         med = means.median()
         mad = np.median(np.abs(means - med))
         z = 0.6745 * (means - med) / mad if mad > 0 else means * 0.0
-        pv = []
+        welch = []
         for s in means.index:
             a = grp.loc[grp[by] == s, value].dropna()
             b = grp.loc[grp[by] != s, value].dropna()
-            pv.append(stats.ttest_ind(a, b, equal_var=False).pvalue if len(a) > 1 and len(b) > 1 else np.nan)
-        pv = np.asarray(pv, float)
+            welch.append(stats.ttest_ind(a, b, equal_var=False).pvalue if len(a) > 1 and len(b) > 1 else np.nan)
+        pv = np.asarray(welch, float)
         ph = np.full_like(pv, np.nan)
         ok = np.isfinite(pv)
         ph[ok] = holm(pv[ok])
@@ -306,7 +331,7 @@ def flag_outlying_series(tests_df, value="e_ratio", by="series", within="boundar
     return pd.DataFrame(out)
 
 
-def symmetry_test(tests_df, value, by="series", direction="direction"):
+def symmetry_test(tests_df: pd.DataFrame, value: str, by: str = "series", direction: str = "direction") -> pd.DataFrame:
     """Push/pull symmetry in the series tested both ways (Sect. 4).
 
     Per series: mean push, mean pull, relative change (pull - push)/push as
@@ -334,7 +359,14 @@ def symmetry_test(tests_df, value, by="series", direction="direction"):
     return pd.DataFrame(rows)
 
 
-def factor_effect(tests_df, factor, value="e_ratio", walls=None, within="boundary", p_crit=0.05):
+def factor_effect(
+    tests_df: pd.DataFrame,
+    factor: str,
+    value: str = "e_ratio",
+    walls: Mapping[str, str] | None = None,
+    within: str = "boundary",
+    p_crit: float = 0.05,
+) -> pd.DataFrame:
     """Systematic effect of a between-series factor (contact depth, unit material).
 
     Kruskal-Wallis on the means of the units the factor is a property of
@@ -387,7 +419,14 @@ def factor_effect(tests_df, factor, value="e_ratio", walls=None, within="boundar
     return pd.DataFrame(rows)
 
 
-def series_table(tests_df, qc_df, impacts_df=None, by="series", n_boot=4000, seed=0):
+def series_table(
+    tests_df: pd.DataFrame,
+    qc_df: pd.DataFrame,
+    impacts_df: pd.DataFrame | None = None,
+    by: str = "series",
+    n_boot: int = 4000,
+    seed: int = 0,
+) -> pd.DataFrame:
     """results/series.csv: counts, statistics of :data:`SERIES_COLUMNS`, law.
 
     Parameters
@@ -426,7 +465,9 @@ def series_table(tests_df, qc_df, impacts_df=None, by="series", n_boot=4000, see
     return out.drop(columns="n_tests")
 
 
-def campaign_tables(datasets, qc_df, walls, n_boot=4000, seed=0):
+def campaign_tables(
+    datasets: Iterable[xr.Dataset], qc_df: pd.DataFrame, walls: Mapping[str, str], n_boot: int = 4000, seed: int = 0
+) -> tuple[dict[str, pd.DataFrame], list[tuple[str, str]]]:
     """Every table of Sects. 3-4 for the valid tests of a campaign.
 
     Parameters

@@ -19,6 +19,8 @@ The workflow's job ``instrument_accuracy`` (part of ``all``) writes
 from __future__ import annotations
 
 import tempfile
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -35,7 +37,7 @@ TOLERANCES = {"*": LAST_DIGIT}
 MATCH_S = 0.02
 
 
-def impact_errors(found: pd.DataFrame, truth: pd.DataFrame, tol_s=MATCH_S) -> np.ndarray:
+def impact_errors(found: pd.DataFrame, truth: pd.DataFrame, tol_s: float = MATCH_S) -> np.ndarray:
     """e_k found minus the true e_k of the impact at the same instant, one per impact matched.
 
     Parameters
@@ -58,7 +60,7 @@ def impact_errors(found: pd.DataFrame, truth: pd.DataFrame, tol_s=MATCH_S) -> np
     return found.e_velocity.to_numpy(float)[near] - truth.e.to_numpy(float)[j[near]]
 
 
-def instrument_accuracy(instrument, fs, n_tests=4, seed=0) -> dict:
+def instrument_accuracy(instrument: str, fs: float, n_tests: int = 4, seed: int = 0) -> dict[str, Any]:
     """Per-impact e error and theta error of one instrument at one sampling rate.
 
     ``n_tests`` two-sided tests of the default specimens with the default
@@ -83,7 +85,11 @@ def instrument_accuracy(instrument, fs, n_tests=4, seed=0) -> dict:
     plan = [
         VirtualTest(f"A{k:02d}", specimen=specs[k % len(specs)], fs=fs, instrument=instrument) for k in range(n_tests)
     ]
-    errors, rms, rms_alpha, bounds, held = [], [], [], [], 0
+    errors: list[np.ndarray] = []
+    rms: list[float] = []
+    rms_alpha: list[float] = []
+    bounds: list[float] = []
+    held = 0
     with tempfile.TemporaryDirectory() as tmp:
         write_campaign(tmp, plan, seed=seed)
         campaign = open_campaign(tmp)
@@ -103,7 +109,7 @@ def instrument_accuracy(instrument, fs, n_tests=4, seed=0) -> dict:
                 bounds.append(float(ds.attrs["theta_error_bound_rad"]))
                 held += int(np.max(np.abs(diff)) <= bounds[-1])
     e = np.concatenate(errors)
-    out = {
+    out: dict[str, Any] = {
         "n_tests": n_tests,
         "n_impacts": int(e.size),
         "e_error_median": float(np.median(e)) if e.size else None,
@@ -117,7 +123,9 @@ def instrument_accuracy(instrument, fs, n_tests=4, seed=0) -> dict:
     return out
 
 
-def accuracy_summary(rates=None, n_tests=4, seed=0) -> dict:
+def accuracy_summary(
+    rates: Mapping[str, Sequence[float]] | None = None, n_tests: int = 4, seed: int = 0
+) -> dict[str, dict[str, dict[str, Any]]]:
     """:func:`instrument_accuracy` of every instrument and rate: {instrument: {"<fs>": dict}}."""
     rates = RATES if rates is None else rates
     return {

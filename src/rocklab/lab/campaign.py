@@ -16,9 +16,11 @@ from __future__ import annotations
 
 import codecs
 import csv
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -74,7 +76,7 @@ def _decode_lines(path: Path) -> list[tuple[int, str, str | None]]:
     blob = path.read_bytes()
     if blob.startswith(codecs.BOM_UTF8):
         blob = blob[len(codecs.BOM_UTF8) :]
-    out = []
+    out: list[tuple[int, str, str | None]] = []
     for n, raw in enumerate(blob.splitlines(), start=1):
         problem = None
         try:
@@ -105,14 +107,14 @@ class Table:
 
     path: Path
     rows: pd.DataFrame
-    problems: dict
+    problems: dict[int, str]
 
-    def error(self, i, problem=None) -> RawFormatError:
+    def error(self, i: int, problem: str | None = None) -> RawFormatError:
         """The :class:`RawFormatError` of row ``i`` (its own problem by default)."""
         return RawFormatError(self.path, int(self.rows.line.iloc[i]), problem or self.problems[i])
 
 
-def _number(text: str, kind) -> tuple[float, str | None]:
+def _number(text: str, kind: type) -> tuple[float, str | None]:
     if text == "":
         return np.nan, None
     try:
@@ -126,7 +128,7 @@ def _number(text: str, kind) -> tuple[float, str | None]:
     return value, None
 
 
-def read_table(path: Path, columns: dict, optional=(), keep_extra=False) -> Table:
+def read_table(path: Path, columns: dict[str, type], optional: tuple[str, ...] = (), keep_extra: bool = False) -> Table:
     """Read a campaign table and check it row by row.
 
     Blanks around a field, a byte-order mark, CRLF line ends, blank lines
@@ -161,7 +163,8 @@ def read_table(path: Path, columns: dict, optional=(), keep_extra=False) -> Tabl
         raise RawFormatError(path, head_n, f"column(s) {', '.join(twice)} named twice")
     index = {c: header.index(c) for c in columns if c in header}
     extra = [c for c in header if keep_extra and c and c not in columns and c != "line" and header.count(c) == 1]
-    records, problems = [], {}
+    records: list[dict[str, Any]] = []
+    problems: dict[int, str] = {}
     for i, (n, text, problem) in enumerate(lines[1:]):
         fields = [f.strip() for f in next(csv.reader([text]), [])]
         if problem is None and len(fields) != len(header):
@@ -189,10 +192,11 @@ def read_table(path: Path, columns: dict, optional=(), keep_extra=False) -> Tabl
     return Table(path, rows, problems)
 
 
-def _table_path(campaign_dir, name) -> Path:
+def _table_path(campaign_dir: str | Path, name: str) -> Path:
     path, problem = campaign_file(Path(campaign_dir), name, "table")
     if problem:
         raise RawFormatError(Path(campaign_dir) / name, None, problem)
+    assert path is not None  # campaign_file gives a path or a problem
     return path
 
 
@@ -200,15 +204,15 @@ def _table_path(campaign_dir, name) -> Path:
 class Refused:
     """Ids of a table refused at the door, each with its reason, and the table's own fault."""
 
-    ids: dict = field(default_factory=dict)
+    ids: dict[str, RawFormatError] = field(default_factory=dict)
     table: RawFormatError | None = None
 
-    def reason(self, key) -> RawFormatError | None:
+    def reason(self, key: str) -> RawFormatError | None:
         """Why ``key`` is refused (the table's fault first), or None."""
         return self.table or self.ids.get(key)
 
 
-def _conflicting(table: Table, key_cols: list, good: pd.Series) -> dict:
+def _conflicting(table: Table, key_cols: list[str], good: pd.Series) -> dict[int, tuple[tuple[Any, ...], str]]:
     """Rows whose key repeats an earlier row with other values: row -> (key tuple, problem).
 
     A row repeated word for word is harmless (the first is read); a key
@@ -216,7 +220,7 @@ def _conflicting(table: Table, key_cols: list, good: pd.Series) -> dict:
     """
     df = table.rows
     values = [c for c in df.columns if c != "line"]
-    out = {}
+    out: dict[int, tuple[tuple[Any, ...], str]] = {}
     for key, group in df[good].groupby(key_cols, sort=False):
         if len(group) > 1 and len(group.drop_duplicates(values)) > 1:
             lines = ", ".join(str(n) for n in group.line)
@@ -226,7 +230,7 @@ def _conflicting(table: Table, key_cols: list, good: pd.Series) -> dict:
     return out
 
 
-def read_specimens(campaign_dir) -> tuple[pd.DataFrame, Refused]:
+def read_specimens(campaign_dir: str | Path) -> tuple[pd.DataFrame, Refused]:
     """Specimens, one row per specimen, dimensions in mm, and the ones refused.
 
     A specimen is refused (its tests become unreadable, naming the row) when
@@ -235,7 +239,8 @@ def read_specimens(campaign_dir) -> tuple[pd.DataFrame, Refused]:
     """
     path = _table_path(campaign_dir, "specimens.csv")
     table = read_table(path, SPECIMEN_COLUMNS)
-    df, problems = table.rows, dict(table.problems)
+    df = table.rows
+    problems: dict[int, str | None] = dict(table.problems)
     for i, row in enumerate(df.itertuples(index=False)):
         if i in problems:
             continue
@@ -253,7 +258,7 @@ def read_specimens(campaign_dir) -> tuple[pd.DataFrame, Refused]:
     return df[keep].drop_duplicates("specimen").drop(columns="line").reset_index(drop=True), refused
 
 
-def read_setups(campaign_dir) -> tuple[pd.DataFrame, Refused]:
+def read_setups(campaign_dir: str | Path) -> tuple[pd.DataFrame, Refused]:
     """Transducer geometry, one row per (setup, channel), in mm, and the setups refused.
 
     A setup is refused as a whole (its tests become unreadable, naming the
@@ -300,10 +305,14 @@ class TestLog:
     """
 
     tests: pd.DataFrame
-    errors: dict = field(default_factory=dict)
+    errors: dict[str, RawFormatError] = field(default_factory=dict)
 
 
-def read_tests(campaign_dir, specimens=None, setups=None) -> TestLog:
+def read_tests(
+    campaign_dir: str | Path,
+    specimens: tuple[pd.DataFrame, Refused] | None = None,
+    setups: tuple[pd.DataFrame, Refused] | None = None,
+) -> TestLog:
     """Test log with every row checked at the door.
 
     A row whose test_id is not a safe name or repeats an earlier row, whose
@@ -328,15 +337,15 @@ def read_tests(campaign_dir, specimens=None, setups=None) -> TestLog:
     root = Path(campaign_dir)
     path = _table_path(root, "tests.csv")
     table = read_table(path, TEST_COLUMNS, optional=("note", "contact_depth_mm"), keep_extra=True)
-    specimens, bad_spec = _or_empty(read_specimens, root) if specimens is None else specimens
-    setups, bad_setup = _or_empty(read_setups, root) if setups is None else setups
+    specimen_rows, bad_spec = _or_empty(read_specimens, root) if specimens is None else specimens
+    setup_rows, bad_setup = _or_empty(read_setups, root) if setups is None else setups
     df = table.rows
-    known_spec, known_setup = set(specimens.specimen), set(setups.setup)
+    known_spec, known_setup = set(specimen_rows.specimen), set(setup_rows.setup)
     # the line of the first row of each test_id: the one reduced
-    first = {}
+    first: dict[str, int] = {}
     for tid, line in zip(df.test_id, df.line, strict=True):
         first.setdefault(tid, line)
-    errors = {}
+    errors: dict[str, RawFormatError] = {}
     for i, row in enumerate(df.itertuples(index=False)):
         problem = table.problems.get(i) or check_identifier(row.test_id, "test_id")
         if problem is None and first[row.test_id] != row.line:
@@ -357,7 +366,7 @@ def read_tests(campaign_dir, specimens=None, setups=None) -> TestLog:
     return TestLog(df, errors)
 
 
-def order_in_series(test_ids) -> dict:
+def order_in_series(test_ids: Iterable[str]) -> dict[str, float]:
     """Each test's place in its series, 0 (first) to 1 (last), from the order of the ids.
 
     Test ids of a campaign grow with the date of the test (``T0001``...),
@@ -379,7 +388,7 @@ def order_in_series(test_ids) -> dict:
     return {tid: i / n for tid, i in rank.items()}
 
 
-def _or_empty(reader, root):
+def _or_empty(reader: Callable[[Path], tuple[pd.DataFrame, Refused]], root: Path) -> tuple[pd.DataFrame, Refused]:
     """A table reader's result, or no rows and the table's fault when it is unusable."""
     try:
         return reader(root)
@@ -390,7 +399,7 @@ def _or_empty(reader, root):
         )
 
 
-def _row_problem(root, row, known_spec, known_setup) -> str | None:
+def _row_problem(root: Path, row: Any, known_spec: set[str], known_setup: set[str]) -> str | None:
     """What makes a row of tests.csv unreadable by itself (None when nothing)."""
     if row.specimen not in known_spec:
         return f"unknown specimen {row.specimen!r} (not in specimens.csv)"
@@ -408,10 +417,12 @@ def _row_problem(root, row, known_spec, known_setup) -> str | None:
     return campaign_file(Path(root), row.file)[1]
 
 
-def consecutive_packs(sizes: dict, max_tests: int) -> list:
+def consecutive_packs(sizes: dict[str, int], max_tests: int) -> list[list[str]]:
     """Keys of ``sizes`` (key -> its tests) in their order, packed while a pack holds at most
     ``max_tests`` tests; a key of more tests is a pack of its own.  Lists of keys."""
-    packs, pack, n = [], [], 0
+    packs: list[list[str]] = []
+    pack: list[str] = []
+    n = 0
     for key, size in sizes.items():
         if pack and n + size > max_tests:
             packs.append(pack)
@@ -437,12 +448,12 @@ class Campaign:
         return self.log.tests
 
     @property
-    def test_ids(self) -> list:
+    def test_ids(self) -> list[str]:
         """The tests that get a results file, in the order of tests.csv: one
         per safe test_id, its first row (the others are refused rows)."""
         return [t for t in dict.fromkeys(self.tests.test_id) if not check_identifier(t, "test_id")]
 
-    def reduction_groups(self) -> dict:
+    def reduction_groups(self) -> dict[str, list[str]]:
         """The tests of :attr:`test_ids` by series, in the order of tests.csv.
 
         What :meth:`reduction_jobs` packs by specimen; the tests refused at
@@ -450,13 +461,13 @@ class Campaign:
         ``unreadable`` (no series is called that: a series ends in ``-2s`` or
         ``-1s-cd<n>``).
         """
-        groups = {}
+        groups: dict[str, list[str]] = {}
         for test_id in self.test_ids:
             key = UNREADABLE if test_id in self.log.errors else row_series(self.test_row(test_id))
             groups.setdefault(key, []).append(test_id)
         return groups
 
-    def reduction_jobs(self, max_tests: int = TESTS_PER_JOB) -> dict:
+    def reduction_jobs(self, max_tests: int = TESTS_PER_JOB) -> dict[str, list[str]]:
         """The tests of each reduction job: whole specimens, in the order of tests.csv.
 
         A job spends longer starting Python and importing the library (about
@@ -481,10 +492,10 @@ class Campaign:
             raise ValueError(f"max_tests must be at least 1, got {max_tests}")
         groups = self.reduction_groups()
         refused = groups.pop(UNREADABLE, None)
-        by_specimen = {}
+        by_specimen: dict[str, list[str]] = {}
         for ids in groups.values():
             by_specimen.setdefault(self.test_row(ids[0]).specimen, []).extend(ids)
-        jobs = {}
+        jobs: dict[str, list[str]] = {}
         for pack in consecutive_packs({s: len(ids) for s, ids in by_specimen.items()}, max_tests):
             ids = by_specimen[pack[0]]
             if len(ids) > max_tests:
@@ -498,7 +509,7 @@ class Campaign:
             jobs[UNREADABLE] = refused
         return jobs
 
-    def diagnosis_jobs(self, max_tests: int = TESTS_PER_JOB) -> dict:
+    def diagnosis_jobs(self, max_tests: int = TESTS_PER_JOB) -> dict[str, list[str]]:
         """The series of each diagnosis job: whole series, in the order of tests.csv.
 
         A job spends about 2 s starting Python and importing the library, as
@@ -523,41 +534,41 @@ class Campaign:
         return {f"series-{p[0]}" if len(p) == 1 else f"series-{p[0]}+{p[-1]}": p for p in packs}
 
     @cached_property
-    def _first_row(self) -> dict:
+    def _first_row(self) -> dict[str, int]:
         """Position in :attr:`tests` of the first row of each test_id (a
         lookup per test would otherwise scan the log: quadratic in its size)."""
-        first = {}
+        first: dict[str, int] = {}
         for i, test_id in enumerate(self.tests.test_id):
             first.setdefault(test_id, i)
         return first
 
-    def test_row(self, test_id) -> pd.Series:
+    def test_row(self, test_id: str) -> pd.Series:
         """The row of tests.csv that is reduced for ``test_id`` (its first)."""
         return self.tests.iloc[self._first_row[test_id]]
 
-    def record_path(self, test_id) -> Path:
+    def record_path(self, test_id: str) -> Path:
         return self.root / self.test_row(test_id).file
 
-    def specimen(self, name) -> pd.Series:
+    def specimen(self, name: str) -> pd.Series:
         return self.specimens.set_index("specimen").loc[name]
 
-    def setup(self, name) -> pd.DataFrame:
+    def setup(self, name: str) -> pd.DataFrame:
         return self.setups[self.setups.setup == name].sort_values("channel").reset_index(drop=True)
 
 
-def row_series(row) -> str:
+def row_series(row: pd.Series) -> str:
     """Series of a row of tests.csv (:func:`series_id`)."""
     return series_id(row.specimen, row.boundary, row.contact_depth_mm if row.boundary == Boundary.ONE_SIDED else np.nan)
 
 
-def series_id(specimen, boundary, contact_depth_mm) -> str:
+def series_id(specimen: str, boundary: str, contact_depth_mm: float | None) -> str:
     """Series key: specimen + boundary + contact depth (docs/raw-format.md)."""
     if boundary == Boundary.TWO_SIDED or contact_depth_mm is None or not np.isfinite(contact_depth_mm):
         return f"{specimen}-2s"
     return f"{specimen}-1s-cd{int(round(contact_depth_mm))}"
 
 
-def open_campaign(campaign_dir) -> Campaign:
+def open_campaign(campaign_dir: str | Path) -> Campaign:
     """Read and cross-check the three tables of a campaign folder."""
     root = Path(campaign_dir)
     specimens = _or_empty(read_specimens, root)

@@ -12,9 +12,11 @@ Readings are in mm, one column per channel.
 from __future__ import annotations
 
 import functools
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 #: Shortest run of identical readings that counts as frozen (stuck/clipped) [s].
 FLAT_RUN_S = 0.25
@@ -53,13 +55,14 @@ class ChannelReport:
     gap_samples_filled: int = 0
     lost_from_s: float | None = None
     noise_mm: float = float("nan")
-    notes: list = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
 
     @property
     def lost(self) -> bool:
         return self.status in LOST_STATUSES
 
     def describe(self) -> str:
+        """What was found and done, in words (empty when nothing)."""
         parts = []
         if self.lost:
             when = f" from {self.lost_from_s:.2f} s" if self.lost_from_s is not None else ""
@@ -71,14 +74,14 @@ class ChannelReport:
         return "; ".join(parts)
 
 
-def _runs(mask):
+def _runs(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Start and stop indices of the True runs of a boolean vector."""
     edges = np.diff(np.r_[0, mask.astype(np.int8), 0])
     return np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
 
 
 @functools.cache
-def _residual_filter(window):
+def _residual_filter(window: int) -> tuple[np.ndarray, float]:
     """Weights of the residual from a local cubic over ``window`` samples, and their gain
     for white noise (read-only: shared by every call of :func:`noise_sigma`)."""
     # imported here: a job that imports the reduction for its tables only
@@ -91,7 +94,7 @@ def _residual_filter(window):
     return c, np.sqrt(np.sum(c**2))
 
 
-def noise_sigma(x, window=9):
+def noise_sigma(x: np.ndarray, window: int = 9) -> float:
     """Robust noise standard deviation [mm] of a channel.
 
     The residual from a local cubic (Savitzky-Golay, ``window`` samples) keeps
@@ -107,7 +110,7 @@ def noise_sigma(x, window=9):
     return float(1.4826 * np.median(np.abs(r - np.median(r))) / gain)
 
 
-def flat_runs(x, min_len):
+def flat_runs(x: np.ndarray, min_len: int) -> list[tuple[int, int]]:
     """(start, stop) of runs of at least ``min_len`` identical readings."""
     same = np.r_[False, x[1:] == x[:-1]]
     starts, stops = _runs(same)
@@ -115,7 +118,7 @@ def flat_runs(x, min_len):
     return [(s - 1, e) for s, e in zip(starts[keep], stops[keep])]
 
 
-def find_spikes(x, sigma):
+def find_spikes(x: np.ndarray, sigma: float) -> np.ndarray:
     """Indices of isolated single-sample spikes.
 
     A spike jumps away and straight back: its residual from the mean of its
@@ -139,7 +142,7 @@ def find_spikes(x, sigma):
     return idx[isolated]
 
 
-def _peer_moving(readings, col, start, stop):
+def _peer_moving(readings: np.ndarray, col: int, start: int, stop: int) -> bool:
     """Do other channels show fresh readings over [start, stop)?"""
     seg = readings[start:stop]
     others = [c for c in range(readings.shape[1]) if c != col]
@@ -151,7 +154,14 @@ def _peer_moving(readings, col, start, stop):
     return False
 
 
-def assess_channels(readings, fs, channels, flat_run_s=FLAT_RUN_S, max_gap_s=MAX_GAP_S, dead_span_mm=DEAD_SPAN_MM):
+def assess_channels(
+    readings: ArrayLike,
+    fs: float,
+    channels: Sequence[int],
+    flat_run_s: float = FLAT_RUN_S,
+    max_gap_s: float = MAX_GAP_S,
+    dead_span_mm: float = DEAD_SPAN_MM,
+) -> tuple[np.ndarray, list[ChannelReport]]:
     """Find faults in every channel and repair spikes and short gaps.
 
     Parameters
@@ -178,7 +188,7 @@ def assess_channels(readings, fs, channels, flat_run_s=FLAT_RUN_S, max_gap_s=MAX
     t = np.arange(n) / fs
     flat_len = max(int(round(flat_run_s * fs)), 8)
     max_gap = max(int(round(max_gap_s * fs)), 1)
-    reports = []
+    reports: list[ChannelReport] = []
     for col, ch in enumerate(channels):
         rep = ChannelReport(int(ch))
         y = x[:, col]

@@ -44,16 +44,19 @@ c0 - c2/p^2 is the instability angle of the fitted motion
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import Any, overload
+
 import numpy as np
 
 
-def odd_samples(n, lo=5):
+def odd_samples(n: float, lo: int = 5) -> int:
     """Odd Savitzky-Golay window length nearest ``n`` samples, at least ``lo``."""
-    n = max(int(round(n)), lo)
-    return n + 1 - n % 2
+    k = max(int(round(n)), lo)
+    return k + 1 - k % 2
 
 
-def _design(tau, p, hum_hz, fs):
+def _design(tau: np.ndarray, p: float, hum_hz: Sequence[float], fs: float) -> np.ndarray:
     cols = [np.ones_like(tau), np.sinh(p * tau) / p, (np.cosh(p * tau) - 1.0) / p**2]
     span = tau[-1] - tau[0] if tau.size else 0.0
     for f in hum_hz:
@@ -66,7 +69,17 @@ def _design(tau, p, hum_hz, fs):
     return np.column_stack(cols)
 
 
-def local_fit(t, theta, t_ref, t_lo, t_hi, p, fs, hum_hz=(50.0,), min_samples=5):
+def local_fit(
+    t: np.ndarray,
+    theta: np.ndarray,
+    t_ref: float,
+    t_lo: float,
+    t_hi: float,
+    p: float,
+    fs: float,
+    hum_hz: Sequence[float] = (50.0,),
+    min_samples: int = 5,
+) -> np.ndarray | None:
     """Least-squares fit of the linearised rocking solution on [t_lo, t_hi].
 
     Parameters
@@ -102,17 +115,25 @@ def local_fit(t, theta, t_ref, t_lo, t_hi, p, fs, hum_hz=(50.0,), min_samples=5)
     return coef[:3]
 
 
-def model_value(c, tau, p):
+@overload
+def model_value(c: np.ndarray, tau: float, p: float) -> float: ...
+@overload
+def model_value(c: np.ndarray, tau: np.ndarray, p: float) -> np.ndarray: ...
+def model_value(c: np.ndarray, tau: float | np.ndarray, p: float) -> Any:
     """Value of the local model at tau [rad]."""
     return c[0] + c[1] * np.sinh(p * tau) / p + c[2] * (np.cosh(p * tau) - 1.0) / p**2
 
 
-def model_velocity(c, tau, p):
+@overload
+def model_velocity(c: np.ndarray, tau: float, p: float) -> float: ...
+@overload
+def model_velocity(c: np.ndarray, tau: np.ndarray, p: float) -> np.ndarray: ...
+def model_velocity(c: np.ndarray, tau: float | np.ndarray, p: float) -> Any:
     """Velocity of the local model at tau [rad/s]."""
     return c[1] * np.cosh(p * tau) + c[2] * np.sinh(p * tau) / p
 
 
-def stationary_tau(c, p):
+def stationary_tau(c: np.ndarray, p: float) -> float:
     """tau where the model velocity vanishes (NaN if it has none)."""
     if c[2] == 0.0:
         return np.nan
@@ -120,7 +141,7 @@ def stationary_tau(c, p):
     return np.arctanh(r) / p if abs(r) < 1.0 else np.nan
 
 
-def inflection_tau(c, p):
+def inflection_tau(c: np.ndarray, p: float) -> float:
     """tau where the model acceleration vanishes, i.e. theta = c0 - c2/p^2
     and the speed is least (NaN if it has none)."""
     if c[1] == 0.0:
@@ -129,7 +150,7 @@ def inflection_tau(c, p):
     return np.arctanh(r) / p if abs(r) < 1.0 else np.nan
 
 
-def root_tau(c, p, tau0=0.0):
+def root_tau(c: np.ndarray, p: float, tau0: float = 0.0) -> float:
     """Zero of the model nearest tau0 by Newton (NaN if it does not converge)."""
     tau = tau0
     for _ in range(30):
@@ -143,7 +164,7 @@ def root_tau(c, p, tau0=0.0):
     return np.nan
 
 
-def asymptote(c, p):
+def asymptote(c: np.ndarray, p: float) -> float:
     """Rotation the model departs from exponentially, c0 - c2 / p^2 [rad].
 
     The instability angle of the fitted motion: theta'' = p^2 (theta - alpha)
@@ -152,6 +173,6 @@ def asymptote(c, p):
     return c[0] - c[2] / p**2
 
 
-def exponentials(c, p):
+def exponentials(c: np.ndarray, p: float) -> tuple[float, float]:
     """A, B of the model written as :func:`asymptote` + A e^{p tau} + B e^{-p tau} [rad]."""
     return 0.5 * (c[2] / p**2 + c[1] / p), 0.5 * (c[2] / p**2 - c[1] / p)

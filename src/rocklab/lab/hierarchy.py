@@ -18,7 +18,7 @@ an interval, a test, a fold or a resample imports the level from here
 
 from __future__ import annotations
 
-from rocklab.lab.campaign import UNREADABLE
+from rocklab.lab.campaign import UNREADABLE, Campaign
 
 #: The levels of the lab's campaign, finest first.
 LEVELS = ("impact", "test", "series", "specimen", "wall", "campaign")
@@ -45,12 +45,12 @@ MIN_UNITS_PER_LEVEL = 2
 MIN_DF = 2
 
 
-def parent(level, levels=LEVELS):
+def parent(level: str, levels: tuple[str, ...] = LEVELS) -> str:
     """The level above ``level`` (the one its units sit in)."""
     return levels[levels.index(level) + 1]
 
 
-def plural(level, n):
+def plural(level: str, n: int) -> str:
     """``n`` units of ``level`` in words: "1 wall", "3 walls", "2 series", "12 block groups"."""
     return f"{n} {level}{'' if n == 1 or level.endswith('s') else 's'}"
 
@@ -84,12 +84,12 @@ def too_few_units(level: str, n_units: int, df: float, per_level: dict[str, int]
     return ""
 
 
-def walls_of_specimens(campaign):
+def walls_of_specimens(campaign: Campaign) -> dict[str, str]:
     """Specimen -> wall of a :class:`rocklab.lab.campaign.Campaign` (its specimens.csv)."""
     return campaign.specimens.set_index("specimen").wall.astype(str).to_dict()
 
 
-def walls_of_series(campaign):
+def walls_of_series(campaign: Campaign) -> dict[str, str]:
     """Series -> wall of a :class:`rocklab.lab.campaign.Campaign`: the wall of the specimen of its tests."""
     walls = walls_of_specimens(campaign)
     return {
@@ -99,7 +99,7 @@ def walls_of_series(campaign):
     }
 
 
-def thickness_of_walls(campaign):
+def thickness_of_walls(campaign: Campaign) -> dict[str, float]:
     """Wall -> its thickness [m] of a :class:`rocklab.lab.campaign.Campaign` (the mean over its specimens)."""
     spec = campaign.specimens.assign(wall=campaign.specimens.wall.astype(str))
     return (spec.groupby("wall").thickness_mm.mean() / 1000.0).to_dict()

@@ -37,6 +37,7 @@ Here, from what the record itself says:
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from rocklab.lab.instrument import InstrumentMotion, health
 from rocklab.lab.records import InertialRecord
@@ -55,17 +56,19 @@ SPIKE_NOISES = 8.0
 MIN_SPIKES = 3
 
 
-def static_tilt(acc_y, acc_z):
+def static_tilt(acc_y: ArrayLike, acc_z: ArrayLike) -> np.ndarray:
     """Tilt theta of a wall at rest from its specific force [rad]: atan2(-f_y, f_z)."""
     return np.arctan2(-np.asarray(acc_y, float), np.asarray(acc_z, float))
 
 
-def rest_samples(fs, n) -> int:
+def rest_samples(fs: float, n: int) -> int:
     """Samples of each rest window (:data:`REST_S`; a quarter of the record at most)."""
     return max(2, min(int(round(REST_S * fs)), n // 4))
 
 
-def integrated_rotation(time, rate, tilt, fs):
+def integrated_rotation(
+    time: np.ndarray, rate: np.ndarray, tilt: np.ndarray, fs: float
+) -> tuple[np.ndarray, float, float]:
     """Theta from the rate, its bias removed by the two rests (module docstring).
 
     Parameters
@@ -99,7 +102,7 @@ def integrated_rotation(time, rate, tilt, fs):
     return theta, float(bias), float(np.mean(rate[b]))
 
 
-def vertical_offset(time, theta, spikes, fs) -> tuple[float, float]:
+def vertical_offset(time: np.ndarray, theta: np.ndarray, spikes: np.ndarray, fs: float) -> tuple[float, float]:
     """Offset of theta at the impacts, where the wall is on its base edge (theta = 0), and its uncertainty [rad].
 
     The median of theta half a sample before each force spike (the jump of
@@ -114,7 +117,15 @@ def vertical_offset(time, theta, spikes, fs) -> tuple[float, float]:
     return offset, float(1.2533 * 1.4826 * np.median(np.abs(at - offset)) / np.sqrt(at.size))
 
 
-def error_bound(rate, tilt, fs, duration, bias, bias_end, offset_sigma=np.nan):
+def error_bound(
+    rate: np.ndarray,
+    tilt: np.ndarray,
+    fs: float,
+    duration: float,
+    bias: float,
+    bias_end: float,
+    offset_sigma: float = np.nan,
+) -> float:
     """Bound on |theta - true theta| that :func:`integrated_rotation` leaves [rad].
 
     ``BOUND_SIGMAS`` standard deviations of the random part, the rate's white
@@ -137,7 +148,9 @@ def error_bound(rate, tilt, fs, duration, bias, bias_end, offset_sigma=np.nan):
     return float(BOUND_SIGMAS * np.hypot(bridge, anchor) + systematic + abs(bias_end - bias) * duration / 4.0)
 
 
-def force_spikes(time, acc_y, acc_z, fs, min_gap_s=0.05) -> np.ndarray:
+def force_spikes(
+    time: np.ndarray, acc_y: np.ndarray, acc_z: np.ndarray, fs: float, min_gap_s: float = 0.05
+) -> np.ndarray:
     """Times of the spikes of the specific force [s]: impacts.
 
     The jump of the force vector from one sample to the next (mostly along
@@ -155,7 +168,7 @@ def force_spikes(time, acc_y, acc_z, fs, min_gap_s=0.05) -> np.ndarray:
     return time[peaks]
 
 
-def inertial_motion(rec: InertialRecord, alpha, p) -> InstrumentMotion:
+def inertial_motion(rec: InertialRecord, alpha: float, p: float) -> InstrumentMotion:
     """The wall's motion from an inertial record (module docstring).
 
     Parameters
@@ -168,7 +181,7 @@ def inertial_motion(rec: InertialRecord, alpha, p) -> InstrumentMotion:
         gives the rate a span of about p alpha.
     """
     t, fs = rec.time, rec.fs
-    spans = {
+    spans: dict[str, tuple[np.ndarray, float]] = {
         "gyro_x_rad_s": (rec.rate, p * alpha),
         "acc_y_m_s2": (rec.acc_y, G * np.sin(alpha)),
         "acc_z_m_s2": (rec.acc_z, G * (1 - np.cos(alpha))),
@@ -192,7 +205,7 @@ def inertial_motion(rec: InertialRecord, alpha, p) -> InstrumentMotion:
     if lost.any():
         flags.append(f"{int(lost.sum())} lost sample(s) bridged")
     unit = {"gyro_x_rad_s": "rad/s", "acc_y_m_s2": "m/s2", "acc_z_m_s2": "m/s2"}
-    variables = {
+    variables: dict[str, tuple[str, np.ndarray, dict[str, str]]] = {
         name: ("time", x, {"units": unit[name], "long_name": f"{name} as recorded (NaN: lost)"})
         for name, (x, _) in spans.items()
     }

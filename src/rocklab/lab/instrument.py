@@ -14,6 +14,7 @@ clipped (:func:`signal_status`, the lab's rule of working instruments,
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -61,13 +62,13 @@ class InstrumentMotion:
     w: np.ndarray
     lost: np.ndarray
     malfunction: str | None = None
-    flags: list = field(default_factory=list)
-    faults: dict = field(default_factory=dict)
-    variables: dict = field(default_factory=dict)
-    attrs: dict = field(default_factory=dict)
+    flags: list[str] = field(default_factory=list)
+    faults: dict[str, str] = field(default_factory=dict)
+    variables: dict[str, tuple[Any, ...]] = field(default_factory=dict)
+    attrs: dict[str, Any] = field(default_factory=dict)
 
 
-def signal_status(x, fs, span_expected) -> str:
+def signal_status(x: np.ndarray, fs: float, span_expected: float) -> str:
     """``dead``, ``clipped`` or ``ok``: the health of one measured signal.
 
     Dead: its robust span (1st to 99th percentile) is below
@@ -100,7 +101,7 @@ def signal_status(x, fs, span_expected) -> str:
     return "ok"
 
 
-def health(signals: dict, fs) -> tuple[dict, str | None]:
+def health(signals: dict[str, tuple[np.ndarray, float]], fs: float) -> tuple[dict[str, str], str | None]:
     """The faults of ``qc.csv`` and the malfunction of a record's signals.
 
     Parameters

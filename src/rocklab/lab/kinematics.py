@@ -24,13 +24,20 @@ solved by a vectorised Cholesky factorisation.
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Sequence
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
+from numpy.typing import ArrayLike
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 #: Order of the unknowns in ``x0`` and in the Jacobian.
 DOF = ("theta", "phi", "v", "w")
 
 
-def _geometry(wall_xyz, frame_xyz):
+def _geometry(wall_xyz: ArrayLike, frame_xyz: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     X = np.atleast_2d(np.asarray(wall_xyz, float))
     F = np.atleast_2d(np.asarray(frame_xyz, float))
     if X.shape != F.shape or X.shape[1] != 3:
@@ -38,7 +45,16 @@ def _geometry(wall_xyz, frame_xyz):
     return X, F
 
 
-def _pose(theta, phi, v, w, X, F, thickness, jacobian):
+def _pose(
+    theta: np.ndarray,
+    phi: np.ndarray,
+    v: np.ndarray,
+    w: np.ndarray,
+    X: np.ndarray,
+    F: np.ndarray,
+    thickness: float,
+    jacobian: bool,
+) -> tuple[np.ndarray, list[np.ndarray] | None]:
     """Lengths |X' - F| per step and channel, shape (N, nch), and (optionally)
     their derivatives with respect to theta, phi, v, w: a list of four
     (N, nch) arrays.  Inputs theta, phi, v, w have shape (N,)."""
@@ -63,13 +79,21 @@ def _pose(theta, phi, v, w, X, F, thickness, jacobian):
     return L, J
 
 
-def rest_length(wall_xyz, frame_xyz):
+def rest_length(wall_xyz: ArrayLike, frame_xyz: ArrayLike) -> np.ndarray:
     """Length of each transducer with the wall vertical and at rest [mm]."""
     X, F = _geometry(wall_xyz, frame_xyz)
     return np.linalg.norm(X - F, axis=1)
 
 
-def transducer_elongation(theta, phi, v, w, wall_xyz, frame_xyz, thickness):
+def transducer_elongation(
+    theta: ArrayLike,
+    phi: ArrayLike,
+    v: ArrayLike,
+    w: ArrayLike,
+    wall_xyz: ArrayLike,
+    frame_xyz: ArrayLike,
+    thickness: float,
+) -> np.ndarray:
     """Readings of the transducers for a given motion (Eq. 3), forward model.
 
     Parameters
@@ -96,7 +120,7 @@ def transducer_elongation(theta, phi, v, w, wall_xyz, frame_xyz, thickness):
     return L - rest_length(X, F)
 
 
-def _cholesky_solve(A, g):
+def _cholesky_solve(A: Sequence[Sequence[Any]], g: Sequence[np.ndarray]) -> np.ndarray:
     """Solve the stacked symmetric positive definite systems A x = g.
 
     ``A[i][j]`` (i >= j) and ``g[i]`` are (N,) arrays for a small system of
@@ -104,39 +128,39 @@ def _cholesky_solve(A, g):
     LAPACK calls for millions of 4 x 4 systems.  Singular systems give NaN.
     """
     k = len(g)
-    Lc = [[None] * k for _ in range(k)]
+    Lc: list[list[Any]] = [[None] * k for _ in range(k)]
     with np.errstate(invalid="ignore", divide="ignore"):
         for j in range(k):
             d = A[j][j] - sum(Lc[j][m] ** 2 for m in range(j))
             Lc[j][j] = np.sqrt(np.where(d > 1e-12 * A[j][j], d, np.nan))
             for i in range(j + 1, k):
                 Lc[i][j] = (A[i][j] - sum(Lc[i][m] * Lc[j][m] for m in range(j))) / Lc[j][j]
-        y = [None] * k
+        y: list[Any] = [None] * k
         for i in range(k):
             y[i] = (g[i] - sum(Lc[i][m] * y[m] for m in range(i))) / Lc[i][i]
-        x = [None] * k
+        x: list[Any] = [None] * k
         for i in reversed(range(k)):
             x[i] = (y[i] - sum(Lc[m][i] * x[m] for m in range(i + 1, k))) / Lc[i][i]
     return np.column_stack(x)
 
 
-def _normal_step(J, r, W):
+def _normal_step(J: Sequence[np.ndarray], r: np.ndarray, W: np.ndarray) -> np.ndarray:
     """Gauss-Newton step minimising sum W (r + J dq)^2, Jacobi-scaled.
 
     J is a list of k (N, nch) derivative arrays, r and W are (N, nch)."""
     k = len(J)
     JW = [Ja * W for Ja in J]
-    A = [[np.einsum("nc,nc->n", JW[a], J[b]) if b <= a else None for b in range(k)] for a in range(k)]
+    A: list[list[Any]] = [[np.einsum("nc,nc->n", JW[a], J[b]) if b <= a else None for b in range(k)] for a in range(k)]
     with np.errstate(invalid="ignore", divide="ignore"):
         s = [np.where(A[a][a] > 0, 1.0 / np.sqrt(A[a][a]), np.nan) for a in range(k)]
-    As = [[A[a][b] * s[a] * s[b] if b <= a else None for b in range(k)] for a in range(k)]
+    As: list[list[Any]] = [[A[a][b] * s[a] * s[b] if b <= a else None for b in range(k)] for a in range(k)]
     for a in range(k):
         As[a][a] = np.ones_like(s[a]) + 0.0 * s[a]
     g = [-np.einsum("nc,nc->n", JW[a], r) * s[a] for a in range(k)]
     return _cholesky_solve(As, g) * np.column_stack(s)
 
 
-def _weights(elongation, weights):
+def _weights(elongation: np.ndarray, weights: ArrayLike | None) -> np.ndarray:
     N, nch = elongation.shape
     W = np.ones((N, nch)) if weights is None else np.broadcast_to(np.asarray(weights, float), (N, nch)).copy()
     W[~np.isfinite(elongation)] = 0.0
@@ -144,8 +168,16 @@ def _weights(elongation, weights):
 
 
 def solve_wall_motion(
-    elongation, wall_xyz, frame_xyz, thickness, weights=None, solve_v=True, x0=None, tol=1e-10, max_iter=30
-):
+    elongation: ArrayLike,
+    wall_xyz: ArrayLike,
+    frame_xyz: ArrayLike,
+    thickness: float,
+    weights: ArrayLike | None = None,
+    solve_v: bool = True,
+    x0: ArrayLike | None = None,
+    tol: float = 1e-10,
+    max_iter: int = 30,
+) -> dict[str, np.ndarray]:
     """Four degrees of freedom of the wall at every time step (Eqs. 3-7).
 
     Solves |X'(q) - F| - |X - F| = elongation for q = (theta, phi, v, w) at
@@ -207,8 +239,9 @@ def solve_wall_motion(
         # Linearised about the vertical wall with the pivot at mid-thickness
         # (the kink at theta = 0 only affects the z component).
         z1 = np.zeros(1)
-        _, J0 = _pose(z1, z1, z1, z1, X, F, 0.0, True)
-        J0 = [np.broadcast_to(J0[a], (N, nch)) for a in free]
+        _, J_rest = _pose(z1, z1, z1, z1, X, F, 0.0, True)
+        assert J_rest is not None  # asked for
+        J0 = [np.broadcast_to(J_rest[a], (N, nch)) for a in free]
         q[:, free] = _normal_step(J0, -Ez, W)
         # Keep only theta: the other degrees of freedom are small, and a
         # transducer along x reads the second-order transverse motion of
@@ -236,6 +269,7 @@ def solve_wall_motion(
         if active.size == 0:
             break
         L, J = _pose(qa[:, 0], qa[:, 1], qa[:, 2], qa[:, 3], X, F, b, True)
+        assert J is not None  # asked for
         r = (L - Ta) * Wa
         cost = np.einsum("nc,nc->n", r, r)
         worse = cost > cost_prev * (1 + 1e-12) + 1e-24
@@ -283,7 +317,7 @@ def solve_wall_motion(
     }
 
 
-def theta_simplified(elongation_ch, height_ch):
+def theta_simplified(elongation_ch: ArrayLike, height_ch: ArrayLike) -> np.ndarray:
     """Rocking rotation from one horizontal transducer, Eq. 8 [rad].
 
     theta ~= arctan(Delta l_i / h_i), h_i the height of the transducer above
@@ -293,7 +327,9 @@ def theta_simplified(elongation_ch, height_ch):
     return np.arctan(np.asarray(elongation_ch, float) / np.asarray(height_ch, float))
 
 
-def simplified_channel(wall_xyz, frame_xyz, channels=None):
+def simplified_channel(
+    wall_xyz: ArrayLike, frame_xyz: ArrayLike, channels: Iterable[int] | None = None
+) -> tuple[int, float]:
     """Channel and signed height to use in Eq. 8.
 
     Among the transducers (optionally restricted to ``channels``) lying
@@ -319,7 +355,9 @@ def simplified_channel(wall_xyz, frame_xyz, channels=None):
     return i, float(X[i, 2] * np.sign(d[i, 1]))
 
 
-def normalised_peaks(theta, phi, v, w, alpha, thickness):
+def normalised_peaks(
+    theta: ArrayLike, phi: ArrayLike, v: ArrayLike, w: ArrayLike, alpha: float, thickness: float
+) -> dict[str, float]:
     """Normalised maximum absolute values of the four degrees of freedom (Fig. 9b).
 
     max|theta| / alpha, max|phi| / alpha, max|v| / b, max|w| / b: rotations
@@ -331,7 +369,7 @@ def normalised_peaks(theta, phi, v, w, alpha, thickness):
     dict of float
     """
 
-    def peak(a):
+    def peak(a: ArrayLike) -> float:
         a = np.abs(np.asarray(a, float))
         return float(np.nanmax(a)) if np.isfinite(a).any() else float("nan")
 
@@ -339,8 +377,16 @@ def normalised_peaks(theta, phi, v, w, alpha, thickness):
 
 
 def wall_motion_dataset(
-    time, elongation, wall_xyz, frame_xyz, thickness, alpha=None, channels=None, weights=None, solve_v=True
-):
+    time: ArrayLike,
+    elongation: ArrayLike,
+    wall_xyz: ArrayLike,
+    frame_xyz: ArrayLike,
+    thickness: float,
+    alpha: float | None = None,
+    channels: Iterable[int] | None = None,
+    weights: ArrayLike | None = None,
+    solve_v: bool = True,
+) -> xr.Dataset:
     """Per-test kinematics as an ``xarray.Dataset`` on ``time``.
 
     Variables ``theta``, ``phi`` [rad], ``v``, ``w`` [mm], ``residual_rms``
@@ -374,9 +420,11 @@ def wall_motion_dataset(
     sol = solve_wall_motion(E, wall_xyz, frame_xyz, thickness, weights=W, solve_v=solve_v)
     units = {"theta": "rad", "phi": "rad", "v": "mm", "w": "mm", "residual_rms": "mm"}
     # one Dataset of all the variables: each added one by one is a merge
-    data = {k: ("time", np.asarray(a), {"units": units[k]} if k in units else {}) for k, a in sol.items()}
+    data: dict[str, tuple[str, np.ndarray, dict[str, Any]]] = {
+        k: ("time", np.asarray(a), {"units": units[k]} if k in units else {}) for k, a in sol.items()
+    }
     data["time"] = ("time", np.asarray(time, float), {"units": "s"})
-    attrs = {}
+    attrs: dict[str, float | int] = {}
     used = np.flatnonzero(W > 0) if W.ndim == 1 else None
     ch, h = simplified_channel(wall_xyz, frame_xyz, used)
     if ch >= 0:

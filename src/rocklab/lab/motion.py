@@ -50,15 +50,22 @@ figures read it back (:func:`read_stored_motion`, :func:`read_motion`,
 
 All angles are returned as magnitudes of the rotation measured on the side
 of release (``sign`` gives that side); velocities keep the sign of the input.
+
+Size: one topic read top to bottom, a test's motion from its extraction to
+its stored form, every function with its types (just past the limit).
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any, TypeVar
 
 import numpy as np
 import pandas as pd
 import xarray as xr
+from numpy.typing import ArrayLike
 
 from rocklab.io import cf_attrs, read_dataset, valid_tests, write_netcdf
 from rocklab.lab import kinematics
@@ -186,7 +193,7 @@ class Motion:
     thetadot_release: float
 
 
-def noise_level(theta, fs):
+def noise_level(theta: ArrayLike, fs: float) -> float:
     """Robust rms of the noise plus mains hum of a rotation record [rad].
 
     1.4826 MAD of the residual of a 0.1 s cubic Savitzky-Golay smoother: the
@@ -205,13 +212,13 @@ def noise_level(theta, fs):
     return float(1.4826 * np.median(np.abs(r - np.median(r))))
 
 
-def _crossings(u, lo, hi):
+def _crossings(u: np.ndarray, lo: int, hi: int) -> np.ndarray:
     """Indices i where u passes from >= 0 at i to < 0 at i+1 (or vice versa)."""
     s = np.signbit(u[lo:hi])
     return lo + np.flatnonzero(s[1:] != s[:-1])
 
 
-def _arrival(us, i, level):
+def _arrival(us: np.ndarray, i: int, level: float) -> int | None:
     """First index after i where the smoothed |rotation| us is back within
     ``level`` of zero (None if the record ends first)."""
     back = np.flatnonzero(us[i:] <= level)
@@ -223,7 +230,7 @@ def _arrival(us, i, level):
 MIN_APEX_SAMPLES = 5
 
 
-def apex_resolved(A, alpha, p, fs):
+def apex_resolved(A: ArrayLike, alpha: float, p: float, fs: float) -> np.ndarray | np.bool_:
     """Whether the flight of apex A [rad] on a wall (alpha [rad], p [rad/s]) spans :data:`MIN_APEX_SAMPLES`
     samples at ``fs`` [Hz]: its duration twice Housner's quarter period from the apex
     (:func:`rocklab.physics.flight.quarter_period_linear`).  The end of a motion is set on the noise; with
@@ -233,7 +240,13 @@ def apex_resolved(A, alpha, p, fs):
         return 2.0 * quarter_period_linear(np.asarray(A) / alpha) / p * fs >= MIN_APEX_SAMPLES
 
 
-def landing_window(t_takeoff, t_landing, fs, width, ring_guard_s):
+#: Time [s] of one flight (float) or of many (ndarray).
+Times = TypeVar("Times", float, np.ndarray)
+
+
+def landing_window(
+    t_takeoff: Times, t_landing: Times, fs: float, width: float, ring_guard_s: float
+) -> tuple[Times, Times]:
     """The window the derivative filter fits for the speed with which a flight lands [s].
 
     The last ``width`` seconds of the flight (``window_p`` / p), less the
@@ -249,7 +262,7 @@ def landing_window(t_takeoff, t_landing, fs, width, ring_guard_s):
     return lo, t_landing - 2.5 / fs
 
 
-def takeoff_window(t_takeoff, t_apex, width, ring_guard_s):
+def takeoff_window(t_takeoff: Times, t_apex: Times, width: float, ring_guard_s: float) -> tuple[Times, Times]:
     """The window the derivative filter fits for the speed with which a flight takes off [s].
 
     From the end of the ringing (``ring_guard_s``, at most 80 % of the rise)
@@ -265,7 +278,18 @@ def takeoff_window(t_takeoff, t_apex, width, ring_guard_s):
     return lo, np.minimum(lo + width, t_apex + 0.8 * rise)
 
 
-def extract_motion(t, theta, fs, boundary, p, *, k_noise=10.0, ring_guard_s=0.06, window_p=0.6, hum_hz=(50.0,)):
+def extract_motion(
+    t: ArrayLike,
+    theta: ArrayLike,
+    fs: float,
+    boundary: str,
+    p: float,
+    *,
+    k_noise: float = 10.0,
+    ring_guard_s: float = 0.06,
+    window_p: float = 0.6,
+    hum_hz: Sequence[float] = (50.0,),
+) -> Motion:
     """Release, impacts, peaks and end of a free-rocking record.
 
     Parameters
@@ -325,7 +349,7 @@ def extract_motion(t, theta, fs, boundary, p, *, k_noise=10.0, ring_guard_s=0.06
         ext.sort(kind="stable")
         # Keep one extremum per lobe: consecutive same-sign extrema are
         # noise-split lobes, the larger one is the peak.
-        keep = []
+        keep: list[int] = []
         for i in ext:
             if keep and np.sign(us[i]) == np.sign(us[keep[-1]]):
                 if abs(us[i]) > abs(us[keep[-1]]):
@@ -384,7 +408,8 @@ def extract_motion(t, theta, fs, boundary, p, *, k_noise=10.0, ring_guard_s=0.06
 
     # Peaks: extremum of the local model within the flight after each impact,
     # and whether it is the apex of a flight (module docstring).
-    peaks, flights = [], []
+    peak_values: list[float] = []
+    flights: list[bool] = []
     for j, i in enumerate(ext[: len(rows)]):
         lo = rows[j][2] + min(ring_guard_s, 0.8 * (t[i] - rows[j][2]))
         if j + 1 < len(rows):
@@ -407,9 +432,9 @@ def extract_motion(t, theta, fs, boundary, p, *, k_noise=10.0, ring_guard_s=0.06
             flight = -side * c[2] >= 0.5 * p**2 * (theta0 - val)
         i0, i1 = np.searchsorted(t, [lo, hi])
         raw = side * u[i0 : i1 + 1]
-        peaks.append(val)
+        peak_values.append(val)
         flights.append(flight and raw.size > 0 and raw.max() >= threshold)
-    peaks = np.asarray(peaks)
+    peaks = np.asarray(peak_values)
 
     reliable = (peaks >= threshold) & np.asarray(flights, bool)
     n_ok = int(np.argmin(reliable)) if not reliable.all() else peaks.size
@@ -439,7 +464,7 @@ def extract_motion(t, theta, fs, boundary, p, *, k_noise=10.0, ring_guard_s=0.06
     )
 
 
-def centre_amplification(disp_centre, disp_side_from_theta, i_first_impact):
+def centre_amplification(disp_centre: ArrayLike, disp_side_from_theta: ArrayLike, i_first_impact: int) -> float:
     """Channel-5 amplification of one-sided tests (Fig. 20b) [-].
 
     Ratio of the maximum |displacement| after the first impact measured at
@@ -451,7 +476,7 @@ def centre_amplification(disp_centre, disp_side_from_theta, i_first_impact):
     return float(np.nanmax(c) / np.nanmax(s))
 
 
-def monitor_readings(ds):
+def monitor_readings(ds: xr.Dataset) -> tuple[int, np.ndarray, np.ndarray] | None:
     """Monitor transducer (channel 5 at the centre of the facade, Fig. 20a).
 
     Its reading against the one the rigid-body motion of the reduced test
@@ -489,15 +514,15 @@ def monitor_readings(ds):
     return int(ds.channel.values[k[0]]), ds.elongation.values[:, k[0]], rigid[:, 0]
 
 
-def _cf_attrs(attrs):
+def _cf_attrs(attrs: Mapping[str, Any]) -> dict[str, str]:
     return cf_attrs(f"rocklab free-rocking motion of test {attrs.get('test_id', '')}".rstrip(), SOURCE)
 
 
-def motion_to_dataset(m: Motion, attrs=None) -> xr.Dataset:
+def motion_to_dataset(m: Motion, attrs: Mapping[str, Any] | None = None) -> xr.Dataset:
     """A :class:`Motion` as a dataset: impacts on ``impact``, peaks on ``peak``,
     the scalars as attributes (after ``attrs``); :func:`motion_from_dataset`
     reads it back."""
-    data = {name: ("impact", m.impacts[name].to_numpy()) for name in IMPACT_FIELDS}
+    data: dict[str, tuple[Any, ...]] = {name: ("impact", m.impacts[name].to_numpy()) for name in IMPACT_FIELDS}
     data["peaks"] = ("peak", np.asarray(m.peaks, float))
     for name, (long_name, units) in VARIABLE_ATTRS.items():
         data[name] += ({"long_name": long_name, "units": units},)
@@ -508,7 +533,7 @@ def motion_to_dataset(m: Motion, attrs=None) -> xr.Dataset:
     )
 
 
-def motion_from_dataset(ds) -> Motion:
+def motion_from_dataset(ds: xr.Dataset) -> Motion:
     """The :class:`Motion` of a dataset of :func:`motion_to_dataset` or :func:`stored_motion`.
 
     Raises
@@ -526,25 +551,25 @@ def motion_from_dataset(ds) -> Motion:
     )
 
 
-def read_stored_motion(path) -> xr.Dataset:
+def read_stored_motion(path: str | Path) -> xr.Dataset:
     """The stored motion (:func:`stored_motion`) of the reduced test at ``path``
     (``results/tests/<job>/<test_id>.nc``, written by :func:`write_test_with_motion`)."""
     return read_dataset(path, group=MOTION_GROUP)
 
 
-def read_motion(path) -> Motion:
+def read_motion(path: str | Path) -> Motion:
     """The :class:`Motion` stored in the reduced test at ``path`` (:func:`read_stored_motion`)."""
     return motion_from_dataset(read_stored_motion(path))
 
 
-def valid_stored_motions(paths, qc_path=None):
+def valid_stored_motions(paths: Iterable[str | Path], qc_path: str | Path | None = None) -> Iterator[xr.Dataset]:
     """Yield the stored motions of the valid tests among the reduced tests at
     ``paths`` (:func:`read_stored_motion`; valid as
     :func:`rocklab.io.valid_tests` says)."""
     return valid_tests(paths, qc_path, group=MOTION_GROUP)
 
 
-def write_test_with_motion(ds, path) -> xr.Dataset:
+def write_test_with_motion(ds: xr.Dataset, path: str | Path) -> xr.Dataset:
     """Write the reduced test ``ds`` to ``path`` with its :func:`stored_motion`
     as the group :data:`MOTION_GROUP` (module docstring); returns that motion."""
     motion = stored_motion(ds)
@@ -552,7 +577,7 @@ def write_test_with_motion(ds, path) -> xr.Dataset:
     return motion
 
 
-def stored_motion(ds) -> xr.Dataset:
+def stored_motion(ds: xr.Dataset) -> xr.Dataset:
     """The motion of a reduced test as the workflow stores it (module docstring).
 
     :func:`extract_motion` of theta with the default settings, the test's

@@ -6,6 +6,8 @@ Written by the QC job beside ``qc.csv`` (``results/summaries/quality_control.jso
 
 from __future__ import annotations
 
+from typing import Any
+
 import pandas as pd
 
 from rocklab.lab.validity import Verdict
@@ -29,12 +31,12 @@ CHANNEL_FAULTS = {
 }
 
 
-def _span(values: pd.Series) -> dict:
+def _span(values: pd.Series) -> dict[str, Any]:
     values = values.dropna()
     return {"min": values.min(), "max": values.max()} if len(values) else {"min": None, "max": None}
 
 
-def quality_control_summary(qc: pd.DataFrame) -> dict:
+def quality_control_summary(qc: pd.DataFrame) -> dict[str, Any]:
     """Verdicts, the margins of the decisions and the channel faults of a campaign.
 
     Parameters

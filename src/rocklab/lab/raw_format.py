@@ -38,7 +38,7 @@ class RawFormatError(ValueError):
         What is wrong, in words.
     """
 
-    def __init__(self, path, row, problem):
+    def __init__(self, path: str | Path, row: int | None, problem: str) -> None:
         self.path, self.row, self.problem = str(path), row, problem
         where = f"{self.path}:{row}" if row is not None else self.path
         super().__init__(f"{where}: {problem}")
@@ -63,7 +63,7 @@ def check_identifier(value: str, what: str) -> str | None:
     return None
 
 
-def campaign_file(root, relative: str, what: str = "file") -> tuple[Path | None, str | None]:
+def campaign_file(root: str | Path, relative: str, what: str = "file") -> tuple[Path | None, str | None]:
     """The path of a campaign file named in a table, or why it is refused.
 
     The name is checked before the file system is touched: an absolute path

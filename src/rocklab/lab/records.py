@@ -20,6 +20,7 @@ import hashlib
 import io
 import re
 import zlib
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -56,9 +57,9 @@ class Record:
 
     time: np.ndarray
     readings: np.ndarray
-    channels: list
+    channels: list[int]
     fs: float
-    header: dict
+    header: dict[str, str]
     sha256: str
     path: str
 
@@ -79,7 +80,7 @@ def _decompress(path: Path) -> tuple[str, str]:
 PLAIN_NUMBERS = re.compile(r"[^0-9.eE+\-,\s]")
 
 
-def _numbers(body: str, columns: list, path: Path, first_data: int) -> np.ndarray:
+def _numbers(body: str, columns: list[str], path: Path, first_data: int) -> np.ndarray:
     """The data rows as finite floats, NaN where a field is empty.
 
     Parsed as floats by pandas' C reader when the text holds plain decimal
@@ -133,8 +134,8 @@ class RecordText:
     """
 
     path: Path
-    lines: list
-    header: dict
+    lines: list[str]
+    header: dict[str, str]
     n_comment: int
     sha256: str
 
@@ -143,7 +144,7 @@ class RecordText:
         """The record's kind (:data:`RECORD_KINDS`): its ``# record:`` line, transducers without one."""
         return self.header.get("record", TRANSDUCERS)
 
-    def error(self, problem) -> RawFormatError:
+    def error(self, problem: str) -> RawFormatError:
         """A :class:`RawFormatError` of the header (line 1, where it starts)."""
         return RawFormatError(self.path, 1, problem)
 
@@ -154,7 +155,7 @@ TRANSDUCERS = "transducers"
 RECORD_KINDS = (TRANSDUCERS, "rotation", "inertial")
 
 
-def read_text(path) -> RecordText:
+def read_text(path: str | Path) -> RecordText:
     """The door checks of every record: a regular file, whole gzip (or plain) UTF-8 text
     without control characters, its ``#`` header, and a known ``# record:`` kind.
 
@@ -191,7 +192,9 @@ def read_text(path) -> RecordText:
     return rec
 
 
-def check_header(rec: RecordText, expected_test_id, units, required=()) -> float:
+def check_header(
+    rec: RecordText, expected_test_id: str | None, units: tuple[str, ...], required: tuple[str, ...] = ()
+) -> float:
     """The sampling rate [Hz] of a record, its header checked.
 
     The keys ``required`` are there, ``sampling_rate_hz`` is a positive
@@ -221,7 +224,7 @@ def check_header(rec: RecordText, expected_test_id, units, required=()) -> float
     return fs
 
 
-def read_rows(rec: RecordText, columns: list, fs: float) -> np.ndarray:
+def read_rows(rec: RecordText, columns: list[str], fs: float) -> np.ndarray:
     """The data rows of a record under the header row ``columns``, as floats (NaN: empty field).
 
     Every row has the header's number of fields and only (finite) numbers;
@@ -267,12 +270,12 @@ def read_rows(rec: RecordText, columns: list, fs: float) -> np.ndarray:
     return data
 
 
-def header_row(rec: RecordText) -> list:
+def header_row(rec: RecordText) -> list[str]:
     """The names of the header row (the line after the comments), blanks stripped."""
     return [c.strip() for c in rec.lines[rec.n_comment].split(",")]
 
 
-def read_record(path, expected_test_id=None) -> Record:
+def read_record(path: str | Path, expected_test_id: str | None = None) -> Record:
     """Read one transducer record and check it against the format.
 
     Parameters
@@ -294,7 +297,7 @@ def read_record(path, expected_test_id=None) -> Record:
     return transducer_record(read_text(path), expected_test_id)
 
 
-def transducer_record(rec: RecordText, expected_test_id=None) -> Record:
+def transducer_record(rec: RecordText, expected_test_id: str | None = None) -> Record:
     """:func:`read_record` of a record past :func:`read_text`."""
     if rec.kind != TRANSDUCERS:
         raise rec.error(f"a {rec.kind} record, not a transducer record")
@@ -344,9 +347,9 @@ class RotationRecord:
     """
 
     time: np.ndarray
-    dof: dict
+    dof: dict[str, np.ndarray]
     fs: float
-    header: dict
+    header: dict[str, str]
     sha256: str
     path: str
 
@@ -375,19 +378,19 @@ class InertialRecord:
     acc_z: np.ndarray
     sensor_mm: np.ndarray
     fs: float
-    header: dict
+    header: dict[str, str]
     sha256: str
     path: str
 
 
-def _no_empty_column(rec: RecordText, columns, data) -> None:
+def _no_empty_column(rec: RecordText, columns: list[str], data: np.ndarray) -> None:
     """Refuse a record with a measured column that holds no sample at all."""
     empty = [c for j, c in enumerate(columns) if j and np.isnan(data[:, j]).all()]
     if empty:
         raise RawFormatError(rec.path, rec.n_comment + 1, f"column {empty[0]}: every sample is empty")
 
 
-def rotation_record(rec: RecordText, expected_test_id=None) -> RotationRecord:
+def rotation_record(rec: RecordText, expected_test_id: str | None = None) -> RotationRecord:
     """A ``# record: rotation`` record past :func:`read_text` (``docs/raw-format.md``).
 
     Raises
@@ -414,7 +417,7 @@ def rotation_record(rec: RecordText, expected_test_id=None) -> RotationRecord:
     return RotationRecord(data[:, 0], dof, fs, rec.header, rec.sha256, str(rec.path))
 
 
-def inertial_record(rec: RecordText, expected_test_id=None) -> InertialRecord:
+def inertial_record(rec: RecordText, expected_test_id: str | None = None) -> InertialRecord:
     """A ``# record: inertial`` record past :func:`read_text` (``docs/raw-format.md``).
 
     Raises
@@ -443,12 +446,11 @@ def inertial_record(rec: RecordText, expected_test_id=None) -> InertialRecord:
     data = read_rows(rec, columns, fs)
     _no_empty_column(rec, columns, data)
     col = {c: data[:, j] for j, c in enumerate(columns)}
-    return InertialRecord(
-        data[:, 0], *(col[c] for c in INERTIAL_COLUMNS), sensor, fs, rec.header, rec.sha256, str(rec.path)
-    )
+    rate, acc_y, acc_z = (col[c] for c in INERTIAL_COLUMNS)
+    return InertialRecord(data[:, 0], rate, acc_y, acc_z, sensor, fs, rec.header, rec.sha256, str(rec.path))
 
 
-def check_sensor(rec: InertialRecord, length_mm, height_mm, thickness_mm) -> None:
+def check_sensor(rec: InertialRecord, length_mm: float, height_mm: float, thickness_mm: float) -> None:
     """Refuse an inertial record whose ``sensor_mm`` is not on the wall (body frame, ``docs/raw-format.md``).
 
     Raises
@@ -468,10 +470,14 @@ def check_sensor(rec: InertialRecord, length_mm, height_mm, thickness_mm) -> Non
 
 
 #: The reader of each kind of record past :func:`read_text`.
-READERS = {TRANSDUCERS: transducer_record, "rotation": rotation_record, "inertial": inertial_record}
+READERS: dict[str, Callable[[RecordText, str | None], Record | RotationRecord | InertialRecord]] = {
+    TRANSDUCERS: transducer_record,
+    "rotation": rotation_record,
+    "inertial": inertial_record,
+}
 
 
-def read_any_record(path, expected_test_id=None) -> Record | RotationRecord | InertialRecord:
+def read_any_record(path: str | Path, expected_test_id: str | None = None) -> Record | RotationRecord | InertialRecord:
     """Read one test's record of whatever kind its header declares (``# record:``, :data:`RECORD_KINDS`).
 
     The door checks are the same for all (:func:`read_text`, :func:`check_header`, :func:`read_rows`).

@@ -17,8 +17,10 @@ from __future__ import annotations
 import json
 import logging
 import re
+from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 from types import SimpleNamespace
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -46,7 +48,7 @@ from rocklab.physics.boundary import Boundary
 log = logging.getLogger(__name__)
 
 #: Defaults of the config sections a reduction reads.
-DEFAULTS = {"channels": health.OPTIONS, "validity": validity.RULES}
+DEFAULTS: dict[str, Mapping[str, Any]] = {"channels": health.OPTIONS, "validity": validity.RULES}
 
 QC_COLUMNS = [
     "test_id",
@@ -63,8 +65,8 @@ QC_COLUMNS = [
 ]
 
 
-def _options(options):
-    out = {k: dict(v) for k, v in DEFAULTS.items()}
+def _options(options: Mapping[str, Any] | None) -> dict[str, dict[str, Any]]:
+    out: dict[str, dict[str, Any]] = {k: dict(v) for k, v in DEFAULTS.items()}
     for key, val in (options or {}).items():
         if key in out and isinstance(val, dict):
             out[key].update(val)
@@ -75,7 +77,7 @@ def _options(options):
 LOG_COLUMN = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,63}")
 
 
-def log_values(row) -> dict:
+def log_values(row: pd.Series) -> dict[str, float]:
     """The test log's own columns of a tests.csv row (beyond :data:`rocklab.lab.campaign.TEST_COLUMNS`), as numbers.
 
     ``log_<column>``: a number as written, a date or time (ISO 8601) in
@@ -84,7 +86,7 @@ def log_values(row) -> dict:
     attribute of the reduced test), are left out.  What a drift between
     tests may follow (:mod:`rocklab.diagnosis.causes.restitution_drift`).
     """
-    out = {}
+    out: dict[str, float] = {}
     for col, text in row.items():
         if col in TEST_COLUMNS or col == "line" or not str(text).strip() or not LOG_COLUMN.fullmatch(str(col)):
             continue
@@ -100,7 +102,7 @@ def log_values(row) -> dict:
     return out
 
 
-def test_metadata(campaign: Campaign, test_id: str) -> dict:
+def test_metadata(campaign: Campaign, test_id: str) -> dict[str, Any]:
     """Specimen, setup and wall constants of a test (lengths in mm, SI for p), its log (:func:`log_values`)."""
     row = campaign.test_row(test_id)
     spec = campaign.specimen(row.specimen)
@@ -133,7 +135,7 @@ def test_metadata(campaign: Campaign, test_id: str) -> dict:
     }
 
 
-def _row_metadata(campaign: Campaign, test_id: str) -> dict:
+def _row_metadata(campaign: Campaign, test_id: str) -> dict[str, Any]:
     row = campaign.test_row(test_id)
     return {"test_id": test_id, "specimen": row.specimen, "series": "", "boundary": row.boundary}
 
@@ -146,7 +148,7 @@ SOURCE = {
 }
 
 
-def _unreadable(meta: dict, error: Exception) -> xr.Dataset:
+def _unreadable(meta: Mapping[str, Any], error: Exception) -> xr.Dataset:
     ds = xr.Dataset(attrs={**_cf_attrs(meta["test_id"]), **{k: v for k, v in meta.items() if v is not None}})
     ds.attrs.update(
         valid=0,
@@ -159,11 +161,11 @@ def _unreadable(meta: dict, error: Exception) -> xr.Dataset:
     return ds
 
 
-def _cf_attrs(test_id, kind=TRANSDUCERS):
+def _cf_attrs(test_id: str, kind: str = TRANSDUCERS) -> dict[str, str]:
     return cf_attrs(f"rocklab reduction of test {test_id}", SOURCE[kind])
 
 
-def reduce_test(campaign: Campaign, test_id: str, options=None) -> xr.Dataset:
+def reduce_test(campaign: Campaign, test_id: str, options: Mapping[str, Any] | None = None) -> xr.Dataset:
     """Reduce one test to a dataset: raw and repaired readings, motion, QC.
 
     Never raises for a bad record: an unreadable one gives a dataset with
@@ -212,7 +214,17 @@ DOF_LONG_NAMES = {
 TOP_Y_LONG_NAME = "y displacement of the top corners (x = -L/2, +L/2)"
 
 
-def _judged(meta: dict, time, fs, theta, phi, v, w, malfunction, rules) -> tuple[dict, np.ndarray]:
+def _judged(
+    meta: Mapping[str, Any],
+    time: np.ndarray,
+    fs: float,
+    theta: np.ndarray,
+    phi: np.ndarray,
+    v: np.ndarray,
+    w: np.ndarray,
+    malfunction: str | None,
+    rules: Mapping[str, float],
+) -> tuple[dict[str, Any], np.ndarray]:
     """The lab's rules on a test's motion (:mod:`rocklab.lab.validity`), whatever the instrument:
     the verdict and the numbers it rests on, as attributes of the reduced test, and the y
     displacement of the top corners [mm] (N, 2) that the out-of-plumb is read from."""
@@ -233,7 +245,9 @@ def _judged(meta: dict, time, fs, theta, phi, v, w, malfunction, rules) -> tuple
     }, top
 
 
-def _reduce_transducers(campaign: Campaign, meta: dict, rec: Record, opt: dict) -> xr.Dataset:
+def _reduce_transducers(
+    campaign: Campaign, meta: dict[str, Any], rec: Record, opt: Mapping[str, Mapping[str, Any]]
+) -> xr.Dataset:
     """:func:`reduce_test` of a transducer record: channel health, four-DOF kinematics, the lab's rules."""
     test_id, path = meta["test_id"], rec.path
     described = campaign.setup(meta["setup"])
@@ -274,12 +288,12 @@ def _reduce_transducers(campaign: Campaign, meta: dict, rec: Record, opt: dict) 
         solve_v=choice.solve_v,
     )
 
-    dof = [motion[k].values for k in DOF_LONG_NAMES]
-    judged, top = _judged(meta, rec.time, rec.fs, *dof, choice.malfunction, opt["validity"])
+    theta, phi, v, w = (motion[k].values for k in DOF_LONG_NAMES)
+    judged, top = _judged(meta, rec.time, rec.fs, theta, phi, v, w, choice.malfunction, opt["validity"])
 
     flags = [d for d in (r.describe() for r in reports) if d] + choice.flags
     # the channel variables in one assign: each added one by one is a merge
-    channel_vars = {
+    channel_vars: dict[str, tuple[Any, np.ndarray, dict[str, Any]]] = {
         # an identifier, but CF wants units on a numeric coordinate: a number is dimensionless
         "channel": ("channel", np.asarray(rec.channels, int), {"long_name": "transducer channel number", "units": "1"}),
         "raw": (("time", "channel"), rec.readings, {"units": "mm", "long_name": "transducer elongation as recorded"}),
@@ -363,7 +377,9 @@ def _reduce_transducers(campaign: Campaign, meta: dict, rec: Record, opt: dict) 
     return ds
 
 
-def _reduce_instrument(meta: dict, rec: RotationRecord | InertialRecord, opt: dict) -> xr.Dataset:
+def _reduce_instrument(
+    meta: dict[str, Any], rec: RotationRecord | InertialRecord, opt: Mapping[str, Mapping[str, Any]]
+) -> xr.Dataset:
     """:func:`reduce_test` of a rotation or inertial record: the instrument's motion, the lab's rules."""
     if isinstance(rec, RotationRecord):
         kind, m = "rotation", rotation.rotation_motion(rec, meta["alpha"], noise_level)
@@ -379,7 +395,7 @@ def _reduce_instrument(meta: dict, rec: RotationRecord | InertialRecord, opt: di
         coords={"time": ("time", rec.time, {"long_name": "time since the start of the record", "units": "s"})},
     )
     b = meta["thickness_mm"]
-    judged, top = _judged(meta, rec.time, rec.fs, *dof, m.malfunction, opt["validity"])
+    judged, top = _judged(meta, rec.time, rec.fs, m.theta, m.phi, m.v, m.w, m.malfunction, opt["validity"])
     ds["top_y"] = (("time", "corner"), top, {"units": "mm", "long_name": TOP_Y_LONG_NAME})
     ds.attrs.update({k: v for k, v in meta.items() if not (isinstance(v, float) and np.isnan(v))})
     ds.attrs.update(
@@ -397,7 +413,9 @@ def _reduce_instrument(meta: dict, rec: RotationRecord | InertialRecord, opt: di
     return ds
 
 
-def reduce_tests(campaign: Campaign, test_ids, options=None):
+def reduce_tests(
+    campaign: Campaign, test_ids: Iterable[str], options: Mapping[str, Any] | None = None
+) -> Iterator[tuple[str, xr.Dataset]]:
     """:func:`reduce_test` of each test, one bad test never stopping the rest.
 
     A reduction that fails on a record the reader accepted (a defect of
@@ -420,8 +438,8 @@ def reduce_tests(campaign: Campaign, test_ids, options=None):
         yield test_id, ds
 
 
-def qc_row(ds: xr.Dataset) -> dict:
-    """One row of ``qc.csv`` from a reduced test."""
+def qc_row(ds: xr.Dataset | SimpleNamespace) -> dict[str, Any]:
+    """One row of ``qc.csv`` from a reduced test (or its ``attrs``, :func:`row_attrs`)."""
     a = ds.attrs
     return {
         "test_id": a["test_id"],
@@ -440,13 +458,13 @@ def qc_row(ds: xr.Dataset) -> dict:
     }
 
 
-def qc_table(datasets, campaign: Campaign) -> pd.DataFrame:
+def qc_table(datasets: Iterable[xr.Dataset | SimpleNamespace], campaign: Campaign) -> pd.DataFrame:
     """QC table, one row per row of ``tests.csv`` (duplicates included).
 
     ``datasets``: reduced tests, or anything with their ``attrs`` (:func:`row_attrs`).
     """
     rows = {ds.attrs["test_id"]: qc_row(ds) for ds in datasets}
-    out = []
+    out: list[dict[str, Any]] = []
     for key, err in campaign.log.errors.items():
         if "@" in key:
             tid, line = key.split("@")
@@ -467,8 +485,8 @@ def qc_table(datasets, campaign: Campaign) -> pd.DataFrame:
                     **instrument.NO_VALUES,
                 }
             )
-    seen = set()
-    table = []
+    seen: set[str] = set()
+    table: list[dict[str, Any]] = []
     for tid in campaign.tests.test_id:
         if tid in seen or tid not in rows:
             continue
@@ -489,7 +507,7 @@ KINEMATICS_COLUMNS = [
 ]
 
 
-def kinematics_row(attrs: dict) -> dict:
+def kinematics_row(attrs: Mapping[str, Any]) -> dict[str, Any]:
     """One row of ``kinematics.csv``: Fig. 9b peaks and the Eq. 8 difference (Fig. 9a)."""
     return {k: attrs.get(k, np.nan) for k in KINEMATICS_COLUMNS}
 
@@ -498,7 +516,7 @@ def kinematics_row(attrs: dict) -> dict:
 ROW_ATTRS = tuple(dict.fromkeys(QC_COLUMNS + KINEMATICS_COLUMNS))
 
 
-def row_attrs(ds: xr.Dataset) -> dict:
+def row_attrs(ds: xr.Dataset) -> dict[str, Any]:
     """The :data:`ROW_ATTRS` of a reduced test, as plain Python values (JSON).
 
     What a reduction job writes beside its netCDF files, so that the QC
@@ -508,17 +526,17 @@ def row_attrs(ds: xr.Dataset) -> dict:
     return {k: np.asarray(v).item() for k, v in ds.attrs.items() if k in ROW_ATTRS}
 
 
-def write_row_attrs(rows, path) -> None:
+def write_row_attrs(rows: Iterable[Mapping[str, Any]], path: str | Path) -> None:
     """Write :func:`row_attrs` of a job's tests (a list) to ``path`` (JSON; NaN as ``NaN``)."""
     write_text(path, json.dumps(list(rows), indent=0) + "\n")
 
 
-def read_row_attrs(paths) -> list:
+def read_row_attrs(paths: Iterable[str | Path]) -> list[SimpleNamespace]:
     """The tests of the files of :func:`write_row_attrs`, each with its ``attrs``, in order."""
     return [SimpleNamespace(attrs=attrs) for path in paths for attrs in json.loads(Path(path).read_text())]
 
 
-def kinematics_table(datasets, campaign: Campaign) -> pd.DataFrame:
+def kinematics_table(datasets: Iterable[xr.Dataset | SimpleNamespace], campaign: Campaign) -> pd.DataFrame:
     """``kinematics.csv``: :func:`kinematics_row` of every readable test, in the order of ``tests.csv``.
 
     ``datasets``: reduced tests, or anything with their ``attrs`` (:func:`row_attrs`).

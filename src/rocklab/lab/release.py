@@ -53,6 +53,7 @@ velocity at the release, the inputs of that closed form
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from rocklab.lab.flight_fit import (
     asymptote,
@@ -66,7 +67,7 @@ from rocklab.lab.flight_fit import (
 )
 
 
-def fit_fall(t, y, t_lo, t_hi, p, fs):
+def fit_fall(t: np.ndarray, y: np.ndarray, t_lo: float, t_hi: float, p: float, fs: float) -> np.ndarray | None:
     """The fall fitted on [t_lo, t_hi], origin of tau at t_lo.
 
     Parameters
@@ -89,7 +90,7 @@ def fit_fall(t, y, t_lo, t_hi, p, fs):
     return local_fit(t, y, t_lo, t_lo, t_hi, p, fs, hum_hz=())
 
 
-def release_state(t, theta, p):
+def release_state(t: ArrayLike, theta: ArrayLike, p: float) -> dict[str, float | int]:
     """Release instant, rotation and angular velocity of a free-rocking record.
 
     :func:`fit_fall` over the stretch between 97 % and 50 % of the held
@@ -136,6 +137,7 @@ def release_state(t, theta, p):
     if seg.size < 5:
         return nan
     c = fit_fall(t, y, t[seg[0]], t[seg[-1]], p, fs)
+    assert c is not None  # seg holds 5 samples at least
     a_ind = asymptote(c, p)
     A, B = exponentials(c, p)
     held = np.flatnonzero(y[: seg[0] + 1] >= 0.997 * y_top)
@@ -164,7 +166,9 @@ def release_state(t, theta, p):
     }
 
 
-def screw_departure(t, u, p, fs, noise, smooth_win):
+def screw_departure(
+    t: np.ndarray, u: np.ndarray, p: float, fs: float, noise: float, smooth_win: int
+) -> tuple[float, float, int, float, float]:
     """Release instant and initial rotation of a record u = sign * theta.
 
     Returns (t_release, theta0, i_half, alpha_fall, v_release): ``i_half`` is

@@ -24,7 +24,11 @@ lost sample.  Here:
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from rocklab.lab.instrument import InstrumentMotion, health
 from rocklab.lab.records import RotationRecord
@@ -36,13 +40,13 @@ MAX_BRIDGE_S = 0.25
 VERTICAL_NOISES = 5.0
 
 
-def lost_stretches(lost) -> list:
+def lost_stretches(lost: ArrayLike) -> list[tuple[int, int]]:
     """(first, stop) sample indices of the runs of lost samples."""
     edges = np.diff(np.r_[0, np.asarray(lost, np.int8), 0])
     return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
 
 
-def bridge(time, x, lost):
+def bridge(time: np.ndarray, x: ArrayLike, lost: np.ndarray) -> np.ndarray:
     """``x`` with its lost samples bridged by a cubic spline through the measured ones;
     before the first and after the last measured sample, that sample (the
     record starts held and ends at rest)."""
@@ -58,10 +62,10 @@ def bridge(time, x, lost):
     return x
 
 
-def at_vertical(theta, lost, noise) -> list:
+def at_vertical(theta: np.ndarray, lost: np.ndarray, noise: float) -> list[tuple[int, int]]:
     """The lost stretches (:func:`lost_stretches`) in which the bridged ``theta`` reached the vertical:
     a sign change across the stretch or a bridge within :data:`VERTICAL_NOISES` noise levels of 0."""
-    out = []
+    out: list[tuple[int, int]] = []
     for i0, i1 in lost_stretches(lost):
         if i0 == 0 or i1 == len(theta):
             continue
@@ -71,7 +75,9 @@ def at_vertical(theta, lost, noise) -> list:
     return out
 
 
-def rotation_motion(rec: RotationRecord, alpha, noise_of) -> InstrumentMotion:
+def rotation_motion(
+    rec: RotationRecord, alpha: float, noise_of: Callable[[np.ndarray, float], float]
+) -> InstrumentMotion:
     """The wall's motion from a rotation record, its gaps bridged and flagged (module docstring).
 
     Parameters
@@ -89,7 +95,7 @@ def rotation_motion(rec: RotationRecord, alpha, noise_of) -> InstrumentMotion:
     faults, malfunction = health({"theta_rad": (theta_raw, alpha)}, fs)
     theta = bridge(t, theta_raw, lost)
     noise = noise_of(theta_raw[~lost], fs) if (~lost).sum() > 10 else np.nan
-    flags = []
+    flags: list[str] = []
     stretches = lost_stretches(lost)
     inner = [(i0, i1) for i0, i1 in stretches if i0 > 0 and i1 < len(t)]
     too_long = [(i0, i1) for i0, i1 in inner if (i1 - i0) / fs > MAX_BRIDGE_S]
@@ -104,7 +110,7 @@ def rotation_motion(rec: RotationRecord, alpha, noise_of) -> InstrumentMotion:
     unseen = at_vertical(theta, lost, noise) if np.isfinite(noise) else []
     if unseen:
         flags.append(f"{len(unseen)} impact(s) on a lost stretch: not measured")
-    dof = {}
+    dof: dict[str, np.ndarray] = {}
     for name in ("phi", "v", "w"):
         x = rec.dof.get(name)
         if x is None:
@@ -113,7 +119,7 @@ def rotation_motion(rec: RotationRecord, alpha, noise_of) -> InstrumentMotion:
         else:
             dof[name] = bridge(t, x, np.isnan(x))
     unit = {"theta": "rad", "phi": "rad", "v": "mm", "w": "mm"}
-    variables = {
+    variables: dict[str, tuple[str, np.ndarray, dict[str, Any]]] = {
         f"{name}_measured": ("time", x, {"units": unit[name], "long_name": f"{name} as recorded (NaN: lost)"})
         for name, x in rec.dof.items()
     }
@@ -140,7 +146,7 @@ def rotation_motion(rec: RotationRecord, alpha, noise_of) -> InstrumentMotion:
     )
 
 
-def unseen_impacts(t_arrival, t_departure, time, lost) -> np.ndarray:
+def unseen_impacts(t_arrival: ArrayLike, t_departure: ArrayLike, time: np.ndarray, lost: np.ndarray) -> np.ndarray:
     """Which impacts fell on a lost stretch.
 
     An impact from its arrival at theta = 0 to its departure, widened by a

@@ -17,14 +17,16 @@ Channel roles are read from the transducer geometry, never assumed.
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 
 import numpy as np
 import pandas as pd
+from numpy.typing import ArrayLike
 
 from rocklab.lab import kinematics
-from rocklab.lab.channels import BACKUP_CHANNELS, CHANNEL_POLICY, LOST_STATUSES
+from rocklab.lab.channels import BACKUP_CHANNELS, CHANNEL_POLICY, LOST_STATUSES, ChannelReport
 
 #: Largest residual out-of-plumb of the wall top after the motion [mm].
 RESIDUAL_TOP_MM = 1.5
@@ -89,21 +91,21 @@ def channel_roles(setup: pd.DataFrame, thickness_mm: float) -> pd.DataFrame:
 class ChannelChoice:
     """Channels used for the kinematics, and what that choice cost."""
 
-    used: list
+    used: list[int]
     solve_v: bool
-    lost_out_of_plane: list
-    flags: list = field(default_factory=list)
+    lost_out_of_plane: list[int]
+    flags: list[str] = field(default_factory=list)
     malfunction: str | None = None
-    backups_used: list = field(default_factory=list)
+    backups_used: list[int] = field(default_factory=list)
 
 
 def choose_channels(
     roles: pd.DataFrame,
-    lost: set,
-    backup=BACKUP_CHANNELS,
-    policy=CHANNEL_POLICY,
-    max_lost=MAX_LOST_OUT_OF_PLANE,
-    absent=(),
+    lost: set[int],
+    backup: Sequence[int] = BACKUP_CHANNELS,
+    policy: str = CHANNEL_POLICY,
+    max_lost: int = MAX_LOST_OUT_OF_PLANE,
+    absent: Sequence[int] = (),
 ) -> ChannelChoice:
     """Pick the kinematic channels as the lab does.
 
@@ -128,11 +130,12 @@ def choose_channels(
     oop = roles.channel[roles.role == "out_of_plane"].tolist()
     inp = roles.channel[roles.role == "in_plane"].tolist()
     lost_oop = [c for c in oop if c in lost]
-    flags = []
+    flags: list[str] = []
     primary = [c for c in oop if c not in backup]
     spare = [c for c in oop if c in backup and c not in lost]
     if policy == "all":
-        used, stand_in = [c for c in oop if c not in lost], []
+        used: list[int] = [c for c in oop if c not in lost]
+        stand_in: list[int] = []
     else:
         used = [c for c in primary if c not in lost]
         need = len(primary) - len(used)
@@ -168,7 +171,7 @@ FAULT_COLUMNS = (
 )
 
 
-def channel_faults(reports, choice: ChannelChoice) -> dict:
+def channel_faults(reports: Sequence[ChannelReport], choice: ChannelChoice) -> dict[str, str | int]:
     """The channel faults of a test, as the columns :data:`FAULT_COLUMNS` of ``qc.csv``.
 
     Parameters
@@ -188,7 +191,7 @@ def channel_faults(reports, choice: ChannelChoice) -> dict:
         (a netCDF attribute holds no boolean).
     """
 
-    def named(channels) -> str:
+    def named(channels: Iterable[int]) -> str:
         return " ".join(f"ch{c}" for c in channels)
 
     return {
@@ -203,7 +206,15 @@ def channel_faults(reports, choice: ChannelChoice) -> dict:
 NO_FAULTS = {**{c: "" for c in FAULT_COLUMNS[:-1]}, "in_plane_lost": 0}
 
 
-def top_displacement(theta, phi, v, w, length_mm, height_mm, thickness_mm):
+def top_displacement(
+    theta: ArrayLike,
+    phi: ArrayLike,
+    v: ArrayLike,
+    w: ArrayLike,
+    length_mm: float,
+    height_mm: float,
+    thickness_mm: float,
+) -> np.ndarray:
     """Horizontal displacement along y of the two top corners [mm].
 
     Read by a virtual transducer, horizontal along y and very long, fixed at
@@ -221,7 +232,7 @@ def top_displacement(theta, phi, v, w, length_mm, height_mm, thickness_mm):
     return kinematics.transducer_elongation(theta, phi, v, w, X, F, thickness_mm)
 
 
-def residual_out_of_plumb(top_y, fs, tail_s=1.0):
+def residual_out_of_plumb(top_y: ArrayLike, fs: float, tail_s: float = 1.0) -> float:
     """Residual top out-of-plumb after the motion [mm].
 
     The largest |y displacement| of the top corners, taken as the median over
@@ -234,7 +245,12 @@ def residual_out_of_plumb(top_y, fs, tail_s=1.0):
     return float(np.nanmax(np.abs(np.nanmedian(tail, axis=0))))
 
 
-def verdict(malfunction, release_ratio, residual_top_mm, rules=RULES) -> tuple[bool, str, str]:
+def verdict(
+    malfunction: str | None,
+    release_ratio: float,
+    residual_top_mm: float,
+    rules: Mapping[str, float] = RULES,
+) -> tuple[bool, str, str]:
     """Valid flag, reject reason and its explanation by the lab's rules.
 
     Parameters

@@ -20,10 +20,13 @@ from __future__ import annotations
 
 import gzip
 import io
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from rocklab.lab.records import INERTIAL_COLUMNS, INERTIAL_UNITS, ROTATION_UNITS
 from rocklab.physics.constants import G
@@ -78,13 +81,21 @@ class InertialEffects:
     """
 
     gyro_density: float = 7e-5
-    gyro_bias_rad_s: tuple = (1e-4, 5e-4)
+    gyro_bias_rad_s: tuple[float, float] = (1e-4, 5e-4)
     acc_density: float = 1e-3
     acc_bias_m_s2: float = 3e-3
-    sensor: tuple = (1.0, 0.0, 0.8)
+    sensor: tuple[float, float, float] = (1.0, 0.0, 0.8)
 
 
-def rotation_readings(t, theta, phi, v, w, effects=RotationEffects(), rng=None) -> dict:
+def rotation_readings(
+    t: np.ndarray,
+    theta: ArrayLike,
+    phi: ArrayLike,
+    v: ArrayLike,
+    w: ArrayLike,
+    effects: RotationEffects = RotationEffects(),
+    rng: np.random.Generator | int | None = None,
+) -> dict[str, np.ndarray]:
     """The columns of a rotation record of a motion (lost samples NaN).
 
     Returns
@@ -109,13 +120,20 @@ def rotation_readings(t, theta, phi, v, w, effects=RotationEffects(), rng=None) 
     return cols
 
 
-def sensor_point(specimen, effects=InertialEffects()) -> np.ndarray:
+def sensor_point(specimen: Mapping[str, Any], effects: InertialEffects = InertialEffects()) -> np.ndarray:
     """Where the sensor is glued (body frame) [mm]."""
     fx, fy, fz = effects.sensor
     return np.array([fx * specimen["length_mm"] / 2, fy * specimen["thickness_mm"] / 2, fz * specimen["height_mm"]])
 
 
-def inertial_readings(t, theta, sensor_mm, thickness_mm, effects=InertialEffects(), rng=None) -> tuple[dict, float]:
+def inertial_readings(
+    t: ArrayLike,
+    theta: ArrayLike,
+    sensor_mm: np.ndarray,
+    thickness_mm: float,
+    effects: InertialEffects = InertialEffects(),
+    rng: np.random.Generator | int | None = None,
+) -> tuple[dict[str, np.ndarray], float]:
     """The columns of an inertial record of a rocking motion theta(t), and the gyroscope's bias.
 
     The rate is the derivative of theta; the specific force at the sensor
@@ -150,7 +168,9 @@ def inertial_readings(t, theta, sensor_mm, thickness_mm, effects=InertialEffects
     return cols, bias
 
 
-def instrument_fault(cols: dict, kind, rng=None, level=None) -> dict:
+def instrument_fault(
+    cols: dict[str, np.ndarray], kind: str, rng: np.random.Generator | int | None = None, level: float | None = None
+) -> dict[str, np.ndarray]:
     """An instrument fault (:data:`INSTRUMENT_FAULTS`) on the first column of a record's readings (in place).
 
     ``dead``: the column reads noise around zero; ``clipped``: it saturates at
@@ -169,7 +189,16 @@ def instrument_fault(cols: dict, kind, rng=None, level=None) -> dict:
     return cols
 
 
-def write_instrument_record(path, test_id, instrument, fs, t, cols: dict, sensor_mm=None, unreadable=False):
+def write_instrument_record(
+    path: str | Path,
+    test_id: str,
+    instrument: str,
+    fs: float,
+    t: np.ndarray,
+    cols: Mapping[str, np.ndarray],
+    sensor_mm: Iterable[float] | None = None,
+    unreadable: bool = False,
+) -> None:
     """Write a ``# record: rotation`` or ``# record: inertial`` file in the lab's format.
 
     Time with 5 decimals, rotations with 7, rates with 6, forces and lengths
@@ -179,6 +208,7 @@ def write_instrument_record(path, test_id, instrument, fs, t, cols: dict, sensor
     units = {"rotation": ROTATION_UNITS, "inertial": INERTIAL_UNITS}[instrument]
     head = f"# test_id: {test_id}\n# record: {instrument}\n# sampling_rate_hz: {fs:g}\n# units: {', '.join(units)}\n"
     if instrument == "inertial":
+        assert sensor_mm is not None  # an inertial record says where its sensor is
         head += "# sensor_mm: " + ", ".join(f"{x:g}" for x in sensor_mm) + "\n"
         names = list(INERTIAL_COLUMNS)
     else:

@@ -27,11 +27,14 @@ from __future__ import annotations
 
 import gzip
 import io
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
+from numpy.typing import ArrayLike
 
 from rocklab.lab import kinematics
 
@@ -80,14 +83,14 @@ class Effects:
     ringing_hz: float = 35.0
     ringing_tau_s: float = 0.012
     creep_rad_s: float = 3e-4
-    hold_s: tuple = (1.5, 3.0)
-    rest_s: tuple = (2.0, 4.0)
+    hold_s: tuple[float, float] = (1.5, 3.0)
+    rest_s: tuple[float, float] = (2.0, 4.0)
     twist_ratio: float = 0.005
     slide_mm: float = 0.005
     decimals: int | None = 3
 
     @classmethod
-    def off(cls, **kw):
+    def off(cls, **kw: Any) -> Effects:
         """Every effect switched off (exact readings), except those in kw."""
         base = cls(
             noise_mm=0.0, hum_mm=0.0, ringing_mm=0.0, creep_rad_s=0.0, twist_ratio=0.0, slide_mm=0.0, decimals=None
@@ -120,6 +123,7 @@ class Fault:
     max_len: int = 8
 
     def describe(self) -> str:
+        """The fault in words, as a flag of the reduction names it."""
         if self.kind == "unreadable":
             return "unreadable file"
         extra = f" from {self.start_s:.2f} s" if self.start_s is not None and self.kind == "stuck" else ""
@@ -127,7 +131,7 @@ class Fault:
         return f"ch{self.channel} {self.kind}{extra}{n}"
 
 
-def usual_layout(setup, length_mm, height_mm, thickness_mm, one_sided):
+def usual_layout(setup: str, length_mm: float, height_mm: float, thickness_mm: float, one_sided: bool) -> pd.DataFrame:
     """Transducers in the usual layout of the spec, as ``setups.csv`` rows.
 
     Channels 0, 1 on x = -L/2 and 2, 3 on x = +L/2 at 0.35 h and 0.85 h,
@@ -138,7 +142,7 @@ def usual_layout(setup, length_mm, height_mm, thickness_mm, one_sided):
     """
     L, h, b = float(length_mm), float(height_mm), float(thickness_mm)
     lo, hi, mid = round(0.35 * h), round(0.85 * h), round(0.6 * h)
-    rows = [
+    rows: list[tuple[float, ...]] = [
         (0, -L / 2, 0, lo, -L / 2, -180, lo),
         (1, -L / 2, 0, hi, -L / 2, -210, hi),
         (2, L / 2, 0, lo, L / 2, -185, lo),
@@ -155,14 +159,22 @@ def usual_layout(setup, length_mm, height_mm, thickness_mm, one_sided):
     return df
 
 
-def transducer_geometry(layout):
+def transducer_geometry(layout: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
     """Wall and frame ends of the transducers of a layout, (nch, 3) arrays each [mm]."""
     X = layout[["wall_x_mm", "wall_y_mm", "wall_z_mm"]].to_numpy(float)
     F = layout[["frame_x_mm", "frame_y_mm", "frame_z_mm"]].to_numpy(float)
     return X, F
 
 
-def top_offset_mm(theta, phi, v, w, length_mm, height_mm, thickness_mm):
+def top_offset_mm(
+    theta: ArrayLike,
+    phi: ArrayLike,
+    v: ArrayLike,
+    w: ArrayLike,
+    length_mm: float,
+    height_mm: float,
+    thickness_mm: float,
+) -> np.ndarray | float:
     """Largest |y displacement| of the two top corners of the wall [mm].
 
     The quantity of the out-of-plumb rule, exact from the rigid-body map of
@@ -177,8 +189,18 @@ def top_offset_mm(theta, phi, v, w, length_mm, height_mm, thickness_mm):
 
 
 def instrument_readings(
-    t, theta, phi, v, w, layout, thickness_mm, height_mm, effects=Effects(), impacts=None, rng=None
-):
+    t: np.ndarray,
+    theta: ArrayLike,
+    phi: ArrayLike,
+    v: ArrayLike,
+    w: ArrayLike,
+    layout: pd.DataFrame,
+    thickness_mm: float,
+    height_mm: float,
+    effects: Effects = Effects(),
+    impacts: Sequence[tuple[float, float]] | None = None,
+    rng: np.random.Generator | int | None = None,
+) -> np.ndarray:
     """Transducer readings of a motion with noise, hum and ringing [mm].
 
     Parameters
@@ -228,7 +250,14 @@ def instrument_readings(
     return E
 
 
-def apply_faults(readings, t, faults, channels, rng=None, noise_mm=0.002):
+def apply_faults(
+    readings: np.ndarray,
+    t: np.ndarray,
+    faults: Iterable[Fault],
+    channels: Sequence[int],
+    rng: np.random.Generator | int | None = None,
+    noise_mm: float = 0.002,
+) -> np.ndarray:
     """Inject instrument faults in readings (in place) [mm].
 
     Parameters
@@ -274,29 +303,29 @@ def apply_faults(readings, t, faults, channels, rng=None, noise_mm=0.002):
     return readings
 
 
-def _smoothstep(u):
+def _smoothstep(u: np.ndarray) -> np.ndarray:
     u = np.clip(u, 0.0, 1.0)
     return u * u * (3 - 2 * u)
 
 
 def record_from_motion(
-    t_free,
-    theta_free,
-    fs,
-    layout,
-    specimen,
+    t_free: np.ndarray,
+    theta_free: ArrayLike,
+    fs: float,
+    layout: pd.DataFrame,
+    specimen: Mapping[str, Any],
     *,
-    phi_free=None,
-    v_free=None,
-    w_free=None,
-    impacts=None,
-    t_rest=None,
-    effects=Effects(),
-    faults=(),
-    residual_top_mm=0.0,
-    residual_kind="rotation",
-    rng=None,
-):
+    phi_free: np.ndarray | None = None,
+    v_free: np.ndarray | None = None,
+    w_free: np.ndarray | None = None,
+    impacts: pd.DataFrame | None = None,
+    t_rest: float | None = None,
+    effects: Effects = Effects(),
+    faults: Iterable[Fault] = (),
+    residual_top_mm: float = 0.0,
+    residual_kind: str = "rotation",
+    rng: np.random.Generator | int | None = None,
+) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
     """A whole record (hold, release, free rocking, rest) from a free motion.
 
     Parameters
@@ -399,7 +428,7 @@ def record_from_motion(
         else:
             raise ValueError("residual_kind must be 'rotation' or 'sliding'")
 
-    ring = None
+    ring: list[tuple[float, float]] | None = None
     if imp_t.size:
         ring = list(zip(imp_t + t_release, imp_v / imp_v[0]))
     E = instrument_readings(t, theta, phi, v, w, layout, b, h, effects, ring, rng)
@@ -420,7 +449,15 @@ def record_from_motion(
     return t, E, truth
 
 
-def write_record(path, test_id, fs, t, readings, channels, unreadable=False):
+def write_record(
+    path: str | Path,
+    test_id: str,
+    fs: float,
+    t: np.ndarray,
+    readings: np.ndarray,
+    channels: Iterable[int],
+    unreadable: bool = False,
+) -> None:
     """Write one ``tests/<id>.csv.gz`` exactly in the lab's format.
 
     Time with 4 decimals, readings with 3, empty fields for NaN.  With

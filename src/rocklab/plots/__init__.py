@@ -1,13 +1,17 @@
 """The paper's figures, regenerated from reduced data and tables (matplotlib, no display)."""
 
+from __future__ import annotations
+
 import io
+from pathlib import Path
 
 import matplotlib.pyplot as plt
+from matplotlib.figure import Figure
 
 from rocklab.disk import write_bytes
 
 
-def save_png(fig, path, dpi):
+def save_png(fig: Figure, path: str | Path, dpi: float) -> None:
     """Write a figure of this package as a PNG file, laid out at the resolution it is written at, and close it.
 
     The figures carry matplotlib's tight layout engine, which ``savefig`` runs

@@ -9,13 +9,23 @@ the model at that level and its 95 % confidence band.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
+
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
+from matplotlib.figure import Figure
 
 from rocklab.inference.verdicts import ClaimVerdict
 from rocklab.physics.boundary import Boundary
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.artist import Artist
+
+    from rocklab.dissipation.covariates import LevelFit
 
 #: The panels of each row: (boundary, covariate, axis label).
 COLUMNS = (
@@ -27,7 +37,9 @@ COLUMNS = (
 MARKERS = {"clay brick": "s", "tuff": "^"}
 
 
-def covariate_figure(fits, effects=None):
+def covariate_figure(
+    fits: Mapping[tuple[str, str], Mapping[str, LevelFit]], effects: pd.DataFrame | None = None
+) -> Figure:
     """Parameters against h/b and contact depth, with the fitted line and band.
 
     Parameters
@@ -80,7 +92,7 @@ def covariate_figure(fits, effects=None):
                 ax.set_xlabel(label)
             if j == 0:
                 ax.set_ylabel(response.replace(".", ".\n"), fontsize=8)
-    legend = {}
+    legend: dict[str, Artist] = {}  # label -> handle
     for ax in axes.flat:
         legend |= dict(zip(*reversed(ax.get_legend_handles_labels())))
     if legend:

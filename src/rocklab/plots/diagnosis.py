@@ -11,6 +11,9 @@ series (Figs. 14b, 15b).  Every model runs on the exact simulator
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any
+
 import matplotlib
 
 matplotlib.use("Agg")
@@ -18,21 +21,28 @@ from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.figure import Figure
 
 from rocklab.diagnosis import block_tests, measured_test, simulate_measured, stored_records
 from rocklab.diagnosis.catalogue import by_name
 from rocklab.diagnosis.causes import Stage, instability_angle
 from rocklab.diagnosis.evidence import flight_time_alpha, in_series_order, observe
 from rocklab.diagnosis.extended import model_params
-from rocklab.diagnosis.result import CampaignDiagnosis
+from rocklab.diagnosis.result import CampaignDiagnosis, Finding, LimestoneDiagnosis, SeriesDiagnosis
 from rocklab.diagnosis.wall_model import impact_speeds
 from rocklab.physics import restitution
 from rocklab.physics.boundary import Boundary
 from rocklab.physics.flight import quarter_period
 from rocklab.physics.wall import overturning_velocity
 
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.axes import Axes
+
+    from rocklab.diagnosis import MeasuredTest
+
 #: Literature models of panel a: label -> base of :func:`rocklab.diagnosis.extended.rocking_model`.
-LITERATURE = {
+LITERATURE: dict[str, dict[str, str]] = {
     Boundary.TWO_SIDED: {"Housner e_an,2s (Eq. 2)": "analytic"},
     Boundary.ONE_SIDED: {
         "e_an,1s (Eq. 14)": "analytic",
@@ -42,12 +52,12 @@ LITERATURE = {
 }
 
 
-def _plot(ax, t, theta, test, **kw):
+def _plot(ax: Axes, t: np.ndarray, theta: np.ndarray, test: MeasuredTest, **kw: Any) -> None:
     sel = t >= test.t_release
     ax.plot(t[sel] - test.t_release, theta[sel] / test.alpha, **kw)
 
 
-def history_figure(test, entry):
+def history_figure(test: MeasuredTest, entry: SeriesDiagnosis) -> Figure:
     """Figs. 14-15 for one test: measured motion, literature models, extended model.
 
     Parameters
@@ -61,6 +71,7 @@ def history_figure(test, entry):
     -------
     matplotlib.figure.Figure
     """
+    assert test.t is not None and test.theta is not None  # a test read with its record
     fig, axes = plt.subplots(2, 1, figsize=(9, 6.5), sharex=True)
     t_end = (test.t_end - test.t_release) * 1.3 + 0.5
     for ax in axes:
@@ -90,7 +101,9 @@ def history_figure(test, entry):
     return fig
 
 
-def _impact_law(tests, ext, values, x):
+def _impact_law(
+    tests: Sequence[MeasuredTest], ext: Sequence[str], values: Mapping[str, float | None], x: np.ndarray
+) -> np.ndarray:
     """e / e_an of a model at impact speeds x [thetadot_r] on each test's release hinge, shape (tests, x)."""
     mp = model_params(tests, ext, values)
     vr = overturning_velocity(mp.alpha, mp.p)[:, None]
@@ -99,7 +112,9 @@ def _impact_law(tests, ext, values, x):
     return impact_speeds(v, side, mp)[0] / (v * np.abs(mp.e0)[:, None])
 
 
-def _flight_angle_seen(tests, ext, values, A):
+def _flight_angle_seen(
+    tests: Sequence[MeasuredTest], ext: Sequence[str], values: Mapping[str, float | None], A: np.ndarray
+) -> np.ndarray:
     """alpha_r / alpha that Housner's closed form gives the model's flight time at apexes A [rad], (tests, A)."""
     mp = model_params(tests, ext, values)
     p, alpha = mp.p[:, None], mp.alpha[:, None]
@@ -113,7 +128,7 @@ def _flight_angle_seen(tests, ext, values, A):
 MAX_TESTS_DRAWN = 100
 
 
-def discovery_figure(tests, entry):
+def discovery_figure(tests: Sequence[MeasuredTest], entry: SeriesDiagnosis) -> Figure | None:
     """Each form the diagnosis discovered beyond the catalogue against the data and the best listed model.
 
     One panel per discovered finding of ``entry`` (a series of
@@ -196,13 +211,15 @@ def discovery_figure(tests, entry):
             fontsize=9,
         )
         ax.legend(fontsize=7, loc="best")
-    if len(tests) < entry.n_tests:
+    if entry.n_tests is not None and len(tests) < entry.n_tests:
         fig.suptitle(f"{len(tests)} of the series' {entry.n_tests} tests drawn, spread evenly over it", fontsize=8)
     fig.set_layout_engine("tight")
     return fig
 
 
-def series_figures(diagnosis, tests_by_series):
+def series_figures(
+    diagnosis: CampaignDiagnosis | str | Path, tests_by_series: Mapping[str, Sequence[str | Path]]
+) -> dict[str, Figure]:
     """Figs. 14-15 for the sample test of every series of results/diagnosis.json.
 
     Parameters
@@ -226,21 +243,23 @@ def series_figures(diagnosis, tests_by_series):
         two-sided and one-sided series, as the paper's figures (a note when
         the campaign has none).
     """
-    diagnosis = CampaignDiagnosis.of(diagnosis)
-    out = {}
-    for e in diagnosis.series:
+    campaign = CampaignDiagnosis.of(diagnosis)
+    out: dict[str, Figure] = {}
+    for e in campaign.series:
         paths = {Path(p).stem: p for p in tests_by_series[e.key]}
         (recs,) = stored_records([paths[e.sample_test]]).values()
         out[e.key] = history_figure(measured_test(recs[0]), e)
         if e.discovered:
-            out[f"discovered/{e.key}"] = discovery_figure(_series_tests(paths), e)
+            found = discovery_figure(_series_tests(paths), e)
+            assert found is not None  # the series has a discovered form
+            out[f"discovered/{e.key}"] = found
     for name, boundary in (("fig14", Boundary.TWO_SIDED), ("fig15", Boundary.ONE_SIDED)):
-        own = diagnosis.series_of(boundary)
+        own = campaign.series_of(boundary)
         out[name] = out[max(own, key=lambda e: e.n_tests).key] if own else _empty(boundary)
     return out
 
 
-def family_curve_figure(finding, key, ax=None):
+def family_curve_figure(finding: Finding, key: str | None, ax: Axes | None = None) -> Figure:
     """A discovered family's curve against the data and the catalogue's best member.
 
     For the losses in flight (:mod:`rocklab.diagnosis.causes.flight_loss`):
@@ -264,12 +283,12 @@ def family_curve_figure(finding, key, ax=None):
     -------
     matplotlib.figure.Figure
     """
-    c = finding.curve
+    c, gain = finding.curve, finding.heldout_gain
+    assert c is not None and gain is not None  # a finding with a curve, compared held out
     if ax is None:
         ax = plt.subplots(figsize=(8, 5))[1]
     ax.plot(c["measured"]["x"], c["measured"]["y"], "o", color="0.5", ms=3, label=c["measured"]["label"])
     ax.plot(c["best_listed"]["x"], c["best_listed"]["y"], "--", color="C1", label=c["best_listed"]["label"])
-    gain = finding.heldout_gain
     ax.plot(
         c["family"]["x"],
         c["family"]["y"],
@@ -283,11 +302,13 @@ def family_curve_figure(finding, key, ax=None):
     ax.set_ylabel(c["y"])
     ax.set_title(f"Series {key}: {finding.effect}, the curve found against the data")
     ax.legend(fontsize=7, loc="best")
-    ax.figure.set_layout_engine("tight")
-    return ax.figure
+    fig = ax.figure
+    assert isinstance(fig, Figure)  # an axes of a figure (set_layout_engine), not of a subfigure
+    fig.set_layout_engine("tight")
+    return fig
 
 
-def family_figure(result, events):
+def family_figure(result: LimestoneDiagnosis, events: pd.DataFrame) -> Figure:
     """The impact law across the limestone blocks: the families against the data and the listed causes.
 
     The median measured r/e_an (e_an Housner's, Eq. 2) of every trial
@@ -314,12 +335,12 @@ def family_figure(result, events):
     x = np.tan(trials.alpha) ** 2
     ok = np.isfinite(trials.r)
 
-    def per_trial(e):
+    def per_trial(e: np.ndarray) -> np.ndarray:
         return np.array([np.median(e[i][ok[i]]) for i in range(len(x))])
 
     xs = np.unique(x)
 
-    def by_group(v):
+    def by_group(v: np.ndarray) -> np.ndarray:
         return np.array([v[x == u].mean() for u in xs])
 
     measured = per_trial(trials.r / e_an)
@@ -353,7 +374,7 @@ def family_figure(result, events):
     return fig
 
 
-def _series_tests(paths):
+def _series_tests(paths: Mapping[str, str | Path]) -> list[MeasuredTest]:
     """Valid tests of one series, ``paths`` (stem -> path) its tests, as the diagnosis read them.
 
     At most :data:`MAX_TESTS_DRAWN`, spread evenly over the series' files.
@@ -364,7 +385,7 @@ def _series_tests(paths):
     return in_series_order([t for t in map(measured_test, recs) if t.n_impacts >= 2])
 
 
-def _empty(boundary):
+def _empty(boundary: str) -> Figure:
     """The figure of a campaign without a diagnosed series of this boundary condition."""
     fig, ax = plt.subplots(figsize=(9, 2))
     ax.text(0.5, 0.5, f"no {boundary} series with two tests of two impacts or more", ha="center", va="center")

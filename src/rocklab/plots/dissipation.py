@@ -8,15 +8,23 @@ test series are ordered by h/b.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any
+
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
+from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
 from rocklab.physics.boundary import Boundary
+
+if TYPE_CHECKING:
+    import xarray as xr
+    from matplotlib.axes import Axes
 
 #: Panels of the Sect. 3-4 figures, in the paper's order.
 PANELS = ((Boundary.TWO_SIDED, "a", "2s"), (Boundary.ONE_SIDED, "b", "1s"))
@@ -24,24 +32,24 @@ PANELS = ((Boundary.TWO_SIDED, "a", "2s"), (Boundary.ONE_SIDED, "b", "1s"))
 CD_COLORS = {60.0: "C0", 120.0: "C1", 260.0: "C2"}
 
 
-def _series_order(series):
+def _series_order(series: pd.DataFrame) -> pd.DataFrame:
     """Series of a table sorted by h/b, then contact depth."""
     cols = [c for c in ("h_over_b", "contact_depth_mm", "series") if c in series]
     return series.sort_values(cols, na_position="first").reset_index(drop=True)
 
 
-def _two_panels(figsize=(9, 7), sharex=False):
+def _two_panels(figsize: tuple[float, float] = (9, 7), sharex: bool = False) -> tuple[Figure, dict[str, Axes]]:
     fig, axes = plt.subplots(2, 1, figsize=figsize, sharex=sharex)
     return fig, dict(zip((b for b, _, _ in PANELS), axes))
 
 
-def _series_ticks(ax, s):
+def _series_ticks(ax: Axes, s: pd.DataFrame) -> None:
     labels = [f"{r.series}\n{r.h_over_b:.1f}" for r in s.itertuples()]
     ax.set_xticks(np.arange(len(s)), labels, rotation=90, fontsize=7)
     ax.set_xlabel("test series, h/b")
 
 
-def initial_rotation_by_test(tests):
+def initial_rotation_by_test(tests: pd.DataFrame) -> Figure:
     """Fig. 10: theta0 / alpha (nominal alpha) test after test, per series.
 
     Parameters
@@ -65,7 +73,7 @@ def initial_rotation_by_test(tests):
     return fig
 
 
-def ratio_vs_impacts(e_by_n, min_tests=5):
+def ratio_vs_impacts(e_by_n: pd.DataFrame, min_tests: int = 5) -> Figure:
     """Fig. 11: e_exp / e_an after n impacts, Eqs. 10 and 11.
 
     Every test by Eq. 11 (thin lines) and the median over the tests that
@@ -102,7 +110,7 @@ def ratio_vs_impacts(e_by_n, min_tests=5):
     return fig
 
 
-def ratio_by_series(tests, series):
+def ratio_by_series(tests: pd.DataFrame, series: pd.DataFrame) -> Figure:
     """Fig. 13: e_exp / e_an per test series, identified by h/b.
 
     Tests as dots, series means with their bootstrap 95 % interval; the
@@ -142,7 +150,14 @@ def ratio_by_series(tests, series):
     return fig
 
 
-def series_means(series, quantity, ylabel, fig_label, references=(), lines=None):
+def series_means(
+    series: pd.DataFrame,
+    quantity: str,
+    ylabel: str,
+    fig_label: str,
+    references: Sequence[tuple[str, str]] = (),
+    lines: Mapping[str, Sequence[tuple[float, str]]] | None = None,
+) -> Figure:
     """Figs. 16-19: series means of a per-test quantity with bootstrap 95 % CI.
 
     Parameters
@@ -181,7 +196,12 @@ def series_means(series, quantity, ylabel, fig_label, references=(), lines=None)
     return fig
 
 
-def centre_amplification(tests, ds=None, monitor=None, t_first_impact=None):
+def centre_amplification(
+    tests: pd.DataFrame,
+    ds: xr.Dataset | None = None,
+    monitor: tuple[int, np.ndarray, np.ndarray] | None = None,
+    t_first_impact: float | None = None,
+) -> Figure:
     """Fig. 20: amplification at the centre of the facade (channel 5).
 
     (a) a one-sided test: the monitor's reading and the one its point would
@@ -203,6 +223,7 @@ def centre_amplification(tests, ds=None, monitor=None, t_first_impact=None):
     """
     fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 7))
     if ds is not None:
+        assert monitor is not None and t_first_impact is not None  # they come with the sample test
         ch, measured, rigid = monitor
         t = ds.time.values
         ax1.plot(t, measured, color="k", lw=0.9, label=f"channel {ch}, measured (centre)")
@@ -239,13 +260,15 @@ def centre_amplification(tests, ds=None, monitor=None, t_first_impact=None):
     return fig
 
 
-def fig20_sample(tests):
+def fig20_sample(tests: pd.DataFrame) -> str | None:
     """Test of Fig. 20a: the first one-sided test with a monitor reading, or None."""
     d = tests[(tests.boundary == Boundary.ONE_SIDED) & tests.centre_amplification.notna()]
     return next(iter(d.test_id), None)
 
 
-def dissipation_figures(tests, e_by_n, series, sample=None):
+def dissipation_figures(
+    tests: pd.DataFrame, e_by_n: pd.DataFrame, series: pd.DataFrame, sample: xr.Dataset | None = None
+) -> dict[str, Figure]:
     """Figs. 10, 11, 13 and 16-20 with the paper's reference values.
 
     Parameters
@@ -288,7 +311,7 @@ def dissipation_figures(tests, e_by_n, series, sample=None):
         "fig18": series_means(series, "n_cycles", "number of cycles, n", "Fig. 18"),
         "fig19": series_means(series, "duration_p", "p D", "Fig. 19"),
     }
-    kw = {}
+    kw: dict[str, Any] = {}
     if sample is not None:
         t1 = tests.set_index("test_id").t_first_impact[sample.attrs["test_id"]]
         kw = dict(ds=sample, monitor=monitor_readings(sample), t_first_impact=float(t1))

@@ -8,15 +8,23 @@ against the full kinematics, and the normalised peaks).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.figure import Figure
+from numpy.typing import ArrayLike
 from scipy.signal import savgol_filter
 
+if TYPE_CHECKING:
+    import pandas as pd
+    import xarray as xr
 
-def transducer_velocity(x, fs, window_s=0.025):
+
+def transducer_velocity(x: ArrayLike, fs: float, window_s: float = 0.025) -> np.ndarray:
     """Velocity of a transducer reading [mm/s] by a Savitzky-Golay derivative.
 
     A cubic over ``window_s`` (11 samples at 400 Hz) passes the rocking
@@ -27,7 +35,7 @@ def transducer_velocity(x, fs, window_s=0.025):
     return savgol_filter(x, n, 3, deriv=1, delta=1.0 / fs)
 
 
-def sample_record(ds, channel=3):
+def sample_record(ds: xr.Dataset, channel: int = 3) -> Figure:
     """Fig. 6: a transducer's record and its numerically derived velocity (a test that no transducer
     recorded: its rotation theta, as its rotation or inertial record gave it)."""
     if "elongation" in ds:
@@ -57,7 +65,7 @@ def sample_record(ds, channel=3):
     return fig
 
 
-def degrees_of_freedom(ds):
+def degrees_of_freedom(ds: xr.Dataset) -> Figure:
     """Fig. 8: the four degrees of freedom, normalised (v, w by b; theta, phi by alpha_ind)."""
     a_ind = abs(float(ds.attrs.get("theta0_release", np.nan))) or float(ds.attrs["alpha"])
     b = float(ds.attrs["thickness_mm"])
@@ -75,7 +83,7 @@ def degrees_of_freedom(ds):
     return fig
 
 
-def eq8_and_peaks(ds, peaks):
+def eq8_and_peaks(ds: xr.Dataset, peaks: pd.DataFrame) -> Figure:
     """Fig. 9: (a) theta of Eqs. 3-7 against Eq. 8; (b) normalised DOF peaks per test.
 
     Parameters

@@ -6,6 +6,8 @@ Each function returns a ``matplotlib.figure.Figure``; the workflow saves them.
 from __future__ import annotations
 
 import textwrap
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import matplotlib
 
@@ -13,20 +15,25 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.colors import ListedColormap
+from matplotlib.figure import Figure
 
 from rocklab.seismic.walls import MODELS
+
+if TYPE_CHECKING:
+    import pandas as pd
+    import xarray as xr
 
 #: White: standing; gray: overturned, as the paper's dots.
 _MAP_COLOURS = ListedColormap(["white", "0.45"])
 
 
-def _edges(x):
+def _edges(x: np.ndarray) -> np.ndarray:
     mid = 0.5 * (x[1:] + x[:-1])
     step = x[1] - x[0] if x.size > 1 else 1.0
     return np.concatenate([[x[0] - 0.5 * step], mid, [x[-1] + 0.5 * step]])
 
 
-def overturning_maps(maps, title=None):
+def overturning_maps(maps: Sequence[xr.Dataset], title: str | None = None) -> Figure:
     """Figs. 21 and 23: maps side by side, overturned cells gray.
 
     Parameters
@@ -58,7 +65,9 @@ def overturning_maps(maps, title=None):
     return fig
 
 
-def map_indices_figure(summary, models=("2s-housner", "2s-0.95"), order=None):
+def map_indices_figure(
+    summary: pd.DataFrame, models: Sequence[str] = ("2s-housner", "2s-0.95"), order: Sequence[str] | None = None
+) -> Figure:
     """Fig. 22: (a) N_O and (b) (N_D + N_A)/2 record by record for two or more models.
 
     Parameters

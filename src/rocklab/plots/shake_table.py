@@ -5,14 +5,22 @@ Each function returns a ``matplotlib.figure.Figure``; the workflow saves them.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.figure import Figure
 
 from rocklab.plots.maps import _MAP_COLOURS, _edges
 from rocklab.shake_table.evaluation import fragility_table
+
+if TYPE_CHECKING:
+    import pandas as pd
+    import xarray as xr
 
 _STYLE = {
     "block-calibrated": dict(color="C3", ls="-"),
@@ -20,7 +28,7 @@ _STYLE = {
 }
 
 
-def fragility_curves(predictions):
+def fragility_curves(predictions: pd.DataFrame) -> Figure:
     """P(overturning) against PGV and PGA per specimen: measured, the calibrated block and the PGV threshold.
 
     Measured: the overturning rate of each bin, with its 95 % interval over
@@ -58,7 +66,7 @@ def fragility_curves(predictions):
     return fig
 
 
-def calibrated_maps(maps):
+def calibrated_maps(maps: Sequence[xr.Dataset]) -> Figure:
     """Overturning maps of the calibrated blocks: one panel per specimen and record (overturned gray).
 
     Parameters

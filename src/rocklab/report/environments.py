@@ -4,11 +4,12 @@ environments (``bench/environments.py``, :func:`rocklab.benchmarks.performance_s
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import Any
 
 from rocklab.report.format import markdown_table, show
 
 
-def _environments(n: Mapping):
+def _environments(n: Mapping[str, Any]) -> Any:
     return (n.get("performance") or {}).get("environments")
 
 
@@ -17,7 +18,7 @@ NOT_RUN_ENVIRONMENTS = (
 )
 
 
-def environment_sections(n: Mapping) -> str:
+def environment_sections(n: Mapping[str, Any]) -> str:
     """Per section of the numbers file: its floats, how many moved between environments, the nearest to tolerance."""
     env = _environments(n)
     if env is None:
@@ -30,7 +31,7 @@ def environment_sections(n: Mapping) -> str:
     return markdown_table(header, rows)
 
 
-def _tolerance(tol) -> str:
+def _tolerance(tol: Mapping[str, Any] | None) -> str:
     if tol is None:
         return "none declared"
     parts = [
@@ -40,7 +41,7 @@ def _tolerance(tol) -> str:
     return " + ".join(p for p in parts if p) or "exact"
 
 
-def environment_moves(n: Mapping) -> str:
+def environment_moves(n: Mapping[str, Any]) -> str:
     """The numbers that came nearest their tolerance: their value in each environment, spread and tolerance."""
     env = _environments(n)
     if env is None:

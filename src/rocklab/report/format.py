@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Sequence
+from typing import Any
+
 from jinja2 import Undefined
 
 #: What a page says for a quantity the results do not hold.
 NOT_MEASURED = "not measured"
 
 
-def show(value, spec: str = "") -> str:
+def show(value: Any, spec: str = "") -> str:
     """One value as a page prints it.
 
     ``None`` (a quantity the stage did not measure) reads :data:`NOT_MEASURED`,
@@ -30,10 +33,10 @@ def show(value, spec: str = "") -> str:
     return format(value, spec) if spec else format(value, "g")
 
 
-def _row(cells) -> str:
+def _row(cells: Iterable[str]) -> str:
     return "| " + " | ".join(cells) + " |"
 
 
-def markdown_table(header, rows) -> str:
+def markdown_table(header: Sequence[str], rows: Iterable[Iterable[str]]) -> str:
     """A markdown table of strings."""
     return "\n".join([_row(header), _row(["---"] * len(header)), *(_row(r) for r in rows)])

@@ -14,8 +14,10 @@ from __future__ import annotations
 import base64
 import csv
 import html
+from collections.abc import Mapping
 from io import StringIO
 from pathlib import Path
+from typing import Any
 
 from markdown_it import MarkdownIt
 
@@ -110,7 +112,7 @@ def _is_number(text: str) -> bool:
     return text.strip() != ""
 
 
-def table_html(csv_text: str, name: str, schema: dict | None = None) -> str:
+def table_html(csv_text: str, name: str, schema: Mapping[str, Any] | None = None) -> str:
     """A sortable, filterable HTML page of a CSV table.
 
     Parameters
@@ -182,7 +184,7 @@ def markdown_html(text: str, name: str) -> str:
     return _page(title, md.renderer.render(tokens, md.options, {}))
 
 
-def report_page(source, schema=None, name=None) -> str:
+def report_page(source: str | Path, schema: str | Path | None = None, name: str | None = None) -> str:
     """The HTML page of a result file for the report: a table (``.csv``) or a text (``.md``).
 
     Parameters

@@ -26,6 +26,7 @@ from __future__ import annotations
 import json
 from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 from jinja2 import ChainableUndefined, Environment, StrictUndefined
 
@@ -63,12 +64,12 @@ SECTIONS = {
 VOLATILE = ("performance", "shake_table")
 
 
-def summary_paths(results_dir) -> dict[str, Path]:
+def summary_paths(results_dir: str | Path) -> dict[str, Path]:
     """Where each stage of a results folder writes its summary: {section: path}."""
     return {name: Path(results_dir) / "summaries" / f"{name}.json" for name in SECTIONS}
 
 
-def docs_numbers(results_dir, checkout=None) -> dict:
+def docs_numbers(results_dir: str | Path, checkout: str | Path | None = None) -> dict[str, Any]:
     """The numbers file of a results folder: every stage's summary and the timings.
 
     A stage that did not run (no summary file) is ``None``: its pages say "not measured".
@@ -80,12 +81,12 @@ def docs_numbers(results_dir, checkout=None) -> dict:
     return {"volatile": list(VOLATILE), **numbers}
 
 
-def stable(numbers: Mapping) -> dict:
+def stable(numbers: Mapping[str, Any]) -> dict[str, Any]:
     """``numbers`` without its volatile sections: what two runs must agree on."""
     return {k: v for k, v in numbers.items() if k not in VOLATILE and k != "volatile"}
 
 
-def differences(new: Mapping, old: Mapping) -> list[str]:
+def differences(new: Mapping[str, Any], old: Mapping[str, Any]) -> list[str]:
     """Where two numbers files disagree beyond the tolerance of each quantity,
     the volatile sections left out (dotted paths, section first)."""
     new, old = stable(new), stable(old)
@@ -96,11 +97,13 @@ def differences(new: Mapping, old: Mapping) -> list[str]:
     ]
 
 
-def write_numbers(numbers: Mapping, path) -> None:
+def write_numbers(numbers: Mapping[str, Any], path: str | Path) -> None:
+    """Write the numbers file (:func:`docs_numbers`) to ``path`` (:func:`rocklab.summaries.dumps`)."""
     write_text(path, summaries.dumps(numbers))
 
 
-def read_numbers(path) -> dict:
+def read_numbers(path: str | Path) -> dict[str, Any]:
+    """The numbers file at ``path``, as written by :func:`write_numbers`."""
     return json.loads(Path(path).read_text())
 
 
@@ -115,10 +118,10 @@ class _Environment(Environment):
     """Jinja's environment, in which a ``None`` section's keys are ``None``:
     a stage that did not run is "not measured" all the way down."""
 
-    def getitem(self, obj, argument):
+    def getitem(self, obj: Any, argument: Any) -> Any:
         return None if obj is None else super().getitem(obj, argument)
 
-    def getattr(self, obj, attribute):
+    def getattr(self, obj: Any, attribute: str) -> Any:
         return None if obj is None else super().getattr(obj, attribute)
 
 
@@ -135,17 +138,23 @@ def environment(strict: bool = True) -> Environment:
     return env
 
 
-def render(template: str, numbers: Mapping, strict: bool = True) -> str:
+def render(template: str, numbers: Mapping[str, Any], strict: bool = True) -> str:
     """``template`` (Jinja2) rendered with the sections of ``numbers`` and ``table(name)``."""
     return environment(strict).from_string(template).render(**numbers, table=lambda name: TABLES[name](numbers))
 
 
-def render_pages(template_dir, numbers: Mapping, strict: bool = True) -> dict[str, str]:
+def render_pages(template_dir: str | Path, numbers: Mapping[str, Any], strict: bool = True) -> dict[str, str]:
     """Every template of ``template_dir`` rendered (:func:`render`): {file name: page text}."""
     return {p.name: render(p.read_text(), numbers, strict) for p in sorted(Path(template_dir).glob("*.md"))}
 
 
-def write_docs(results_dir, template_dir, out_dir, strict: bool = False, checkout=None) -> list[Path]:
+def write_docs(
+    results_dir: str | Path,
+    template_dir: str | Path,
+    out_dir: str | Path,
+    strict: bool = False,
+    checkout: str | Path | None = None,
+) -> list[Path]:
     """Write the numbers file and every page of ``template_dir`` into ``out_dir``.
 
     Not ``strict`` by default: any campaign gets its pages, with "not

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable, Mapping
+from typing import Any, Concatenate, ParamSpec
 
 import pandas as pd
 
@@ -27,14 +28,22 @@ SERIES_REJECTIONS = (
 )
 
 
-def _of(section: str) -> Callable[[Callable[[Mapping], str]], Callable[[Mapping], str]]:
+#: The arguments of a table after the numbers file (the boundary condition of :func:`findings`).
+P = ParamSpec("P")
+
+
+def _of(
+    section: str,
+) -> Callable[[Callable[Concatenate[Mapping[str, Any], P], str]], Callable[Concatenate[Mapping[str, Any], P], str]]:
     """A table of the numbers file that reads "not measured." where its stage,
     ``section``, did not run (no summary)."""
 
-    def decorate(table: Callable[[Mapping], str]) -> Callable[[Mapping], str]:
+    def decorate(
+        table: Callable[Concatenate[Mapping[str, Any], P], str],
+    ) -> Callable[Concatenate[Mapping[str, Any], P], str]:
         @functools.wraps(table)
-        def wrapped(n: Mapping, *args) -> str:
-            return NOT_MEASURED + "." if n.get(section) is None else table(n, *args)
+        def wrapped(n: Mapping[str, Any], *args: P.args, **kwargs: P.kwargs) -> str:
+            return NOT_MEASURED + "." if n.get(section) is None else table(n, *args, **kwargs)
 
         return wrapped
 
@@ -42,7 +51,7 @@ def _of(section: str) -> Callable[[Callable[[Mapping], str]], Callable[[Mapping]
 
 
 @_of("quality_control")
-def qc_series(n: Mapping) -> str:
+def qc_series(n: Mapping[str, Any]) -> str:
     """Verdicts of every series (``series.csv``)."""
     rows = [
         [
@@ -58,7 +67,7 @@ def qc_series(n: Mapping) -> str:
 
 
 @_of("dissipation")
-def table3(n: Mapping) -> str:
+def table3(n: Mapping[str, Any]) -> str:
     """Table 3 of the paper from the page's numbers, as results/table3.md has it
     (:func:`rocklab.dissipation.statistics.table3_markdown`, the one rendering of the table)."""
     rows = [
@@ -72,7 +81,7 @@ def table3(n: Mapping) -> str:
 
 
 @_of("dissipation")
-def stands_apart(n: Mapping) -> str:
+def stands_apart(n: Mapping[str, Any]) -> str:
     """Series whose mean e_exp/e_an stands apart within their boundary condition."""
     rows = [
         [name, s["series"], show(s["e_ratio_mean"], ".3f"), show(s["modified_z"], ".1f")]
@@ -83,7 +92,7 @@ def stands_apart(n: Mapping) -> str:
 
 
 @_of("dissipation")
-def effects(n: Mapping) -> str:
+def effects(n: Mapping[str, Any]) -> str:
     """Kruskal-Wallis tests of the means of the factor's units by level (``effects.csv``)."""
     rows = [
         [
@@ -102,7 +111,7 @@ def effects(n: Mapping) -> str:
 
 
 @_of("dissipation")
-def push_pull(n: Mapping) -> str:
+def push_pull(n: Mapping[str, Any]) -> str:
     """Pushed against pulled tests of the series released both ways."""
     rows = [
         [
@@ -120,7 +129,7 @@ def push_pull(n: Mapping) -> str:
 
 
 @_of("diagnosis")
-def findings(n: Mapping, boundary: str) -> str:
+def findings(n: Mapping[str, Any], boundary: str) -> str:
     """The causes named for one boundary condition, with their parameters."""
     d = n["diagnosis"][boundary]
     if d is None:
@@ -143,7 +152,7 @@ def findings(n: Mapping, boundary: str) -> str:
 
 
 @_of("diagnosis")
-def minority(n: Mapping, boundary: str) -> str:
+def minority(n: Mapping[str, Any], boundary: str) -> str:
     """Causes named in fewer than half of the series of a boundary condition."""
     if n["diagnosis"][boundary] is None:
         return NOT_MEASURED + "."
@@ -155,7 +164,7 @@ def minority(n: Mapping, boundary: str) -> str:
 
 
 @_of("diagnosis")
-def diagnosis_series(n: Mapping) -> str:
+def diagnosis_series(n: Mapping[str, Any]) -> str:
     """The verdict of every series."""
     rows = [
         [s["series"], s["boundary"], show(s["n_tests"]), s["verdict"], show(s["unexplained"])]
@@ -164,7 +173,7 @@ def diagnosis_series(n: Mapping) -> str:
     return markdown_table(["series", "boundary", "tests", "causes named", "unexplained"], rows)
 
 
-def _effect_cell(e: Mapping, spec: str = ".3g") -> str:
+def _effect_cell(e: Mapping[str, Any], spec: str = ".3g") -> str:
     """ "estimate [low, high]" of a campaign-level row, or "-" where it was not testable."""
     if e.get("estimate") is None:
         return "-"
@@ -172,7 +181,7 @@ def _effect_cell(e: Mapping, spec: str = ".3g") -> str:
 
 
 @_of("campaign_level")
-def campaign_statements(n: Mapping) -> str:
+def campaign_statements(n: Mapping[str, Any]) -> str:
     """The paper's campaign-wide statements tested (``diagnosis/campaign_effects.csv``)."""
     c = n["campaign_level"]
     rows = [
@@ -194,7 +203,7 @@ def campaign_statements(n: Mapping) -> str:
 
 
 @_of("campaign_level")
-def campaign_found(n: Mapping) -> str:
+def campaign_found(n: Mapping[str, Any]) -> str:
     """The effects the exploratory checks found (Holm-adjusted), beyond the paper's statements."""
     c = n["campaign_level"]
     rows = [
@@ -212,7 +221,7 @@ def campaign_found(n: Mapping) -> str:
 
 
 @_of("limestone")
-def limestone_groups(n: Mapping) -> str:
+def limestone_groups(n: Mapping[str, Any]) -> str:
     """The limestone blocks by slenderness."""
     rows = [
         [
@@ -229,14 +238,14 @@ def limestone_groups(n: Mapping) -> str:
     return markdown_table(header, rows)
 
 
-def _reduction(base, new) -> str:
-    if base in (None, 0) or new is None:
+def _reduction(base: float | None, new: float | None) -> str:
+    if base is None or base == 0 or new is None:
         return "-"
     return f"{100 * (1 - new / base):.0f}"
 
 
 @_of("maps")
-def maps_records(n: Mapping) -> str:
+def maps_records(n: Mapping[str, Any]) -> str:
     """N_O of every record and model, and the reductions from 2s-housner to 2s-0.95."""
     m = n["maps"]
     header = ["record", *(f"N_O `{model}`" for model in m["models"])]
@@ -259,7 +268,7 @@ def maps_records(n: Mapping) -> str:
     return markdown_table(header, rows)
 
 
-def calibrated_walls(n: Mapping) -> str:
+def calibrated_walls(n: Mapping[str, Any]) -> str:
     """The calibrated walls against e alone, and each finding switched off (issue 13, item 4)."""
     rows = []
     walls = n.get("calibrated") or {}
@@ -293,7 +302,7 @@ def calibrated_walls(n: Mapping) -> str:
 
 
 @_of("maps")
-def maps_comparison(n: Mapping) -> str:
+def maps_comparison(n: Mapping[str, Any]) -> str:
     """Record by record, N_O from 2s-housner to 2s-0.95 against Table 4 and the paper's range."""
     comparison = n["maps"]["comparison"]["by_comparison"].get("2s-housner__2s-0.95", {"records": []})
     paper = n["maps"]["reductions"].get("2s-housner__2s-0.95", {}).get("N_O", {})
@@ -324,7 +333,7 @@ def maps_comparison(n: Mapping) -> str:
 
 
 @_of("performance")
-def performance_jobs(n: Mapping) -> str:
+def performance_jobs(n: Mapping[str, Any]) -> str:
     """Job times of the workflow by rule."""
     jobs = n["performance"]["jobs"]
     rows = [
@@ -335,7 +344,7 @@ def performance_jobs(n: Mapping) -> str:
 
 
 @_of("performance")
-def performance_stages(n: Mapping) -> str:
+def performance_stages(n: Mapping[str, Any]) -> str:
     """The main job stage by stage (``bench/workflow.py``), or that it was not measured."""
     wf = n["performance"].get("workflow")
     if wf is None:
@@ -349,7 +358,7 @@ def performance_stages(n: Mapping) -> str:
 
 
 @_of("performance")
-def discovery_cells(n: Mapping) -> str:
+def discovery_cells(n: Mapping[str, Any]) -> str:
     """The series of ``bench/discovery.py`` one by one: the hidden cause, the design's factors, the verdict and
     what it missed, or that it was not measured."""
     d = n["performance"].get("discovery")
@@ -382,10 +391,10 @@ NOT_RUN = (
 )
 
 
-def _shake_table(table: Callable[[Mapping], str]) -> Callable[[Mapping], str]:
+def _shake_table(table: Callable[[Mapping[str, Any]], str]) -> Callable[[Mapping[str, Any]], str]:
     """``table`` of the numbers file's shake_table section, :data:`NOT_RUN` where the target did not run."""
 
-    def wrapped(n: Mapping) -> str:
+    def wrapped(n: Mapping[str, Any]) -> str:
         st = n.get("shake_table")
         return NOT_RUN if st is None else table(st)
 
@@ -394,7 +403,7 @@ def _shake_table(table: Callable[[Mapping], str]) -> Callable[[Mapping], str]:
 
 
 @_shake_table
-def shake_table_status(st: Mapping) -> str:
+def shake_table_status(st: Mapping[str, Any]) -> str:
     """Whether the shake-table target ran, and on how many tests."""
     parts = [
         f"{s}: {show(st[s]['n_tests'])} tests of {show(st[s]['n_ground_motions'])} ground motions"
@@ -403,13 +412,13 @@ def shake_table_status(st: Mapping) -> str:
     return "Results of the target `shake_table` (" + "; ".join(parts) + ")."
 
 
-def _probabilistic(v, key) -> str:
+def _probabilistic(v: Mapping[str, Any], key: str) -> str:
     """A Brier score or log loss, "-" for a 0/1 predictor (scored by accuracy alone)."""
     return "-" if v[key] is None else show(v[key], ".3f")
 
 
 @_shake_table
-def shake_table_scores(st: Mapping) -> str:
+def shake_table_scores(st: Mapping[str, Any]) -> str:
     """Held-out accuracy, Brier score and log loss of every model and specimen."""
     rows = [
         [
@@ -427,7 +436,7 @@ def shake_table_scores(st: Mapping) -> str:
 
 
 @_shake_table
-def shake_table_differences(st: Mapping) -> str:
+def shake_table_differences(st: Mapping[str, Any]) -> str:
     """The calibrated block's held-out accuracy minus each other model's, with paired 95 % intervals over records."""
     rows = []
     for s in st["specimens"]:
@@ -439,7 +448,7 @@ def shake_table_differences(st: Mapping) -> str:
 
 
 @_shake_table
-def shake_table_transfer(st: Mapping) -> str:
+def shake_table_transfer(st: Mapping[str, Any]) -> str:
     """One replica's fit predicting the other (held out by record), beside the PGV threshold transferred."""
     rows = [
         [
@@ -464,7 +473,7 @@ def shake_table_transfer(st: Mapping) -> str:
 
 
 @_shake_table
-def shake_table_nominal(st: Mapping) -> str:
+def shake_table_nominal(st: Mapping[str, Any]) -> str:
     """What the nominal block gets wrong, per specimen."""
     rows = [
         [
@@ -491,7 +500,7 @@ def shake_table_nominal(st: Mapping) -> str:
 
 
 @_shake_table
-def shake_table_parameters(st: Mapping) -> str:
+def shake_table_parameters(st: Mapping[str, Any]) -> str:
     """The fitted parameters with their 95 % intervals, whether each departs from the nominal block, grid edges."""
     rows = [
         [
@@ -511,7 +520,7 @@ def shake_table_parameters(st: Mapping) -> str:
 
 
 #: The tables a template may place with ``{{ table("name") }}``.
-TABLES: dict[str, Callable[[Mapping], str]] = {
+TABLES: dict[str, Callable[[Mapping[str, Any]], str]] = {
     "qc_series": qc_series,
     "table3": table3,
     "stands_apart": stands_apart,

@@ -21,11 +21,14 @@ from __future__ import annotations
 
 import json
 import re
+from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import obspy
 import pandas as pd
+from numpy.typing import ArrayLike
 
 from rocklab.physics.wall import G
 from rocklab.seismic.accelerograms import baseline_correct_array, peak_ground_acceleration
@@ -58,7 +61,7 @@ REQUIRED = ("test", "ground_motion", "overturned_sp1", "overturned_sp2", "motion
 _RSN = re.compile(r"^RSN(\d+)(?:_|$)", re.IGNORECASE)
 
 
-def record_of(ground_motion) -> str:
+def record_of(ground_motion: object) -> str:
     """The earthquake record of a ground motion: ``RSN<n>`` where its name carries the RSN, else the name.
 
     Both horizontal components of a record (``RSN137_TABAS_BAJ-L1.AT2`` and
@@ -69,7 +72,7 @@ def record_of(ground_motion) -> str:
     return f"RSN{int(m.group(1))}" if m else name
 
 
-def check_dir(folder, key="shake_table_dir") -> Path:
+def check_dir(folder: str | Path, key: str = "shake_table_dir") -> Path:
     """The data folder, or a clear error naming the config ``key`` that points to it."""
     path = Path(folder)
     missing = [n for n in ("tests.csv", "geometry.json", "motions") if not (path / n).exists()]
@@ -86,7 +89,7 @@ def dem_columns(tests: pd.DataFrame, specimen: str) -> list[str]:
     return [c for c in tests.columns if c.startswith(f"dem_{specimen.lower()}_")]
 
 
-def read_tests(folder) -> pd.DataFrame:
+def read_tests(folder: str | Path) -> pd.DataFrame:
     """tests.csv, checked: one row per test, 0/1 outcomes and DEM flags.
 
     Raises
@@ -111,7 +114,7 @@ def read_tests(folder) -> pd.DataFrame:
     return df
 
 
-def read_geometry(folder) -> dict:
+def read_geometry(folder: str | Path) -> dict[str, Any]:
     """geometry.json: per specimen the mass, and ``rocking_2d`` of each footprint edge (b, h, R, I_O: the block's)."""
     path = check_dir(folder) / "geometry.json"
     geo = json.loads(path.read_text())
@@ -126,7 +129,9 @@ def read_geometry(folder) -> dict:
     return geo
 
 
-def displacement_gain(acc_g, disp_mm, dt, band=SIGN_CHECK_BAND):
+def displacement_gain(
+    acc_g: np.ndarray | Sequence[float], disp_mm: ArrayLike, dt: float, band: tuple[float, float] = SIGN_CHECK_BAND
+) -> tuple[float, float]:
     """Regression gain and correlation of the displacement's second derivative on the acceleration.
 
     Both signals are band-passed (``band`` [Hz], 4th-order zero-phase
@@ -160,7 +165,7 @@ def displacement_gain(acc_g, disp_mm, dt, band=SIGN_CHECK_BAND):
     return gain, corr
 
 
-def check_sign(gain, corr, where="record", sign=ACCELERATION_SIGN):
+def check_sign(gain: float, corr: float, where: str = "record", sign: float = ACCELERATION_SIGN) -> None:
     """Raise ValueError when a well-correlated gain contradicts the sign convention."""
     if abs(corr) >= SIGN_CHECK_MIN_CORR and np.sign(gain) != np.sign(sign):
         raise ValueError(
@@ -169,7 +174,7 @@ def check_sign(gain, corr, where="record", sign=ACCELERATION_SIGN):
         )
 
 
-def read_motion(folder, row) -> obspy.Stream:
+def read_motion(folder: str | Path, row: Mapping[str, Any]) -> obspy.Stream:
     """The table motion of one test as an obspy Stream, +x along the displacement.
 
     Parameters
@@ -220,14 +225,14 @@ def read_motion(folder, row) -> obspy.Stream:
     return obspy.Stream([acc_tr, dsp_tr])
 
 
-def block_input(trace) -> np.ndarray:
+def block_input(trace: obspy.Trace) -> np.ndarray:
     """The acceleration the block feels [m/s^2]: the record band-passed as the source's loader does (:data:`BAND`)."""
     return baseline_correct_array(
         trace.data, trace.stats.delta, pre_event=PRE_EVENT, freqmin=BAND[0], freqmax=BAND[1], corners=BAND_ORDER
     )
 
 
-def table_velocity(displacement) -> np.ndarray:
+def table_velocity(displacement: obspy.Trace) -> np.ndarray:
     """Table velocity [m/s] from the displacement trace [m], band-passed as :func:`block_input`.
 
     The table is displacement-controlled: its velocity is the derivative of
@@ -241,7 +246,7 @@ def table_velocity(displacement) -> np.ndarray:
     return np.gradient(signal.sosfiltfilt(sos, displacement.data), dt)
 
 
-def motion_measures(stream) -> dict:
+def motion_measures(stream: obspy.Stream) -> dict[str, float]:
     """PGA [g] and peak acceleration towards +x and -x [g] of the block input, PGV [m/s], duration [s].
 
     Parameters

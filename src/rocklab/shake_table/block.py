@@ -54,6 +54,8 @@ from __future__ import annotations
 import logging
 import math
 import time
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 import xarray as xr
@@ -91,7 +93,7 @@ TAIL = 20.0
 SUBSTEPS = 1
 
 
-def specimen_block(geometry: dict, specimen: str) -> dict:
+def specimen_block(geometry: Mapping[str, Any], specimen: str) -> dict[str, float]:
     """The body of one specimen from geometry.json: what the contact does not change.
 
     Returns
@@ -118,7 +120,7 @@ def specimen_block(geometry: dict, specimen: str) -> dict:
     }
 
 
-def contact(block: dict, contact_plus_mm, contact_minus_mm) -> dict:
+def contact(block: Mapping[str, float], contact_plus_mm: float, contact_minus_mm: float) -> dict[str, float]:
     """The rocking block of a body on contact edges ``contact_plus_mm``, ``contact_minus_mm`` [mm] from its COM.
 
     Returns
@@ -133,7 +135,7 @@ def contact(block: dict, contact_plus_mm, contact_minus_mm) -> dict:
     """
     h, k = block["h_m"], block["k_g_m"]
     b = {"plus": 1e-3 * float(contact_plus_mm), "minus": 1e-3 * float(contact_minus_mm)}
-    out = {}
+    out: dict[str, float] = {}
     for side, other in (("plus", "minus"), ("minus", "plus")):
         r2 = b[side] ** 2 + h**2
         out[f"alpha_{side}"] = math.atan2(b[side], h)
@@ -144,19 +146,19 @@ def contact(block: dict, contact_plus_mm, contact_minus_mm) -> dict:
     return out
 
 
-def footprint(block: dict) -> dict:
+def footprint(block: Mapping[str, float]) -> dict[str, float]:
     """:func:`contact` on the footprint's edges: the nominal block."""
     return contact(block, block["footprint_plus_mm"], block["footprint_minus_mm"])
 
 
-def grid(block: dict) -> dict:
+def grid(block: Mapping[str, float]) -> dict[str, np.ndarray]:
     """The parameter grid of a specimen: :data:`CONTACT_NODES_MM` inside its footprint, then its edge; :data:`C_NODES`.
 
     Every test is simulated once at every node, and every fit (folds,
     resamples) reads the outcomes from it; the last contact nodes with
     c = 1 are the nominal block.
     """
-    out = {}
+    out: dict[str, np.ndarray] = {}
     for q, edge in ((CONTACT_PLUS, block["footprint_plus_mm"]), (CONTACT_MINUS, block["footprint_minus_mm"])):
         inside = CONTACT_NODES_MM[CONTACT_NODES_MM < edge / 2 ** (1 / 6)]
         out[q.name] = np.append(inside, edge)
@@ -164,9 +166,9 @@ def grid(block: dict) -> dict:
     return out
 
 
-def node_on(values: dict, grid_: dict) -> dict:
+def node_on(values: Mapping[str, float], grid_: Mapping[str, np.ndarray]) -> dict[str, float]:
     """``values`` at the nearest node of ``grid_`` (in ln for the contacts): one parameter set on another specimen."""
-    out = {}
+    out: dict[str, float] = {}
     for q in PARAMS:
         nodes = np.asarray(grid_[q.name], float)
         dist = np.abs(np.log(nodes / values[q.name])) if q is not C else np.abs(nodes - values[q.name])
@@ -174,7 +176,12 @@ def node_on(values: dict, grid_: dict) -> dict:
     return out
 
 
-def block_model(block: dict, contact_plus_mm=None, contact_minus_mm=None, c=1.0) -> RockingModel:
+def block_model(
+    block: Mapping[str, float],
+    contact_plus_mm: float | None = None,
+    contact_minus_mm: float | None = None,
+    c: float = 1.0,
+) -> RockingModel:
     """The specimen's :class:`RockingModel` on a contact (None: the footprint's edge) with the extra loss c."""
     cp = block["footprint_plus_mm"] if contact_plus_mm is None else contact_plus_mm
     cm = block["footprint_minus_mm"] if contact_minus_mm is None else contact_minus_mm
@@ -194,13 +201,20 @@ def block_model(block: dict, contact_plus_mm=None, contact_minus_mm=None, c=1.0)
     )
 
 
-def grid_models(block: dict, grid_: dict) -> list[RockingModel]:
+def grid_models(block: Mapping[str, float], grid_: Mapping[str, np.ndarray]) -> list[RockingModel]:
     """The block at every node of ``grid_``, in C order of :data:`PARAMS`."""
     names = [q.name for q in PARAMS]
     return [block_model(block, a, b, c) for a in grid_[names[0]] for b in grid_[names[1]] for c in grid_[names[2]]]
 
 
-def outcome_grid(inputs, dts, block: dict, tests, grid_=None, specimen="") -> xr.Dataset:
+def outcome_grid(
+    inputs: Sequence[np.ndarray],
+    dts: Sequence[float],
+    block: Mapping[str, float],
+    tests: Sequence[int],
+    grid_: Mapping[str, np.ndarray] | None = None,
+    specimen: str = "",
+) -> xr.Dataset:
     """Whether the block overturns under each record at every node of the parameter grid.
 
     One batch per record: its histories are the grid's models, run in
@@ -236,7 +250,7 @@ def outcome_grid(inputs, dts, block: dict, tests, grid_=None, specimen="") -> xr
         over[i] = ds.overturned.values.reshape(shape)
         if (i + 1) % 50 == 0 or i + 1 == len(inputs):
             log.info("%s: %d of %d records simulated, %.1f s", specimen, i + 1, len(inputs), time.perf_counter() - t0)
-    coords = {"test": ("test", np.asarray(tests, int))}
+    coords: dict[str, tuple[str, np.ndarray]] = {"test": ("test", np.asarray(tests, int))}
     coords.update({q.name: (q.name, np.asarray(grid_[q.name], float)) for q in PARAMS})
     return xr.Dataset(
         {"overturned": (("test", *(q.name for q in PARAMS)), over)},
@@ -250,7 +264,7 @@ def outcome_grid(inputs, dts, block: dict, tests, grid_=None, specimen="") -> xr
     )
 
 
-def grid_of(outcomes: xr.Dataset) -> dict:
+def grid_of(outcomes: xr.Dataset) -> dict[str, np.ndarray]:
     """The parameter grid of an outcome grid, by name."""
     return {q.name: outcomes[q.name].values for q in PARAMS}
 

@@ -44,7 +44,11 @@ accuracies has a paired bootstrap interval over records
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
+from typing import Any, TypeAlias
+
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy import optimize
 
 from rocklab.diagnosis.parameters import Param
@@ -62,8 +66,11 @@ LAPSES = np.array([0.001, 0.005, 0.02, 0.05, 0.1])
 #: Probabilities are clipped to [PROB_CLIP, 1 - PROB_CLIP] in the log loss.
 PROB_CLIP = 1e-6
 
+#: A node of the likelihood: the indices of eps, sigma and the flat grid index (:meth:`OutcomeLikelihood.fit`).
+Node: TypeAlias = "tuple[int | np.integer[Any], ...]"
 
-def folds_by_group(groups, k=5):
+
+def folds_by_group(groups: ArrayLike, k: int = 5) -> np.ndarray:
     """Fold of every test, all tests of a group (record) in one fold.
 
     Groups are dealt, largest first, to the fold holding the fewest tests so
@@ -79,7 +86,7 @@ def folds_by_group(groups, k=5):
     if k < 2:
         raise ValueError(f"cross-validation needs at least 2 records, got {names.size}")
     load = np.zeros(k, int)
-    fold_of = {}
+    fold_of: dict[Any, int] = {}
     for i in np.lexsort((names, -counts)):
         f = int(np.argmin(load))
         fold_of[names[i]] = f
@@ -87,7 +94,7 @@ def folds_by_group(groups, k=5):
     return np.array([fold_of[g] for g in groups], int)
 
 
-def _kernel(ln_b, sigma):
+def _kernel(ln_b: np.ndarray, sigma: float) -> np.ndarray:
     """Weights (centre, node) of the lognormal scatter over the nodes ``ln_b`` of one contact."""
     if sigma == 0:
         return np.eye(ln_b.size)
@@ -107,7 +114,7 @@ class OutcomeLikelihood:
         The grid values by parameter name (:data:`~rocklab.shake_table.block.PARAMS`, the axes of ``overturned``).
     """
 
-    def __init__(self, overturned, observed, grid):
+    def __init__(self, overturned: ArrayLike, observed: ArrayLike, grid: Mapping[str, np.ndarray]) -> None:
         o = np.asarray(overturned, float)
         self.grid = grid
         self.shape = o.shape[1:]
@@ -120,7 +127,7 @@ class OutcomeLikelihood:
         # ll[eps, sigma, test, node]
         self.ll = np.where(y, np.log(p), np.log1p(-p))
 
-    def fit(self, weights):
+    def fit(self, weights: ArrayLike) -> Node:
         """Node (eps, sigma, flat grid index) of the largest weighted log-likelihood.
 
         ``weights``: per test (0 leaves a test out; bootstrap counts resample).
@@ -129,19 +136,19 @@ class OutcomeLikelihood:
         total = np.tensordot(self.ll, np.asarray(weights, float), axes=([2], [0]))
         return np.unravel_index(int(np.argmax(total)), total.shape)
 
-    def probability(self, node, idx=slice(None)):
+    def probability(self, node: Node, idx: slice | np.ndarray = slice(None)) -> np.ndarray:
         """P_i of the tests ``idx`` at ``node`` (from :meth:`fit`)."""
         e, s, g = node
         return LAPSES[e] + (1 - 2 * LAPSES[e]) * self.smooth[s][idx, g]
 
-    def node(self, values: dict):
+    def node(self, values: Mapping[str, float]) -> Node:
         """The node (eps, sigma, flat grid index) of parameters ``values`` given on this grid's nodes."""
         ijk = tuple(int(np.flatnonzero(np.isclose(self.grid[q.name], values[q.name]))[0]) for q in PARAMS)
         e = int(np.flatnonzero(np.isclose(LAPSES, values[LAPSE.name]))[0])
         s = int(np.flatnonzero(np.isclose(SIGMAS, values[SIGMA.name]))[0])
         return e, s, int(np.ravel_multi_index(ijk, self.shape))
 
-    def values(self, node) -> dict:
+    def values(self, node: Node) -> dict[str, float]:
         """The parameters of ``node`` by name."""
         e, s, g = node
         ijk = np.unravel_index(g, self.shape)
@@ -151,7 +158,7 @@ class OutcomeLikelihood:
         return out
 
 
-def resample_weights(groups, idx, n_boot, seed=0):
+def resample_weights(groups: ArrayLike, idx: np.ndarray, n_boot: int, seed: int = 0) -> np.ndarray:
     """Bootstrap weights (n_boot, tests): the groups (records) of ``idx`` drawn with replacement, zero elsewhere."""
     groups = np.asarray(groups)
     rng = np.random.default_rng(seed)
@@ -164,7 +171,9 @@ def resample_weights(groups, idx, n_boot, seed=0):
     return out
 
 
-def calibrate(lik: OutcomeLikelihood, groups, idx, n_boot=200, seed=0):
+def calibrate(
+    lik: OutcomeLikelihood, groups: Sequence[Any] | np.ndarray, idx: np.ndarray, n_boot: int = 200, seed: int = 0
+) -> dict[str, Any]:
     """Fit on the tests ``idx``, resample their records, predict every test.
 
     Returns
@@ -189,7 +198,15 @@ def calibrate(lik: OutcomeLikelihood, groups, idx, n_boot=200, seed=0):
     }
 
 
-def paired_accuracy_difference(y, p_a, p_b, groups, n_boot=2000, seed=0, level=0.95):
+def paired_accuracy_difference(
+    y: ArrayLike,
+    p_a: ArrayLike,
+    p_b: ArrayLike,
+    groups: ArrayLike,
+    n_boot: int = 2000,
+    seed: int = 0,
+    level: float = 0.95,
+) -> tuple[float, float, float]:
     """Accuracy of ``p_a`` minus that of ``p_b`` on the same tests, with a paired bootstrap interval over groups.
 
     Both predictors are scored on the same tests (P > 0.5 read as
@@ -213,12 +230,12 @@ def paired_accuracy_difference(y, p_a, p_b, groups, n_boot=2000, seed=0, level=0
     return float(d.mean()), lo, hi
 
 
-def intervals(boot, level=0.95):
+def intervals(boot: Sequence[Mapping[str, float]], level: float = 0.95) -> dict[str, tuple[float, float]]:
     """Percentile interval of every parameter over the resamples' values."""
     return {k: percentile_interval([b[k] for b in boot], level) for k in boot[0]}
 
 
-def named(param: Param, ci) -> bool:
+def named(param: Param, ci: tuple[float, float]) -> bool:
     """Whether the interval ``ci`` stays clear of the parameter's null by its practical margin."""
     if param.practical is None:
         return False
@@ -226,7 +243,7 @@ def named(param: Param, ci) -> bool:
     return lo > param.null + param.practical or hi < param.null - param.practical
 
 
-def deterministic_probability(predicted, train_error):
+def deterministic_probability(predicted: ArrayLike, train_error: float) -> np.ndarray:
     """A 0/1 prediction as a probability: the lapse is the predictor's error rate on its training tests.
 
     The rate is clipped to [0.005, 0.5]: a predictor without training errors
@@ -237,7 +254,7 @@ def deterministic_probability(predicted, train_error):
     return np.where(np.asarray(predicted, bool), 1.0 - eps, eps)
 
 
-def logistic_threshold(x, y, weights=None):
+def logistic_threshold(x: ArrayLike, y: ArrayLike, weights: ArrayLike | None = None) -> tuple[float, float]:
     """Logistic regression of y on ln x: P = 1 / (1 + exp(-(ln x - ln x50) / beta)).
 
     The probabilistic form of a single threshold x50 (the PGV-threshold
@@ -250,7 +267,7 @@ def logistic_threshold(x, y, weights=None):
     lx, y = np.log(np.asarray(x, float)), np.asarray(y, float)
     w = np.ones_like(lx) if weights is None else np.asarray(weights, float)
 
-    def nll(theta):
+    def nll(theta: np.ndarray) -> float:
         z = (lx - theta[0]) / np.exp(theta[1])
         return float(np.sum(w * (np.logaddexp(0.0, -z) * y + np.logaddexp(0.0, z) * (1 - y))))
 
@@ -259,6 +276,6 @@ def logistic_threshold(x, y, weights=None):
     return float(np.exp(sol.x[0])), float(np.exp(sol.x[1]))
 
 
-def logistic_probability(x, x50, beta):
+def logistic_probability(x: ArrayLike, x50: float, beta: float) -> np.ndarray:
     """P of :func:`logistic_threshold`."""
     return 1.0 / (1.0 + np.exp(-(np.log(np.asarray(x, float)) - np.log(x50)) / beta))

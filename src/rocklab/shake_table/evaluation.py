@@ -25,10 +25,14 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
 import xarray as xr
+from numpy.typing import ArrayLike
 
 from rocklab.inference.intervals import percentile_interval
 from rocklab.io import cf_attrs
@@ -76,12 +80,12 @@ CAUSE_OF = {
 }
 
 
-def _col(model):
+def _col(model: str) -> str:
     """Column suffix of a model's probability in the predictions table."""
     return model.replace("-", "_")
 
 
-def motion_table(folder, tests: pd.DataFrame) -> pd.DataFrame:
+def motion_table(folder: str | Path, tests: pd.DataFrame) -> pd.DataFrame:
     """One row per test with a motion file: ground motion, PGA, PGV, peaks, offset and the sign check."""
     rows = []
     for _, row in tests[tests.motion_file != ""].iterrows():
@@ -100,18 +104,20 @@ def motion_table(folder, tests: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def scores(y, p) -> dict:
+def scores(y: ArrayLike, p: ArrayLike) -> dict[str, float | int]:
     """Accuracy (P > 0.5 read as overturning), Brier score and log loss of probabilities ``p``."""
-    y, p = np.asarray(y, float), np.clip(np.asarray(p, float), cal.PROB_CLIP, 1 - cal.PROB_CLIP)
+    obs, prob = np.asarray(y, float), np.clip(np.asarray(p, float), cal.PROB_CLIP, 1 - cal.PROB_CLIP)
     return {
-        "accuracy": float(np.mean((p > 0.5) == (y > 0.5))),
-        "brier": float(np.mean((p - y) ** 2)),
-        "log_loss": float(-np.mean(y * np.log(p) + (1 - y) * np.log1p(-p))),
-        "n_tests": int(y.size),
+        "accuracy": float(np.mean((prob > 0.5) == (obs > 0.5))),
+        "brier": float(np.mean((prob - obs) ** 2)),
+        "log_loss": float(-np.mean(obs * np.log(prob) + (1 - obs) * np.log1p(-prob))),
+        "n_tests": int(obs.size),
     }
 
 
-def _problem(specimen, tests, motions, outcomes: xr.Dataset):
+def _problem(
+    specimen: str, tests: pd.DataFrame, motions: pd.DataFrame, outcomes: xr.Dataset
+) -> tuple[pd.DataFrame, np.ndarray, np.ndarray, cal.OutcomeLikelihood]:
     """The tests of ``motions`` with their outcomes, records and the likelihood on the specimen's grid."""
     df = motions.merge(tests.drop(columns=["ground_motion"]), on="test", how="left")
     if not np.array_equal(outcomes.test.values, df.test.values):
@@ -121,7 +127,15 @@ def _problem(specimen, tests, motions, outcomes: xr.Dataset):
     return df, y, groups, cal.OutcomeLikelihood(outcomes.overturned.values, y, grid_of(outcomes))
 
 
-def cross_validate(specimen, tests, motions, outcomes: xr.Dataset, k=5, n_boot=50, seed=0) -> pd.DataFrame:
+def cross_validate(
+    specimen: str,
+    tests: pd.DataFrame,
+    motions: pd.DataFrame,
+    outcomes: xr.Dataset,
+    k: int = 5,
+    n_boot: int = 50,
+    seed: int = 0,
+) -> pd.DataFrame:
     """Held-out predictions of the four models for every test with a motion file.
 
     Parameters
@@ -180,7 +194,7 @@ def cross_validate(specimen, tests, motions, outcomes: xr.Dataset, k=5, n_boot=5
     )
 
 
-def score_table(predictions: pd.DataFrame, n_boot=N_BOOT_DIFF, seed=0) -> pd.DataFrame:
+def score_table(predictions: pd.DataFrame, n_boot: int = N_BOOT_DIFF, seed: int = 0) -> pd.DataFrame:
     """scores.csv: held-out scores of every specimen and model; the calibrated block's accuracy differences.
 
     Accuracy for every model; Brier score and log loss for the probabilistic
@@ -206,7 +220,14 @@ def score_table(predictions: pd.DataFrame, n_boot=N_BOOT_DIFF, seed=0) -> pd.Dat
     return pd.DataFrame(rows, columns=["specimen", "model", "accuracy", "brier", "log_loss", "n_tests", *diffs])
 
 
-def transfer_table(tests, motions, outcomes: dict, k=5, n_boot=50, seed=0) -> pd.DataFrame:
+def transfer_table(
+    tests: pd.DataFrame,
+    motions: pd.DataFrame,
+    outcomes: Mapping[str, xr.Dataset],
+    k: int = 5,
+    n_boot: int = 50,
+    seed: int = 0,
+) -> pd.DataFrame:
     """transfer.csv: each specimen's fit predicting the other replica, held out by record.
 
     The replicas shook together under the same records, so the transfer is
@@ -244,7 +265,7 @@ def transfer_table(tests, motions, outcomes: dict, k=5, n_boot=50, seed=0) -> pd
     return pd.DataFrame(rows, columns=["train", "test", "model", "accuracy", "brier", "log_loss", "n_tests"])
 
 
-def onset_edges(peak_plus_g, peak_minus_g, block) -> np.ndarray:
+def onset_edges(peak_plus_g: ArrayLike, peak_minus_g: ArrayLike, block: Mapping[str, float]) -> np.ndarray:
     """Which footprint edges the record can tip the nominal block onto (static onset, exact form).
 
     The +x edge needs the table to accelerate towards -x by more than
@@ -258,13 +279,13 @@ def onset_edges(peak_plus_g, peak_minus_g, block) -> np.ndarray:
     return np.select([plus & minus, plus, minus], ["both edges", "+x edge", "-x edge"], "neither edge")
 
 
-def _bin_labels(x, edges, unit):
+def _bin_labels(x: np.ndarray, edges: Sequence[float], unit: str) -> tuple[np.ndarray, np.ndarray]:
     idx = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, len(edges) - 2)
     labels = [f"{lo:g}-{hi:g} {unit}" if np.isfinite(hi) else f">= {lo:g} {unit}" for lo, hi in zip(edges, edges[1:])]
     return np.array(labels)[idx], idx
 
 
-def nominal_errors(predictions: pd.DataFrame, blocks: dict) -> pd.DataFrame:
+def nominal_errors(predictions: pd.DataFrame, blocks: Mapping[str, Mapping[str, float]]) -> pd.DataFrame:
     """Overturns the nominal block predicts against those observed, by PGA, PGV and onset edge."""
     rows = []
     for s, g in predictions.groupby("specimen", sort=True):
@@ -295,7 +316,9 @@ def nominal_errors(predictions: pd.DataFrame, blocks: dict) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def rate_interval(y, groups, n_boot=N_BOOT_DIFF, seed=0, level=0.95):
+def rate_interval(
+    y: ArrayLike, groups: ArrayLike, n_boot: int = N_BOOT_DIFF, seed: int = 0, level: float = 0.95
+) -> tuple[float, float]:
     """Percentile interval of an overturning rate over resampled records (the tests of a record together)."""
     names, inv = np.unique(np.asarray(groups), return_inverse=True)
     per_y = np.bincount(inv, np.asarray(y, float), names.size)
@@ -333,18 +356,20 @@ def fragility_table(predictions: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def full_fit(specimen, tests, motions, outcomes, n_boot=200, seed=0):
+def full_fit(
+    specimen: str, tests: pd.DataFrame, motions: pd.DataFrame, outcomes: xr.Dataset, n_boot: int = 200, seed: int = 0
+) -> dict[str, Any]:
     """The contact fitted to every test of a specimen, with bootstrap intervals and in-sample fragility."""
     _, y, groups, lik = _problem(specimen, tests, motions, outcomes)
     fit = cal.calibrate(lik, groups, np.arange(y.size), n_boot, seed)
     return {**fit, "grid": lik.grid}
 
 
-def _at_edge(value, nodes) -> bool:
+def _at_edge(value: float, nodes: ArrayLike) -> bool:
     return bool(np.isclose(value, np.min(nodes)) or np.isclose(value, np.max(nodes)))
 
 
-def parameter_table(specimen, fit, block) -> pd.DataFrame:
+def parameter_table(specimen: str, fit: Mapping[str, Any], block: Mapping[str, float]) -> pd.DataFrame:
     """parameters.csv rows: the fitted parameters and what follows from the contact, with 95 % intervals.
 
     The contact half-widths [mm], c, the scatter and the lapse; derived from
@@ -386,7 +411,7 @@ def parameter_table(specimen, fit, block) -> pd.DataFrame:
         )
     fp = footprint(block)
 
-    def derived(values):
+    def derived(values: Mapping[str, float]) -> list[float]:
         k = contact(block, values[CONTACT_PLUS.name], values[CONTACT_MINUS.name])
         return [np.degrees(k["alpha_plus"]), np.degrees(k["alpha_minus"]), k["e_plus"], k["e_minus"], k["energy_kept"]]
 
@@ -418,7 +443,17 @@ def parameter_table(specimen, fit, block) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def calibrated_map(ag, dt, block, values, record, n=41, lo=0.5, hi=1.5, specimen="") -> xr.Dataset:
+def calibrated_map(
+    ag: np.ndarray,
+    dt: float,
+    block: Mapping[str, float],
+    values: Mapping[str, float],
+    record: str,
+    n: int = 41,
+    lo: float = 0.5,
+    hi: float = 1.5,
+    specimen: str = "",
+) -> xr.Dataset:
     """Overturning map (Sect. 5) of the calibrated block under one table record.
 
     The grid of amplitude and duration scales of
@@ -450,14 +485,25 @@ def calibrated_map(ag, dt, block, values, record, n=41, lo=0.5, hi=1.5, specimen
     )
 
 
-def block_inputs(folder, tests: pd.DataFrame, motions: pd.DataFrame):
+def block_inputs(
+    folder: str | Path, tests: pd.DataFrame, motions: pd.DataFrame
+) -> tuple[list[np.ndarray], list[float]]:
     """The block input [m/s^2] and sample interval [s] of every test of ``motions``, in its order."""
     rows = tests.set_index("test").loc[list(motions.test)].reset_index()
     traces = [asu_data.read_motion(folder, row).select(channel="ACC")[0] for _, row in rows.iterrows()]
     return [asu_data.block_input(tr) for tr in traces], [tr.stats.delta for tr in traces]
 
 
-def calibration_tables(tests, motions, outcomes: dict, blocks: dict, folds=5, n_boot=200, n_boot_cv=50, seed=0):
+def calibration_tables(
+    tests: pd.DataFrame,
+    motions: pd.DataFrame,
+    outcomes: Mapping[str, xr.Dataset],
+    blocks: Mapping[str, Mapping[str, float]],
+    folds: int = 5,
+    n_boot: int = 200,
+    n_boot_cv: int = 50,
+    seed: int = 0,
+) -> dict[str, pd.DataFrame]:
     """Every table of the calibration stage for the specimens of ``outcomes``.
 
     Returns
@@ -486,13 +532,13 @@ def calibration_tables(tests, motions, outcomes: dict, blocks: dict, folds=5, n_
     }
 
 
-def fitted_values(parameters: pd.DataFrame, specimen: str) -> dict:
+def fitted_values(parameters: pd.DataFrame, specimen: str) -> dict[str, float]:
     """The fitted contact and c of one specimen from parameters.csv."""
     p = parameters[parameters.specimen == specimen].set_index("parameter").value
     return {q.name: float(p[q.name]) for q in PARAMS}
 
 
-def map_tests(predictions: pd.DataFrame, n=2) -> list[int]:
+def map_tests(predictions: pd.DataFrame, n: int = 2) -> list[int]:
     """Tests whose records are mapped: of the ``n`` ground motions with most tests, the test of median PGA."""
     g = predictions.drop_duplicates("test")
     counts = g.groupby("ground_motion").size().sort_values(ascending=False, kind="stable")
@@ -503,7 +549,15 @@ def map_tests(predictions: pd.DataFrame, n=2) -> list[int]:
     return out
 
 
-def calibrated_maps(folder, tests, predictions, parameters, blocks, specimen, n=41) -> xr.Dataset:
+def calibrated_maps(
+    folder: str | Path,
+    tests: pd.DataFrame,
+    predictions: pd.DataFrame,
+    parameters: pd.DataFrame,
+    blocks: Mapping[str, Mapping[str, float]],
+    specimen: str,
+    n: int = 41,
+) -> xr.Dataset:
     """Maps of the calibrated block of ``specimen`` under the records of :func:`map_tests`, on dim ``record``."""
     values = fitted_values(parameters, specimen)
     chosen = map_tests(predictions)

@@ -8,6 +8,10 @@ Written by the calibration job from the tables it has just written
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+from typing import Any
+
 import numpy as np
 import pandas as pd
 import xarray as xr
@@ -41,12 +45,12 @@ TOLERANCES = {
 }
 
 
-def _number(x):
+def _number(x: Any) -> Any:
     """A table's value for JSON: None where empty."""
     return None if x is None or (isinstance(x, float) and np.isnan(x)) else x
 
 
-def unrecorded(tests: pd.DataFrame) -> dict:
+def unrecorded(tests: pd.DataFrame) -> dict[str, Any]:
     """The tests without a table record: how many, how often each replica overturned, and under what.
 
     They cannot be simulated nor scored (no motion); their outcome rates,
@@ -54,7 +58,7 @@ def unrecorded(tests: pd.DataFrame) -> dict:
     to the sample.
     """
     none = tests.motion_file == ""
-    out = {"n_tests": int(none.sum()), "n_with_record": int((~none).sum()), "n_total": len(tests)}
+    out: dict[str, Any] = {"n_tests": int(none.sum()), "n_with_record": int((~none).sum()), "n_total": len(tests)}
     for s in SPECIMENS:
         col = tests[f"overturned_{s.lower()}"]
         out[s] = {
@@ -66,7 +70,9 @@ def unrecorded(tests: pd.DataFrame) -> dict:
     return out
 
 
-def shake_table_summary(tables, outcomes, tests: pd.DataFrame) -> dict:
+def shake_table_summary(
+    tables: Mapping[str, str | Path], outcomes: Iterable[str | Path], tests: pd.DataFrame
+) -> dict[str, Any]:
     """The shake-table outcomes against the nominal block and the fitted contact (target ``shake_table``).
 
     Parameters
@@ -90,7 +96,7 @@ def shake_table_summary(tables, outcomes, tests: pd.DataFrame) -> dict:
     scores, params, preds, errors, transfer = (
         pd.read_csv(tables[k]) for k in ("scores", "parameters", "predictions", "nominal_errors", "transfer")
     )
-    out = {"specimens": sorted(scores.specimen.unique()), "target_accuracy": TARGET_ACCURACY}
+    out: dict[str, Any] = {"specimens": sorted(scores.specimen.unique()), "target_accuracy": TARGET_ACCURACY}
     for s, g in preds.groupby("specimen"):
         obs, nom = g.observed.astype(bool), g.nominal_overturns.astype(bool)
         e = errors[(errors.specimen == s) & (errors.by == "onset_edge")].set_index("bin")
