@@ -37,6 +37,7 @@ as the impact speed falls (:func:`rocklab.diagnosis.estimation.noise.noise_varia
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 import pandas as pd
@@ -54,6 +55,9 @@ from rocklab.physics import restitution
 from rocklab.physics.boundary import Boundary
 from rocklab.physics.impact import bounded_factor
 from rocklab.physics.law import Amplitude, HousnerLoss, Restitution
+
+if TYPE_CHECKING:
+    from rocklab.diagnosis.result import Number
 
 #: Impacts per trial used (later ones are dominated by the processing noise).
 N_IMPACTS = 10
@@ -290,7 +294,7 @@ def diagnose_group(trials: _Trials, *, n_boot=40, seed=0) -> BlockDiagnosis:
             Finding(
                 effect=eff,
                 params={k: sel["fit"].values[k] for k in own},
-                ci95={k: sel["ci"][k] for k in own if k in sel["ci"]},
+                ci95={k: cast("list[Number]", sel["ci"][k]) for k in own if k in sel["ci"]},
                 u_systematic={k: sel["ci"].u_sys[k] for k in own if k in sel["ci"].u_sys},
                 n_tests=len(trials.ids),
                 evidence={
@@ -331,7 +335,10 @@ def diagnose_group(trials: _Trials, *, n_boot=40, seed=0) -> BlockDiagnosis:
         unexplained=bool(sel["structure"]) and not sel["weak"],
         residual_structure=sel["structure"],
         findings=findings,
-        weak_evidence={k: {"params": v["params"], "reason": sentence_of(v["reason"])} for k, v in sel["weak"].items()},
+        weak_evidence={
+            k: {"params": cast("dict[str, Number]", v["params"]), "reason": sentence_of(v["reason"])}
+            for k, v in sel["weak"].items()
+        },
         rejected=sentences(sel["rejected"]),
         signatures={k: v["text"] for k, v in sig.items()},
         heldout={"base": heldout_means(base_ho), "model": heldout_means(final_ho)},

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import logging
 import time
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
@@ -37,6 +38,9 @@ from rocklab.diagnosis.extended import engineering_errors, model_params, simulat
 from rocklab.diagnosis.result import BaseRun, Finding, HeldOut, SeriesDiagnosis, SeriesExtended
 from rocklab.diagnosis.series_problem import WallProblem
 from rocklab.physics.boundary import Boundary
+
+if TYPE_CHECKING:
+    from rocklab.diagnosis.result import Number
 
 log = logging.getLogger(__name__)
 
@@ -197,7 +201,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
             Finding(
                 effect=eff,
                 params={k: values[k] for k in own},
-                ci95={k: sel["ci"][k] for k in own if k in sel["ci"]},
+                ci95={k: cast("list[Number]", sel["ci"][k]) for k in own if k in sel["ci"]},
                 n_tests=len(tests),
                 evidence={
                     "signature": sig.get(eff, {}).get("text", ""),
@@ -233,7 +237,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         u_model = bias.get("u_model", {})
         f.u_systematic = {k: float(np.hypot(pulls.get(k, 0.0), u_model.get(k, 0.0))) for k in f.ci95}
     params = {q.name: q for f in findings for q in catalogue.by_name(f.effect).params}
-    verdict_intervals(findings, params, {f.effect: f.n_tests for f in findings})
+    verdict_intervals(findings, params, {f.effect: cast(int, f.n_tests) for f in findings})
     blind = not_identifiable(tests, [f.effect for f in findings])
     # a cause the design cannot identify is never named, and a rival these tests cannot tell from a named
     # cause was never tested against it: a named cause whose effect either could produce is named with
@@ -264,7 +268,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         residual_structure=structure,
         findings=findings,
         listed_verdict=sel["catalogue"]["effects"] if listed else None,
-        listed_params=sel["catalogue"]["fit"].values if listed else None,
+        listed_params=cast("dict[str, Number]", sel["catalogue"]["fit"].values) if listed else None,
         weak_evidence=sentences({k: v["reason"] for k, v in sel["weak"].items()}),
         rejected=sentences(sel["rejected"]),
         signatures={k: v["text"] for k, v in sig.items()},
@@ -272,7 +276,10 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         heldout=HeldOut(base=heldout_means(sel["base"]), model=heldout_means(sel["final"])),
         model_bias=bias or None,
         extended=SeriesExtended(
-            effects=ext, params=ext_values, errors=ext_err, statement=what_is_wrong(ext_err, "the extended model")[0]
+            effects=ext,
+            params=cast("dict[str, Number]", ext_values),
+            errors=ext_err,
+            statement=what_is_wrong(ext_err, "the extended model")[0],
         )
         if ext and ext_err is not None
         else None,
