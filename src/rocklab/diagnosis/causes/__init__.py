@@ -12,12 +12,14 @@ from __future__ import annotations
 import enum
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, TypeAlias
+from typing import TYPE_CHECKING, Any, Protocol, TypeAlias
 
 from rocklab.diagnosis.parameters import Param
 from rocklab.physics.boundary import Boundary
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from rocklab.diagnosis.evidence import Observed, TestStack
     from rocklab.diagnosis.result import Structure
     from rocklab.diagnosis.wall_model import ModelParams
@@ -34,6 +36,20 @@ Signature: TypeAlias = dict[str, Any]
 
 #: :attr:`Cause.unexplained`: what a model of a stack of tests leaves that the cause would explain.
 Unexplained: TypeAlias = "Callable[[TestStack, ModelParams], list[Structure]]"
+
+
+class Trials(Protocol):
+    """What :attr:`Cause.on_ratios` reads of trials without rotations (the limestone blocks of
+    :mod:`rocklab.diagnosis.block_tests`): (trials, impacts) arrays and a row per trial."""
+
+    ids: list[str]
+    alpha: np.ndarray
+    u: np.ndarray
+    odd: np.ndarray
+    group: np.ndarray
+
+    @property
+    def ratio(self) -> np.ndarray: ...
 
 
 class Stage(enum.StrEnum):
