@@ -36,14 +36,17 @@ as the impact speed falls (:func:`rocklab.diagnosis.estimation.noise.noise_varia
 
 from __future__ import annotations
 
+import os
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 import pandas as pd
 
 from rocklab.data import LIMESTONE
 from rocklab.diagnosis import catalogue
-from rocklab.diagnosis.causes import restitution_housner_loss
+from rocklab.diagnosis.causes import Cause, Signature, restitution_housner_loss
 from rocklab.diagnosis.discovery import discovery, family_against_listed
 from rocklab.diagnosis.estimation import Problem, beyond_the_catalogue, select_effects
 from rocklab.diagnosis.estimation.resampling import heldout_gain, heldout_means
@@ -54,6 +57,11 @@ from rocklab.physics import restitution
 from rocklab.physics.boundary import Boundary
 from rocklab.physics.impact import bounded_factor
 from rocklab.physics.law import Amplitude, HousnerLoss, Restitution
+
+if TYPE_CHECKING:
+    from rocklab.diagnosis.estimation.fitting import Fits
+    from rocklab.diagnosis.parameters import Param
+    from rocklab.diagnosis.result import Number
 
 #: Impacts per trial used (later ones are dominated by the processing noise).
 N_IMPACTS = 10
@@ -69,7 +77,7 @@ TABLES = LIMESTONE
 IMPACT_LAWS = (HousnerLoss, Restitution, Amplitude)
 
 
-def candidates():
+def candidates() -> tuple[Cause, ...]:
     """The listed causes of two-sided walls whose laws change e (:data:`IMPACT_LAWS`), in catalogue
     order: each changes the ratios of the impacts; a law of the rotations they also have (an angle)
     is not fitted."""
@@ -81,7 +89,7 @@ def candidates():
     )
 
 
-def read_events(path=TABLES / "limestone-rocking-events.csv"):
+def read_events(path: str | os.PathLike[str] = TABLES / "limestone-rocking-events.csv") -> pd.DataFrame:
     """Per-impact table of the non-duplicate trials (``limestone-rocking-events.csv``)."""
     ev = pd.read_csv(path)
     ev = ev[ev.duplicate_of.isna()].copy()
@@ -93,7 +101,7 @@ def read_events(path=TABLES / "limestone-rocking-events.csv"):
 class _Trials:
     """Trials as padded (rows, impacts) arrays: a row is a trial, or a block group (:func:`by_group`)."""
 
-    ids: list
+    ids: list[str]
     alpha: np.ndarray
     r: np.ndarray  # measured ratio, NaN where unused
     u: np.ndarray  # (thetadot^-_k / thetadot^-_1)^2
@@ -101,11 +109,11 @@ class _Trials:
     group: np.ndarray  # block group of each row
 
     @property
-    def ratio(self):
+    def ratio(self) -> np.ndarray:
         """r / e_an of every impact, Housner's e_an of Eq. 2 [-]."""
         return self.r / restitution.two_sided(self.alpha)[:, None]
 
-    def subset(self, idx):
+    def subset(self, idx: np.ndarray) -> _Trials:
         return replace(
             self,
             ids=[self.ids[i] for i in idx],
@@ -117,7 +125,7 @@ class _Trials:
         )
 
 
-def pooled(groups):
+def pooled(groups: Mapping[int, _Trials]) -> _Trials:
     """All groups' trials as one :class:`_Trials` (a calibration common to every slenderness)."""
     gs = list(groups.values())
     return _Trials(
@@ -130,7 +138,7 @@ def pooled(groups):
     )
 
 
-def by_group(trials):
+def by_group(trials: _Trials) -> _Trials:
     """The trials with one row per block group: its trials' impacts side by side (:data:`N_IMPACTS` each).
 
     Slenderness is a property of the block group (:data:`rocklab.lab.hierarchy.BLOCK_COVARIATE_LEVEL`):
@@ -141,7 +149,7 @@ def by_group(trials):
     rows = [np.flatnonzero(trials.group == g) for g in groups]
     width = max(len(i) for i in rows) * N_IMPACTS
 
-    def side_by_side(x, fill):
+    def side_by_side(x: np.ndarray, fill: float) -> np.ndarray:
         out = np.full((len(groups), width), fill, dtype=x.dtype)
         for j, i in enumerate(rows):
             out[j, : len(i) * N_IMPACTS] = x[i].ravel()
@@ -157,7 +165,7 @@ def by_group(trials):
     )
 
 
-def group_trials(events):
+def group_trials(events: pd.DataFrame) -> dict[int, _Trials]:
     """One :class:`_Trials` per block group."""
     out = {}
     for g, ev in events.groupby("group"):
@@ -181,10 +189,10 @@ def group_trials(events):
     return out
 
 
-class BlockProblem(Problem):
+class BlockProblem(Problem[_Trials]):
     """The trials of one block group as a :class:`rocklab.diagnosis.estimation.problem.Problem` (impact group only)."""
 
-    def __init__(self, trials: _Trials):
+    def __init__(self, trials: _Trials) -> None:
         self.T = trials
         self.n_tests = len(trials.ids)
         self.causes = candidates()
@@ -194,10 +202,10 @@ class BlockProblem(Problem):
             # Housner's loss and a constant loss are told apart only across slendernesses
             self.causes += (restitution_housner_loss.CAUSE,)
 
-    def subset(self, idx):
+    def subset(self, idx: np.ndarray) -> _Trials:
         return self.T.subset(np.asarray(idx))
 
-    def model_e(self, sub, values):
+    def model_e(self, sub: _Trials, values: Mapping[str, float]) -> np.ndarray:
         """e of every impact: the laws of the causes (at their null where not in ``values``) on
         Housner's e, the base e first, then the factors on the edge being left (odd impacts leave
         the release edge), then Eq. 17 in the speed relative to the first impact's."""
@@ -216,18 +224,18 @@ class BlockProblem(Problem):
                 e = e * bounded_factor(e, law.a - law.b * sub.u)
         return e
 
-    def residuals(self, sub, ext, values):
+    def residuals(self, sub: _Trials, ext: Collection[str], values: Mapping[str, float]) -> dict[str, np.ndarray]:
         with np.errstate(invalid="ignore", divide="ignore"):
             return {"impact": np.log(self.model_e(sub, values) / sub.r)}
 
-    def noise(self, sub):
+    def noise(self, sub: _Trials) -> dict[str, np.ndarray]:
         return {"impact": 1.0 / np.sqrt(sub.u)}
 
-    def resolution(self, x):
+    def resolution(self, x: np.ndarray) -> float:
         # the noise covariate is a relative speed, not a resolution: significance decides
         return 0.0
 
-    def covariates(self, sub):
+    def covariates(self, sub: _Trials) -> dict[str, dict[str, np.ndarray]]:
         k = np.tile(np.arange(1.0, N_IMPACTS + 1), (len(sub.ids), sub.r.shape[1] // N_IMPACTS))
         return {
             "impact": {
@@ -237,16 +245,18 @@ class BlockProblem(Problem):
             }
         }
 
-    def params(self, ext):
+    def params(self, ext: Collection[str]) -> list[Param]:
         # no rotations in the tables: the asymmetry is that of e only
         return [q for q in super().params(ext) if q.name != "s_alpha"]
 
-    def starts(self, ext):
+    def starts(self, ext: Collection[str]) -> dict[str, float]:
         ratio = self.T.ratio
         med = float(np.nanmedian(ratio))
         return {"c": med, "a": med}
 
-    def heldout_measures(self, sub, ext, values):
+    def heldout_measures(
+        self, sub: _Trials, ext: Collection[str], values: Mapping[str, float]
+    ) -> dict[str, np.ndarray]:
         R = self.residuals(sub, ext, values)["impact"]
         # the impact speed after n impacts relative to the first: the product of the ratios, trial by trial
         trials = R.reshape(len(R), -1, N_IMPACTS)
@@ -258,7 +268,7 @@ class BlockProblem(Problem):
             return {"ratio_rms": np.sqrt(np.nanmean(R**2, axis=1)), "decay_rms": np.sqrt(np.nanmean(decay**2, axis=1))}
 
 
-def signatures(trials: _Trials):
+def signatures(trials: _Trials) -> dict[str, Signature]:
     """Evidence in the ratios that needs no fit: each cause's own (its ``on_ratios``), Housner's loss
     across slendernesses first."""
     out = {}
@@ -269,12 +279,12 @@ def signatures(trials: _Trials):
     return out
 
 
-def diagnose_group(trials: _Trials, *, n_boot=40, seed=0) -> BlockDiagnosis:
+def diagnose_group(trials: _Trials, *, n_boot: int = 40, seed: int = 0) -> BlockDiagnosis:
     """Diagnosis of one block group (or of all, pooled): what Housner's e gets wrong, the causes, the gain."""
     several = np.ptp(trials.alpha) > 0
     problem = BlockProblem(by_group(trials) if several else trials)
     sig = signatures(trials)
-    fits: dict = {}
+    fits: Fits = {}
     sel = select_effects(problem, signature=sig, n_boot=n_boot, seed=seed, fits=fits)
     sel = beyond_the_catalogue(problem, sel, signature=sig, n_boot=n_boot, seed=seed, fits=fits)
     e_an = float(np.median(restitution.two_sided(trials.alpha)))
@@ -290,7 +300,7 @@ def diagnose_group(trials: _Trials, *, n_boot=40, seed=0) -> BlockDiagnosis:
             Finding(
                 effect=eff,
                 params={k: sel["fit"].values[k] for k in own},
-                ci95={k: sel["ci"][k] for k in own if k in sel["ci"]},
+                ci95={k: cast("list[Number]", sel["ci"][k]) for k in own if k in sel["ci"]},
                 u_systematic={k: sel["ci"].u_sys[k] for k in own if k in sel["ci"].u_sys},
                 n_tests=len(trials.ids),
                 evidence={
@@ -331,7 +341,10 @@ def diagnose_group(trials: _Trials, *, n_boot=40, seed=0) -> BlockDiagnosis:
         unexplained=bool(sel["structure"]) and not sel["weak"],
         residual_structure=sel["structure"],
         findings=findings,
-        weak_evidence={k: {"params": v["params"], "reason": sentence_of(v["reason"])} for k, v in sel["weak"].items()},
+        weak_evidence={
+            k: {"params": cast("dict[str, Number]", v["params"]), "reason": sentence_of(v["reason"])}
+            for k, v in sel["weak"].items()
+        },
         rejected=sentences(sel["rejected"]),
         signatures={k: v["text"] for k, v in sig.items()},
         heldout={"base": heldout_means(base_ho), "model": heldout_means(final_ho)},
@@ -340,7 +353,7 @@ def diagnose_group(trials: _Trials, *, n_boot=40, seed=0) -> BlockDiagnosis:
     )
 
 
-def diagnose_blocks(events=None, *, n_boot=40, seed=0) -> LimestoneDiagnosis:
+def diagnose_blocks(events: pd.DataFrame | None = None, *, n_boot: int = 40, seed: int = 0) -> LimestoneDiagnosis:
     """Diagnose every block group of the limestone tables."""
     events = read_events() if events is None else events
     groups = group_trials(events)

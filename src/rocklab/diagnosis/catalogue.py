@@ -16,7 +16,13 @@ structure.
 
 from __future__ import annotations
 
+from collections.abc import Collection, Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING
+
 from rocklab.diagnosis.causes import (
+    Cause,
+    Law,
+    Signature,
     Stage,
     contact_gap,
     flight_damping,
@@ -33,6 +39,9 @@ from rocklab.diagnosis.causes import (
 )
 from rocklab.diagnosis.evidence import observe
 from rocklab.diagnosis.wall_model import log_columns
+
+if TYPE_CHECKING:
+    from rocklab.diagnosis.evidence import MeasuredTest
 
 CAUSES = [
     restitution_scale.CAUSE,
@@ -53,7 +62,7 @@ FAMILIES = [
 ]
 
 
-def in_order(columns=()):
+def in_order(columns: Iterable[str] = ()) -> list[Cause]:
     """The causes and the families in the order they act on the model.
 
     ``columns``: the test log's columns a drift may follow, each a family
@@ -67,7 +76,7 @@ def in_order(columns=()):
     return [*(c for c in CAUSES if c not in later), *families, *later]
 
 
-def by_name(name):
+def by_name(name: str) -> Cause:
     """The cause of the catalogue called ``name`` (a drift along a column of the test log too).
 
     With :func:`log_columns_of`, the one reading of a cause's name: elsewhere a cause is its object.
@@ -76,35 +85,37 @@ def by_name(name):
     return next(c for c in in_order(() if column is None else (column,)) if c.name == name)
 
 
-def log_columns_of(names):
+def log_columns_of(names: Iterable[str]) -> set[str]:
     """The columns of the test log that the causes called ``names`` follow (a drift along one), which a
     model of them needs whether or not its tests have them (:attr:`~rocklab.diagnosis.causes.Cause.log_column`)."""
     return {c for name in names if (c := restitution_drift.column_of(name)) is not None}
 
 
-def laws(ext, values=None, columns=()):
+def laws(ext: Collection[str], values: Mapping[str, float] | None = None, columns: Iterable[str] = ()) -> list[Law]:
     """The laws of the causes named ``ext`` (:attr:`rocklab.diagnosis.causes.Cause.laws`) with their
     parameter ``values`` (null where missing), in the order they act on a wall (:func:`in_order`,
     with a drift along each of the test log's ``columns``)."""
     return [law for c in in_order(columns) if c.name in ext for law in c.laws(c.values(values or {}))]
 
 
-def by_short(short):
+def by_short(short: str) -> Cause:
     """The cause of the catalogue whose short name (:attr:`rocklab.diagnosis.causes.Cause.short`) is ``short``."""
     return next(c for c in in_order() if c.short == short)
 
 
-def short_names():
+def short_names() -> list[str]:
     """The short names of the causes the maps can carry, in catalogue order."""
     return [c.short for c in in_order() if c.short]
 
 
-def null_values():
+def null_values() -> dict[str, float]:
     """Every parameter of the catalogue at its null value (the base model)."""
     return {q.name: q.null for c in in_order() for q in c.params}
 
 
-def for_boundary(boundary, stage=Stage.SELECTION, families=False, columns=()):
+def for_boundary(
+    boundary: str, stage: Stage = Stage.SELECTION, families: bool = False, columns: Iterable[str] = ()
+) -> list[Cause]:
     """The causes of a stage that can occur in a boundary condition, in catalogue order (and the families,
     with a drift along each of the test log's ``columns``)."""
     return [
@@ -112,7 +123,7 @@ def for_boundary(boundary, stage=Stage.SELECTION, families=False, columns=()):
     ]
 
 
-def signatures(tests):
+def signatures(tests: Sequence[MeasuredTest]) -> dict[str, Signature]:
     """Evidence for each cause that needs no model fit, in catalogue order.
 
     Returns
@@ -135,7 +146,7 @@ def signatures(tests):
     return out
 
 
-def starts(sigs):
+def starts(sigs: Mapping[str, Signature]) -> dict[str, float]:
     """Data-driven starting values of every parameter from the signatures (:func:`signatures`)."""
     out = {}
     for cause in in_order():

@@ -2,15 +2,23 @@
 
 from __future__ import annotations
 
+import os
+from collections.abc import Iterable, Mapping
+from typing import Any, cast
+
 from rocklab.diagnosis.catalogue import by_name
 from rocklab.diagnosis.causes import Stage
-from rocklab.diagnosis.result import BoundaryDiagnosis, CampaignDiagnosis
+from rocklab.diagnosis.result import BoundaryDiagnosis, CampaignDiagnosis, Finding, PooledFinding, SeriesDiagnosis
 from rocklab.disk import write_text
 from rocklab.inference.intervals import MIN_BOOTSTRAP
 from rocklab.inference.notes import counted, note_lines, note_mark
 
 
-def write_diagnosis(diagnosis, json_path, md_path=None):
+def write_diagnosis(
+    diagnosis: CampaignDiagnosis | Iterable[SeriesDiagnosis | BoundaryDiagnosis | Mapping[str, Any]],
+    json_path: str | os.PathLike[str],
+    md_path: str | os.PathLike[str] | None = None,
+) -> None:
     """Write results/diagnosis.json (and diagnosis.md).
 
     Parameters
@@ -26,11 +34,11 @@ def write_diagnosis(diagnosis, json_path, md_path=None):
         write_text(md_path, diagnosis_markdown(diagnosis))
 
 
-def _fmt_params(f):
+def _fmt_params(f: Finding | PooledFinding) -> str:
     return ", ".join(f"{k} = {v:.4g}" for k, v in f.params.items())
 
 
-def _rests_on(f):
+def _rests_on(f: Finding | PooledFinding) -> str:
     """What a finding's interval rests on: "(154 tests, 10 series)", "(21 tests)"."""
     parts = [
         counted(getattr(f, k), noun)
@@ -40,7 +48,7 @@ def _rests_on(f):
     return f" ({', '.join(parts)})" if parts else ""
 
 
-def _fmt_ci(f, notes):
+def _fmt_ci(f: Finding | PooledFinding, notes: dict[str, str]) -> str:
     """The 95 % interval cell of a finding, or the mark of the reason it has none (:func:`note_mark`)."""
     if f.ci95:
         return ", ".join(f"[{a:.4g}, {b:.4g}]" for a, b in f.ci95.values()) + _rests_on(f)
@@ -49,7 +57,9 @@ def _fmt_ci(f, notes):
     return "none"
 
 
-def diagnosis_markdown(diagnosis) -> str:
+def diagnosis_markdown(
+    diagnosis: CampaignDiagnosis | Iterable[SeriesDiagnosis | BoundaryDiagnosis | Mapping[str, Any]],
+) -> str:
     """Readable report (results/diagnosis.md) of a diagnosis.
 
     Parameters
@@ -71,7 +81,12 @@ def diagnosis_markdown(diagnosis) -> str:
         "",
     ]
     diagnosis = CampaignDiagnosis.of(diagnosis)
-    for e in [*sorted(diagnosis.boundaries, key=lambda e: e.key), *sorted(diagnosis.series, key=lambda e: e.key)]:
+    # a boundary condition's entry or a series', told apart by ``pooled``; an entry has its key (the schema)
+    e: Any
+    for e in [
+        *sorted(diagnosis.boundaries, key=lambda e: cast(str, e.key)),
+        *sorted(diagnosis.series, key=lambda e: cast(str, e.key)),
+    ]:
         pooled = isinstance(e, BoundaryDiagnosis)
         title = f"{'boundary condition' if pooled else 'series'} {e.key}"
         size = counted(e.n_tests, "test") + (f", {counted(e.n_series, 'series')}" if pooled else "")
@@ -173,5 +188,5 @@ def diagnosis_markdown(diagnosis) -> str:
     return "\n".join(out)
 
 
-def _f(x, fmt=".4f"):
+def _f(x: float | None, fmt: str = ".4f") -> str:
     return "n/a" if x is None else format(x, fmt)

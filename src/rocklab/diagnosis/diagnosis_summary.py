@@ -9,13 +9,21 @@ Written by the diagnosis jobs beside ``diagnosis.json`` and
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.causes import Stage
-from rocklab.diagnosis.result import CampaignDiagnosis, LimestoneDiagnosis
+from rocklab.diagnosis.result import (
+    CampaignDiagnosis,
+    FamilyComparison,
+    LimestoneDiagnosis,
+    PooledFinding,
+    SeriesDiagnosis,
+)
 from rocklab.physics.boundary import Boundary
 from rocklab.summaries import Tolerance
 
@@ -34,7 +42,7 @@ from rocklab.summaries import Tolerance
 TOLERANCES = {"*": Tolerance(abs=1e-6, rel=1e-3)}
 
 
-def _finding(f) -> dict:
+def _finding(f: PooledFinding) -> dict:
     return {
         "params": f.params,
         "ci95": f.ci95,
@@ -43,7 +51,7 @@ def _finding(f) -> dict:
     }
 
 
-def _after_selection_gain(series_entries, effect) -> dict | None:
+def _after_selection_gain(series_entries: Sequence[SeriesDiagnosis], effect: str) -> dict | None:
     """Held-out errors of the free run with and without a cause estimated after selection
     (:attr:`rocklab.diagnosis.causes.Stage.AFTER_SELECTION`), pooled over the series that name
     it: for each error its finding measures (the free run's, not a deviance), the root of the
@@ -55,13 +63,14 @@ def _after_selection_gain(series_entries, effect) -> dict | None:
     measures = [k for k, v in named[0][1].error_heldout.items() if v is not None]
     n = np.array([w for w, _ in named], dtype=float)
 
-    def pooled(x):
+    def pooled(x: Sequence[float]) -> float:
         return math.sqrt(np.sum(n * np.asarray(x, dtype=float) ** 2) / np.sum(n))
 
     return {
         k: {
-            "base": pooled([f.error_heldout[k] + f.gain[k] for _, f in named]),
-            "model": pooled([f.error_heldout[k] for _, f in named]),
+            # the measures the first series has, which every one has
+            "base": pooled([cast(float, f.error_heldout[k]) + cast(float, f.gain[k]) for _, f in named]),
+            "model": pooled([cast(float, f.error_heldout[k]) for _, f in named]),
         }
         for k in measures
     }
@@ -101,6 +110,8 @@ def diagnosis_summary(diagnosis: CampaignDiagnosis | str | Path) -> dict:
             }
         )
     for e in d.boundaries:
+        # an entry has its boundary condition and base model (the schema)
+        assert e.boundary is not None and e.base is not None
         mine = d.series_of(e.boundary)
         out[Boundary(e.boundary).key] = {
             "n_tests": e.n_tests,
@@ -114,7 +125,7 @@ def diagnosis_summary(diagnosis: CampaignDiagnosis | str | Path) -> dict:
             "findings": {f.effect: _finding(f) for f in e.findings},
             "heldout": e.heldout,
             # absent where no series was large enough to extend the model
-            "extended": (e.extended or {}).get("statement"),
+            "extended": (e.extended or {}).get("statement"),  # type: ignore[call-overload]
             # each cause estimated once the model is chosen (the stop): what it gains, and the series
             # that do not name it
             "after_selection": {
@@ -130,7 +141,7 @@ def diagnosis_summary(diagnosis: CampaignDiagnosis | str | Path) -> dict:
     return out
 
 
-def _family(families) -> dict | None:
+def _family(families: Sequence[FamilyComparison]) -> dict | None:
     """The first generalised family of the limestone blocks (issue 12): form, parameters, intervals, gains."""
     if not families:
         return None

@@ -8,13 +8,40 @@ fitted whether named or not (:func:`family_against_listed`, the limestone
 blocks).
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, TypedDict, cast
+
 import numpy as np
 
 from rocklab.diagnosis.estimation import Problem, fit, heldout, paired_gain, parameter_intervals
 from rocklab.diagnosis.result import FamilyComparison
 
+if TYPE_CHECKING:
+    from rocklab.diagnosis.estimation.fitting import Fits
+    from rocklab.diagnosis.estimation.selection import Selection
+    from rocklab.diagnosis.result import Number
 
-def family_against_listed(problem: Problem, family, sel, *, n_boot=40, seed=0, fits=None) -> FamilyComparison:
+
+class Discovery(TypedDict, total=False):
+    """The fields of a finding that say whether its form was discovered (:func:`discovery`)."""
+
+    discovered: bool
+    family: str
+    reduces_to: str
+    best_listed: list[str]
+    heldout_gain: dict[str, float | None]
+
+
+def family_against_listed(
+    problem: Problem[Any],
+    family: str,
+    sel: Selection,
+    *,
+    n_boot: int = 40,
+    seed: int = 0,
+    fits: Fits | None = None,
+) -> FamilyComparison:
     """A family fitted whether named or not, against the base model and the best listed cause.
 
     The fit of ``family`` on all tests, its bootstrap intervals, the closed
@@ -36,15 +63,17 @@ def family_against_listed(problem: Problem, family, sel, *, n_boot=40, seed=0, f
     ci = parameter_intervals(problem, f, n_boot=n_boot, seed=seed)
     vs_base, se_base = paired_gain(sel["base"]["deviance"], ho["deviance"])
     vs_best, se_best = paired_gain(heldout(problem, (best,), fits[(best,)])["deviance"], ho["deviance"])
+    assert cause.closed_form is not None
     return FamilyComparison(
         effect=family,
         form=cause.law,
-        params=f.values,
-        ci95=ci,
+        # the fit's numbers, as the record holds them
+        params=cast("dict[str, Number]", f.values),
+        ci95=cast("dict[str, list[Number]]", ci),
         reduces_to=cause.closed_form(f.values, ci),
         discovered=family in sel["effects"],
         best_listed=best,
-        best_listed_params=fits[(best,)].values,
+        best_listed_params=cast("dict[str, Number]", fits[(best,)].values),
         dbic_vs_base=f.bic - fits[()].bic if () in fits else None,
         dbic_vs_best_listed=f.bic - fits[(best,)].bic,
         heldout_gain={
@@ -56,7 +85,7 @@ def family_against_listed(problem: Problem, family, sel, *, n_boot=40, seed=0, f
     )
 
 
-def discovery(problem: Problem, eff, sel):
+def discovery(problem: Problem[Any], eff: str, sel: Selection) -> Discovery:
     """The fields of a finding that say whether its form was discovered (a family) rather than listed.
 
     A discovered form carries the closed form of the library it reduces to
@@ -70,6 +99,7 @@ def discovery(problem: Problem, eff, sel):
     vs_catalogue, se_catalogue = paired_gain(sel["catalogue"]["final"]["deviance"], ho)
     vs_base, se_base = paired_gain(sel["base"]["deviance"], ho)
     own = [q.name for q in cause.params]
+    assert cause.closed_form is not None
     return {
         "discovered": True,
         "family": f"{cause.law} (holds {cause.family})",

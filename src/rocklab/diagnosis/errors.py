@@ -10,16 +10,33 @@ for a model of named causes) and stated in words (:func:`what_is_wrong`).
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
+from typing import Any, TypedDict
 
 import numpy as np
 
 from rocklab.diagnosis.estimation import finite_mean
 from rocklab.diagnosis.evidence import MeasuredTest, TestStack, log_ratio, residuals
+from rocklab.diagnosis.result import Errors
 from rocklab.diagnosis.wall_model import ModelParams, free_run, simulate_test
 from rocklab.simulation.rocking_model import RockingModel
 
 
-def engineering_rows(tests, mp: ModelParams, n_max=600):
+class EngineeringRow(TypedDict):
+    """The measures of one test's free run (:func:`engineering_rows`): (measured, model) pairs, or numbers."""
+
+    n_impacts: tuple[int, int]
+    duration_s: tuple[float, float]
+    decay_pct: tuple[float, float]
+    first_quarter_p: tuple[float, float]
+    flight_time_pct: float
+    lag_s: float
+    lag_cycles: float
+    common_impacts: int
+    log_peak_rms: float
+
+
+def engineering_rows(tests: Sequence[MeasuredTest], mp: ModelParams, n_max: int = 600) -> list[EngineeringRow]:
     """Per-test measures of the free run of the model ``mp`` of ``tests`` against the measured motion.
 
     Returns
@@ -35,7 +52,7 @@ def engineering_rows(tests, mp: ModelParams, n_max=600):
     S = TestStack.of(tests)
     run = free_run(S, mp, n_max)
     R = residuals(S, mp)
-    rows = []
+    rows: list[EngineeringRow] = []
     for i, ts in enumerate(tests):
         M = run["peaks"][i]
         # the model is observed like the wall: flights above the noise threshold
@@ -67,7 +84,7 @@ def engineering_rows(tests, mp: ModelParams, n_max=600):
     return rows
 
 
-def history_rms(test: MeasuredTest, model: RockingModel):
+def history_rms(test: MeasuredTest, model: RockingModel) -> float:
     """RMS of (theta_model - theta_measured) / alpha over the measured motion (the exact simulator ``model``)."""
     if test.t is None or test.theta is None:
         return np.nan
@@ -77,9 +94,9 @@ def history_rms(test: MeasuredTest, model: RockingModel):
     return float(np.sqrt(np.mean((m - test.theta[sel]) ** 2)) / test.alpha)
 
 
-def summarise_rows(rows):
+def summarise_rows(rows: Sequence[Mapping[str, object]]) -> Errors:
     """Means over tests of :func:`engineering_rows` (measured, model)."""
-    out = {}
+    out: Errors = {}
     for key in rows[0]:
         vals = [r[key] for r in rows]
         if isinstance(vals[0], tuple):
@@ -90,7 +107,7 @@ def summarise_rows(rows):
     return out
 
 
-def what_is_wrong(errors, model="the simulation"):
+def what_is_wrong(errors: Errors, model: str = "the simulation") -> tuple[str, bool]:
     """Plain statement, in numbers, of where a model's free run departs from the tests.
 
     Returns
@@ -100,7 +117,8 @@ def what_is_wrong(errors, model="the simulation"):
         (duration 20 %, decay 1 point, quarter period 10 %, flight time 3 %,
         lag 0.5 cycle).
     """
-    e = errors
+    # each measure's kind (a pair, a number) is known by its key: read as such
+    e: Mapping[str, Any] = errors
     n, T, d, q = e["n_impacts"], e["duration_s"], e["decay_pct"], e["first_quarter_p"]
     parts, off = [], False
     # the duration decides: the reduction cannot resolve the last, shortest flights, so the

@@ -12,6 +12,7 @@ as the lab measures (:func:`simulated_tests`).
 
 from __future__ import annotations
 
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import replace
 
 import numpy as np
@@ -19,13 +20,19 @@ import numpy as np
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.errors import engineering_rows, history_rms, summarise_rows
 from rocklab.diagnosis.estimation import finite_mean
-from rocklab.diagnosis.evidence import measured_test
+from rocklab.diagnosis.evidence import MeasuredTest, measured_test
+from rocklab.diagnosis.result import Errors
 from rocklab.diagnosis.wall_model import ModelParams, log_columns, model_of, simulate_test, simulator
 from rocklab.lab.motion import noise_level
 from rocklab.simulation.rocking_model import RockingModel
 
 
-def model_params(tests, ext=(), values=None, base=None) -> ModelParams:
+def model_params(
+    tests: Sequence[MeasuredTest],
+    ext: Collection[str] = (),
+    values: Mapping[str, float] | None = None,
+    base: ModelParams | None = None,
+) -> ModelParams:
     """ModelParams of the base model extended by the causes ``ext`` with parameter ``values``.
 
     The causes act in catalogue order; the values of causes outside ``ext``
@@ -37,7 +44,9 @@ def model_params(tests, ext=(), values=None, base=None) -> ModelParams:
     return model_of(tests, catalogue.laws(ext, values, tuple(sorted(columns))), base)
 
 
-def rocking_model(test, ext=(), values=None, base="analytic") -> RockingModel:
+def rocking_model(
+    test: MeasuredTest, ext: Collection[str] = (), values: Mapping[str, float] | None = None, base: str = "analytic"
+) -> RockingModel:
     """The exact simulator of a diagnosis model, for one test (:func:`rocklab.diagnosis.wall_model.simulator`).
 
     ``base``: ``"analytic"`` (Eq. 2 / Eq. 14), ``"two-sided-e"`` (e_an,2s used
@@ -47,13 +56,26 @@ def rocking_model(test, ext=(), values=None, base="analytic") -> RockingModel:
     return simulator(model_params([test], ext, values).row(0), base)
 
 
-def simulate_measured(test, ext=(), values=None, base="analytic", t_end=None, fs=None):
+def simulate_measured(
+    test: MeasuredTest,
+    ext: Collection[str] = (),
+    values: Mapping[str, float] | None = None,
+    base: str = "analytic",
+    t_end: float | None = None,
+    fs: float | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
     """Free run of a diagnosis model (exact simulator) from a measured test's release, on its clock
     (:func:`rocklab.diagnosis.wall_model.simulate_test`)."""
     return simulate_test(test, rocking_model(test, ext, values, base), t_end, fs)
 
 
-def engineering_errors(tests, ext=(), values=None, base="analytic", n_history=2):
+def engineering_errors(
+    tests: Sequence[MeasuredTest],
+    ext: Collection[str] = (),
+    values: Mapping[str, float] | None = None,
+    base: str = "analytic",
+    n_history: int = 2,
+) -> Errors:
     """Series means of :func:`rocklab.diagnosis.errors.engineering_rows` and the RMS of theta/alpha
     on ``n_history`` tests (exact simulator)."""
     out = summarise_rows(engineering_rows(tests, model_params(tests, ext, values).with_base(base)))
@@ -62,7 +84,9 @@ def engineering_errors(tests, ext=(), values=None, base="analytic", n_history=2)
     return out
 
 
-def simulated_tests(tests, ext=(), values=None, seed=0):
+def simulated_tests(
+    tests: Sequence[MeasuredTest], ext: Collection[str] = (), values: Mapping[str, float] | None = None, seed: int = 0
+) -> list[MeasuredTest]:
     """The tests a diagnosis model would have given: each measured test run by the exact simulator
     from its release on its clock (:func:`simulate_measured`), white noise of its measured level
     added (:func:`rocklab.lab.motion.noise_level`), read by the lab's extraction

@@ -13,20 +13,28 @@ condition.  Method: docs/diagnosis-method.md.
 from __future__ import annotations
 
 import logging
+from collections.abc import Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
+import numpy.typing as npt
 
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.errors import what_is_wrong
 from rocklab.diagnosis.estimation.systematic import widened
+from rocklab.diagnosis.evidence import MeasuredTest
 from rocklab.diagnosis.result import (
     BaseRun,
     BoundaryDiagnosis,
     BoundaryExtended,
     CampaignDiagnosis,
+    Errors,
     HeldOut,
+    Number,
     PooledEvidence,
     PooledFinding,
+    SeriesDiagnosis,
+    SeriesExtended,
     Structure,
 )
 from rocklab.diagnosis.series import MIN_TESTS_TO_NAME, base_name, diagnose_records
@@ -34,10 +42,13 @@ from rocklab.inference.intervals import mean_over_units, no_interval_note, t_int
 from rocklab.lab.hierarchy import plural
 from rocklab.physics.boundary import Boundary
 
+if TYPE_CHECKING:
+    from rocklab.diagnosis.result import Finding, MeasuredAndModel
+
 log = logging.getLogger(__name__)
 
 
-def _wmean(vals, w):
+def _wmean(vals: Iterable[Number] | np.ndarray, w: npt.ArrayLike | Sequence[Number]) -> float | None:
     """Weighted mean of the finite values (None counts as missing); None if there are none."""
     vals = np.array([np.nan if v is None else v for v in vals], float)
     w = np.asarray(w, float)
@@ -45,11 +56,11 @@ def _wmean(vals, w):
     return float(np.sum(vals[ok] * w[ok]) / np.sum(w[ok])) if ok.any() else None
 
 
-def _merge_errors(errors, w):
+def _merge_errors(errors: Sequence[Mapping[str, Any]], w: npt.ArrayLike | Sequence[Number]) -> Errors:
     """Weighted means over series of :func:`engineering_errors` dicts."""
     return {
         k: (
-            {s: _wmean([e[k][s] for e in errors], w) for s in v}
+            cast("MeasuredAndModel", {s: _wmean([e[k][s] for e in errors], w) for s in v})
             if isinstance(v, dict)
             else _wmean([e[k] for e in errors], w)
         )
@@ -57,7 +68,12 @@ def _merge_errors(errors, w):
     }
 
 
-def pooled_parameter(values, walls=None, u_sys=None, bounds=(-np.inf, np.inf)):
+def pooled_parameter(
+    values: Mapping[str, float],
+    walls: Mapping[str, str] | None = None,
+    u_sys: Mapping[str, float] | None = None,
+    bounds: tuple[float, float] = (-np.inf, np.inf),
+) -> tuple[float, list[float] | None, str, int, str, float]:
     """The random-effects mean of one parameter over series, and its 95 % interval.
 
     Each series is one unit (the scatter between series, sd ~0.01-0.05 of
@@ -114,7 +130,9 @@ def pooled_parameter(values, walls=None, u_sys=None, bounds=(-np.inf, np.inf)):
     return m, widened([float(lo), float(hi)], m, *bounds, u_shared), level, k, "", u_shared
 
 
-def _parameter_values(cause, name, usable, named):
+def _parameter_values(
+    cause: str, name: str, usable: Sequence[SeriesDiagnosis], named: Mapping[str | None, Finding]
+) -> tuple[dict[str | None, Number], list[str | None], int]:
     """Every usable series' value of one parameter of ``cause``: its estimate where it named the cause;
     where it did not, its own estimate where its data carry the cause's signature (its
     ``unnamed_estimates``: a series short of the evidence to name it still says how large it is), else
@@ -137,7 +155,7 @@ def _parameter_values(cause, name, usable, named):
     return out, own, n_null
 
 
-def _pooled_text(units, n_values, n_unnamed, n_own, n_null):
+def _pooled_text(units: str, n_values: int, n_unnamed: int, n_own: int, n_null: int) -> str:
     """How a pooled parameter counts the series, in words."""
     head = f"random-effects mean over {units} of {n_values} series"
     if not n_unnamed:
@@ -151,7 +169,13 @@ def _pooled_text(units, n_values, n_unnamed, n_own, n_null):
     return f"{head}; of the {n_unnamed} that did not name it, " + ", ".join(h for h in how if h)
 
 
-def diagnose_boundary(entries, boundary, *, walls=None, thickness=None) -> BoundaryDiagnosis | None:
+def diagnose_boundary(
+    entries: CampaignDiagnosis | Iterable[SeriesDiagnosis | BoundaryDiagnosis | Mapping[str, Any]],
+    boundary: str,
+    *,
+    walls: Mapping[str, str] | None = None,
+    thickness: Mapping[str, float] | None = None,
+) -> BoundaryDiagnosis | None:
     """One boundary condition from the diagnoses of its series.
 
     ``entries``: a :class:`~rocklab.diagnosis.result.CampaignDiagnosis` or
@@ -180,7 +204,8 @@ def diagnose_boundary(entries, boundary, *, walls=None, thickness=None) -> Bound
     small = [e.key for e in ser if e.too_small]
     w_all = np.array([e.n_tests for e in ser], float)
     n_tests = int(w_all.sum())
-    base_err = _merge_errors([e.base.errors for e in ser], w_all)
+    # the series entries as the diagnosis writes them: every key the file's schema requires set
+    base_err = _merge_errors([cast(BaseRun, e.base).errors for e in ser], w_all)
     counts: dict[str, list] = {}
     for e in usable:
         for f in e.findings:
@@ -201,7 +226,7 @@ def diagnose_boundary(entries, boundary, *, walls=None, thickness=None) -> Bound
             # interval of its own: their mean systematic part (a null value has none)
             u_sys |= dict.fromkeys(own, float(np.mean(list(u_sys.values()))))
             params[name], interval, level, units[name], note, shared[name] = pooled_parameter(
-                values, walls, u_sys, bounds.get(name, (-np.inf, np.inf))
+                cast("dict[str, float]", values), walls, u_sys, bounds.get(name, (-np.inf, np.inf))
             )
             if interval is None:
                 notes[name] = note
@@ -211,8 +236,8 @@ def diagnose_boundary(entries, boundary, *, walls=None, thickness=None) -> Bound
         findings.append(
             PooledFinding(
                 effect=eff,
-                params=params,
-                ci95=ci,
+                params=cast("dict[str, Number]", params),
+                ci95=cast("dict[str, list[Number]]", ci),
                 u_systematic=shared,
                 evidence=PooledEvidence(
                     series=f"named in {len(lst)} of {of_series}",
@@ -241,8 +266,15 @@ def diagnose_boundary(entries, boundary, *, walls=None, thickness=None) -> Bound
     w_used = [e.n_tests for e in usable]
     ho = (
         HeldOut(
-            base={k: _wmean([e.heldout["base"][k] for e in usable], w_used) for k in usable[0].heldout["base"]},
-            model={k: _wmean([e.heldout["model"][k] for e in usable], w_used) for k in usable[0].heldout["model"]},
+            # a series large enough to name a cause has its held-out errors
+            base={
+                k: _wmean([cast(HeldOut, e.heldout)["base"][k] for e in usable], w_used)
+                for k in cast(HeldOut, usable[0].heldout)["base"]
+            },
+            model={
+                k: _wmean([cast(HeldOut, e.heldout)["model"][k] for e in usable], w_used)
+                for k in cast(HeldOut, usable[0].heldout)["model"]
+            },
         )
         if usable
         else None
@@ -252,7 +284,9 @@ def diagnose_boundary(entries, boundary, *, walls=None, thickness=None) -> Bound
     extended = [e for e in ser if e.extended]
     ext_statement = None
     if extended:
-        ext_err = _merge_errors([e.extended["errors"] for e in extended], [e.n_tests for e in extended])
+        ext_err = _merge_errors(
+            [cast(SeriesExtended, e.extended)["errors"] for e in extended], [e.n_tests for e in extended]
+        )
         ext_statement = what_is_wrong(ext_err, "the extended model")[0]
     if usable and not findings and not flagged and not off:
         statement = "the base model explains the data within the noise: " + statement
@@ -264,17 +298,17 @@ def diagnose_boundary(entries, boundary, *, walls=None, thickness=None) -> Bound
         n_tests=n_tests,
         n_series=len(ser),
         n_series_diagnosed=len(usable),
-        too_small_series=small,
-        n_impacts=int(sum(e.n_impacts for e in ser)),
+        too_small_series=cast("list[str]", small),
+        n_impacts=int(sum(cast(int, e.n_impacts) for e in ser)),
         base=BaseRun(model=base_name(boundary), errors=base_err),
         what_is_wrong=statement,
         verdict=[f.effect for f in findings],
         unexplained=bool(usable) and len(flagged) >= 0.5 * len(usable),
         residual_structure=[Structure(k, f"{k} in {n} of {len(usable)} series") for k, n in kinds_left],
-        unexplained_series=flagged,
+        unexplained_series=cast("list[str]", flagged),
         findings=findings,
         heldout=ho,
-        series_verdicts=verdicts,
+        series_verdicts=cast("dict[str, list[str]]", verdicts),
         extended=BoundaryExtended(statement=ext_statement, n_series=len(extended)) if ext_statement else None,
         too_small=None
         if usable
@@ -282,7 +316,7 @@ def diagnose_boundary(entries, boundary, *, walls=None, thickness=None) -> Bound
             f"none of its {len(ser)} series has the {MIN_TESTS_TO_NAME} tests "
             "of two impacts or more a series needs to name one"
         ),
-        wall_thickness_m=float(np.mean([thickness[w] for w in {walls[e.key] for e in ser}]))
+        wall_thickness_m=float(np.mean([thickness[w] for w in {walls[cast(str, e.key)] for e in ser}]))
         if walls is not None and thickness is not None
         else None,
     )
@@ -297,7 +331,12 @@ def diagnose_boundary(entries, boundary, *, walls=None, thickness=None) -> Bound
     return out
 
 
-def with_boundaries(entries, *, walls=None, thickness=None) -> CampaignDiagnosis:
+def with_boundaries(
+    entries: CampaignDiagnosis | Iterable[SeriesDiagnosis | BoundaryDiagnosis | Mapping[str, Any]],
+    *,
+    walls: Mapping[str, str] | None = None,
+    thickness: Mapping[str, float] | None = None,
+) -> CampaignDiagnosis:
     """Series entries followed by one entry per boundary condition (:func:`diagnose_boundary`; ``walls``:
     series -> wall, ``thickness``: wall -> thickness [m])."""
     series = CampaignDiagnosis.of(entries)
@@ -305,7 +344,14 @@ def with_boundaries(entries, *, walls=None, thickness=None) -> CampaignDiagnosis
     return CampaignDiagnosis([*series.entries, *(e for e in pooled if e is not None)])
 
 
-def diagnose_campaign(series_records, *, n_boot=40, n_history=2, by_boundary=True, seed=0) -> CampaignDiagnosis:
+def diagnose_campaign(
+    series_records: Mapping[str, Sequence[MeasuredTest | Mapping[str, Any]]],
+    *,
+    n_boot: int = 40,
+    n_history: int = 2,
+    by_boundary: bool = True,
+    seed: int = 0,
+) -> CampaignDiagnosis:
     """Diagnose every series and every boundary condition of a campaign.
 
     Parameters

@@ -42,10 +42,12 @@ null.
 from __future__ import annotations
 
 import json
+import os
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, fields
 from functools import cache
 from pathlib import Path
-from typing import ClassVar, Protocol, TypedDict
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol, Self, TypeAlias, TypedDict, cast
 
 import numpy as np
 
@@ -63,7 +65,7 @@ DIAGNOSIS_SCHEMA = data_path("schemas", "diagnosis.schema.yaml")
 LIMESTONE_SCHEMA = data_path("schemas", "limestone_diagnosis.schema.yaml")
 
 
-def jsonable(x):
+def jsonable(x: object) -> object:
     """``x`` with NumPy scalars as Python numbers and non-finite floats as None (JSON)."""
     if isinstance(x, dict):
         return {str(k): jsonable(v) for k, v in x.items()}
@@ -79,12 +81,12 @@ def jsonable(x):
 
 
 @cache
-def _validator(schema):
+def _validator(schema: Path) -> Any:
     """A validator of the schema at ``schema`` (read once per process)."""
     return jsonschema.Draft202012Validator(yaml.safe_load(Path(schema).read_text()))
 
 
-def validate(document, schema, what):
+def validate(document: object, schema: Path, what: str) -> None:
     """Check a JSON document against a schema.
 
     Raises
@@ -127,7 +129,7 @@ class _Record:
         return out
 
     @classmethod
-    def from_dict(cls, d: dict):
+    def from_dict(cls, d: Mapping[str, Any]) -> Self:
         """The record of a JSON object (or of a dict the diagnosis computed).
 
         Raises
@@ -162,7 +164,12 @@ class _Document:
         """The JSON document (the record's, or a list of entries)."""
         raise NotImplementedError
 
-    def to_json(self, path) -> None:
+    if TYPE_CHECKING:
+        # made by the subclasses (a record's, or a list of entries)
+        @classmethod
+        def from_dict(cls, d: Any) -> Self: ...
+
+    def to_json(self, path: str | os.PathLike[str]) -> None:
         """Write the file as the diagnosis always has: ``json.dumps(..., indent=1)``, no final newline.
 
         Raises
@@ -175,7 +182,7 @@ class _Document:
         write_text(path, json.dumps(document, indent=1))
 
     @classmethod
-    def from_json(cls, path):
+    def from_json(cls, path: str | os.PathLike[str]) -> Self:
         """The object of a file written by :meth:`to_json`.
 
         Raises
@@ -414,7 +421,7 @@ class _Entry(_Record):
         """The findings that name a cause (those of the verdict), in the entry's order."""
         return [f for f in self.findings if f.effect in self.verdict]
 
-    def finding(self: _HasFindings, effect: str):
+    def finding(self: _HasFindings, effect: str) -> Finding | PooledFinding | None:
         """The finding of a cause, None where the entry has none."""
         return next((f for f in self.findings if f.effect == effect), None)
 
@@ -513,7 +520,11 @@ class BoundaryDiagnosis(_Entry):
     wall_thickness_m: float | None = None
 
 
-def entry_of(d):
+#: An entry as a caller may hold it: its object, or the dict of its JSON object.
+_EntryLike: TypeAlias = "SeriesDiagnosis | BoundaryDiagnosis | Mapping[str, Any]"
+
+
+def entry_of(d: _EntryLike) -> SeriesDiagnosis | BoundaryDiagnosis:
     """The :class:`SeriesDiagnosis` or :class:`BoundaryDiagnosis` of an entry (by its ``scope``)."""
     if isinstance(d, _Entry):
         return d
@@ -538,14 +549,14 @@ class CampaignDiagnosis(_Document):
         return [e.to_dict() for e in self.entries]
 
     @classmethod
-    def from_dict(cls, entries):
+    def from_dict(cls, entries: Iterable[_EntryLike]) -> Self:
         """The diagnosis of a list of entries (dicts or entry objects)."""
         if isinstance(entries, dict):
             raise ValueError("a diagnosis is a list of entries, not an object")
         return cls([entry_of(e) for e in entries])
 
     @classmethod
-    def of(cls, diagnosis):
+    def of(cls, diagnosis: CampaignDiagnosis | str | Path | Iterable[_EntryLike]) -> Self:
         """A diagnosis from what a caller may hold: the object, its entries or the path of its JSON file.
 
         Raises
@@ -560,15 +571,16 @@ class CampaignDiagnosis(_Document):
                 return cls.from_json(diagnosis)
             except OSError as err:
                 raise ValueError(f"{diagnosis}: not a readable {cls.title} ({err})") from err
-        return cls.from_dict(list(diagnosis))
+        # neither the object nor a path: its entries
+        return cls.from_dict(list(cast("Iterable[_EntryLike]", diagnosis)))
 
     @classmethod
-    def joined(cls, parts):
+    def joined(cls, parts: Iterable[CampaignDiagnosis]) -> Self:
         """One diagnosis of the entries of several, in their order."""
         return cls([e for part in parts for e in part.entries])
 
     @classmethod
-    def of_series_files(cls, paths):
+    def of_series_files(cls, paths: Iterable[str | os.PathLike[str]]) -> Self:
         """The series of a campaign from its diagnosis jobs' files (results/diagnosis/<job>.json),
         ordered by series as diagnosis.json lists them (the files interleave them)."""
         joined = cls.joined(cls.from_json(path) for path in paths)
@@ -584,11 +596,11 @@ class CampaignDiagnosis(_Document):
         """The entries of the boundary conditions, in the file's order."""
         return [e for e in self.entries if isinstance(e, BoundaryDiagnosis)]
 
-    def boundary(self, boundary) -> BoundaryDiagnosis | None:
+    def boundary(self, boundary: str | None) -> BoundaryDiagnosis | None:
         """The entry of a boundary condition ("two-sided", "one-sided"), None where there is none."""
         return next((e for e in self.boundaries if e.boundary == boundary), None)
 
-    def series_of(self, boundary) -> list[SeriesDiagnosis]:
+    def series_of(self, boundary: str | None) -> list[SeriesDiagnosis]:
         """The series entries of one boundary condition."""
         return [e for e in self.series if e.boundary == boundary]
 
@@ -602,7 +614,7 @@ class CampaignDiagnosis(_Document):
         """The series that leave structure no candidate explains."""
         return [e for e in self.series if e.unexplained]
 
-    def minority(self, boundary) -> list[tuple[SeriesDiagnosis, Finding]]:
+    def minority(self, boundary: str | None) -> list[tuple[SeriesDiagnosis, Finding]]:
         """The findings of the series of a boundary condition that its verdict lacks (named in too few series).
 
         Returns

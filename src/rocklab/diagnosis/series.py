@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Collection, Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, TypedDict, cast
 
 import numpy as np
 
@@ -34,9 +36,15 @@ from rocklab.diagnosis.estimation.selection import sentences, supported
 from rocklab.diagnosis.estimation.systematic import standard_error, verdict_intervals, widened
 from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_test, observe
 from rocklab.diagnosis.extended import engineering_errors, model_params, simulated_tests
-from rocklab.diagnosis.result import BaseRun, Finding, HeldOut, SeriesDiagnosis, SeriesExtended
+from rocklab.diagnosis.result import BaseRun, Finding, HeldOut, ModelBias, SeriesDiagnosis, SeriesExtended
 from rocklab.diagnosis.series_problem import WallProblem
 from rocklab.physics.boundary import Boundary
+
+if TYPE_CHECKING:
+    from rocklab.diagnosis.causes.stop_threshold import StopEstimate
+    from rocklab.diagnosis.estimation.fitting import Fits
+    from rocklab.diagnosis.estimation.selection import Selection
+    from rocklab.diagnosis.result import Number, Structure
 
 log = logging.getLogger(__name__)
 
@@ -44,7 +52,18 @@ log = logging.getLogger(__name__)
 MIN_TESTS_TO_NAME = 2
 
 
-def base_name(boundary):
+class _Head(TypedDict):
+    """What every entry of a series starts with."""
+
+    scope: str
+    key: str
+    boundary: str
+    n_tests: int
+    n_impacts: int
+    base: BaseRun
+
+
+def base_name(boundary: str) -> str:
     """The base model of a boundary condition, in words."""
     return (
         "Housner e_an,2s (Eq. 2), nominal alpha, released from rest at theta0"
@@ -53,7 +72,7 @@ def base_name(boundary):
     )
 
 
-def not_identifiable(tests, named=()):
+def not_identifiable(tests: Sequence[MeasuredTest], named: Collection[str] = ()) -> dict[str, str]:
     """The causes of the catalogue that the design of a series cannot carry, and why.
 
     Each cause says where the tests cannot tell it from the noise or from
@@ -84,7 +103,7 @@ def not_identifiable(tests, named=()):
     return out
 
 
-def unnamed_estimates(problem, sel, fits):
+def unnamed_estimates(problem: WallProblem, sel: Selection, fits: Fits) -> dict[str, dict[str, float]]:
     """The parameters of each candidate a series does not name whose signature its data carry.
 
     Its fit with the chosen model (``sel``, the selection with its ``fits``),
@@ -102,7 +121,7 @@ def unnamed_estimates(problem, sel, fits):
     for x in problem.candidates(True):
         if x in named or not supported(problem.signature, x):
             continue
-        f = fits.get(problem.combine(named, x))
+        f = fits.get(problem.combine(named, x))  # type: ignore[arg-type]  # None, where x cannot join: no fit
         if f is None:
             continue
         own = [q for q in catalogue.by_name(x).params if q.name in f.values]
@@ -112,7 +131,15 @@ def unnamed_estimates(problem, sel, fits):
     return out
 
 
-def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, seed=0) -> SeriesDiagnosis:
+def diagnose_series(
+    tests: Sequence[Any],
+    *,
+    key: str = "",
+    scope: str = "series",
+    n_boot: int = 40,
+    n_history: int = 2,
+    seed: int = 0,
+) -> SeriesDiagnosis:
     """Diagnosis of one series: base model, what it gets wrong, causes, gain.
 
     Parameters
@@ -167,7 +194,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
     )
     statement, off = what_is_wrong(base_err, "the simulation")
     log.info("base model: %s", statement)
-    head = {
+    head: _Head = {
         "scope": scope,
         "key": key,
         "boundary": boundary,
@@ -184,7 +211,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         return SeriesDiagnosis(**head, what_is_wrong=statement, too_small=why, sample_test=_sample_test(tests))
     problem = WallProblem(tests)
     sig = problem.signature
-    fits: dict = {}
+    fits: Fits = {}
     sel = select_effects(problem, signature=sig, n_boot=n_boot, seed=seed, fits=fits)
     sel = beyond_the_catalogue(problem, sel, signature=sig, n_boot=n_boot, seed=seed, fits=fits)
     effects, values = sel["effects"], sel["fit"].values
@@ -197,7 +224,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
             Finding(
                 effect=eff,
                 params={k: values[k] for k in own},
-                ci95={k: sel["ci"][k] for k in own if k in sel["ci"]},
+                ci95={k: cast("list[Number]", sel["ci"][k]) for k in own if k in sel["ci"]},
                 n_tests=len(tests),
                 evidence={
                     "signature": sig.get(eff, {}).get("text", ""),
@@ -218,6 +245,8 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
     structure = list(sel["structure"])
     ext, ext_values = list(effects), dict(values)
     for cause in problem.after_selection:
+        # a cause estimated after selection says what the model leaves for it, and estimates itself
+        assert cause.unexplained is not None and cause.estimate is not None
         mp = model_params(tests, effects, values)
         left = cause.unexplained(problem.S, mp)
         found = cause.estimate(tests, mp, seed=seed) if left else None
@@ -233,7 +262,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         u_model = bias.get("u_model", {})
         f.u_systematic = {k: float(np.hypot(pulls.get(k, 0.0), u_model.get(k, 0.0))) for k in f.ci95}
     params = {q.name: q for f in findings for q in catalogue.by_name(f.effect).params}
-    verdict_intervals(findings, params, {f.effect: f.n_tests for f in findings})
+    verdict_intervals(findings, params, {f.effect: cast(int, f.n_tests) for f in findings})
     blind = not_identifiable(tests, [f.effect for f in findings])
     # a cause the design cannot identify is never named, and a rival these tests cannot tell from a named
     # cause was never tested against it: a named cause whose effect either could produce is named with
@@ -264,7 +293,7 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         residual_structure=structure,
         findings=findings,
         listed_verdict=sel["catalogue"]["effects"] if listed else None,
-        listed_params=sel["catalogue"]["fit"].values if listed else None,
+        listed_params=cast("dict[str, Number]", sel["catalogue"]["fit"].values) if listed else None,
         weak_evidence=sentences({k: v["reason"] for k, v in sel["weak"].items()}),
         rejected=sentences(sel["rejected"]),
         signatures={k: v["text"] for k, v in sig.items()},
@@ -272,7 +301,10 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
         heldout=HeldOut(base=heldout_means(sel["base"]), model=heldout_means(sel["final"])),
         model_bias=bias or None,
         extended=SeriesExtended(
-            effects=ext, params=ext_values, errors=ext_err, statement=what_is_wrong(ext_err, "the extended model")[0]
+            effects=ext,
+            params=cast("dict[str, Number]", ext_values),
+            errors=ext_err,
+            statement=what_is_wrong(ext_err, "the extended model")[0],
         )
         if ext and ext_err is not None
         else None,
@@ -289,7 +321,14 @@ def diagnose_series(tests, *, key="", scope="series", n_boot=40, n_history=2, se
     return entry
 
 
-def _with_model_bias(tests, findings, sel, ext, values, seed):
+def _with_model_bias(
+    tests: Sequence[MeasuredTest],
+    findings: list[Finding],
+    sel: Selection,
+    ext: list[str],
+    values: dict[str, float],
+    seed: int,
+) -> ModelBias:
     """Widen the intervals of the findings by the bias of the model, measured on the tests simulated at
     the extended model (:mod:`rocklab.diagnosis.estimation.bias`): the selected causes fitted again, a
     cause estimated after selection (a stop) estimated again.
@@ -318,17 +357,22 @@ def _with_model_bias(tests, findings, sel, ext, values, seed):
             continue
         again = cause.estimate(simulated, mp, seed=seed)
         for k, ci in f.ci95.items() if again is not None else ():
+            assert f.n_tests is not None
             b[k] = float(again["values"][k] - f.params[k])
-            u[k] = float(net_of_noise(b[k], standard_error(ci, df=f.n_tests - 1)))
+            u[k] = float(net_of_noise(b[k], standard_error(cast("list[float]", ci), df=f.n_tests - 1)))
+    # the findings being made hold numbers (a file's None is a number not finite)
     for f in findings:
         bounds = {q.name: q for q in catalogue.by_name(f.effect).params}
         for k, ci in f.ci95.items():
             q = bounds[k]
-            f.ci95[k] = widened(ci, f.params[k], q.lower, q.upper, u.get(k, 0.0))
+            f.ci95[k] = cast(
+                "list[Number]",
+                widened(cast("list[float]", ci), cast(float, f.params[k]), q.lower, q.upper, u.get(k, 0.0)),
+            )
     return {"b": b, "u_model": u}
 
 
-def _estimated(left, found):
+def _estimated(left: list[Structure], found: StopEstimate | None) -> str:
     """What the estimate of a cause after selection gave, in words (the log)."""
     if not left:
         return "not estimated"
@@ -337,12 +381,19 @@ def _estimated(left, found):
     return f"{'named' if found['named'] else 'not named'}: {found['finding'].evidence['fit']}"
 
 
-def _sample_test(tests):
+def _sample_test(tests: Sequence[MeasuredTest]) -> str:
     """The test of most impacts (the one the figures draw)."""
     return tests[int(np.argmax([t.n_impacts for t in tests]))].test_id
 
 
-def diagnose_records(records, key, *, n_boot=40, n_history=2, seed=0) -> SeriesDiagnosis | None:
+def diagnose_records(
+    records: Iterable[MeasuredTest | Mapping[str, Any]],
+    key: object,
+    *,
+    n_boot: int = 40,
+    n_history: int = 2,
+    seed: int = 0,
+) -> SeriesDiagnosis | None:
     """:func:`diagnose_series` of one series' records, or None when none of its
     tests has two impacts or more (nothing to compare a model with)."""
     tests = [r if isinstance(r, MeasuredTest) else measured_test(r) for r in records]

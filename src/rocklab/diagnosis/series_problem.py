@@ -2,51 +2,59 @@
 
 from __future__ import annotations
 
+from collections.abc import Collection, Iterable, Mapping
+from typing import TYPE_CHECKING, Any, cast
+
 import numpy as np
 
 from rocklab.diagnosis import catalogue
-from rocklab.diagnosis.causes import Stage
+from rocklab.diagnosis.causes import Signature, Stage
 from rocklab.diagnosis.estimation import Problem
-from rocklab.diagnosis.evidence import TestStack, covariates, log_ratio, noise_covariates, residuals
+from rocklab.diagnosis.evidence import MeasuredTest, TestStack, covariates, log_ratio, noise_covariates, residuals
 from rocklab.diagnosis.extended import model_params
 from rocklab.diagnosis.result import Structure
 from rocklab.diagnosis.wall_model import base_params, free_run, log_columns
 
+if TYPE_CHECKING:
+    from rocklab.diagnosis.causes import Unexplained
 
-class WallProblem(Problem):
+
+class WallProblem(Problem[TestStack]):
     """The tests of one boundary condition (a series), the causes of the catalogue that can occur in it."""
 
-    def __init__(self, tests):
+    def __init__(self, tests: Iterable[MeasuredTest]) -> None:
         self.tests = list(tests)
         self.n_tests = len(self.tests)
         self.S = TestStack.of(self.tests)
         self.boundary = self.tests[0].boundary
         self.causes = tuple(catalogue.for_boundary(self.boundary, families=True, columns=log_columns(self.tests)))
         self.after_selection = tuple(catalogue.for_boundary(self.boundary, Stage.AFTER_SELECTION))
-        self._sig = None
-        self._cache = {}
+        self._sig: dict[str, Signature] | None = None
+        # what residuals() keeps between calls: the base model of a subset, and evidence.residuals' own
+        self._cache: dict[str, Any] = {}
 
-    def subset(self, idx):
+    def subset(self, idx: np.ndarray) -> TestStack:
         return self.S.subset(np.asarray(idx))
 
-    def residuals(self, sub, ext, values):
+    def residuals(self, sub: TestStack, ext: Collection[str], values: Mapping[str, float]) -> dict[str, np.ndarray]:
         # a fit evaluates one subset many times: its base model is made once
         if self._cache.get("base_of") is not sub:
             self._cache.update(base_of=sub, base=base_params(sub.tests))
         return residuals(sub, model_params(sub.tests, ext, values, self._cache["base"]), self._cache)
 
-    def covariates(self, sub):
+    def covariates(self, sub: TestStack) -> dict[str, dict[str, np.ndarray]]:
         return covariates(sub)
 
-    def noise(self, sub):
+    def noise(self, sub: TestStack) -> dict[str, np.ndarray]:
         return noise_covariates(sub)
 
-    def extra_structure(self, sub, ext, values):
+    def extra_structure(self, sub: TestStack, ext: Collection[str], values: Mapping[str, float]) -> list[Structure]:
         """What the model leaves that the causes estimated after selection would explain."""
         mp = model_params(sub.tests, ext, values)
-        return [st for cause in self.after_selection for st in cause.unexplained(sub, mp)]
+        # every cause estimated after selection says what it would explain (Cause.unexplained)
+        return [st for cause in self.after_selection for st in cast("Unexplained", cause.unexplained)(sub, mp)]
 
-    def form_structure(self, ext):
+    def form_structure(self, ext: Collection[str]) -> list[Structure]:
         """What a family's signature says the model ``ext`` misses: its listed member of the wrong
         form (``against_member``), or no member at all (``unmodelled``); the flight-loss curve of
         :mod:`rocklab.diagnosis.causes.flight_loss`.  A named member whose form only its family's
@@ -58,6 +66,7 @@ class WallProblem(Problem):
             if c.family in ext and sig.get("against_member"):
                 out.append(Structure(c.name, sig["against_member"]))
             elif c.family in ext and c.checks_form and (not sig or sig.get("not_identifiable")):
+                assert c.family is not None
                 out.append(
                     Structure(
                         c.family,
@@ -69,16 +78,18 @@ class WallProblem(Problem):
         return out
 
     @property
-    def signature(self):
+    def signature(self) -> dict[str, Signature]:
         """The causes' signatures in these tests (:func:`rocklab.diagnosis.catalogue.signatures`)."""
         if self._sig is None:
             self._sig = catalogue.signatures(self.tests)
         return self._sig
 
-    def starts(self, ext):
+    def starts(self, ext: Collection[str]) -> dict[str, float]:
         return catalogue.starts(self.signature)
 
-    def heldout_measures(self, sub, ext, values):
+    def heldout_measures(
+        self, sub: TestStack, ext: Collection[str], values: Mapping[str, float]
+    ) -> dict[str, np.ndarray]:
         mp = model_params(sub.tests, ext, values)
         run = free_run(sub, mp, n_max=sub.A.shape[1])
         R = residuals(sub, mp)

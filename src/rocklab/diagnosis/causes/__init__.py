@@ -10,13 +10,46 @@ limestone blocks.  docs/diagnosis-method.md shows how to add one.
 from __future__ import annotations
 
 import enum
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Protocol, TypeAlias
 
 from rocklab.diagnosis.parameters import Param
 from rocklab.physics.boundary import Boundary
 
+if TYPE_CHECKING:
+    import numpy as np
+
+    from rocklab.diagnosis.evidence import Observed, TestStack
+    from rocklab.diagnosis.result import Structure
+    from rocklab.diagnosis.wall_model import ModelParams
+    from rocklab.physics.law import Amplitude, FlightLoss, Gap, Hinge, HousnerLoss, Restitution, SpeedFactor, Stop
+
 BOTH = tuple(Boundary)
+
+#: A law of :mod:`rocklab.physics.law`: what a cause does to a wall (:attr:`Cause.laws`).
+Law: TypeAlias = "Restitution | HousnerLoss | Amplitude | SpeedFactor | Hinge | FlightLoss | Gap | Stop"
+
+#: A cause's signature in the data (:attr:`Cause.signature`): ``value``, ``supports``, ``text`` and what
+#: else the cause reads from it (its starting values, a statement), their kinds by key.
+Signature: TypeAlias = dict[str, Any]
+
+#: :attr:`Cause.unexplained`: what a model of a stack of tests leaves that the cause would explain.
+Unexplained: TypeAlias = "Callable[[TestStack, ModelParams], list[Structure]]"
+
+
+class Trials(Protocol):
+    """What :attr:`Cause.on_ratios` reads of trials without rotations (the limestone blocks of
+    :mod:`rocklab.diagnosis.block_tests`): (trials, impacts) arrays and a row per trial."""
+
+    ids: list[str]
+    alpha: np.ndarray
+    u: np.ndarray
+    odd: np.ndarray
+    group: np.ndarray
+
+    @property
+    def ratio(self) -> np.ndarray: ...
 
 
 class Stage(enum.StrEnum):
@@ -29,11 +62,11 @@ class Stage(enum.StrEnum):
     AFTER_SELECTION = "after selection"
 
 
-def _no_signature(observed):
+def _no_signature(observed: Observed) -> None:
     return None
 
 
-def _no_starts(signatures):
+def _no_starts(signatures: Mapping[str, Signature]) -> dict[str, float]:
     return {}
 
 
@@ -151,13 +184,13 @@ class Cause:
     log_column: str | None = None
     not_identifiable: Callable | None = None
 
-    def holds(self, ci, name, value):
+    def holds(self, ci: Mapping[str, Sequence[float]], name: str, value: float) -> bool:
         """Whether the 95 % interval ``ci`` of parameter ``name`` holds ``value`` (to its practical margin)."""
         q = next(q for q in self.params if q.name == name)
         lo, hi = ci[name]
         margin = q.practical or 0.0
         return lo - margin <= value <= hi + margin
 
-    def values(self, values):
+    def values(self, values: Mapping[str, float]) -> dict[str, float]:
         """This cause's parameters from ``values``, the null value where missing."""
         return {q.name: values.get(q.name, q.null) for q in self.params}

@@ -6,21 +6,27 @@ transverse walls (:func:`rocklab.diagnosis.wall_model.impact_speeds`).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
+
 import numpy as np
 
-from rocklab.diagnosis.causes import Cause
+from rocklab.diagnosis.causes import Cause, Signature
 from rocklab.diagnosis.parameters import Param
 from rocklab.physics.boundary import Boundary
 from rocklab.physics.law import Gap
 
+if TYPE_CHECKING:
+    from rocklab.diagnosis.evidence import Observed
+
 GAMMA = Param("gap_over_alpha", 0.0, 0.3, 0.0, practical=0.002)
 
 
-def laws(v):
+def laws(v: Mapping[str, float]) -> tuple[Gap]:
     return (Gap(v["gap_over_alpha"]),)
 
 
-def signature(ob):
+def signature(ob: Observed) -> Signature:
     """The negative rotations: excursions past theta = 0 above the noise threshold."""
     S = ob.S
     d = S.depth[np.isfinite(S.depth)]
@@ -34,7 +40,7 @@ def signature(ob):
     }
 
 
-def starts(sig):
+def starts(sig: Mapping[str, Signature]) -> dict[str, float]:
     return {"gap_over_alpha": max(sig.get(CAUSE.name, {}).get("value", 0.0), 1e-3)}
 
 

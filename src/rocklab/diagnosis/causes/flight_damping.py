@@ -3,15 +3,21 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from rocklab._imports import lazy_module
 from rocklab.diagnosis import evidence
-from rocklab.diagnosis.causes import Cause
+from rocklab.diagnosis.causes import Cause, Signature
 from rocklab.diagnosis.parameters import Param
 from rocklab.physics.flight import flight_angle, quarter_period, speed_loss
 from rocklab.physics.law import FlightLoss
+
+if TYPE_CHECKING:
+    from rocklab.diagnosis.evidence import Observed
 
 stats = lazy_module("scipy.stats")
 
@@ -24,11 +30,11 @@ LONG_FLIGHT = 0.3
 MIN_LONG_FLIGHTS = 5
 
 
-def laws(v):
+def laws(v: Mapping[str, float]) -> tuple[FlightLoss]:
     return (FlightLoss(v["zeta"]),)
 
 
-def signature(ob):
+def signature(ob: Observed) -> Signature | None:
     """The speed lost between a take-off and the next impact (none in a rigid flight).
 
     Read on the long flights (:func:`long_flights`), where the derivative
@@ -69,7 +75,19 @@ def signature(ob):
     }
 
 
-def filter_reading(A, a, p, v, *, zeta=0.0, mu=0.0, kappa=0.0, k=0.0, read=None, fs=None):
+def filter_reading(
+    A: npt.ArrayLike,
+    a: npt.ArrayLike,
+    p: float,
+    v: npt.ArrayLike,
+    *,
+    zeta: float = 0.0,
+    mu: float = 0.0,
+    kappa: float = 0.0,
+    k: float = 0.0,
+    read: np.ndarray | None = None,
+    fs: float | None = None,
+) -> np.ndarray:
     """The speed a flight of apex A [rad] and take-off speed v [rad/s] loses by its next impact, over v, as
     the derivative filter reads it [-].
 
@@ -90,27 +108,27 @@ def filter_reading(A, a, p, v, *, zeta=0.0, mu=0.0, kappa=0.0, k=0.0, read=None,
     return speed_loss(A, a, p, zeta, mu=mu, kappa=kappa, k=k) + read @ losses
 
 
-def _loss_read(T, v, p, fs):
+def _loss_read(T: float, v: float, p: float, fs: float | None) -> np.ndarray:
     """What the filter reads of each loss in the speed loss of one flight, per unit: take-off less landing."""
     r = evidence.filter_reading(T, v, p, fs)
     return r[1] - r[2]
 
 
-def viscous_curve(A, alpha, p, read):
+def viscous_curve(A: np.ndarray, alpha: float, p: float, read: np.ndarray | None) -> np.ndarray:
     """The viscous loss's :func:`filter_reading` per unit zeta on the flights of ``read``: linear in zeta
     for the small losses of a wall."""
     u = 1e-3
     return filter_reading(A, alpha, p, 0.0, zeta=u, read=read) / u
 
 
-def curve_scale(curve, loss):
+def curve_scale(curve: np.ndarray, loss: np.ndarray) -> tuple[float, float]:
     """The scale c >= 0 of a loss curve per unit of its parameter that fits the losses best (least
     squares through the origin), and the mean square of what it leaves."""
     c = max(float(curve @ loss / (curve @ curve)), 0.0)
     return c, float(np.mean((loss - c * curve) ** 2))
 
 
-def long_flights(ob):
+def long_flights(ob: Observed) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Apex, take-off speed and relative speed loss of the flights the filter reads within one half.
 
     Returns
@@ -131,7 +149,7 @@ def long_flights(ob):
     return S.A[:, :-1][ok], S.va[:, :-1][ok], loss[ok], read[ok]
 
 
-def _long(ob):
+def _long(ob: Observed) -> tuple[np.ndarray, np.ndarray]:
     """Which flights :func:`long_flights` reads, (tests, impacts - 1), and the speed each loses."""
     S = ob.S
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -140,7 +158,7 @@ def _long(ob):
     return ok, loss
 
 
-def short_flights_only(ob):
+def short_flights_only(ob: Observed) -> str:
     """Why the flights of a series cannot tell a loss in flight from a lower e ("" where they can).
 
     The derivative filter moves the loss of a flight shorter than its
@@ -157,7 +175,7 @@ def short_flights_only(ob):
     )
 
 
-def starts(sig):
+def starts(sig: Mapping[str, Signature]) -> dict[str, float]:
     return {"zeta": max(sig.get(CAUSE.name, {}).get("zeta", 0.0), 1e-4)}
 
 

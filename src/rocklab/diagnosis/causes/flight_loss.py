@@ -20,15 +20,22 @@ the curve is read on the flights whose fit windows stay within one half.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, TypedDict
+
 import numpy as np
 
 from rocklab._imports import lazy_module
-from rocklab.diagnosis.causes import Cause, flight_damping
+from rocklab.diagnosis.causes import Cause, Signature, flight_damping
 from rocklab.diagnosis.causes.flight_damping import LONG_FLIGHT, MIN_LONG_FLIGHTS, long_flights
 from rocklab.diagnosis.parameters import Param
 from rocklab.physics.flight import takeoff_speed
 from rocklab.physics.law import FlightLoss
 from rocklab.physics.wall import overturning_velocity
+
+if TYPE_CHECKING:
+    from rocklab.diagnosis.evidence import MeasuredTest, Observed
+    from rocklab.diagnosis.result import Curve, CurveLine
 
 stats = lazy_module("scipy.stats")
 
@@ -50,11 +57,20 @@ MEMBERS = (
 )
 
 
-def laws(v):
+class _FlightKeywords(TypedDict):
+    """The keywords of a flight's closed forms (:func:`rocklab.physics.flight.takeoff_speed`)."""
+
+    zeta: float
+    mu: float
+    kappa: float
+    k: float
+
+
+def laws(v: Mapping[str, float]) -> tuple[FlightLoss]:
     return (FlightLoss(v["zeta"], v["mu_over_alpha"], v["kappa_alpha"]),)
 
 
-def member_curves(A, v, alpha, p, read):
+def member_curves(A: np.ndarray, v: np.ndarray, alpha: float, p: float, read: np.ndarray) -> dict[str, np.ndarray]:
     """Each member's flight-loss curve per unit of its parameter on the flights of ``read``, as the
     derivative filter reads it (:func:`rocklab.diagnosis.causes.flight_damping.filter_reading`): linear in
     the parameter for the small losses of a wall.
@@ -72,7 +88,7 @@ def member_curves(A, v, alpha, p, read):
     }
 
 
-def signature(ob):
+def signature(ob: Observed) -> Signature | None:
     """The speed lost between take-off and the next impact against the flight's speed (long flights).
 
     Each member's curve (:func:`member_curves`) fitted by its one parameter
@@ -119,7 +135,7 @@ def signature(ob):
     }
 
 
-def starts(sig):
+def starts(sig: Mapping[str, Signature]) -> dict[str, float]:
     """The member that fits the flight-loss curve best, at its fitted value (not the listed viscous loss's)."""
     s = sig.get(CAUSE.name)
     if not s or s.get("best", "zeta") == "zeta":
@@ -127,7 +143,7 @@ def starts(sig):
     return {s["best"]: s["start"]}
 
 
-def closed_form(values, ci):
+def closed_form(values: Mapping[str, float], ci: Mapping[str, Sequence[float]]) -> str:
     """The member of the family the intervals hold (the others at their null), or none."""
     fits = [
         text
@@ -141,7 +157,7 @@ def closed_form(values, ci):
     return "no closed form of the library"
 
 
-def curve(tests, values, listed):
+def curve(tests: Sequence[MeasuredTest], values: Mapping[str, float], listed: Mapping[str, float]) -> Curve:
     """The flight-loss curve of the fitted family and of the listed viscous loss, against the long flights.
 
     Parameters
@@ -172,8 +188,8 @@ def curve(tests, values, listed):
     vr = float(overturning_velocity(alpha, p))
     A = np.linspace(0.02, 0.98, 60) * a
 
-    def line(zeta, mu_a, kappa_a, label):
-        kw = {"zeta": zeta, "mu": mu_a * alpha, "kappa": kappa_a / alpha, "k": k}
+    def line(zeta: float, mu_a: float, kappa_a: float, label: str) -> CurveLine:
+        kw: _FlightKeywords = {"zeta": zeta, "mu": mu_a * alpha, "kappa": kappa_a / alpha, "k": k}
         v_off = takeoff_speed(A, a, p, **kw)
         read = flight_damping.filter_reading(A, a, p, v_off, fs=fs, **kw)
         return {"x": (v_off / vr).tolist(), "y": read.tolist(), "label": label}

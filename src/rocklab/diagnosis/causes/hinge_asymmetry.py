@@ -3,13 +3,19 @@ on the hinge being left."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from rocklab._imports import lazy_module
-from rocklab.diagnosis.causes import Cause
+from rocklab.diagnosis.causes import Cause, Signature, Trials
 from rocklab.diagnosis.parameters import Param
 from rocklab.physics.boundary import Boundary
 from rocklab.physics.law import Hinge, Restitution
+
+if TYPE_CHECKING:
+    from rocklab.diagnosis.evidence import Observed
 
 stats = lazy_module("scipy.stats")
 
@@ -17,11 +23,11 @@ S_ALPHA = Param("s_alpha", -0.5, 0.5, 0.0, practical=0.005)
 S_E = Param("s_e", -0.5, 0.5, 0.0, practical=0.003)
 
 
-def laws(v):
+def laws(v: Mapping[str, float]) -> tuple[Restitution, Hinge]:
     return (Restitution(asymmetry=v["s_e"]), Hinge(asymmetry=v["s_alpha"]))
 
 
-def signature(ob):
+def signature(ob: Observed) -> Signature:
     """e and alpha by hinge, theta0/alpha by push or pull release."""
     S, ratio, ok, a_T = ob.S, ob.ratio, ob.ok, ob.a_T
     parts, ps, start = [], [], {}
@@ -59,7 +65,7 @@ def signature(ob):
     }
 
 
-def on_ratios(trials):
+def on_ratios(trials: Trials) -> Signature:
     """r/e_an on odd and even impacts: the two base edges in turn."""
     ratio = trials.ratio
     ok = np.isfinite(ratio)
@@ -75,7 +81,7 @@ def on_ratios(trials):
     }
 
 
-def starts(sig):
+def starts(sig: Mapping[str, Signature]) -> dict[str, float]:
     return {k: sig.get(CAUSE.name, {}).get(k, 0.0) for k in ("s_alpha", "s_e")}
 
 

@@ -11,22 +11,28 @@ which does not fit the flight times at all amplitudes when k is not 0.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
 
-from rocklab.diagnosis.causes import Cause, instability_angle
+from rocklab.diagnosis.causes import Cause, Signature, instability_angle
 from rocklab.diagnosis.estimation.structure import within_slope
 from rocklab.diagnosis.parameters import Param
 from rocklab.physics.law import Hinge
 
+if TYPE_CHECKING:
+    from rocklab.diagnosis.evidence import Observed
+
 K = Param("rounding", -0.6, 0.8, 0.0, practical=0.02)
 
 
-def laws(v):
+def laws(v: Mapping[str, float]) -> tuple[Hinge]:
     r = v["alpha_r_over_alpha"]
     return (Hinge(r, rounding=v["rounding"]),)
 
 
-def signature(ob):
+def signature(ob: Observed) -> Signature | None:
     """The trend of the flight times' angle (Housner inverted) with the flight's amplitude, within tests.
 
     a(A) / alpha = r (1 - k) + k A / alpha: the slope of the angle over
@@ -38,6 +44,7 @@ def signature(ob):
     slope, p, span = within_slope(np.where(ok, ob.a_T, 0.0), x, ok, min_obs=2)
     if not np.isfinite(p):
         return None
+    assert K.practical is not None
     return {
         "value": float(slope),
         "supports": bool(p < 0.01 and abs(slope) > K.practical),
@@ -46,11 +53,11 @@ def signature(ob):
     }
 
 
-def starts(sig):
+def starts(sig: Mapping[str, Signature]) -> dict[str, float]:
     return {"rounding": sig.get(CAUSE.name, {}).get("value", K.null)}
 
 
-def closed_form(values, ci):
+def closed_form(values: Mapping[str, float], ci: Mapping[str, Sequence[float]]) -> str:
     if not CAUSE.holds(ci, "rounding", 0.0):
         return "no closed form of the library"
     if CAUSE.holds(ci, "alpha_r_over_alpha", 1.0):

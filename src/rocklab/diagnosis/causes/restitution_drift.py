@@ -13,15 +13,20 @@ follows as it chooses between causes.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from rocklab._imports import lazy_module
-from rocklab.diagnosis.causes import Cause, restitution_scale
+from rocklab.diagnosis.causes import Cause, Signature, restitution_scale
 from rocklab.diagnosis.parameters import Param
 from rocklab.lab.hierarchy import MIN_DF
 from rocklab.physics.law import Restitution
+
+if TYPE_CHECKING:
+    from rocklab.diagnosis.evidence import MeasuredTest, Observed
 
 stats = lazy_module("scipy.stats")
 
@@ -33,7 +38,7 @@ NAME = "restitution_drift"
 MIN_TESTS = MIN_DF + 2
 
 
-def column_of(name):
+def column_of(name: str) -> str | None:
     """The test log's column a drift named ``name`` follows (None: the test order, or no drift): the
     reading of a name, for :func:`rocklab.diagnosis.catalogue.by_name` alone (a cause says it as
     :attr:`~rocklab.diagnosis.causes.Cause.log_column`)."""
@@ -42,19 +47,19 @@ def column_of(name):
     return None
 
 
-def _place(tests, column):
+def _place(tests: Sequence[MeasuredTest], column: str | None) -> np.ndarray:
     """n of each test: its place in the series, or in the range of a column of the test log
     (of a model: :meth:`rocklab.diagnosis.wall_model.ModelParams.place`)."""
     return np.array([t.order if column is None else t.log[column] for t in tests], float)
 
 
-def _cause(column, others=()):
-    def laws(v):
+def _cause(column: str | None, others: Sequence[str] = ()) -> Cause:
+    def laws(v: Mapping[str, float]) -> tuple[Restitution]:
         return (Restitution(v["c"], drift=v["drift"], along=column),)
 
     what = "the test's place in the series" if column is None else f"the test's value of {column} in the test log"
 
-    def signature(ob):
+    def signature(ob: Observed) -> Signature | None:
         """The per-test median of the measured e/e_an against n."""
         med = np.array([np.median(ob.ratio[i][ob.ok[i]]) if ob.ok[i].any() else np.nan for i in range(len(ob.tests))])
         order = _place(ob.tests, column)
@@ -71,10 +76,10 @@ def _cause(column, others=()):
 
     name = NAME if column is None else f"{NAME}[{column}]"
 
-    def starts(sig):
+    def starts(sig: Mapping[str, Signature]) -> dict[str, float]:
         return {"drift": sig.get(name, {}).get("value", 0.0)} if column is None else {}
 
-    def closed_form(values, ci):
+    def closed_form(values: Mapping[str, float], ci: Mapping[str, Sequence[float]]) -> str:
         if CAUSE.holds(ci, "drift", 0.0):
             return "restitution_scale: e = c e_an, no drift"
         return "no closed form of the library"
@@ -97,14 +102,14 @@ def _cause(column, others=()):
     )
 
 
-def too_few_tests(ob):
+def too_few_tests(ob: Observed) -> str:
     """Why the tests of a series cannot carry a drift between them ("" where they can)."""
     n = len(ob.tests)
     return f"a drift is a slope over tests and needs {MIN_TESTS} of them, the series has {n}" if n < MIN_TESTS else ""
 
 
 @lru_cache(maxsize=64)
-def along_log(columns):
+def along_log(columns: tuple[str, ...]) -> tuple[Cause, ...]:
     """The drifts along each column of the test log ``columns`` (a tuple), each replacing the other drifts."""
     names = (NAME, *(f"{NAME}[{c}]" for c in columns))
     return tuple(_cause(c, names) for c in columns)

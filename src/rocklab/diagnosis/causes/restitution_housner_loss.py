@@ -10,12 +10,18 @@ a series (no boundary condition).
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from rocklab._imports import lazy_module
-from rocklab.diagnosis.causes import Cause, restitution_scale
+from rocklab.diagnosis.causes import Cause, Signature, Trials, restitution_scale
 from rocklab.diagnosis.parameters import Param
 from rocklab.physics.law import HousnerLoss
+
+if TYPE_CHECKING:
+    from rocklab.diagnosis.result import Slenderness
 
 stats = lazy_module("scipy.stats")
 
@@ -23,11 +29,11 @@ LAMBDA = Param("loss_fraction", 0.0, 3.0, 1.0, practical=0.01)
 DELTA = Param("loss_constant", -0.2, 0.2, 0.0, practical=0.002)
 
 
-def laws(v):
+def laws(v: Mapping[str, float]) -> tuple[HousnerLoss]:
     return (HousnerLoss(v["loss_fraction"], v["loss_constant"]),)
 
 
-def slenderness_trend(trials):
+def slenderness_trend(trials: Trials) -> Slenderness:
     """How e/e_an varies with slenderness, block group by block group.
 
     Slenderness is a property of the block group
@@ -66,12 +72,13 @@ def slenderness_trend(trials):
     }
 
 
-def on_ratios(trials):
+def on_ratios(trials: Trials) -> Signature | None:
     """Across slendernesses, the trend of the block groups' r/e_an with (B/H)^2 (:func:`slenderness_trend`);
     None within one slenderness."""
     if not np.ptp(trials.alpha) > 0:
         return None
     st = slenderness_trend(trials)
+    assert st["p"] is not None
     return {
         "value": st["slope"],
         "supports": bool(st["p"] < 0.01),
@@ -80,7 +87,7 @@ def on_ratios(trials):
     }
 
 
-def closed_form(values, ci):
+def closed_form(values: Mapping[str, float], ci: Mapping[str, Sequence[float]]) -> str:
     housner = CAUSE.holds(ci, "loss_fraction", 1.0)
     if housner and CAUSE.holds(ci, "loss_constant", 0.0):
         return "Housner's e (Eq. 2)"

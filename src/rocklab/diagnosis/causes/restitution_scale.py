@@ -2,21 +2,27 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
+
 import numpy as np
 
-from rocklab.diagnosis.causes import Cause
+from rocklab.diagnosis.causes import Cause, Signature, Trials
 from rocklab.diagnosis.evidence import series_level
 from rocklab.diagnosis.parameters import Param
 from rocklab.physics.law import Restitution
 
+if TYPE_CHECKING:
+    from rocklab.diagnosis.evidence import Observed
+
 C = Param("c", 0.2, 2.0, 1.0, practical=0.005)
 
 
-def laws(v):
+def laws(v: Mapping[str, float]) -> tuple[Restitution]:
     return (Restitution(v["c"]),)
 
 
-def signature(ob):
+def signature(ob: Observed) -> Signature | None:
     """The measured e/e_an: one level per test (its median), their mean over tests."""
     e = ob.ratio[ob.ok]
     if e.size < 3:
@@ -31,7 +37,7 @@ def signature(ob):
     }
 
 
-def on_ratios(trials):
+def on_ratios(trials: Trials) -> Signature:
     """The measured r/e_an of the impacts: one level per trial (its median), their mean over trials."""
     ratio = trials.ratio
     ok = np.isfinite(ratio)
@@ -43,7 +49,7 @@ def on_ratios(trials):
     }
 
 
-def starts(sig):
+def starts(sig: Mapping[str, Signature]) -> dict[str, float]:
     return {"c": sig.get(CAUSE.name, {}).get("value", 1.0)}
 
 

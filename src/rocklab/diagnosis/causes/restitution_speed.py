@@ -14,12 +14,18 @@ exact simulator's reference integrator carries it, the maps' engines do not.
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from rocklab._imports import lazy_module
-from rocklab.diagnosis.causes import Cause, restitution_amplitude, restitution_scale
+from rocklab.diagnosis.causes import Cause, Signature, restitution_amplitude, restitution_scale
 from rocklab.diagnosis.parameters import Param
 from rocklab.physics.law import KNOTS, SpeedFactor
+
+if TYPE_CHECKING:
+    from rocklab.diagnosis.evidence import Observed
 
 stats = lazy_module("scipy.stats")
 
@@ -27,11 +33,11 @@ G = tuple(Param(f"g{j}", 0.0, 2.5, 1.0, practical=0.01) for j in range(KNOTS.siz
 NAMES = [q.name for q in G]
 
 
-def laws(v):
+def laws(v: Mapping[str, float]) -> tuple[SpeedFactor]:
     return (SpeedFactor(tuple(v[n] for n in NAMES)),)
 
 
-def _binned(ob):
+def _binned(ob: Observed) -> tuple[list[float], list[float], float] | None:
     """Medians of the measured e/e_an in thirds of the range of the impact speed, and their test."""
     e, x = ob.ratio[ob.ok], ob.vr[ob.ok]
     if e.size < 9:
@@ -44,13 +50,14 @@ def _binned(ob):
     return centres, [float(np.median(g)) for g in groups], stats.kruskal(*groups).pvalue
 
 
-def signature(ob):
+def signature(ob: Observed) -> Signature | None:
     """The measured e/e_an in thirds of the impact speed: a law that changes with the speed."""
     b = _binned(ob)
     if b is None:
         return None
     centres, med, p = b
     spread = max(med) - min(med)
+    assert G[0].practical is not None
     return {
         "value": med,
         "at": centres,
@@ -61,7 +68,7 @@ def signature(ob):
     }
 
 
-def starts(sig):
+def starts(sig: Mapping[str, Signature]) -> dict[str, float]:
     s = sig.get(CAUSE.name)
     if not s:
         return {}
@@ -69,16 +76,16 @@ def starts(sig):
     return dict(zip(NAMES, map(float, g)))
 
 
-def _holds(ci, curve):
+def _holds(ci: Mapping[str, Sequence[float]], curve: Iterable[float]) -> bool:
     return all(CAUSE.holds(ci, n, float(c)) for n, c in zip(NAMES, curve) if n in ci)
 
 
-def closed_form(values, ci):
+def closed_form(values: Mapping[str, float], ci: Mapping[str, Sequence[float]]) -> str:
     """The first closed form whose curve at the knots every interval holds (weighted by the inverse widths)."""
     g = np.array([values[n] for n in NAMES])
     w = np.array([1.0 / max(ci[n][1] - ci[n][0], 1e-9) ** 2 if n in ci else 0.0 for n in NAMES])
 
-    def fit(basis):
+    def fit(basis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         coef = np.linalg.lstsq(basis * np.sqrt(w)[:, None], g * np.sqrt(w), rcond=None)[0]
         return coef, basis @ coef
 

@@ -11,21 +11,26 @@ halves the held-out error of the free run in the number of impacts.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, TypedDict, cast
 
 import numpy as np
 
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.causes import BOTH, Cause, Stage
-from rocklab.diagnosis.errors import engineering_rows
-from rocklab.diagnosis.evidence import TestStack
+from rocklab.diagnosis.errors import EngineeringRow, engineering_rows
+from rocklab.diagnosis.evidence import MeasuredTest, TestStack
 from rocklab.diagnosis.parameters import Param
 from rocklab.diagnosis.result import Finding, Structure
-from rocklab.diagnosis.wall_model import next_flight
+from rocklab.diagnosis.wall_model import ModelParams, next_flight
 from rocklab.inference.intervals import MIN_BOOTSTRAP, expanded, percentile_interval, t_interval
 from rocklab.lab.motion import odd_samples
 from rocklab.physics.flight import landing_speed, quarter_period
 from rocklab.physics.law import Stop
 from rocklab.physics.wall import overturning_velocity
+
+if TYPE_CHECKING:
+    from rocklab.diagnosis.result import Number
 
 signal = lazy_module("scipy.signal")
 
@@ -33,12 +38,36 @@ NAME = "stop_threshold"
 V_STOP = Param("v_stop_over_vr", 0.0, 1.0, 0.0)
 
 
-def laws(v):
+class StopThreshold(TypedDict):
+    """The stop threshold of a series and what it gains (:func:`threshold`)."""
+
+    v_stop_over_vr: float
+    ci95: list[float]
+    common_bracket: bool
+    spread_log: float
+    n_observed: int
+    n_tests: int
+    n_impacts_rms: tuple[float, float]
+    duration_pct_rms: tuple[float, float]
+    named: bool
+
+
+class StopEstimate(TypedDict):
+    """What :func:`estimate` gives the diagnosis (:attr:`rocklab.diagnosis.causes.Cause.estimate`)."""
+
+    named: bool
+    values: dict[str, float]
+    finding: Finding
+
+
+def laws(v: Mapping[str, float]) -> tuple[Stop]:
     # a value per test is allowed: the threshold of each test taken from the others (estimate)
     return (Stop(v["v_stop_over_vr"]),)
 
 
-def _largest_apex_after_end(S: TestStack, mp, idx, window_s, n_max=200):
+def _largest_apex_after_end(
+    S: TestStack, mp: ModelParams, idx: Sequence[int] | np.ndarray, window_s: float, n_max: int = 200
+) -> np.ndarray:
     """Largest apex the model predicts after the end of each test ``idx`` of ``S``, apexes from
     ``window_s`` / 10 to ``window_s`` after the end [rad] (0 if none).
 
@@ -72,7 +101,7 @@ def _largest_apex_after_end(S: TestStack, mp, idx, window_s, n_max=200):
     return pred
 
 
-def end_of_motion(S: TestStack, mp, min_ratio=3.0, window_s=1.0):
+def end_of_motion(S: TestStack, mp: ModelParams, min_ratio: float = 3.0, window_s: float = 1.0) -> list[Structure]:
     """Whether the walls stop earlier than the model can.
 
     The reduction ends the motion at the last flight it can measure; a wall
@@ -117,7 +146,9 @@ def end_of_motion(S: TestStack, mp, min_ratio=3.0, window_s=1.0):
     return []
 
 
-def stop_speeds(S: TestStack, mp, min_ratio=3.0, tail_s=0.5):
+def stop_speeds(
+    S: TestStack, mp: ModelParams, min_ratio: float = 3.0, tail_s: float = 0.5
+) -> tuple[np.ndarray, np.ndarray]:
     """Landing speeds [thetadot_r] between which each wall stopped dead.
 
     The last measured flight (apex A_n) was launched by a landing at v_n
@@ -153,7 +184,7 @@ def stop_speeds(S: TestStack, mp, min_ratio=3.0, tail_s=0.5):
     return lo, hi
 
 
-def bracket_centre(lo, hi):
+def bracket_centre(lo: np.ndarray, hi: np.ndarray) -> tuple[float, bool]:
     """Threshold of brackets (lo, hi] and whether they share a common part:
     the geometric centre of that part if they have one, else the geometric
     mean of their centres."""
@@ -163,7 +194,9 @@ def bracket_centre(lo, hi):
     return float(np.exp(0.5 * np.mean(np.log(lo) + np.log(hi)))), False
 
 
-def threshold(tests, mp, *, n_boot=200, seed=0, min_tests=3):
+def threshold(
+    tests: list[MeasuredTest], mp: ModelParams, *, n_boot: int = 200, seed: int = 0, min_tests: int = 3
+) -> StopThreshold | None:
     """The landing speed below which the walls of a series stop dead, and what it gains.
 
     Each test brackets its own stop speed (:func:`stop_speeds`, a bracket as
@@ -213,7 +246,7 @@ def threshold(tests, mp, *, n_boot=200, seed=0, min_tests=3):
     keep = ~np.eye(x.size, dtype=bool)
     loo = np.array([bracket_centre(lo[k], hi[k])[0] for k in keep])
 
-    def errors(rows):
+    def errors(rows: Sequence[EngineeringRow]) -> tuple[float, float]:
         n = np.array([r["n_impacts"][1] - r["n_impacts"][0] for r in rows], float)
         d = np.array([100.0 * (r["duration_s"][1] / r["duration_s"][0] - 1.0) for r in rows], float)
         return float(np.sqrt(np.mean(n**2))), float(np.sqrt(np.mean(d**2)))
@@ -233,7 +266,7 @@ def threshold(tests, mp, *, n_boot=200, seed=0, min_tests=3):
     }
 
 
-def finding(stop):
+def finding(stop: StopThreshold) -> Finding:
     """The finding (:class:`rocklab.diagnosis.result.Finding`) of a threshold of :func:`threshold`."""
     (n0, n1), (d0, d1) = stop["n_impacts_rms"], stop["duration_pct_rms"]
     n = stop["n_observed"]
@@ -241,7 +274,7 @@ def finding(stop):
     return Finding(
         effect=NAME,
         params={"v_stop_over_vr": stop["v_stop_over_vr"], "spread_log": stop["spread_log"]},
-        ci95={"v_stop_over_vr": stop["ci95"]},
+        ci95={"v_stop_over_vr": cast("list[Number]", stop["ci95"])},
         n_tests=stop["n_observed"],
         ci_note=note or None,
         evidence={
@@ -257,7 +290,7 @@ def finding(stop):
     )
 
 
-def estimate(tests, mp, seed=0):
+def estimate(tests: list[MeasuredTest], mp: ModelParams, seed: int = 0) -> StopEstimate | None:
     """The stage after selection: :func:`threshold` of the chosen model ``mp`` as a finding, or None
     where none is found."""
     stop = threshold(tests, mp, seed=seed)

@@ -29,9 +29,13 @@ model share (the rigid-body wall both assume), the chain before the
 measured rotation (the transducers' kinematics), noise that is not white.
 """
 
+from __future__ import annotations
+
 import logging
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from rocklab.diagnosis.estimation.fitting import Fit, fit, linearised
 from rocklab.diagnosis.estimation.problem import Problem
@@ -40,14 +44,14 @@ from rocklab.diagnosis.estimation.resampling import sandwich_errors
 log = logging.getLogger(__name__)
 
 
-def net_of_noise(b, se):
+def net_of_noise(b: npt.ArrayLike, se: npt.ArrayLike) -> np.ndarray:
     """The bias a difference ``b`` of one noise draw of standard error ``se`` carries: sqrt(max(b^2 - se^2, 0))
     (E[b^2] = bias^2 + se^2); none where ``se`` is infinite (a direction the tests do not fix)."""
     b, se = np.asarray(b, float), np.asarray(se, float)
     return np.sqrt(np.maximum(b**2 - np.where(np.isfinite(se), se, np.abs(b)) ** 2, 0.0))
 
 
-def model_bias(simulated: Problem, fitted: Fit):
+def model_bias(simulated: Problem[Any], fitted: Fit) -> tuple[dict[str, float], dict[str, float]]:
     """The bias of ``fitted``'s parameters measured on ``simulated``, its tests simulated at the fit.
 
     Parameters

@@ -7,9 +7,13 @@ the held-out folds and the bootstrap resamples step from
 (:mod:`rocklab.diagnosis.estimation.resampling`).
 """
 
+from __future__ import annotations
+
 import logging
 import math
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass
+from typing import Any, TypeAlias, TypeVar
 
 import numpy as np
 
@@ -21,26 +25,41 @@ optimize = lazy_module("scipy.optimize")
 
 log = logging.getLogger(__name__)
 
+Sub = TypeVar("Sub")
+
+#: :func:`linearised`: names, x0, lo, hi, A, y.
+Linearisation: TypeAlias = tuple[list[str], np.ndarray, np.ndarray, np.ndarray, list[np.ndarray], list[np.ndarray]]
+
 
 @dataclass
 class Fit:
     """A fitted model: parameter values, group noise models, -2 log L, observations,
     and the reweighting passes of its best start and whether they converged."""
 
-    ext: tuple
-    values: dict
-    var: dict
+    ext: tuple[str, ...]
+    values: dict[str, float]
+    var: dict[str, tuple[float, float]]
     m2ll: float
     n_obs: int
     passes: int = 0
     converged: bool = True
 
     @property
-    def bic(self):
+    def bic(self) -> float:
         return self.m2ll + len(self.values) * math.log(max(self.n_obs, 2))
 
 
-def fit(problem: Problem, idx, ext, x0=None, n_irls=None) -> Fit:
+#: Fits by their causes, shared by the selections on one problem.
+Fits: TypeAlias = dict[tuple[str, ...], Fit]
+
+
+def fit(
+    problem: Problem[Any],
+    idx: np.ndarray,
+    ext: Collection[str],
+    x0: Mapping[str, float] | None = None,
+    n_irls: int | None = None,
+) -> Fit:
     """Maximum-likelihood fit of ``ext`` on the tests ``idx``, noise model per group.
 
     Iteratively reweighted least squares: with the weights of the noise
@@ -87,12 +106,12 @@ def fit(problem: Problem, idx, ext, x0=None, n_irls=None) -> Fit:
             passes += 1
             w = {g: 1.0 / np.sqrt(var[g][0] + var[g][1] * xm[g] ** 2 + VAR_FLOOR) for g in masks}
 
-            def stacked(R, w=w):
+            def stacked(R: Mapping[str, np.ndarray], w: dict[str, np.ndarray] = w) -> np.ndarray:
                 return np.concatenate(
                     [np.nan_to_num(R[g][m], nan=1.0, posinf=1.0, neginf=-1.0) * w[g] for g, m in masks.items()]
                 )
 
-            def res(xx):
+            def res(xx: np.ndarray) -> np.ndarray:
                 return stacked(problem.residuals(sub, ext, dict(zip(names, xx))))
 
             wv = np.concatenate([w[g] for g in masks])
@@ -130,7 +149,9 @@ def fit(problem: Problem, idx, ext, x0=None, n_irls=None) -> Fit:
     return best
 
 
-def _jacobian(problem: Problem, sub, ext, values):
+def _jacobian(
+    problem: Problem[Sub], sub: Sub, ext: Collection[str], values: Mapping[str, float]
+) -> tuple[dict[str, np.ndarray], dict[str, list[np.ndarray]]]:
     """Residuals at ``values`` and their derivatives by each parameter (forward differences).
 
     Returns (R, J): group -> residual array, group -> list of derivative
@@ -148,7 +169,7 @@ def _jacobian(problem: Problem, sub, ext, values):
     return R, J
 
 
-def linearised(problem: Problem, sub, fitted: Fit):
+def linearised(problem: Problem[Sub], sub: Sub, fitted: Fit) -> Linearisation:
     """The least-squares problem of ``fitted`` linearised at its parameters, test by test.
 
     Returns

@@ -9,7 +9,10 @@ see, of a test held out, by the Student-t its group's variance predicts from
 the residuals it was estimated on (:func:`predictive_dof`).
 """
 
+from __future__ import annotations
+
 import math
+from collections.abc import Mapping
 
 import numba
 import numpy as np
@@ -23,7 +26,7 @@ VAR_FLOOR = 1e-10
 
 
 @numba.njit(cache=True)
-def _profile(t, r2, x2):
+def _profile(t: float, r2: np.ndarray, x2: np.ndarray) -> float:
     """-2 log L (constants dropped) of :func:`noise_variance`'s model at log rho = t, s0^2 profiled out.
 
     Compiled: the noise model is fitted at every reweighting pass of every
@@ -39,7 +42,7 @@ def _profile(t, r2, x2):
     return n * math.log(mean / n) + logs
 
 
-def noise_variance(r, x):
+def noise_variance(r: np.ndarray, x: np.ndarray) -> tuple[float, float]:
     """Maximum-likelihood noise model v = s0^2 + s1^2 x^2 of residuals r [log units^2].
 
     ``x`` is the observation's noise threshold over its amplitude: records
@@ -67,7 +70,7 @@ def noise_variance(r, x):
     )
     t, fun = float(search.x), float(search.fun)
     ends = {"hom": n * math.log(hom[0]), "prop": n * math.log(float(np.mean(r2 / x2))) + float(np.sum(np.log(x2)))}
-    best = min(ends, key=ends.get)
+    best = min(ends, key=ends.get)  # type: ignore[arg-type]  # every key has its value
     if fun <= ends[best]:
         rho = math.exp(t)
         s0 = float(np.mean(r2 / (1.0 + rho * x2)))
@@ -75,21 +78,25 @@ def noise_variance(r, x):
     return hom if best == "hom" else (1e-300, float(np.mean(r2 / x2)))
 
 
-def finite_residuals(R, X):
+def finite_residuals(
+    R: Mapping[str, np.ndarray], X: Mapping[str, np.ndarray]
+) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Finite residuals and their noise covariates, per group."""
-    out = {}
+    out: dict[str, tuple[np.ndarray, np.ndarray]] = {}
     for g, r in R.items():
         ok = np.isfinite(r) & np.isfinite(X[g])
         out[g] = (r[ok], X[g][ok])
     return out
 
 
-def group_variances(R, X):
+def group_variances(R: Mapping[str, np.ndarray], X: Mapping[str, np.ndarray]) -> dict[str, tuple[float, float]]:
     """The noise model (s0^2, s1^2) of each residual group of R with two finite residuals or more."""
     return {g: noise_variance(r, x) for g, (r, x) in finite_residuals(R, X).items() if r.size >= 2}
 
 
-def predictive_dof(R, X, var):
+def predictive_dof(
+    R: Mapping[str, np.ndarray], X: Mapping[str, np.ndarray], var: Mapping[str, tuple[float, float]]
+) -> dict[str, int]:
     """The degrees of freedom of each group's noise model ``var`` fitted on the residuals R.
 
     A variance estimated from n residuals predicts a new residual with
@@ -109,7 +116,12 @@ def predictive_dof(R, X, var):
     }
 
 
-def deviance(R, X, var, dof=None):
+def deviance(
+    R: Mapping[str, np.ndarray],
+    X: Mapping[str, np.ndarray],
+    var: Mapping[str, tuple[float, float]],
+    dof: Mapping[str, int] | None = None,
+) -> float:
     """-2 log L (constants dropped) of residuals R under the group noise models ``var``.
 
     With ``dof`` (group -> degrees of freedom, :func:`predictive_dof`) each

@@ -7,10 +7,23 @@ candidate causes (objects with ``name``, ``params``
 knows nothing of walls.
 """
 
+from __future__ import annotations
+
+from collections.abc import Collection, Mapping, Sequence
+from typing import TYPE_CHECKING, Generic, TypeVar
+
 import numpy as np
 
+if TYPE_CHECKING:
+    from rocklab.diagnosis.causes import Cause
+    from rocklab.diagnosis.parameters import Param
+    from rocklab.diagnosis.result import Structure
 
-class Problem:
+#: What a problem's :meth:`Problem.subset` gives: its tests, as the problem holds them.
+Sub = TypeVar("Sub")
+
+
+class Problem(Generic[Sub]):
     """A set of tests and the residual groups of models over them.
 
     Subclasses set ``causes`` (the candidates, in the order they are
@@ -21,49 +34,49 @@ class Problem:
     """
 
     n_tests: int
-    causes: tuple = ()
+    causes: tuple[Cause, ...] = ()
 
-    def subset(self, idx):
+    def subset(self, idx: np.ndarray) -> Sub:
         raise NotImplementedError
 
-    def residuals(self, sub, ext, values):
+    def residuals(self, sub: Sub, ext: Collection[str], values: Mapping[str, float]) -> dict[str, np.ndarray]:
         raise NotImplementedError
 
-    def candidates(self, families=False):
+    def candidates(self, families: bool = False) -> list[str]:
         """Names of the candidate causes (the listed ones; with ``families``, the generalised families too)."""
         return [c.name for c in self.causes if families or not getattr(c, "family", None)]
 
-    def starts(self, ext):
+    def starts(self, ext: Collection[str]) -> dict[str, float]:
         return {}
 
-    def heldout_measures(self, sub, ext, values):
+    def heldout_measures(self, sub: Sub, ext: Collection[str], values: Mapping[str, float]) -> dict[str, np.ndarray]:
         return {}
 
-    def covariates(self, sub):
+    def covariates(self, sub: Sub) -> dict[str, dict[str, np.ndarray]]:
         """Group -> {label: array like its residuals} for the structure tests."""
         return {}
 
-    def noise(self, sub):
+    def noise(self, sub: Sub) -> dict[str, np.ndarray]:
         """Noise covariate (threshold over amplitude) of every residual of :meth:`residuals`."""
         raise NotImplementedError
 
-    def extra_structure(self, sub, ext, values):
+    def extra_structure(self, sub: Sub, ext: Collection[str], values: Mapping[str, float]) -> list[Structure]:
         """Structure outside the residual groups (list of statements)."""
         return []
 
-    def form_structure(self, ext):
+    def form_structure(self, ext: Collection[str]) -> list[Structure]:
         """Fit-free evidence that a cause of ``ext`` has the wrong form (list of statements)."""
         return []
 
-    def resolution(self, x):
+    def resolution(self, x: np.ndarray) -> float:
         """Typical resolution [log units] of a group from its noise covariates ``x``."""
         return float(np.median(x))
 
-    def params(self, ext):
+    def params(self, ext: Collection[str]) -> list[Param]:
         """The :class:`~rocklab.diagnosis.parameters.Param` of the causes ``ext`` this problem can see, in order."""
         return [q for c in self.causes if c.name in ext for q in c.params]
 
-    def combine(self, current, eff):
+    def combine(self, current: Sequence[str], eff: str) -> tuple[str, ...] | None:
         """The causes ``current`` plus ``eff`` in catalogue order, less those ``eff``
         replaces; None where a cause of ``current`` replaces ``eff``."""
         by_name = {c.name: c for c in self.causes}

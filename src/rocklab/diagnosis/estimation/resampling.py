@@ -13,11 +13,16 @@ paired per-test comparison of two models' held-out deviances is
 :func:`finite_mean`.
 """
 
+from __future__ import annotations
+
 import logging
 import math
 import time
+from collections.abc import Collection, Iterable, Mapping, Sequence
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.estimation.fitting import Fit, fit, linearised
@@ -38,7 +43,7 @@ COLLAPSED_BOOTSTRAP = 0.5
 log = logging.getLogger(__name__)
 
 
-class Intervals(dict):
+class Intervals(dict[str, list[float]]):
     """Parameter -> its 95 % interval, with ``u_sys``: parameter -> the systematic standard uncertainty
     the interval holds [its unit] (:mod:`rocklab.diagnosis.estimation.systematic`).
 
@@ -47,18 +52,22 @@ class Intervals(dict):
     but not this one (:func:`rocklab.diagnosis.pooling.pooled_parameter`).
     """
 
-    def __init__(self, ci=(), u_sys=None):
+    def __init__(
+        self,
+        ci: Mapping[str, list[float]] | Iterable[tuple[str, list[float]]] = (),
+        u_sys: Mapping[str, float] | None = None,
+    ) -> None:
         super().__init__(ci)
-        self.u_sys = dict(u_sys or {})
+        self.u_sys: dict[str, float] = dict(u_sys or {})
 
 
-def finite_mean(x):
+def finite_mean(x: npt.ArrayLike) -> float | None:
     """Mean of the finite values of x, None if there are none."""
     x = np.asarray(x, float)
     return float(np.nanmean(x)) if np.isfinite(x).any() else None
 
 
-def heldout_means(ho) -> dict[str, float | None]:
+def heldout_means(ho: Mapping[str, np.ndarray]) -> dict[str, float | None]:
     """The held-out errors of :func:`heldout` as a finding or an entry quotes them: the mean held-out
     deviance per observation (``deviance_per_obs``), then the mean of each engineering measure."""
     return {
@@ -67,7 +76,9 @@ def heldout_means(ho) -> dict[str, float | None]:
     }
 
 
-def heldout_gain(before, after, paired) -> dict[str, float | None]:
+def heldout_gain(
+    before: Mapping[str, np.ndarray], after: Mapping[str, np.ndarray], paired: float
+) -> dict[str, float | None]:
     """What a model gains on another, held out: the mean error of each engineering measure before
     (:func:`heldout` of the other model) minus after, and ``deviance_per_obs``, the ``paired`` gain
     of the held-out deviance per observation (:func:`paired_gain`)."""
@@ -79,13 +90,13 @@ def heldout_gain(before, after, paired) -> dict[str, float | None]:
     return out | {"deviance_per_obs": paired}
 
 
-def _folds(n, k_max=5):
+def _folds(n: int, k_max: int = 5) -> list[np.ndarray]:
     k = n if n <= 6 else k_max
     idx = np.arange(n)
     return [idx[idx % k == j] for j in range(k)] if n > 1 else [idx]
 
 
-def heldout(problem: Problem, ext, fitted: Fit | None = None):
+def heldout(problem: Problem[Any], ext: Collection[str], fitted: Fit | None = None) -> dict[str, np.ndarray]:
     """Per-test held-out deviance of ``ext`` fitted on the other tests (K-fold), and measures.
 
     The fit of each fold's training tests is one Gauss-Newton step from the
@@ -142,7 +153,7 @@ def heldout(problem: Problem, ext, fitted: Fit | None = None):
     return {"deviance": dev, **meas}
 
 
-def sandwich_errors(A, y):
+def sandwich_errors(A: Sequence[np.ndarray], y: Sequence[np.ndarray]) -> np.ndarray:
     """Cluster-robust (by test) standard errors of the parameters of a linearised fit
     (:func:`sandwich_intervals`); inf for a direction the tests do not fix."""
     G = len(A)
@@ -160,7 +171,15 @@ def sandwich_errors(A, y):
     return np.where(seen & np.isfinite(se), se, np.inf)
 
 
-def sandwich_intervals(names, x0, lo, hi, A, y, level=0.95):
+def sandwich_intervals(
+    names: Sequence[str],
+    x0: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    A: Sequence[np.ndarray],
+    y: Sequence[np.ndarray],
+    level: float = 0.95,
+) -> dict[str, list[float]]:
     """Cluster-robust (by test) t intervals of the parameters from the linearisation of a fit.
 
     The least-squares problem of the fit, linearised test by test (``A``,
@@ -189,7 +208,7 @@ def sandwich_intervals(names, x0, lo, hi, A, y, level=0.95):
     }
 
 
-def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
+def parameter_intervals(problem: Problem[Any], fitted: Fit, n_boot: int = 40, seed: int = 0) -> Intervals:
     """95 % intervals of the parameters: whole tests resampled (bootstrap over tests), or the sandwich.
 
     Each resample is fitted by one Gauss-Newton step from the full fit
@@ -285,7 +304,12 @@ def parameter_intervals(problem: Problem, fitted: Fit, n_boot=40, seed=0):
     return _with_systematic(problem, fitted, ci, groups)
 
 
-def _with_systematic(problem: Problem, fitted: Fit, ci, groups):
+def _with_systematic(
+    problem: Problem[Any],
+    fitted: Fit,
+    ci: Mapping[str, list[float]],
+    groups: Mapping[str, tuple[np.ndarray, np.ndarray]],
+) -> Intervals:
     """The statistical intervals ``ci`` widened by the systematic uncertainty of each parameter, within its
     bounds (:func:`~rocklab.diagnosis.estimation.systematic.widened`), as :class:`Intervals`."""
     u = dict(zip(fitted.values, systematic_uncertainty(groups)))
@@ -306,13 +330,13 @@ def _with_systematic(problem: Problem, fitted: Fit, ci, groups):
     return out
 
 
-def paired_difference(d):
+def paired_difference(d: np.ndarray) -> tuple[float, float]:
     """Mean of the finite paired per-test differences ``d`` and its standard error."""
     d = d[np.isfinite(d)]
     se = float(np.std(d, ddof=1) / math.sqrt(d.size)) if d.size > 1 else np.inf
     return float(np.mean(d)) if d.size else 0.0, se
 
 
-def paired_gain(before, after):
+def paired_gain(before: npt.ArrayLike, after: npt.ArrayLike) -> tuple[float, float]:
     """Mean per-test held-out deviance gain of ``after`` over ``before`` and its standard error."""
     return paired_difference(np.asarray(before, float) - np.asarray(after, float))

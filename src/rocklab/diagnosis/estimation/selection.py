@@ -10,21 +10,28 @@ cannot identify (:func:`stand_ins`) or a rival the series cannot tell from it
 (:func:`rivals`) may stand in for is named with that caveat.
 """
 
+from __future__ import annotations
+
 import enum
 import logging
 import math
 import time
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, NotRequired, TypeAlias, TypedDict, cast
 
 import numpy as np
 
 from rocklab._imports import lazy_module
-from rocklab.diagnosis.estimation.fitting import fit
+from rocklab.diagnosis.estimation.fitting import Fit, Fits, fit
 from rocklab.diagnosis.estimation.problem import Problem
 from rocklab.diagnosis.estimation.resampling import Intervals, heldout, paired_difference, parameter_intervals
 from rocklab.diagnosis.estimation.structure import structure
 from rocklab.diagnosis.result import Structure
 from rocklab.inference.intervals import MIN_BOOTSTRAP
+
+if TYPE_CHECKING:
+    from rocklab.diagnosis.causes import Signature
 
 stats = lazy_module("scipy.stats")
 
@@ -66,23 +73,60 @@ class Rejection:
         )
 
 
-def sentence_of(rejection: "Rejection | None") -> str:
+class Step(TypedDict):
+    """A cause's entry into a selection: the held-out result after it, its paired gain and its BIC."""
+
+    heldout: dict[str, np.ndarray]
+    gain: float
+    se: float
+    dbic: float
+
+
+class Weak(TypedDict):
+    """A candidate turned down that would remove the structure left: its parameters and why it was."""
+
+    params: dict[str, float]
+    reason: Rejection | None
+
+
+class Selection(TypedDict):
+    """The causes a selection names and its evidence (:func:`select_effects`); ``catalogue``: the selection
+    of the listed causes where one beyond them replaced it (:func:`beyond_the_catalogue`)."""
+
+    effects: list[str]
+    fit: Fit
+    ci: Intervals
+    base: dict[str, np.ndarray]
+    final: dict[str, np.ndarray]
+    steps: dict[str, Step]
+    rejected: dict[str, Rejection]
+    structure: list[Structure]
+    weak: dict[str, Weak]
+    catalogue: NotRequired[Selection]
+
+
+#: A candidate of a stage: its BIC against the current model, its name, its causes with the current ones,
+#: their fit.
+Candidate: TypeAlias = tuple[float, str, tuple[str, ...], Fit]
+
+
+def sentence_of(rejection: Rejection | None) -> str:
     """The sentence of a rejection as the files give it, "" for none (a weak candidate never turned down)."""
     return rejection.sentence if rejection is not None else ""
 
 
-def sentences(rejected: dict[str, "Rejection | None"]) -> dict[str, str]:
+def sentences(rejected: Mapping[str, Rejection | None]) -> dict[str, str]:
     """Cause -> :func:`sentence_of` its rejection, of a selection's ``rejected`` or weak reasons."""
     return {k: sentence_of(r) for k, r in rejected.items()}
 
 
-def supported(signature, cause):
+def supported(signature: Mapping[str, Signature], cause: str) -> bool:
     """Whether the data carry the signature of ``cause`` (``signature``: cause -> its signature dict,
     :func:`rocklab.diagnosis.catalogue.signatures`); a cause without a signature is never held back by one."""
     return signature.get(cause, {}).get("supports", True)
 
 
-def _improves(d):
+def _improves(d: np.ndarray) -> bool:
     """Whether paired per-test improvements ``d`` are beyond the noise.
 
     The mean exceeds twice its standard error, or every one of at least five
@@ -100,7 +144,7 @@ def _improves(d):
     return gain > 2 * se or bool(np.all(d > 0))
 
 
-def _null_excluded(problem, effect, ci):
+def _null_excluded(problem: Problem[Any], effect: str, ci: Mapping[str, Sequence[float]]) -> bool:
     """Whether some parameter of ``effect`` stays clear of its null by a practical margin.
 
     A generalised family (a cause with a ``family``) is judged on the
@@ -123,14 +167,14 @@ def _null_excluded(problem, effect, ci):
     return False
 
 
-def _in_order(cands, family_of, bic_margin):
+def _in_order(cands: list[Candidate], family_of: Mapping[str, str | None], bic_margin: float) -> list[Candidate]:
     """The candidates (dbic, name, ...) in the held-out test's order: by BIC, but a family right after its
     listed member where it does not beat it by the margin a cause needs to enter (the listed law, the
     paper's, is not displaced by a flexible one that fits as well: a law of the speed marginally ahead of
     Eq. 17 on the embedded wall 3a, two-sided)."""
     listed = {eff: dbic for dbic, eff, *_ in cands}
 
-    def key(cand):
+    def key(cand: Candidate) -> tuple[float, int]:
         member = family_of.get(cand[1])
         if member in listed and cand[0] > listed[member] - bic_margin:
             return (listed[member], 1)
@@ -140,16 +184,16 @@ def _in_order(cands, family_of, bic_margin):
 
 
 def select_effects(
-    problem: Problem,
+    problem: Problem[Any],
     *,
-    signature=None,
-    n_boot=40,
-    max_effects=4,
-    seed=0,
-    bic_margin=BIC_MARGIN,
-    families=False,
-    fits=None,
-):
+    signature: Mapping[str, Signature] | None = None,
+    n_boot: int = 40,
+    max_effects: int = 4,
+    seed: int = 0,
+    bic_margin: float = BIC_MARGIN,
+    families: bool = False,
+    fits: Fits | None = None,
+) -> Selection:
     """Greedy forward selection of the causes the data carry, with removal tests.
 
     Parameters
@@ -183,7 +227,7 @@ def select_effects(
     signature = signature or {}
     fits = {} if fits is None else fits
 
-    def fit_of(ext):
+    def fit_of(ext: tuple[str, ...]) -> Fit:
         # a fit is deterministic: the rounds, the removals and the weak-evidence
         # pass meet the same models again
         if ext not in fits:
@@ -209,7 +253,7 @@ def select_effects(
     cur_fit = fit_of(current)
     cur_ho = heldout(problem, current)
     base_ho = cur_ho
-    steps: dict[str, dict] = {}
+    steps: dict[str, Step] = {}
     rejected: dict[str, Rejection] = {}
     ci = Intervals()
     # candidates that predicted the tests left out worse than the model they would join: no evidence for them
@@ -302,7 +346,7 @@ def select_effects(
     # structure that a candidate turned down by the held-out test or the bootstrap would remove
     # is weak evidence for it, not something outside the catalogue; one that did worse held out
     # removes it by fitting the noise of the tests it was fitted on, and is no evidence
-    weak = {}
+    weak: dict[str, Weak] = {}
     if found:
         for eff in candidates:
             if eff in worse_held_out:
@@ -331,7 +375,13 @@ def select_effects(
     }
 
 
-def _wrong_forms(problem: Problem, sel, signature, fits, bic_margin=BIC_MARGIN):
+def _wrong_forms(
+    problem: Problem[Any],
+    sel: Selection,
+    signature: Mapping[str, Signature],
+    fits: Fits,
+    bic_margin: float = BIC_MARGIN,
+) -> list[Structure]:
     """Statements that a named listed cause has the wrong form: its family fits better in its place.
 
     The structure tests look for a pattern in the residual groups and lack
@@ -346,13 +396,22 @@ def _wrong_forms(problem: Problem, sel, signature, fits, bic_margin=BIC_MARGIN):
         # a family its signature does not support is never named: no search for it
         if getattr(c, "family", None) not in current or not supported(signature, c.name):
             continue
+        assert c.family is not None
         dbic = _in_place_of(problem, sel, c.name, c.family, fits)
         if dbic is not None and dbic < -bic_margin:
             out.append(Structure(c.name, f"{c.name} in place of {c.family} lowers the BIC by {-dbic:.0f}"))
     return out
 
 
-def beyond_the_catalogue(problem: Problem, sel, *, signature, n_boot=40, seed=0, fits=None):
+def beyond_the_catalogue(
+    problem: Problem[Any],
+    sel: Selection,
+    *,
+    signature: Mapping[str, Signature],
+    n_boot: int = 40,
+    seed: int = 0,
+    fits: Fits | None = None,
+) -> Selection:
     """The selection with the generalised families, where the listed causes leave structure (issue 12).
 
     Where ``sel`` (a selection of the listed causes,
@@ -398,7 +457,14 @@ def beyond_the_catalogue(problem: Problem, sel, *, signature, n_boot=40, seed=0,
     return {**wide, "catalogue": sel}
 
 
-def stand_ins(problem: Problem, sel, hidden, *, fits=None, bic_margin=BIC_MARGIN):
+def stand_ins(
+    problem: Problem[Any],
+    sel: Selection,
+    hidden: Mapping[str, str],
+    *,
+    fits: Fits | None = None,
+    bic_margin: float = BIC_MARGIN,
+) -> dict[str, dict[str, str]]:
     """The named causes that a cause the design cannot identify may stand in for.
 
     A cause the series' design cannot tell from the noise or from another
@@ -440,7 +506,14 @@ def stand_ins(problem: Problem, sel, hidden, *, fits=None, bic_margin=BIC_MARGIN
     return out
 
 
-def rivals(problem: Problem, sel, signature, *, fits=None, bic_margin=BIC_MARGIN):
+def rivals(
+    problem: Problem[Any],
+    sel: Selection,
+    signature: Mapping[str, Signature],
+    *,
+    fits: Fits | None = None,
+    bic_margin: float = BIC_MARGIN,
+) -> tuple[dict[str, dict[str, str]], list[Structure]]:
     """The named causes that a candidate the series cannot tell from them may stand in for.
 
     The selection tries the candidates in the order of their information
@@ -481,6 +554,7 @@ def rivals(problem: Problem, sel, signature, *, fits=None, bic_margin=BIC_MARGIN
             if dbic is None or dbic >= bic_margin:
                 continue
             ext = problem.combine(tuple(e for e in named if e != y), x)
+            assert ext is not None
             d = heldout(problem, ext, fits[ext])["deviance"] - sel["final"]["deviance"]
             if _improves(d):
                 continue
@@ -501,7 +575,7 @@ def rivals(problem: Problem, sel, signature, *, fits=None, bic_margin=BIC_MARGIN
     return out, preferred
 
 
-def _nested_fit(problem: Problem, ext, x, fits):
+def _nested_fit(problem: Problem[Any], ext: tuple[str, ...], x: str, fits: Fits) -> Fit:
     """The fit of ``ext``, where its cause ``x`` is not held at its null while a sub-model gives it an effect.
 
     The cold starts of :func:`~rocklab.diagnosis.estimation.fitting.fit`
@@ -516,7 +590,7 @@ def _nested_fit(problem: Problem, ext, x, fits):
     idx = np.arange(problem.n_tests)
     best = fits[ext] if ext in fits else fit(problem, idx, ext)
     own = [q for q in problem.params((x,)) if q.practical is not None and q.name in best.values]
-    if own and all(abs(best.values[q.name] - q.null) <= q.practical for q in own):
+    if own and all(abs(best.values[q.name] - q.null) <= cast(float, q.practical) for q in own):
         nulls = {q.name: q.null for q in problem.params(ext)}
         for c in (c for c in ext if c != x):
             sub = tuple(e for e in ext if e != c)
@@ -529,7 +603,7 @@ def _nested_fit(problem: Problem, ext, x, fits):
     return best
 
 
-def _in_place_of(problem: Problem, sel, x, y, fits):
+def _in_place_of(problem: Problem[Any], sel: Selection, x: str, y: str, fits: Fits) -> float | None:
     """BIC of the selection's model with the cause ``x`` in place of its cause ``y``, less the model's;
     None where ``x`` cannot join the others (``fits``: shared with the selection)."""
     ext = problem.combine(tuple(e for e in sel["effects"] if e != y), x)

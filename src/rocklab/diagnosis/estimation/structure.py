@@ -1,6 +1,10 @@
 """Residual structure that a fitted model leaves: bias and trends, tested across tests."""
 
+from __future__ import annotations
+
 import math
+from collections.abc import Collection, Mapping
+from typing import Any
 
 import numpy as np
 
@@ -17,7 +21,9 @@ STRUCTURE_MIN = 0.01
 STRUCTURE_P = 1e-3
 
 
-def structure(problem: Problem, idx, ext, values):
+def structure(
+    problem: Problem[Any], idx: np.ndarray, ext: Collection[str], values: Mapping[str, float]
+) -> list[Structure]:
     """Residual structure left by a model: bias and trends of each group, across tests.
 
     For each group, the per-test median (bias) and the within-test slopes on
@@ -69,7 +75,7 @@ def structure(problem: Problem, idx, ext, values):
     return found + problem.form_structure(ext) + problem.extra_structure(sub, ext, values)
 
 
-def within_slope(r, x, ok, min_obs=3):
+def within_slope(r: np.ndarray, x: np.ndarray, ok: np.ndarray, min_obs: int = 3) -> tuple[float, float, float]:
     """Within-test slope of r on x, its cluster-robust p-value and the 10-90 % span of x.
 
     The slope of the residuals on the covariate, each demeaned within its

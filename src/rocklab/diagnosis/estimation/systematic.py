@@ -39,7 +39,11 @@ A problem of one residual group has no second view: its systematic part is
 zero.
 """
 
+from __future__ import annotations
+
 import logging
+from collections.abc import Collection, Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, TypeAlias, TypeVar, cast
 
 import numpy as np
 
@@ -50,37 +54,51 @@ from rocklab.inference.multiplicity import simultaneous_factor
 
 stats = lazy_module("scipy.stats")
 
+if TYPE_CHECKING:
+    from rocklab.diagnosis.parameters import Param
+    from rocklab.diagnosis.result import Finding, Number
+
 log = logging.getLogger(__name__)
 
+Sub = TypeVar("Sub")
 
-class _Groups(Problem):
+#: The residuals of a problem by subset, causes and values (:class:`_Groups`).
+Memo: TypeAlias = dict[tuple[int, tuple[str, ...], tuple[tuple[str, float], ...]], dict[str, np.ndarray]]
+
+#: Residual group -> its weighted derivatives and minus its weighted residuals, stacked over the tests.
+Groups: TypeAlias = dict[str, tuple[np.ndarray, np.ndarray]]
+
+
+class _Groups(Problem[Sub]):
     """``problem`` seen through some of its residual groups, its residuals computed once per point.
 
     The linearisation of each group (:func:`by_group`) evaluates the residuals at the same points:
     the memo makes that one evaluation for all groups, as one linearisation of all of them.
     """
 
-    def __init__(self, problem: Problem, groups, memo):
+    def __init__(self, problem: Problem[Sub], groups: Iterable[str], memo: Memo) -> None:
         self.problem, self.groups, self.memo = problem, set(groups), memo
         self.n_tests, self.causes = problem.n_tests, problem.causes
 
-    def subset(self, idx):
+    def subset(self, idx: np.ndarray) -> Sub:
         return self.problem.subset(idx)
 
-    def noise(self, sub):
+    def noise(self, sub: Sub) -> dict[str, np.ndarray]:
         return self.problem.noise(sub)
 
-    def params(self, ext):
+    def params(self, ext: Collection[str]) -> list[Param]:
         return self.problem.params(ext)
 
-    def residuals(self, sub, ext, values):
+    def residuals(self, sub: Sub, ext: Collection[str], values: Mapping[str, float]) -> dict[str, np.ndarray]:
         key = (id(sub), tuple(ext), tuple(values.items()))
         if key not in self.memo:
             self.memo[key] = self.problem.residuals(sub, ext, values)
         return {g: r for g, r in self.memo[key].items() if g in self.groups}
 
 
-def by_group(problem: Problem, fitted: Fit):
+def by_group(
+    problem: Problem[Any], fitted: Fit
+) -> tuple[list[str], np.ndarray, np.ndarray, np.ndarray, list[np.ndarray], list[np.ndarray], Groups]:
     """The linearisation of ``fitted`` over all tests, group by group.
 
     Returns
@@ -94,7 +112,7 @@ def by_group(problem: Problem, fitted: Fit):
         Group -> (A_g, y_g), its rows stacked over the tests.
     """
     every = problem.subset(np.arange(problem.n_tests))
-    memo: dict = {}
+    memo: Memo = {}
     parts = {g: linearised(_Groups(problem, [g], memo), every, fitted) for g in fitted.var}
     names, x0, lo, hi = next(iter(parts.values()))[:4]
     A = [np.concatenate([p[4][i] for p in parts.values()]) for i in range(problem.n_tests)]
@@ -103,14 +121,14 @@ def by_group(problem: Problem, fitted: Fit):
     return names, x0, lo, hi, A, y, groups
 
 
-def pulls(groups):
+def pulls(groups: Mapping[str, tuple[np.ndarray, np.ndarray]]) -> dict[str, np.ndarray]:
     """The pull of each residual group on the parameters (module docstring), group -> ndarray."""
     B = sum(a.T @ a for a, _ in groups.values())
     Binv = np.linalg.pinv(B)
     return {g: Binv @ (a.T @ b) for g, (a, b) in groups.items()}
 
 
-def systematic_uncertainty(groups):
+def systematic_uncertainty(groups: Mapping[str, tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
     """The systematic standard uncertainty of each parameter: the pulls of the groups in quadrature.
 
     Parameters
@@ -127,19 +145,21 @@ def systematic_uncertainty(groups):
     return np.sqrt(np.sum(d**2, axis=0))
 
 
-def _z(level):
+def _z(level: float) -> float:
     """The two-sided normal quantile of ``level`` (1.96 at 95 %)."""
     return float(stats.norm.ppf(0.5 + level / 2))
 
 
-def standard_error(ci, level=0.95, df=np.inf):
+def standard_error(ci: Sequence[float], level: float = 0.95, df: float = np.inf) -> float:
     """The standard error a symmetric interval ``ci`` of ``level`` stands for: its half-width over the
     quantile of Student's t on ``df`` degrees of freedom (the normal's by default, the inverse of
     :func:`widened`'s scaling; an interval over n units, t or expanded bootstrap, on n - 1)."""
     return (ci[1] - ci[0]) / (2.0 * float(stats.t.ppf(0.5 + level / 2, df)))
 
 
-def widened(ci, x0, lower, upper, u_sys, level=0.95):
+def widened(
+    ci: Sequence[float], x0: float, lower: float, upper: float, u_sys: float, level: float = 0.95
+) -> list[float]:
     """The interval ``ci`` of an estimate ``x0`` with a systematic standard uncertainty ``u_sys`` added.
 
     Each side's half-width h becomes sqrt(h^2 + (z u_sys)^2), z the normal
@@ -153,7 +173,16 @@ def widened(ci, x0, lower, upper, u_sys, level=0.95):
     return [float(max(lower, x0 - below)), float(min(upper, x0 + above))]
 
 
-def simultaneous(ci, x0, lower, upper, u_sys, k, df, level=0.95):
+def simultaneous(
+    ci: Sequence[float],
+    x0: float,
+    lower: float,
+    upper: float,
+    u_sys: float,
+    k: int,
+    df: float,
+    level: float = 0.95,
+) -> list[float]:
     """The interval ``ci`` of :func:`widened` (its systematic part ``u_sys``) as one of ``k`` that hold all
     their parameters together at ``level``.
 
@@ -172,7 +201,9 @@ def simultaneous(ci, x0, lower, upper, u_sys, k, df, level=0.95):
     return widened([x0 - below, x0 + above], x0, lower, upper, simultaneous_factor(k, np.inf, level) * u_sys, level)
 
 
-def verdict_intervals(findings, params, n_units, level=0.95):
+def verdict_intervals(
+    findings: Sequence[Finding], params: Mapping[str, Param], n_units: Mapping[str, int], level: float = 0.95
+) -> None:
     """Give each finding ``ci95_joint``: its intervals as part of the verdict's, which hold every parameter
     of every cause named together at ``level`` (:func:`simultaneous` over all of them, each on the units
     its intervals rest on less one): the claim that the verdict and all its values are right.
@@ -191,9 +222,20 @@ def verdict_intervals(findings, params, n_units, level=0.95):
     for f in findings:
         u = f.u_systematic or {}
         df = n_units[f.effect] - 1
+        # the findings of a diagnosis being made hold numbers (a file's None is a number not finite)
         f.ci95_joint = {
-            name: simultaneous(
-                ci, f.params[name], params[name].lower, params[name].upper, u.get(name, 0.0), k, df, level
+            name: cast(
+                "list[Number]",
+                simultaneous(
+                    cast("list[float]", ci),
+                    cast(float, f.params[name]),
+                    params[name].lower,
+                    params[name].upper,
+                    u.get(name, 0.0),
+                    k,
+                    df,
+                    level,
+                ),
             )
             for name, ci in f.ci95.items()
             if ci is not None
