@@ -87,7 +87,8 @@ def test_a_rival_the_data_prefer_leaves_structure_not_a_caveat():
     assert sel["effects"] == ["level"]
     out, preferred = rivals(problem, sel, {})
     assert "the data prefer it" in out["level"]["loss"]
-    assert len(preferred) == 1 and preferred[0].startswith("loss in place of level")
+    assert len(preferred) == 1 and preferred[0].where == "loss"
+    assert preferred[0].sentence.startswith("loss in place of level")
 
 
 class HingeProblem(Problem):

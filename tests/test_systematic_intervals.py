@@ -23,6 +23,7 @@ from rocklab.diagnosis.estimation.systematic import (
     widened,
 )
 from rocklab.diagnosis.parameters import Param
+from rocklab.diagnosis.result import Finding
 
 TRUTH = 0.3
 
@@ -159,19 +160,15 @@ def test_a_verdicts_intervals_count_all_its_parameters_each_on_its_own_units():
     assert cut[0] == 0.0
     u = float(np.hypot(u_pull, u_model))
     found = [
-        {
-            "effect": "x",
-            "params": {"a": 0.3, "b": 0.002},
-            "ci95": {"a": [0.25, 0.36], "b": cut},
-            "u_systematic": {"b": u},
-        },
-        {"effect": "stop", "params": {"v": 0.2}, "ci95": {"v": [0.15, 0.26]}},
+        Finding(effect="x", params={"a": 0.3, "b": 0.002}, ci95={"a": [0.25, 0.36], "b": cut}, u_systematic={"b": u}),
+        Finding(effect="stop", params={"v": 0.2}, ci95={"v": [0.15, 0.26]}),
     ]
     verdict_intervals(found, P, {"x": 10, "stop": 5})
-    assert found[0]["ci95_joint"]["a"] == pytest.approx(simultaneous([0.25, 0.36], 0.3, 0.0, 1.0, 0.0, 3, 9))
-    assert found[0]["ci95_joint"]["b"] == pytest.approx(simultaneous(cut, 0.002, 0.0, 1.0, u, 3, 9))
-    assert found[0]["ci95_joint"]["b"][0] == 0.0
-    lo, hi = found[1]["ci95_joint"]["v"]
+    joint = [f.ci95_joint or {} for f in found]
+    assert joint[0]["a"] == pytest.approx(simultaneous([0.25, 0.36], 0.3, 0.0, 1.0, 0.0, 3, 9))
+    assert joint[0]["b"] == pytest.approx(simultaneous(cut, 0.002, 0.0, 1.0, u, 3, 9))
+    assert joint[0]["b"][0] == 0.0
+    lo, hi = joint[1]["v"]
     r = stats.t.ppf(0.5 + 0.95 ** (1 / 3) / 2, 4) / stats.t.ppf(0.975, 4)
     assert (lo, hi) == pytest.approx((0.2 - r * 0.05, 0.2 + r * 0.06))
 

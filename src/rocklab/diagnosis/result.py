@@ -42,6 +42,7 @@ null.
 from __future__ import annotations
 
 import json
+import math
 import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, fields
@@ -266,9 +267,19 @@ class CurveLine(TypedDict):
     label: str
 
 
-#: A discovered form's curve against the data: ``measured``, ``family``, ``best_listed`` lines and the
-#: axes' labels ``x`` and ``y``.
-Curve = dict[str, CurveLine | str]
+class Curve(TypedDict):
+    """A discovered form's curve against the data: its lines and the axes' labels."""
+
+    measured: CurveLine
+    best_listed: CurveLine
+    family: CurveLine
+    x: str
+    y: str
+
+
+def floats(numbers: Mapping[str, Number]) -> dict[str, float]:
+    """The numbers of a file's mapping as floats, a null (a number that was not finite) as NaN."""
+    return {k: math.nan if v is None else float(v) for k, v in numbers.items()}
 
 
 class BlockBase(TypedDict):

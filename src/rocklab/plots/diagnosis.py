@@ -28,7 +28,7 @@ from rocklab.diagnosis.catalogue import by_name
 from rocklab.diagnosis.causes import Stage, instability_angle
 from rocklab.diagnosis.evidence import flight_time_alpha, in_series_order, observe
 from rocklab.diagnosis.extended import model_params
-from rocklab.diagnosis.result import CampaignDiagnosis, Finding, LimestoneDiagnosis, SeriesDiagnosis
+from rocklab.diagnosis.result import CampaignDiagnosis, Finding, LimestoneDiagnosis, SeriesDiagnosis, floats
 from rocklab.diagnosis.wall_model import impact_speeds
 from rocklab.physics import restitution
 from rocklab.physics.boundary import Boundary
@@ -81,7 +81,7 @@ def history_figure(test: MeasuredTest, entry: SeriesDiagnosis) -> Figure:
         _plot(axes[0], t, th, test, ls=style, lw=0.9, label=label)
     ext = entry.extended
     if ext:
-        t, th = simulate_measured(test, ext["effects"], ext["params"], t_end=t_end)
+        t, th = simulate_measured(test, ext["effects"], floats(ext["params"]), t_end=t_end)
         params = ", ".join(f"{k} = {v:.3g}" for k, v in ext["params"].items())
         _plot(axes[1], t, th, test, color="C3", lw=0.9, label=f"{' + '.join(ext['effects'])}\n({params})")
     else:
@@ -105,7 +105,7 @@ def _impact_law(
     tests: Sequence[MeasuredTest], ext: Sequence[str], values: Mapping[str, float | None], x: np.ndarray
 ) -> np.ndarray:
     """e / e_an of a model at impact speeds x [thetadot_r] on each test's release hinge, shape (tests, x)."""
-    mp = model_params(tests, ext, values)
+    mp = model_params(tests, ext, floats(values))
     vr = overturning_velocity(mp.alpha, mp.p)[:, None]
     side = np.array([t.side0 for t in tests], float)[:, None] + 0.0 * x
     v = x * vr
@@ -116,7 +116,7 @@ def _flight_angle_seen(
     tests: Sequence[MeasuredTest], ext: Sequence[str], values: Mapping[str, float | None], A: np.ndarray
 ) -> np.ndarray:
     """alpha_r / alpha that Housner's closed form gives the model's flight time at apexes A [rad], (tests, A)."""
-    mp = model_params(tests, ext, values)
+    mp = model_params(tests, ext, floats(values))
     p, alpha = mp.p[:, None], mp.alpha[:, None]
     side = np.array([t.side0 for t in tests], float)[:, None] + 0.0 * A
     return flight_time_alpha(A, 2.0 * quarter_period(A, mp.flight(A, side), p), p) / alpha
@@ -246,6 +246,8 @@ def series_figures(
     campaign = CampaignDiagnosis.of(diagnosis)
     out: dict[str, Figure] = {}
     for e in campaign.series:
+        # every series of a diagnosis has its key, its sample test and its tests counted
+        assert e.key is not None and e.sample_test is not None
         paths = {Path(p).stem: p for p in tests_by_series[e.key]}
         (recs,) = stored_records([paths[e.sample_test]]).values()
         out[e.key] = history_figure(measured_test(recs[0]), e)
@@ -255,7 +257,7 @@ def series_figures(
             out[f"discovered/{e.key}"] = found
     for name, boundary in (("fig14", Boundary.TWO_SIDED), ("fig15", Boundary.ONE_SIDED)):
         own = campaign.series_of(boundary)
-        out[name] = out[max(own, key=lambda e: e.n_tests).key] if own else _empty(boundary)
+        out[name] = out[str(max(own, key=lambda e: e.n_tests or 0).key)] if own else _empty(boundary)
     return out
 
 
@@ -350,10 +352,10 @@ def family_figure(result: LimestoneDiagnosis, events: pd.DataFrame) -> Figure:
     ax.axhline(1.0, color="C0", lw=1.0, label="Housner's e (Eq. 2)")
     for i, fam in enumerate(result.all.families):
         if i == 0:
-            best = per_trial(problem.model_e(trials, fam.best_listed_params) / e_an)
+            best = per_trial(problem.model_e(trials, floats(fam.best_listed_params)) / e_an)
             pars = ", ".join(f"{k} = {v:.3g}" for k, v in fam.best_listed_params.items())
             ax.plot(xs, by_group(best), "--", color="C1", label=f"best listed: {fam.best_listed} ({pars})")
-        model = per_trial(problem.model_e(trials, fam.params) / e_an)
+        model = per_trial(problem.model_e(trials, floats(fam.params)) / e_an)
         pars = ", ".join(f"{k} = {v:.3g}" for k, v in fam.params.items())
         gain = fam.heldout_gain
         ax.plot(
