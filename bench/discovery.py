@@ -157,7 +157,7 @@ def scenario(cause, boundary, alpha, n):
         kw["alpha_ratio"] = 0.75 if one else 0.9
         truth[cause] = {"alpha_r_over_alpha": kw["alpha_ratio"]}
     elif cause == "flight_damping":
-        model["flight_damping"] = 0.01
+        model["zeta"] = 0.01
         truth[cause] = {"zeta": 0.01}
     elif cause == "hinge_asymmetry":
         # e_+ = e_an, e_- = 0.96 e_an: e_an sqrt(0.96) exp(+-s_e/2), a scale beside the asymmetry
@@ -179,11 +179,11 @@ def scenario(cause, boundary, alpha, n):
         model["impact"] = _by_speed(lambda x: 0.9 + 0.1 * x)
         truth[cause] = {f"g{j}": 0.9 + 0.1 * j / 3 for j in range(4)}
     elif cause == "flight_loss[friction]":
-        model["hinge_friction"] = 0.02 * alpha
+        model["mu"] = 0.02 * alpha
         kw["theta0_range"] = (0.85, 0.95)  # released below alpha - mu: friction would hold it at rest
         truth["flight_loss"] = {"zeta": 0.0, "mu_over_alpha": 0.02, "kappa_alpha": 0.0}
     elif cause == "flight_loss[drag]":
-        model["flight_drag"] = 0.06 / alpha
+        model["kappa"] = 0.06 / alpha
         truth["flight_loss"] = {"zeta": 0.0, "mu_over_alpha": 0.0, "kappa_alpha": 0.06}
     elif cause == "stop_threshold":
         model["impact"] = _sticking(0.15, 0.95)

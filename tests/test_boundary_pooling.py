@@ -24,7 +24,7 @@ TRUTH["flight_damping"] = {"zeta": 0.008}
 
 @pytest.fixture(scope="module")
 def four_walls():
-    model = {"impact": I.Scaled(H(), 0.95), "flight_damping": 0.008}
+    model = {"impact": I.Scaled(H(), 0.95), "zeta": 0.008}
     entries = []
     for i, sp in enumerate(["1a", "2a", "3b", "5c"]):
         records = vl.series_records(

@@ -185,7 +185,7 @@ def _bad_simulate(tmp):
         ([*FREE, "--e-scale", "1.5", *out], "--e-scale", "would create energy"),
         ([*FREE, "--amplitude-law", "0", "0.5", *out], "--amplitude-law", "A must be > 0"),
         ([*FREE, "--amplitude-law", "1.2", "-0.5", *out], "--amplitude-law", "B must be >= 0"),
-        ([*FREE, "--flight-damping", "1", *out], "--flight-damping", "must be in [0, 1)"),
+        ([*FREE, "--zeta", "1", *out], "--zeta", "must be in [0, 1)"),
         ([*FREE, "--t-end", "0", *out], "--t-end", "must be > 0"),
         ([*FREE, "--fs", "-400", *out], "--fs", "must be > 0"),
         ([*FREE, "--fs", "1e9", *out], "--fs", "samples over 30 s"),

@@ -120,8 +120,8 @@ SCENARIOS = {
         {"instability_angle": {"alpha_r_over_alpha": 0.95}},
     ),
     "instability-1s": ("one-sided", {}, {"alpha_ratio": 0.75}, {"instability_angle": {"alpha_r_over_alpha": 0.75}}),
-    "damping-0.02": ("two-sided", {"impact": H(), "flight_damping": 0.02}, {}, {"flight_damping": {"zeta": 0.02}}),
-    "damping-0.005": ("two-sided", {"impact": H(), "flight_damping": 0.005}, {}, {"flight_damping": {"zeta": 0.005}}),
+    "damping-0.02": ("two-sided", {"impact": H(), "zeta": 0.02}, {}, {"flight_damping": {"zeta": 0.02}}),
+    "damping-0.005": ("two-sided", {"impact": H(), "zeta": 0.005}, {}, {"flight_damping": {"zeta": 0.005}}),
     # alpha_- = 0.97 alpha_+: released lower, or the weaker hinge overturns the wall
     "asymmetry-alpha": (
         "two-sided",
@@ -151,7 +151,7 @@ SCENARIOS = {
     ),
     "damping+scale": (
         "two-sided",
-        {"impact": I.Scaled(H(), 0.95), "flight_damping": 0.01},
+        {"impact": I.Scaled(H(), 0.95), "zeta": 0.01},
         {},
         {"flight_damping": {"zeta": 0.01}, "restitution_scale": {"c": 0.95}},
     ),
@@ -422,7 +422,7 @@ def test_a_viscous_loss_is_read_on_the_long_flights_at_any_noise():
     a median over every flight sat on that cluster at 1 and crossed the threshold by the noise's scatter, so
     with better instruments (0.0002 mm) the viscous loss lost its signature (bench/discovery.py, cell 109)."""
     spec = vl.DEFAULT_SPECIMENS.set_index("specimen").loc["2a"]
-    model = {"impact": H(), "flight_damping": 0.01}
+    model = {"impact": H(), "zeta": 0.01}
     for noise_mm in (0.002, 0.0002):
         recs = vl.series_records("z", spec, "two-sided", model, n=5, fs=200.0, seed=109, noise_mm=noise_mm)
         s = D.signatures([D.measured_test(r) for r in recs])["flight_damping"]
@@ -489,7 +489,7 @@ def test_a_gap_wall_sticks_by_the_same_rule_in_the_free_run_and_the_simulator():
             "two-sided",
             1e-6,
         ),
-        ({"flight_damping": 0.02}, ("flight_damping",), {"zeta": 0.02}, "two-sided", 1e-3),  # first order in zeta
+        ({"zeta": 0.02}, ("flight_damping",), {"zeta": 0.02}, "two-sided", 1e-3),  # first order in zeta
         # a law of the impact speed and a change of the base e: the simulator's laws of the diagnosis' own
         (
             {"impact": I.SpeedLaw(H(), (0.8, 0.9, 1.05, 1.1))},

@@ -41,7 +41,7 @@ def test_coulomb_friction_on_a_linear_oscillator_loses_two_mu_per_half_cycle():
 def test_dry_friction_shifts_the_hinge_of_the_linearised_flight(form):
     """Linearised: the rise is Housner's flight on a hinge a + mu, the fall on a - mu (closed form)."""
     mu = 0.004
-    m = RockingModel(alpha=ALPHA, p=P, hinge_friction=mu, form=form, impact=H())
+    m = RockingModel(alpha=ALPHA, p=P, mu=mu, form=form, impact=H())
     h = simulate_free(m, 0.8 * ALPHA, 0.0, t_end=3.0, fs=400, rtol=1e-11, atol=1e-13)
     imp = h.impacts
     v_land, v_off, apex = abs(imp.thetadot_before[0]), abs(imp.thetadot_after[0]), imp.theta_peak_before[1]
@@ -54,14 +54,12 @@ def test_dry_friction_shifts_the_hinge_of_the_linearised_flight(form):
         assert apex == pytest.approx(flight.apex_after(v_off, ALPHA, P, mu=mu), rel=1e-8)
 
 
-@pytest.mark.parametrize(
-    "kw", [{"hinge_friction": 0.002}, {"flight_drag": 3.0}, {"hinge_friction": 0.001, "flight_drag": 1.0}]
-)
+@pytest.mark.parametrize("kw", [{"mu": 0.002}, {"kappa": 3.0}, {"mu": 0.001, "kappa": 1.0}])
 def test_closed_forms_of_a_flight_match_the_exact_simulator(kw):
     m = RockingModel(alpha=ALPHA, p=P, impact=H(), **kw)
     h = simulate_free(m, 0.8 * ALPHA, 0.0, t_end=8.0, fs=400, rtol=1e-11, atol=1e-13)
     imp = h.impacts.iloc[:12]
-    loss = {"mu": m.hinge_friction, "kappa": m.flight_drag}
+    loss = {"mu": m.mu, "kappa": m.kappa}
     pk = imp.theta_peak_before.to_numpy()
     np.testing.assert_allclose(flight.landing_speed(pk, ALPHA, P, **loss), np.abs(imp.thetadot_before), rtol=1e-8)
     np.testing.assert_allclose(flight.apex_after(np.abs(imp.thetadot_after[:-1]), ALPHA, P, **loss), pk[1:], rtol=1e-8)
@@ -70,7 +68,7 @@ def test_closed_forms_of_a_flight_match_the_exact_simulator(kw):
 
 
 @pytest.mark.parametrize("k", [0.3, -0.2])
-@pytest.mark.parametrize("kw", [{"hinge_friction": 0.002}, {"hinge_friction": 0.001, "flight_drag": 2.0}])
+@pytest.mark.parametrize("kw", [{"mu": 0.002}, {"mu": 0.001, "kappa": 2.0}])
 def test_losses_on_an_angle_that_depends_on_the_amplitude_match_the_exact_simulator(k, kw):
     """A flight rocks on the angle of its own apex (flight_angle(A, alpha, k)) and loses on that angle:
     the closed forms, solving apex and angle together, against the event-driven simulator."""
@@ -81,7 +79,7 @@ def test_losses_on_an_angle_that_depends_on_the_amplitude_match_the_exact_simula
     h = simulate_free(m, 0.8 * ALPHA, 0.0, t_end=8.0, fs=400, rtol=1e-11, atol=1e-13)
     imp = h.impacts.iloc[:12]
     assert len(imp) >= 6
-    loss = {"mu": m.hinge_friction, "kappa": m.flight_drag, "k": k}
+    loss = {"mu": m.mu, "kappa": m.kappa, "k": k}
     pk, v_after = imp.theta_peak_before.to_numpy(), np.abs(imp.thetadot_after.to_numpy())
     np.testing.assert_allclose(flight.landing_speed(pk, ALPHA, P, **loss), np.abs(imp.thetadot_before), rtol=1e-8)
     A = flight.apex_after(v_after[:-1], ALPHA, P, **loss)
@@ -97,7 +95,7 @@ def test_losses_on_an_angle_that_depends_on_the_amplitude_match_the_exact_simula
     values = {"alpha_r_over_alpha": 1.0, "rounding": k, "zeta": 0.0}
     values |= {"mu_over_alpha": loss["mu"] / ALPHA, "kappa_alpha": loss["kappa"] * ALPHA}
     sim = D.rocking_model(wall, ext, values)
-    assert (sim.hinge_rounding, sim.hinge_friction, sim.flight_drag) == pytest.approx((k, loss["mu"], loss["kappa"]))
+    assert (sim.hinge_rounding, sim.mu, sim.kappa) == pytest.approx((k, loss["mu"], loss["kappa"]))
     mp = D.model_params([wall], ext, values)
     v_before = np.abs(imp.thetadot_before.to_numpy())[None, :-1]
     A_model, _, a, _, _ = dm.next_flight(v_before, np.ones_like(v_before), mp)
@@ -108,7 +106,7 @@ def test_losses_on_an_angle_that_depends_on_the_amplitude_match_the_exact_simula
 def test_drag_takes_the_energy_of_its_work():
     """Energy balance over one flight: 1/2 (v_off^2 - v_land^2) = int kappa |thetadot|^3 dt."""
     kappa = 3.0
-    m = RockingModel(alpha=ALPHA, p=P, impact=H(), flight_drag=kappa)
+    m = RockingModel(alpha=ALPHA, p=P, impact=H(), kappa=kappa)
     h = simulate_free(m, 0.8 * ALPHA, 0.0, t_end=3.0, fs=20000, rtol=1e-11, atol=1e-13)
     t0, t1 = h.impacts.t[0], h.impacts.t[1]
     sel = (h.t > t0) & (h.t < t1)
@@ -135,7 +133,7 @@ def test_the_engine_refuses_dry_friction_and_drag_the_maps_carry_the_viscous_mem
     from rocklab.seismic.maps import overturning_map
 
     with pytest.raises(NotImplementedError, match="no dry friction or drag in flight"):
-        RockingModel(alpha=ALPHA, p=P, hinge_friction=0.001).numba_params()
+        RockingModel(alpha=ALPHA, p=P, mu=0.001).numba_params()
     loss = {"zeta": 0.004, "mu_over_alpha": 0.01, "kappa_alpha": 0.02}
     entry = {
         "scope": "boundary",
@@ -149,9 +147,9 @@ def test_the_engine_refuses_dry_friction_and_drag_the_maps_carry_the_viscous_mem
     assert "flight_loss is carried on the maps' wall by flight_damping" in caplog.text
     assert "mu_over_alpha = 0.01" in caplog.text and "kappa_alpha = 0.02" in caplog.text
     model = calibrated.calibrated_model([entry], "2s-calibrated", 0.1, 1.0)
-    assert (model.flight_damping, model.hinge_friction, model.flight_drag) == (0.004, 0.0, 0.0)
+    assert (model.zeta, model.mu, model.kappa) == (0.004, 0.0, 0.0)
     assert model.numba_params()[3] == 0.004
-    assert calibrated.calibrated_model([entry], "2s-calibrated-no-zeta", 0.1, 1.0).flight_damping == 0.0
+    assert calibrated.calibrated_model([entry], "2s-calibrated-no-zeta", 0.1, 1.0).zeta == 0.0
     # the maps job runs on it (its numba engine, every model the diagnosis names)
     t = np.arange(0.0, 2.0, 0.01)
     ag = np.where(t < 0.5, 3.0 * np.sin(2 * np.pi * t), 0.0)
@@ -172,9 +170,9 @@ def test_the_virtual_lab_records_the_hidden_losses(tmp_path):
     from rocklab.lab import virtual_lab as vl
 
     # with an angle that depends on the amplitude too: both families' keys at once
-    model = {"hinge_friction": 0.002, "flight_drag": 0.5, "hinge_rounding": 0.2}
+    model = {"mu": 0.002, "kappa": 0.5, "hinge_rounding": 0.2}
     truth = vl.write_campaign(tmp_path, [vl.VirtualTest("T1", theta0_ratio=0.9, model=model)], t_end=5.0)
-    assert (truth.hinge_friction[0], truth.flight_drag[0], truth.hinge_rounding[0]) == (0.002, 0.5, 0.2)
+    assert (truth.mu[0], truth.kappa[0], truth.hinge_rounding[0]) == (0.002, 0.5, 0.2)
 
 
 # name: (simulator model, series keywords, truth of the family's parameters, member it reduces to)
@@ -182,7 +180,7 @@ FRICTION = {"theta0_range": (0.85, 0.95)}  # released below alpha - mu: friction
 SCENARIOS = {
     **{
         f"friction-{m}-noise-{noise}": (
-            {"impact": H(), "hinge_friction": m * A2},
+            {"impact": H(), "mu": m * A2},
             {**FRICTION, "noise_mm": noise},
             {"zeta": 0.0, "mu_over_alpha": m, "kappa_alpha": 0.0},
             "dry friction",
@@ -192,7 +190,7 @@ SCENARIOS = {
     },
     **{
         f"drag-{k}-noise-{noise}": (
-            {"impact": H(), "flight_drag": k / A2},
+            {"impact": H(), "kappa": k / A2},
             {"noise_mm": noise},
             {"zeta": 0.0, "mu_over_alpha": 0.0, "kappa_alpha": k},
             "quadratic drag",
@@ -240,7 +238,7 @@ def test_a_loss_in_flight_of_another_form_is_discovered(diagnosed, name):
 
 
 def test_a_viscous_loss_is_still_the_listed_flight_damping():
-    recs = virtual_series("visc", "two-sided", {"impact": H(), "flight_damping": 0.01}, seed=7, noise_mm=0.01)
+    recs = virtual_series("visc", "two-sided", {"impact": H(), "zeta": 0.01}, seed=7, noise_mm=0.01)
     e = D.diagnose_series(recs, key="visc", n_boot=10, n_history=0)
     assert e.verdict == ["flight_damping"] and not e.unexplained and e.listed_verdict is None
     assert not e.residual_structure and "dry friction" in e.signatures["flight_loss"]
@@ -296,7 +294,7 @@ def test_a_named_viscous_loss_whose_form_cannot_be_read_is_structure_left():
     from rocklab.diagnosis.result import Structure
     from rocklab.diagnosis.series_problem import WallProblem
 
-    recs = virtual_series("fl", "two-sided", {"flight_damping": 0.01}, n=3, seed=1)
+    recs = virtual_series("fl", "two-sided", {"zeta": 0.01}, n=3, seed=1)
     problem = WallProblem([D.measured_test(r) for r in recs])
     assert problem.signature.get("flight_loss")
     assert not [s for s in problem.form_structure(("flight_damping",)) if "untested" in s.sentence]

@@ -17,7 +17,6 @@ from rocklab.physics import impact as I
 from rocklab.simulation.reference import simulate_free
 from rocklab.simulation.rocking_model import RockingModel
 
-KEYWORD = {"zeta": "flight_damping", "mu": "hinge_friction", "kappa": "flight_drag"}
 WALLS = {"stocky": (0.492, 0.123), "paper": (1.1, 0.12)}
 #: What the chain misreads of a lossless flight (sampling, interpolation of the instants) [-].
 LOSSLESS = 2e-3
@@ -25,7 +24,7 @@ LOSSLESS = 2e-3
 
 def chain_and_model(h, b, boundary, loss, fs=400.0):
     """Per flight: measured / true - 1 of its duration, take-off and landing speed, and the model's."""
-    kw = {KEYWORD[k]: v for k, v in loss.items()}
+    kw = dict(loss)
     if boundary == "two-sided":
         kw["impact"] = I.Scaled(I.HousnerTwoSided(), 0.95)
     m = RockingModel.from_wall(h, b, boundary=boundary, **kw)

@@ -19,7 +19,7 @@ SCENARIOS = {
         0.9,
         {"instability_angle": {"alpha_r_over_alpha": 0.9}, "restitution_scale": {"c": 0.95}},
     ),
-    "damping": ({"impact": I.HousnerTwoSided(), "flight_damping": 0.02}, 1.0, {"flight_damping": {"zeta": 0.02}}),
+    "damping": ({"impact": I.HousnerTwoSided(), "zeta": 0.02}, 1.0, {"flight_damping": {"zeta": 0.02}}),
 }
 
 

@@ -41,8 +41,8 @@ def test_energy_conserved_with_e_one():
     assert _energy_drift(model, h, np.isfinite(h.theta)) < 1e-9
 
 
-def test_flight_damping_dissipates():
-    model = RockingModel(alpha=0.15, p=2.2, impact=impact.Constant(1.0), flight_damping=0.02)
+def test_a_viscous_loss_dissipates():
+    model = RockingModel(alpha=0.15, p=2.2, impact=impact.Constant(1.0), zeta=0.02)
     h = simulate_free(model, 0.12, t_end=6.0)
     side = np.where(h.theta > 0, 1, -1)
     e = model.energy(h.theta, h.thetadot, side)

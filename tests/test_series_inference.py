@@ -142,9 +142,7 @@ def test_one_test_names_nothing_and_says_why():
 @pytest.fixture(scope="module")
 def friction():
     """Six tests of a two-sided wall with dry friction at the hinge: zeta and kappa fitted at their bound 0."""
-    recs = virtual_series(
-        "friction", "two-sided", {"impact": H(), "hinge_friction": 0.02 * A2}, seed=40, theta0_range=(0.85, 0.95)
-    )
+    recs = virtual_series("friction", "two-sided", {"impact": H(), "mu": 0.02 * A2}, seed=40, theta0_range=(0.85, 0.95))
     return recs, D.diagnose_series(recs, key="friction", n_boot=10, n_history=0)
 
 

@@ -85,7 +85,7 @@ def simulate_model(args):
         impact=_impact_law(args, alpha),
         alpha_rock=args.alpha_rock,
         alpha_neg=args.alpha_neg,
-        flight_damping=args.flight_damping,
+        zeta=args.zeta,
         gap=args.gap,
         form=args.form,
     )
@@ -198,11 +198,11 @@ def add_parser(sub):
     )
     add_eq17_option(g, "--amplitude-law", "Eq. 17: e times (A - B (thetadot/thetadot_r)^2)", "none")
     g.add_argument(
-        "--flight-damping",
+        "--zeta",
         type=number(0.0, 1.0, lo_closed=True),
         default=0.0,
         metavar="ZETA",
-        help="damping ratio zeta between impacts, in [0, 1) [-]",
+        help="viscous loss between impacts, -2 zeta p thetadot, in [0, 1) [-]",
     )
     m = p.add_argument_group("motion (a record, or free rocking from --theta0/--thetadot0)")
     add_record_options(m, required=False)

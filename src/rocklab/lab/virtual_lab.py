@@ -93,7 +93,7 @@ class VirtualTest:
     residual_kind : {'rotation', 'sliding'}
     model : dict
         Further ``RockingModel`` keywords (``impact``, ``alpha_neg``,
-        ``flight_damping``, ``hinge_friction``, ``flight_drag``, ``gap``,
+        ``zeta``, ``mu``, ``kappa``, ``gap``,
         ``form``, ``hinge_rounding``, ...), every physical effect of the
         simulator; ``alpha_rock`` defaults to alpha_ratio * alpha.  With dry
         friction mu, release below (1 - mu / alpha) of the rocking angle (a
@@ -264,10 +264,10 @@ def simulate_virtual_test(test: VirtualTest, specimen, layout, rng=None, t_end=4
             "overturning_velocity": w_r,
             "thetadot0": thetadot0,
             "impact_law": _law_name(model.impact) or "default",
-            "flight_damping": model.flight_damping,
+            "zeta": model.zeta,
             "hinge_rounding": model.hinge_rounding,
-            "hinge_friction": model.hinge_friction,
-            "flight_drag": model.flight_drag,
+            "mu": model.mu,
+            "kappa": model.kappa,
             "gap": model.gap,
             "form": model.form,
             "e_first": float(ratios[0]) if ratios.size else np.nan,
@@ -465,10 +465,10 @@ def write_campaign(out_dir, tests, specimens=None, layouts=None, seed=0, t_end=4
                 "p": truth["p"],
                 "overturning_velocity": truth["overturning_velocity"],
                 "impact_law": truth["impact_law"],
-                "flight_damping": truth["flight_damping"],
+                "zeta": truth["zeta"],
                 "hinge_rounding": truth["hinge_rounding"],
-                "hinge_friction": truth["hinge_friction"],
-                "flight_drag": truth["flight_drag"],
+                "mu": truth["mu"],
+                "kappa": truth["kappa"],
                 "gap": truth["gap"],
                 "form": truth["form"],
                 "e_true": truth["e_true"],

@@ -151,7 +151,7 @@ def free_batch(
     *,
     alpha_rock=None,
     alpha_neg=None,
-    flight_damping=None,
+    zeta=None,
     e_scale=None,
     amplitude_a=None,
     amplitude_b=None,
@@ -176,8 +176,8 @@ def free_batch(
         Initial rotation [rad] and angular velocity [rad/s].
     alpha_rock, alpha_neg : array_like, optional
         Rocking angles of the positive and negative hinge [rad].
-    flight_damping : array_like, optional
-        zeta of the viscous-like loss between impacts.
+    zeta : array_like, optional
+        Viscous-like loss between impacts, -2 zeta p thetadot [-].
     e_scale : array_like, optional
         Multiplies the base-impact coefficients (e.g. e_exp/e_an).
     amplitude_a, amplitude_b : array_like, optional
@@ -206,7 +206,7 @@ def free_batch(
         "thetadot0": thetadot0,
         "alpha_rock": alpha_rock,
         "alpha_neg": alpha_neg,
-        "flight_damping": flight_damping,
+        "zeta": zeta,
         "e_scale": e_scale,
         "amplitude_a": amplitude_a,
         "amplitude_b": amplitude_b,
@@ -229,8 +229,8 @@ def free_batch(
             prm[:, 1] = b["alpha_rock"]
     if "alpha_neg" in b:
         prm[:, 1] = b["alpha_neg"]
-    if "flight_damping" in b:
-        prm[:, 3] = b["flight_damping"]
+    if "zeta" in b:
+        prm[:, 3] = b["zeta"]
     if "e_scale" in b:
         laws[:, :2, 0] *= b["e_scale"][:, None]
     if "amplitude_a" in b:

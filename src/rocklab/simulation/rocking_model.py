@@ -117,16 +117,16 @@ class RockingModel:
     alpha_neg : float, optional
         Rocking angle of the negative hinge (asymmetry) [rad]; default
         alpha_rock.
-    flight_damping : float
-        zeta of the viscous-like term -2 zeta p thetadot between impacts [-].
-    hinge_friction : float
-        mu, dry friction at the hinge: a constant moment mu m g R opposing
+    zeta : float
+        Viscous-like loss between impacts, -2 zeta p thetadot [-].
+    mu : float
+        Dry friction at the hinge: a constant moment mu m g R opposing
         thetadot, the deceleration mu p^2 sign(thetadot) [-].  A wall whose
         restoring moment at an apex is below it (sin(alpha - |theta|) <= mu)
         would stick there: not modelled (the integrator chatters), so
         release it below alpha - mu.
-    flight_drag : float
-        kappa, quadratic drag -kappa thetadot |thetadot| [1/rad].
+    kappa : float
+        Quadratic drag -kappa thetadot |thetadot| [1/rad].
     gap : float
         One-sided only: inward rotation [rad] through which the wall rocks
         two-sided before striking the transverse walls.
@@ -148,10 +148,10 @@ class RockingModel:
     impact: _impact.ImpactLaw | None = None
     alpha_rock: float | None = None
     alpha_neg: float | None = None
-    flight_damping: float = 0.0
+    zeta: float = 0.0
     gap: float = 0.0
-    hinge_friction: float = 0.0
-    flight_drag: float = 0.0
+    mu: float = 0.0
+    kappa: float = 0.0
     form: str = "exact"
     transverse_impact: _impact.ImpactLaw | None = field(default=None)
     hinge_rounding: float = 0.0
@@ -165,8 +165,8 @@ class RockingModel:
             raise ValueError("gap must be >= 0 and is only meaningful for one-sided rocking")
         if not -1.0 < self.hinge_rounding < 1.0:
             raise ValueError(f"hinge_rounding must be in (-1, 1), not {self.hinge_rounding!r}")
-        if min(self.flight_damping, self.hinge_friction, self.flight_drag) < 0:
-            raise ValueError("flight_damping, hinge_friction and flight_drag are losses: >= 0")
+        if min(self.zeta, self.mu, self.kappa) < 0:
+            raise ValueError("zeta, mu and kappa are losses: >= 0")
 
     @classmethod
     def from_wall(cls, height_m, thickness_m, **kw):
@@ -210,19 +210,17 @@ class RockingModel:
         """Angular acceleration [rad/s^2] on hinge ``side`` under ``ag`` [m/s^2]."""
         a = side * self.alpha_side(side)
         restoring = _restoring(theta, a, ag / wall.G, self.form == "linear", np.sin, np.cos)
-        return self.p**2 * restoring - flight.loss_deceleration(
-            thetadot, self.p, self.flight_damping, self.hinge_friction, self.flight_drag
-        )
+        return self.p**2 * restoring - flight.loss_deceleration(thetadot, self.p, self.zeta, self.mu, self.kappa)
 
     def equation_of_motion(self, side, a0, slope, t0):
         """Right-hand side f(t, y) for solve_ivp, y = (theta, thetadot), on hinge
         ``side`` under ag(t) = a0 + slope (t - t0) [m/s^2]; scalar (math, not
         numpy), since the event-driven reference calls it millions of times."""
         a = side * float(self.alpha_side(side))
-        p2, c, g, lin = self.p**2, 2.0 * self.flight_damping * self.p, wall.G, self.form == "linear"
+        p2, c, g, lin = self.p**2, 2.0 * self.zeta * self.p, wall.G, self.form == "linear"
 
-        if self.hinge_friction or self.flight_drag:
-            loss = (self.p, self.flight_damping, self.hinge_friction, self.flight_drag)
+        if self.mu or self.kappa:
+            loss = (self.p, self.zeta, self.mu, self.kappa)
 
             def rhs_losses(t, y):
                 ag_g = (a0 + slope * (t - t0)) / g
@@ -267,7 +265,7 @@ class RockingModel:
         if not self.hinge_rounding or (self.one_sided and side < 0):
             return self
         a, k = self.alpha_side(side), self.hinge_rounding
-        loss = {"zeta": self.flight_damping, "mu": self.hinge_friction, "kappa": self.flight_drag, "k": k}
+        loss = {"zeta": self.zeta, "mu": self.mu, "kappa": self.kappa, "k": k}
         A = flight.apex_after(abs(thetadot), a, self.p, **loss) if theta == 0 else abs(theta)
         angle = float(flight.flight_angle(A, a, k))
         pos, neg = (angle, self.alpha_minus) if side > 0 else (self.alpha_pos, angle)
@@ -289,10 +287,10 @@ class RockingModel:
                 f"a rocking angle that depends on the amplitude (hinge_rounding = {self.hinge_rounding:g}) is "
                 "defined flight by flight in free rocking; the engines integrate ground motion"
             )
-        if self.hinge_friction or self.flight_drag:
+        if self.mu or self.kappa:
             raise NotImplementedError(
-                f"the numba engine has no dry friction or drag in flight (hinge_friction = "
-                f"{self.hinge_friction:g}, flight_drag = {self.flight_drag:g}): simulate with "
+                f"the numba engine has no dry friction or drag in flight (mu = "
+                f"{self.mu:g}, kappa = {self.kappa:g}): simulate with "
                 "rocklab.simulation.reference"
             )
         return np.array(
@@ -300,7 +298,7 @@ class RockingModel:
                 self.alpha_pos,
                 self.alpha_minus,
                 self.p,
-                self.flight_damping,
+                self.zeta,
                 self.gap,
                 float(self.one_sided),
                 float(self.form == "linear"),
@@ -418,9 +416,9 @@ class RockingHistory:
                 form=m.form,
                 alpha_rock=m.alpha_pos,
                 alpha_neg=m.alpha_minus,
-                flight_damping=m.flight_damping,
-                hinge_friction=m.hinge_friction,
-                flight_drag=m.flight_drag,
+                zeta=m.zeta,
+                mu=m.mu,
+                kappa=m.kappa,
                 hinge_rounding=m.hinge_rounding,
                 gap=m.gap,
                 impact=type(m.base_law).__name__,

@@ -52,8 +52,8 @@ UNMODELLED_LOSS = 1e-3
 #: The members of the family: name, its parameter, the others at their null, the exponent of v in the loss.
 MEMBERS = (
     ("flight_damping: viscous, -2 zeta p thetadot", "zeta", 1),
-    ("dry friction at the hinge, a constant moment mu m g R (RockingModel.hinge_friction)", "mu_over_alpha", 0),
-    ("quadratic drag, -kappa thetadot |thetadot| (RockingModel.flight_drag)", "kappa_alpha", 2),
+    ("dry friction at the hinge, a constant moment mu m g R (RockingModel.mu)", "mu_over_alpha", 0),
+    ("quadratic drag, -kappa thetadot |thetadot| (RockingModel.kappa)", "kappa_alpha", 2),
 )
 
 
