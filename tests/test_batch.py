@@ -48,6 +48,20 @@ def test_free_batch_exact_converges_to_reference():
     assert errs[0] / errs[1] > 8  # RK4: fourth order
 
 
+@pytest.mark.parametrize("loss", [{"mu": 0.002}, {"kappa": 3.0}, {"zeta": 0.01, "mu": 0.001, "kappa": 1.0}])
+def test_the_exact_form_has_dry_friction_and_drag_as_the_reference(loss):
+    """The losses in flight beyond the viscous one, as their laws declare them: dry friction jumps at
+    every turn, where the engine starts a new step (to 1e-9 of the reference, not the 1e-5 of a step
+    over the jump)."""
+    model = RockingModel(alpha=ALPHA, p=P, **loss)
+    ref = simulate_free(model, 0.8 * ALPHA, t_end=10.0).impacts
+    n = len(ref)
+    ds = free_batch(model, 0.8 * ALPHA, t_end=10.0, dt=0.01, substeps=16, max_impacts=n)
+    assert int(ds.n_impacts[0]) == n >= 5
+    np.testing.assert_allclose(ds.t_impact[0], ref.t, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(ds.theta_peak[0], ref.theta_peak_before, rtol=0, atol=1e-9)
+
+
 def test_free_batch_recovers_e_with_eq11():
     """Eq. 11 applied to simulated peaks returns the e used (per history)."""
     model = RockingModel(alpha=ALPHA, p=P)

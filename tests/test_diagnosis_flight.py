@@ -129,11 +129,12 @@ def test_the_losses_by_their_dependence_on_the_speed():
         assert np.log(loss[1] / loss[0]) / np.log(v[1] / v[0]) == pytest.approx(n, abs=0.05), kw
 
 
-def test_the_engine_refuses_dry_friction_and_drag_the_maps_carry_the_viscous_member(caplog):
+def test_the_engine_s_linear_form_refuses_dry_friction_and_drag_the_maps_carry_the_viscous_member(caplog):
     from rocklab.seismic.maps import overturning_map
+    from rocklab.simulation.engine import slot
 
-    with pytest.raises(NotImplementedError, match="no dry friction or drag in flight"):
-        RockingModel(alpha=ALPHA, p=P, mu=0.001).numba_params()
+    with pytest.raises(NotImplementedError, match=r"viscous loss alone, not dry friction \(mu = 0.001\)"):
+        RockingModel(alpha=ALPHA, p=P, mu=0.001, form="linear").numba_params()
     loss = {"zeta": 0.004, "mu_over_alpha": 0.01, "kappa_alpha": 0.02}
     entry = {
         "scope": "boundary",
@@ -148,7 +149,7 @@ def test_the_engine_refuses_dry_friction_and_drag_the_maps_carry_the_viscous_mem
     assert "mu_over_alpha = 0.01" in caplog.text and "kappa_alpha = 0.02" in caplog.text
     model = calibrated.calibrated_model([entry], "2s-calibrated", 0.1, 1.0)
     assert (model.zeta, model.mu, model.kappa) == (0.004, 0.0, 0.0)
-    assert model.numba_params()[3] == 0.004
+    assert model.numba_params()[slot("zeta")] == 0.004
     assert calibrated.calibrated_model([entry], "2s-calibrated-no-zeta", 0.1, 1.0).zeta == 0.0
     # the maps job runs on it (its numba engine, every model the diagnosis names)
     t = np.arange(0.0, 2.0, 0.01)

@@ -3,8 +3,12 @@
 Base model: a rigid block on the nominal alpha with the analytic e of its
 boundary (Eq. 2 two-sided, Eq. 14 one-sided), released from rest at the
 measured theta0.  A cause declares what it does to a wall once, as laws of
-:mod:`rocklab.physics.law` (``Cause.laws(values)``); :meth:`ModelParams.under`
-is the one place where a law becomes the per-test arrays of the model.  The
+:mod:`rocklab.physics.law` (``Cause.laws(values)``), each of which says
+what it does to the per-test arrays of the model
+(:meth:`rocklab.physics.law.Law.act_on`, through :meth:`ModelParams.under`):
+a law that acts in flight with a term of its own sets it with
+:meth:`ModelParams.with_term`, and the closed forms and the simulators
+read it from its declaration (:class:`rocklab.physics.law.FlightTerm`).  The
 closed forms of a flight (:mod:`rocklab.physics.flight`) then give the
 one-step predictions (:mod:`rocklab.diagnosis.evidence`), the
 flight-by-flight free run (:func:`next_flight`, :func:`free_run`).
@@ -54,7 +58,11 @@ class ModelParams:
     """Per-test arrays (shape (tests,)) of an extended model (:meth:`under` applies a law).
 
     ``extra`` holds the test log's columns a drift may follow
-    (``"log:<column>"``, the test's place in the series' range, 0 to 1).
+    (``"log:<column>"``, the test's place in the series' range, 0 to 1);
+    ``terms`` the terms in flight of laws beyond the losses zeta, mu, kappa:
+    ``(term, values)`` pairs, ``term`` a
+    :class:`rocklab.physics.law.FlightTerm` and ``values`` a per-test array
+    for each of its parameters (:meth:`with_term`).
     """
 
     alpha: np.ndarray
@@ -77,6 +85,7 @@ class ModelParams:
     kappa: np.ndarray = None  # quadratic drag in flight [1/rad]
     extra: dict = field(default_factory=dict)
     speed_knots: np.ndarray = None  # (tests, knots): e / e_an at the knots of physics.law.SpeedFactor
+    terms: tuple = ()
 
     def __post_init__(self):
         for name in ("mu", "kappa"):
@@ -85,9 +94,12 @@ class ModelParams:
 
     def flight_loss(self, like=None):
         """zeta, mu, kappa of the losses in flight (:func:`rocklab.physics.flight.loss_deceleration`),
-        per test, broadcast against ``like``: the keywords of the flight's closed forms on a flight's
-        own angle (:meth:`flight`)."""
-        return {k: per_test(getattr(self, k), like) for k in ("zeta", "mu", "kappa")}
+        per test, broadcast against ``like``, and the laws' own ``terms`` where there are any: the
+        keywords of the flight's closed forms on a flight's own angle (:meth:`flight`)."""
+        out = {k: per_test(getattr(self, k), like) for k in ("zeta", "mu", "kappa")}
+        if self.terms:
+            out["terms"] = tuple((t, tuple(per_test(v, like) for v in values)) for t, values in self.terms)
+        return out
 
     def flight_keywords(self, like=None):
         """:meth:`flight_loss` and k, the dependence of the rocking angle on the amplitude
@@ -110,39 +122,25 @@ class ModelParams:
         return self.order if column is None else self.extra.get(f"log:{column}", 0.5 + 0 * self.order)
 
     def under(self, law):
-        """The model as ``law`` (one of :mod:`rocklab.physics.law`) changes it: the one place
-        where a cause's law becomes the model's arrays."""
-        if isinstance(law, _law.Restitution):
-            pos, neg = law.factors(None if law.drift is None else self.place(law.along))
-            return replace(self, c_pos=pos * self.c_pos, c_neg=neg * self.c_neg)
-        if isinstance(law, _law.Amplitude):
-            return replace(self, amp_a=law.a * self.amp_a, amp_b=law.b * np.ones_like(self.alpha))
-        if isinstance(law, _law.HousnerLoss):
-            return replace(self, e0=law.restitution(self.e0))
-        if isinstance(law, _law.SpeedFactor):
-            return replace(self, speed_knots=np.tile(np.array(law.knots), (self.alpha.size, 1)))
-        if isinstance(law, _law.Hinge):
-            a_pos, a_neg = law.angles(self.a_pos, self.a_neg)
-            k = self.rounding if law.rounding is None else law.rounding * np.ones_like(self.alpha)
-            return replace(self, a_pos=a_pos, a_neg=a_neg, rounding=k)
-        if isinstance(law, _law.FlightLoss):
-            return replace(
-                self,
-                zeta=law.zeta * np.ones_like(self.alpha),
-                mu=law.mu_over_alpha * self.alpha,
-                kappa=law.kappa_alpha / self.alpha,
-            )
-        if isinstance(law, _law.Gap):
-            gap_model = self.one_sided.copy()
-            return replace(
-                self,
-                gap_model=gap_model,
-                e0=np.where(gap_model, restitution.two_sided(self.alpha), self.e0),
-                gap=law.over_alpha * self.alpha,
-            )
-        if isinstance(law, _law.Stop):
-            return replace(self, stop=law.v_stop * np.ones_like(self.alpha))
-        raise TypeError(f"{type(law).__name__} is no law of rocklab.physics.law")
+        """The model as ``law`` changes it (:meth:`rocklab.physics.law.Law.act_on`, the law's own
+        declaration: this model knows no law by name).
+
+        Raises
+        ------
+        TypeError
+            For an object that is no :class:`rocklab.physics.law.Law`.
+        """
+        if not isinstance(law, _law.Law):
+            raise TypeError(f"{type(law).__name__} is no law of rocklab.physics.law")
+        return law.act_on(self)
+
+    def with_term(self, term, *values):
+        """The model with the term in flight ``term`` (:class:`rocklab.physics.law.FlightTerm`) at
+        ``values``, one per-test array per parameter of the term: set, not added, as the losses are."""
+        if len(values) != len(term.params):
+            raise ValueError(f"{term.name} has the parameters {', '.join(term.params)}: {len(values)} values given")
+        values = tuple(np.broadcast_to(np.asarray(v, float), self.alpha.shape) for v in values)
+        return replace(self, terms=(*(tv for tv in self.terms if tv[0] != term), (term, values)))
 
     def with_base(self, base="analytic"):
         """The model on a literature base: ``"analytic"`` (itself), ``"zero"`` (e = 0, Liberatore &
@@ -156,7 +154,8 @@ class ModelParams:
     def row(self, i):
         """The model of test ``i`` (scalars)."""
         arrays = {k: np.asarray(v)[i] for k, v in vars(self).items() if isinstance(v, np.ndarray)}
-        return replace(self, **arrays, extra={k: np.asarray(v)[i] for k, v in self.extra.items()})
+        terms = tuple((t, tuple(np.asarray(v)[i] for v in values)) for t, values in self.terms)
+        return replace(self, **arrays, extra={k: np.asarray(v)[i] for k, v in self.extra.items()}, terms=terms)
 
 
 def log_columns(tests):
@@ -408,6 +407,7 @@ def simulator(mp: ModelParams, base="analytic") -> RockingModel:
         zeta=float(mp.zeta),
         mu=float(mp.mu),
         kappa=float(mp.kappa),
+        terms=tuple((t, tuple(float(v) for v in values)) for t, values in mp.terms),
         gap=float(mp.gap),
         transverse_impact=transverse,
         hinge_rounding=float(mp.rounding),

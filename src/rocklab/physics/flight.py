@@ -15,6 +15,14 @@ those of the array forms to the last bit, but where libm's expm1 rounds
 otherwise than numpy's: with drag, some 1e-15 apart).  The diagnosis, the
 dissipation analysis and the tests of the simulators all take their flights
 from here.
+
+Beside the losses of :func:`loss_deceleration` (keywords zeta, mu, kappa),
+the closed forms take the terms in flight of other laws as they declare
+them (keyword ``terms``: ``(term, values)`` pairs of a
+:class:`rocklab.physics.law.FlightTerm` and its parameters), by the work
+each declares over the rise and over the fall: exact for a term whose
+work does not depend on the speed (a moment), beside dry friction and a
+viscous loss; beside drag, first order in it.
 """
 
 from __future__ import annotations
@@ -310,12 +318,18 @@ def _viscous(zeta, p, A, a):
     return 2.0 * zeta * p * (path_integral(A, a, p) if _some(zeta) else 0.0)
 
 
-def landing_speed(A, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):
+def _terms_work(terms, A, a, p, rise):
+    """The energy the terms in flight ``terms`` take over the rise to A or the fall from it [rad^2/s^2]."""
+    return sum(term.work(A, a, p, rise, *values) for term, values in terms)
+
+
+def landing_speed(A, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0, terms=()):
     """|thetadot| on arrival at theta = 0 from an apex A on hinge a [rad/s], with the losses in flight.
 
     The losses of :func:`loss_deceleration`: dry friction and drag exact
     (:func:`_work`), the viscous loss 2 zeta p int |thetadot| to first order
-    in zeta.  A wall whose restoring moment at its apex is below the
+    in zeta; ``terms``, those of other laws, by their work over the fall
+    (module docstring).  A wall whose restoring moment at its apex is below the
     friction moment (sin(a - A) <= mu) stays there: landing speed 0.
     ``k``: the hinge's angle depends on the amplitude, the whole flight
     rocks on the angle of its apex (:func:`flight_angle`), so the losses
@@ -324,8 +338,12 @@ def landing_speed(A, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):
     a = flight_angle(A, a, k)
     if not (_some(mu) or _some(kappa)):
         E = potential(A, a, p) - _viscous(zeta, p, A, a)
+        if terms:
+            E = E - _terms_work(terms, A, a, p, rise=False)
         return np.sqrt(2.0 * np.maximum(E, 0.0))
     E = _work(A, a, p, mu, kappa, rise=False) - _viscous(zeta, p, A, a)
+    if terms:
+        E = E - _terms_work(terms, A, a, p, rise=False)
     return np.where(np.sin(a - A) > mu, np.sqrt(2.0 * np.maximum(E, 0.0)), 0.0)
 
 
@@ -377,7 +395,7 @@ def _newton_apex(E, A, a, p, zeta, mu, kappa, k, viscous):
     return out
 
 
-def apex_after(v, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):
+def apex_after(v, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0, terms=()):
     """Apex [rad] reached on hinge a by a wall leaving theta = 0 at |thetadot| = v, with the losses in flight.
 
     The inverse of :func:`landing_speed`'s balance on the rise: the undamped
@@ -387,6 +405,8 @@ def apex_after(v, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):
     so the apex and the angle of the flight are solved together (the
     undamped apex by :func:`_apex_on_flight_angle`, the losses' work on the
     angle of the apex each Newton pass reaches, :func:`_rise_balance`).
+    ``terms``, those of other laws, by their work over the rise: Newton
+    passes from the apex without them (:func:`_apex_with_terms`).
     """
     E = 0.5 * np.asarray(v, float) ** 2
 
@@ -395,32 +415,81 @@ def apex_after(v, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):
 
     A = rise(E)
     if _some(mu) or _some(kappa):
-        return _apex_with_losses(E, A, a, p, zeta, mu, kappa, k)
-    if _some(zeta):
+        A = _apex_with_losses(E, A, a, p, zeta, mu, kappa, k)
+    elif _some(zeta):
         # the loss of the rise depends on the apex it reaches: a few fixed-point passes
         for _ in range(3):
             A = rise(E - 2.0 * zeta * p * path_integral(A, flight_angle(A, a, k), p))
-    return A
+    return _apex_with_terms(E, A, a, p, zeta, mu, kappa, k, terms) if terms else A
 
 
-def takeoff_speed(A, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):
+def _takeoff_energy(A, a, p, zeta, mu, kappa, k, terms):
+    """The take-off energy that reaches the apex A [rad^2/s^2]: the rise's balance on the flight's angle."""
+    a = flight_angle(A, a, k)
+    E = _work(A, a, p, mu, kappa, rise=True) + _viscous(zeta, p, A, a)
+    return E + _terms_work(terms, A, a, p, rise=True) if terms else E
+
+
+def _apex_with_terms(E, A, a, p, zeta, mu, kappa, k, terms):
+    """:func:`apex_after` with the terms of other laws: Newton passes on the rise's balance
+    (:func:`_takeoff_energy`) from the apex A without them, above the root (the terms take energy), kept
+    inside the bracket of the root, each flight to its own (a step of less than :data:`_NEWTON_TOL` of a).
+
+    The slope: the integrand of the rise's balance at the apex (dry friction and drag exact, the
+    terms' declared ``work_slope``); that of the viscous loss and of an angle that moves with the apex
+    are left out (a slope for Newton's passes).
+    """
+    flat = [np.asarray(x, float) for x in (E, A, a, p, zeta, mu, kappa, k, *(q for _, v in terms for q in v))]
+    args = np.broadcast_arrays(*flat)
+    shape = args[0].shape
+    E, A, a, p, zeta, mu, kappa, k, *rest = (x.ravel() for x in args)
+    values = []
+    for _, vals in terms:
+        values.append(tuple(rest[: len(vals)]))
+        rest = rest[len(vals) :]
+    out = A.copy()
+    # the instability rotation rocks on the hinge's own angle whatever k (flight_angle(a, a, k) = a)
+    live = np.isfinite(E) & np.isfinite(A)
+    top = _takeoff_energy(a, a, p, zeta, mu, kappa, 0.0, [(t, v) for (t, _), v in zip(terms, values)])
+    out[live & (E >= top)] = a[live & (E >= top)]
+    live = np.flatnonzero(live & (E < top))
+    lo, hi, x = np.zeros(live.size), A[live].copy(), A[live].copy()
+    for _ in range(_NEWTON_MAX):
+        if not live.size:
+            break
+        own = [(t, tuple(q[live] for q in v)) for (t, _), v in zip(terms, values)]
+        ai, pi, ki = a[live], p[live], k[live]
+        g = _takeoff_energy(x, ai, pi, zeta[live], mu[live], kappa[live], ki, own) - E[live]
+        lo, hi = np.where(g < 0.0, x, lo), np.where(g > 0.0, x, hi)
+        af = flight_angle(x, ai, ki)
+        slope = pi**2 * (np.sin(af - x) + mu[live]) * np.exp(2.0 * kappa[live] * x)
+        slope = slope + sum(t.work_slope(x, af, pi, *q) for t, q in own)
+        step = x - g / np.maximum(slope, 1e-12 * pi**2)
+        step = np.where((step > lo) & (step < hi), step, 0.5 * (lo + hi))
+        out[live] = step
+        moving = np.abs(step - x) > _NEWTON_TOL * ai
+        live, lo, hi, x = live[moving], lo[moving], hi[moving], step[moving]
+    return out.reshape(shape)
+
+
+def takeoff_speed(A, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0, terms=()):
     """|thetadot| at theta = 0 that reaches the apex A on hinge a with the losses in flight [rad/s].
 
     The inverse of :func:`apex_after`: the rise's energy balance (:func:`_work`,
-    the viscous loss to first order) on the angle of the flight (:func:`flight_angle`).
+    the viscous loss to first order, the work of ``terms``) on the angle of
+    the flight (:func:`flight_angle`).
     """
-    a = flight_angle(A, a, k)
-    return np.sqrt(2.0 * (_work(A, a, p, mu, kappa, rise=True) + _viscous(zeta, p, A, a)))
+    return np.sqrt(2.0 * _takeoff_energy(A, a, p, zeta, mu, kappa, k, terms))
 
 
-def speed_loss(A, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0):
+def speed_loss(A, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0, terms=()):
     """Speed a flight of apex A loses between take-off and the next impact, over its take-off speed [-].
 
     1 - :func:`landing_speed` / :func:`takeoff_speed`: the flight-loss curve
     whose dependence on the speed tells the losses of
     :func:`loss_deceleration` apart.
     """
-    loss = {"zeta": zeta, "mu": mu, "kappa": kappa, "k": k}
+    loss = {"zeta": zeta, "mu": mu, "kappa": kappa, "k": k, "terms": terms}
     with np.errstate(invalid="ignore", divide="ignore"):
         return 1.0 - landing_speed(A, a, p, **loss) / takeoff_speed(A, a, p, **loss)
 

@@ -19,13 +19,18 @@ import numpy as np
 import xarray as xr
 
 from rocklab.simulation.engine import batch_kernel as _kernel
+from rocklab.simulation.engine import slot
+from rocklab.simulation.flight_terms import flight_function
 from rocklab.simulation.rocking_model import OVERTURN, REST_TOL, RockingModel
 
 
 def _model_arrays(models, overturn, rest_tol, substeps):
-    prm = np.array([m.numba_params(overturn, rest_tol, substeps) for m in models])
+    """The engine's parameter vectors and impact laws of ``models``, one row each, and the function of
+    their terms in flight (those of every model, in the slots each vector holds them in)."""
+    terms = tuple(dict.fromkeys(t for m in models for t, _ in m.engine_terms()))
+    prm = np.array([m.numba_params(overturn, rest_tol, substeps, terms) for m in models])
     law = np.array([m.numba_law() for m in models])
-    return prm, law
+    return prm, law, flight_function(terms)
 
 
 def overturning_batch(
@@ -50,7 +55,9 @@ def overturning_batch(
     dt : float
         Sample interval [s].
     model : RockingModel
-        Any law with a flat form (not :class:`~rocklab.physics.impact.Custom`).
+        Any law with a flat form (not :class:`~rocklab.physics.impact.Custom`);
+        terms in flight beyond the viscous loss in the exact form only
+        (:meth:`~rocklab.simulation.rocking_model.RockingModel.numba_params`).
     amplitude_scales, duration_scales : array_like
         A_S/A multiplies ``ag``; D_S/D multiplies ``dt``.
     overturn : float
@@ -74,7 +81,7 @@ def overturning_batch(
     dur = np.atleast_1d(np.asarray(duration_scales, float))
     A, D = np.meshgrid(amp, dur, indexing="ij")
     n = A.size
-    prm, law = _model_arrays([model], overturn, rest_tol, substeps)
+    prm, law, terms = _model_arrays([model], overturn, rest_tol, substeps)
     # prange hands each thread one contiguous block of histories, and the
     # cost of an amplitude row varies several times from row to row:
     # interleaved, every thread gets a share of each row (2-17 % of a map's
@@ -90,6 +97,7 @@ def overturning_batch(
         False,
         np.repeat(prm, n, axis=0),
         np.repeat(law, n, axis=0),
+        terms,
         np.zeros(n),
         np.zeros(n),
         0,
@@ -133,13 +141,13 @@ def ground_batch(
         ``n_impacts`` on dim ``history``, and the impact log (see
         :func:`free_batch`) on (history, impact).
     """
-    prm, law = _model_arrays(models, overturn, rest_tol, substeps)
+    prm, law, terms = _model_arrays(models, overturn, rest_tol, substeps)
     n = len(models)
     h = dt * np.broadcast_to(np.asarray(duration_scale, float), (n,)).copy()
     scale = np.broadcast_to(np.asarray(amplitude_scale, float), (n,)).copy()
     n_tail = np.ceil(tail / h).astype(np.int64)
     out = _kernel(
-        np.ascontiguousarray(ag, float), h, scale, n_tail, True, prm, law, np.zeros(n), np.zeros(n), max_impacts
+        np.ascontiguousarray(ag, float), h, scale, n_tail, True, prm, law, terms, np.zeros(n), np.zeros(n), max_impacts
     )
     return _dataset(out)
 
@@ -215,7 +223,7 @@ def free_batch(
     shapes = [v.shape for v in given.values()] + ([np.shape(law)[:-2]] if law is not None else [])
     n = int(np.prod(np.broadcast_shapes(*shapes))) if shapes else 1
     b = {k: np.broadcast_to(v, np.broadcast_shapes(*shapes)).ravel() for k, v in given.items()}
-    prm, law0 = _model_arrays([model], overturn, rest_tol, substeps)
+    prm, law0, terms = _model_arrays([model], overturn, rest_tol, substeps)
     prm = np.repeat(prm, n, axis=0)
     laws = np.repeat(law0, n, axis=0)
     if law is not None:
@@ -224,13 +232,13 @@ def free_batch(
         laws[..., : law.shape[-1]] = law
         laws[..., law.shape[-1] :] = 0.0
     if "alpha_rock" in b:
-        prm[:, 0] = b["alpha_rock"]
+        prm[:, slot("alpha_pos")] = b["alpha_rock"]
         if "alpha_neg" not in b and model.alpha_neg is None:
-            prm[:, 1] = b["alpha_rock"]
+            prm[:, slot("alpha_neg")] = b["alpha_rock"]
     if "alpha_neg" in b:
-        prm[:, 1] = b["alpha_neg"]
+        prm[:, slot("alpha_neg")] = b["alpha_neg"]
     if "zeta" in b:
-        prm[:, 3] = b["zeta"]
+        prm[:, slot("zeta")] = b["zeta"]
     if "e_scale" in b:
         laws[:, :2, 0] *= b["e_scale"][:, None]
     if "amplitude_a" in b:
@@ -246,6 +254,7 @@ def free_batch(
         False,
         prm,
         laws,
+        terms,
         b.get("theta0", np.zeros(n)).copy(),
         b.get("thetadot0", np.zeros(n)).copy(),
         max_impacts,

@@ -4,6 +4,15 @@ Same conventions as :mod:`rocklab.simulation.rocking_model` (onset, impacts, res
 overturning); :mod:`rocklab.simulation.batch` runs many histories over the
 cores.  The linear form is advanced in closed form per record interval (a
 state-transition matrix), the exact form by RK4 substeps.
+
+A wall is a parameter vector laid out by name (:data:`LAYOUT`, :func:`slot`)
+and the laws of its impacts.  Between impacts the engine integrates the
+viscous loss itself (slot ``zeta``: the linear form's closed form holds
+it); any other term in flight (:class:`rocklab.physics.law.FlightTerm`:
+dry friction, drag, the term of a law of a cause) is its declared
+deceleration, compiled into one function of the state
+(:func:`rocklab.simulation.flight_terms.flight_function`) with its
+parameters in the vector's ``flight_*`` slots, in the exact form only.
 """
 
 from __future__ import annotations
@@ -16,21 +25,63 @@ from numba.np.unsafe.ndarray import to_fixed_tuple
 
 from rocklab.physics import flight
 
-_P_APOS, _P_ANEG, _P_P, _P_ZETA, _P_GAP, _P_ONE, _P_LIN, _P_OV, _P_VREST, _P_G, _P_SUB, _P_VR = range(12)
-#: Length of the parameter vector (:meth:`rocklab.simulation.rocking_model.RockingModel.numba_params`).
-_N_P = _P_VR + 1
+#: Parameters of the terms in flight beyond the viscous loss that one wall may have.
+FLIGHT_SLOTS = tuple(f"flight_{j}" for j in range(6))
+#: The parameter vector (:meth:`rocklab.simulation.rocking_model.RockingModel.numba_params`), by name:
+#: rocking angles of hinges +1 and -1 [rad], p [rad/s], zeta [-], gap [rad], one-sided and linear
+#: form (1 or 0), overturning rotation [rad], rest and overturning speed (Eq. 16) [rad/s], g [m/s^2],
+#: RK4 substeps per interval, whether the wall has terms in flight beyond the viscous loss and whether
+#: one jumps at a turn (1 or 0, :attr:`rocklab.physics.law.FlightTerm.smooth`), their parameters.
+LAYOUT = (
+    "alpha_pos",
+    "alpha_neg",
+    "p",
+    "zeta",
+    "gap",
+    "one_sided",
+    "linear",
+    "overturn",
+    "v_rest",
+    "g",
+    "substeps",
+    "v_r",
+    "terms",
+    "turns",
+    *FLIGHT_SLOTS,
+)
+# the kernels' names of the slots, in the order of LAYOUT
+_P_APOS, _P_ANEG, _P_P, _P_ZETA, _P_GAP, _P_ONE, _P_LIN, _P_OV, _P_VREST, _P_G, _P_SUB, _P_VR, _P_TERMS, _P_TURNS = (
+    range(14)
+)
+_N_P = len(LAYOUT)
+#: The speed a wall leaves a turn or its rest with, in the direction it moves [rad/s]: 0 to the last
+#: bit of every sum, but a sign a term that jumps at the turn reads (its first RK4 stage).
+TURNED = 1e-300
 #: Samples of a record per block of :func:`_block_range`.
 _BLOCK = 16
 
 
+def slot(name):
+    """Index of parameter ``name`` in the engine's parameter vector (:data:`LAYOUT`)."""
+    return LAYOUT.index(name)
+
+
 @numba.njit(cache=True, inline="always")
-def _accel(x, v, s, ag, prm):
+def _accel(x, v, s, ag, prm, terms, d):
+    """thetaddot [rad/s^2] at (x, v) on hinge s under ag [m/s^2]; the terms in flight (``terms``) see
+    the rotation on hinge s, its mirror past the edge, and where ``d`` is not 0 the wall moving that
+    way: each continued smoothly past the jump it makes at the edge or at a turn, for the steps that
+    locate them."""
     a = s * (prm[_P_APOS] if s > 0 else prm[_P_ANEG])
     p2 = prm[_P_P] ** 2
     damp = 2.0 * prm[_P_ZETA] * prm[_P_P] * v
     if prm[_P_LIN] > 0:
-        return p2 * (x - a - ag / prm[_P_G]) - damp
-    return -p2 * (math.sin(a - x) + ag / prm[_P_G] * math.cos(a - x)) - damp
+        acc = p2 * (x - a - ag / prm[_P_G]) - damp
+    else:
+        acc = -p2 * (math.sin(a - x) + ag / prm[_P_G] * math.cos(a - x)) - damp
+    if prm[_P_TERMS] > 0:
+        acc = acc - terms(s * abs(x), v if d == 0.0 or v * d > 0.0 else math.copysign(TURNED, d), prm)
+    return acc
 
 
 @numba.njit(cache=True, inline="always")
@@ -57,18 +108,18 @@ def _linear_state(x0, v0, c0, c1, u, zp, F):
 
 
 @numba.njit(cache=True)
-def _rk4(x, v, s, ga, gb, u, prm):
-    """One RK4 step of length u, ground acceleration linear from ga to gb."""
+def _rk4(x, v, s, ga, gb, u, prm, terms, d):
+    """One RK4 step of length u, ground acceleration linear from ga to gb (``d``: :func:`_accel`)."""
     gm = 0.5 * (ga + gb)
-    k1x, k1v = v, _accel(x, v, s, ga, prm)
-    k2x, k2v = v + 0.5 * u * k1v, _accel(x + 0.5 * u * k1x, v + 0.5 * u * k1v, s, gm, prm)
-    k3x, k3v = v + 0.5 * u * k2v, _accel(x + 0.5 * u * k2x, v + 0.5 * u * k2v, s, gm, prm)
-    k4x, k4v = v + u * k3v, _accel(x + u * k3x, v + u * k3v, s, gb, prm)
+    k1x, k1v = v, _accel(x, v, s, ga, prm, terms, d)
+    k2x, k2v = v + 0.5 * u * k1v, _accel(x + 0.5 * u * k1x, v + 0.5 * u * k1v, s, gm, prm, terms, d)
+    k3x, k3v = v + 0.5 * u * k2v, _accel(x + 0.5 * u * k2x, v + 0.5 * u * k2v, s, gm, prm, terms, d)
+    k4x, k4v = v + u * k3v, _accel(x + u * k3x, v + u * k3v, s, gb, prm, terms, d)
     return (x + u / 6.0 * (k1x + 2 * k2x + 2 * k3x + k4x), v + u / 6.0 * (k1v + 2 * k2v + 2 * k3v + k4v))
 
 
 @numba.njit(cache=True, inline="always")
-def _advance(x, v, s, ga, gb, u, prm, l1, l2, zp, h, Fh):
+def _advance(x, v, s, ga, gb, u, prm, terms, d, l1, l2, zp, h, Fh):
     """State after time u from (x, v) on hinge s, ag linear from ga to gb."""
     if prm[_P_LIN] > 0:
         a = s * (prm[_P_APOS] if s > 0 else prm[_P_ANEG])
@@ -80,7 +131,7 @@ def _advance(x, v, s, ga, gb, u, prm, l1, l2, zp, h, Fh):
             return _linear_state(x, v, a + ga * ig, (gb - ga) * (ig / h), u, zp, Fh)
         c1 = (gb - ga) / (g * u) if u > 0 else 0.0
         return _linear_state(x, v, a + ga / g, c1, u, zp, _transition(l1, l2, math.exp(l1 * u), math.exp(l2 * u)))
-    return _rk4(x, v, s, ga, gb, u, prm)
+    return _rk4(x, v, s, ga, gb, u, prm, terms, d)
 
 
 @numba.njit(cache=True)
@@ -188,7 +239,7 @@ def _block_range(ag):
 
 
 @numba.njit(cache=True)
-def _locate(x, v, s, ga, gb, u, prm, l1, l2, zp, h, Fh, ov, edge, target, f0, f1):
+def _locate(x, v, s, ga, gb, u, prm, terms, l1, l2, zp, h, Fh, ov, edge, target, f0, f1):
     """First root in (0, u] of theta - ``target`` (``edge``) or of thetadot.
 
     Safeguarded Newton from the linear interpolation of ``f0``, ``f1`` (the
@@ -203,6 +254,8 @@ def _locate(x, v, s, ga, gb, u, prm, l1, l2, zp, h, Fh, ov, edge, target, f0, f1
     """
     lo, hi = 0.0, u
     tn = u * f0 / (f0 - f1) if f0 != f1 else 0.5 * u
+    # a term that jumps at a turn: the trials see the motion as it starts (_accel), also past the turn
+    hold = math.copysign(1.0, v) if prm[_P_TURNS] > 0 else 0.0
     xm, vm = x, v
     # theta is a sum of terms of size ~ alpha + |ag|/g: below this rounding
     # floor Newton only wanders (slow, small velocities)
@@ -215,11 +268,11 @@ def _locate(x, v, s, ga, gb, u, prm, l1, l2, zp, h, Fh, ov, edge, target, f0, f1
         # the instant of the state returned, whatever the next trial would be
         tm = tn
         gm = ga + (gb - ga) * tm / u
-        xm, vm = _advance(x, v, s, ga, gm, tm, prm, l1, l2, zp, h, Fh)
+        xm, vm = _advance(x, v, s, ga, gm, tm, prm, terms, hold, l1, l2, zp, h, Fh)
         if edge:
             f, df, inside = xm - target, vm, _outside(xm, s, prm, ov) == 0
         else:
-            f, df, inside = vm, _accel(xm, vm, s, gm, prm), vm * v > 0.0
+            f, df, inside = vm, _accel(xm, vm, s, gm, prm, terms, hold), vm * v > 0.0
         if inside:
             lo = tn
         else:
@@ -237,7 +290,7 @@ def _locate(x, v, s, ga, gb, u, prm, l1, l2, zp, h, Fh, ov, edge, target, f0, f1
 
 
 @numba.njit(cache=True)
-def run_history(ag, ag_range, h, scale, n_tail, to_rest, params, law, x, v, log_t, log_vb, log_va, log_peak):
+def run_history(ag, ag_range, h, scale, n_tail, to_rest, params, law, terms, x, v, log_t, log_vb, log_va, log_peak):
     """Event-driven integration of one wall, sample interval by sample interval.
 
     ``ag`` [m/s^2] (times ``scale``) is stepped with interval ``h`` [s] (the
@@ -251,7 +304,12 @@ def run_history(ag, ag_range, h, scale, n_tail, to_rest, params, law, x, v, log_
     up to their length.
 
     Peaks inside a step (zeros of thetadot) are located only when impacts
-    are logged; otherwise max |theta| is sampled at the step ends.
+    are logged; otherwise max |theta| is sampled at the step ends.  A term
+    in flight that jumps where thetadot changes sign (``params`` slot
+    ``turns``; ``terms`` the function of the wall's terms,
+    :func:`rocklab.simulation.flight_terms.flight_function`) has every turn located and a new step started
+    there, and the release and every onset start in the direction the wall
+    moves: RK4 over the jump would be of first order.
 
     Returns
     -------
@@ -288,6 +346,17 @@ def run_history(ag, ag_range, h, scale, n_tail, to_rest, params, law, x, v, log_
     hold = False
     rest_at = 0.0
     s = 1.0 if (x > 0.0 or (x == 0.0 and v >= 0.0)) else -1.0
+    turns = prm[_P_TURNS] > 0
+    # held where a term that jumps at a turn stops it, off the edge: a rest on hinge s at rest_at
+    held = False
+    # the speed a wall at rest starts with, in the direction it tries (the onset tests): 0, or the
+    # direction itself for a term that jumps there
+    vt = TURNED if turns else 0.0
+    if turns and v == 0.0 and not resting:
+        ga = scale * ag[0] if n_rec > 0 else 0.0
+        v = math.copysign(TURNED, _accel(x, 0.0, s, ga, prm, terms, 0.0))
+        if _accel(x, v, s, ga, prm, terms, 0.0) * v <= 0.0:
+            resting, held, rest_at, v = True, True, x, 0.0
     peak = abs(x)
     max_ratio = 0.0
     n_imp = 0
@@ -301,11 +370,12 @@ def run_history(ag, ag_range, h, scale, n_tail, to_rest, params, law, x, v, log_
         if resting:
             # fast-forward through the samples that cannot start the motion:
             # the acceleration at rest is affine in ag, A0 + A1 ag
-            A0p = _accel(rest_at, 0.0, 1.0 if rest_at == 0.0 else -1.0, 0.0, prm)
-            A1p = _accel(rest_at, 0.0, 1.0 if rest_at == 0.0 else -1.0, 1.0, prm) - A0p
-            two = rest_at == 0.0 and not (one and gap == 0.0)
-            A0n = _accel(0.0, 0.0, -1.0, 0.0, prm)
-            A1n = _accel(0.0, 0.0, -1.0, 1.0, prm) - A0n
+            sp, sn = (s, s) if held else (1.0 if rest_at == 0.0 else -1.0, -1.0)
+            A0p = _accel(rest_at, vt, sp, 0.0, prm, terms, 0.0)
+            A1p = _accel(rest_at, vt, sp, 1.0, prm, terms, 0.0) - A0p
+            two = held or (rest_at == 0.0 and not (one and gap == 0.0))
+            A0n = _accel(rest_at if held else 0.0, 0.0 - vt, sn, 0.0, prm, terms, 0.0)
+            A1n = _accel(rest_at if held else 0.0, 0.0 - vt, sn, 1.0, prm, terms, 0.0) - A0n
             # the step's own first sample too: at k = 0 (or after a hold) no
             # earlier step has tested it, and skipping the step would miss an
             # onset in its first part
@@ -353,9 +423,11 @@ def run_history(ag, ag_range, h, scale, n_tail, to_rest, params, law, x, v, log_
             if resting:
                 # onset: first zero of the (affine in ag) acceleration at rest
                 t_on = h + 1.0
-                s_on = 0.0
+                s_on = d_on = 0.0
                 for c in range(2):
-                    if rest_at < 0.0:
+                    if held:
+                        ss, dd = s, 1.0 - 2.0 * c
+                    elif rest_at < 0.0:
                         if c == 1:
                             break
                         ss, dd = -1.0, 1.0
@@ -365,8 +437,9 @@ def run_history(ag, ag_range, h, scale, n_tail, to_rest, params, law, x, v, log_
                         if one and gap == 0.0:
                             break
                         ss, dd = -1.0, -1.0
-                    fa = dd * _accel(rest_at, 0.0, ss, ga, prm)
-                    fb = dd * _accel(rest_at, 0.0, ss, ga1, prm)
+                    vd = dd * vt if turns else 0.0
+                    fa = dd * _accel(rest_at, vd, ss, ga, prm, terms, 0.0)
+                    fb = dd * _accel(rest_at, vd, ss, ga1, prm, terms, 0.0)
                     if fa > 0.0:
                         tc = tau
                     elif fb > 0.0:
@@ -374,13 +447,13 @@ def run_history(ag, ag_range, h, scale, n_tail, to_rest, params, law, x, v, log_
                     else:
                         continue
                     if tc < t_on:
-                        t_on, s_on = tc, ss
+                        t_on, s_on, d_on = tc, ss, dd
                 if s_on == 0.0 or hold:
                     break
-                resting = False
+                resting = held = False
                 t_lift = t_on
                 s = s_on
-                x, v = rest_at, 0.0
+                x, v = rest_at, (d_on * vt if turns else 0.0)
                 peak = abs(x)
                 tau = t_on
                 continue
@@ -391,20 +464,33 @@ def run_history(ag, ag_range, h, scale, n_tail, to_rest, params, law, x, v, log_
                 tau = tb
                 continue
             gb = ga0 + (ga1 - ga0) * (tb * ih)
-            x1, v1 = _advance(x, v, s, ga, gb, u, prm, l1, l2, zp, h, Fh)
+            # a term that jumps at a turn sees the motion as the step starts (from a turn or an onset, at
+            # a speed of rounding): a turn inside the step is located, and a new step starts there
+            x1, v1 = _advance(
+                x, v, s, ga, gb, u, prm, terms, math.copysign(1.0, v) if turns else 0.0, l1, l2, zp, h, Fh
+            )
             ev = _outside(x1, s, prm, ov)
             toward_edge = s * v < 0.0 or (one and s < 0.0)
-            if ev == 0 and v * v1 < 0.0 and (want_peaks or toward_edge):
+            if v * v1 < 0.0 and ((ev == 0 and (want_peaks or toward_edge)) or turns):
                 # thetadot changes sign inside the step: the turning point is a
                 # peak, or (moving towards an edge) may lie past the edge, an
                 # impact that both step ends miss
-                tm, xm, vm = _locate(x, v, s, ga, gb, u, prm, l1, l2, zp, h, Fh, ov, False, 0.0, v, v1)
+                tm, xm, vm = _locate(x, v, s, ga, gb, u, prm, terms, l1, l2, zp, h, Fh, ov, False, 0.0, v, v1)
                 if toward_edge and _outside(xm, s, prm, ov) != 0:
                     gb = ga + (gb - ga) * tm / u
                     u, x1, v1 = tm, xm, vm
                     ev = _outside(x1, s, prm, ov)
-                else:
+                elif ev == 0 or _outside(xm, s, prm, ov) == 0:
                     peak = max(peak, abs(xm))
+                    if turns:
+                        # a term that jumps at the turn: a new step from it, the other way, unless the
+                        # term holds the wall there (it would turn back at once, endlessly)
+                        tau = tau + tm
+                        x, v = xm, math.copysign(TURNED, v1)
+                        gt = ga0 + (ga1 - ga0) * (tau * ih)
+                        if _accel(x, v, s, gt, prm, terms, 0.0) * v <= 0.0:
+                            resting, held, rest_at, v = True, True, x, 0.0
+                        continue
             if ev == 0:
                 x, v = x1, v1
                 peak = max(peak, abs(x))
@@ -417,7 +503,9 @@ def run_history(ag, ag_range, h, scale, n_tail, to_rest, params, law, x, v, log_
                 target = -gap
             else:
                 target = 0.0
-            tn, xm, vm = _locate(x, v, s, ga, gb, u, prm, l1, l2, zp, h, Fh, ov, True, target, x - target, x1 - target)
+            tn, xm, vm = _locate(
+                x, v, s, ga, gb, u, prm, terms, l1, l2, zp, h, Fh, ov, True, target, x - target, x1 - target
+            )
             ev = _outside(xm, s, prm, ov)
             if ev == 0:
                 ev = _outside(x1, s, prm, ov)
@@ -452,7 +540,7 @@ def run_history(ag, ag_range, h, scale, n_tail, to_rest, params, law, x, v, log_
                 # lift at once, as the reference does: a wall coming back
                 # slowly against a ground that turns and pushes it away
                 hold = abs(vm) < prm[_P_VREST] and 0.0 <= t_lift and tau - t_lift <= 1e-9 * h
-                resting = True
+                resting, held = True, False
                 rest_at = x
                 v = 0.0
             else:
@@ -469,7 +557,7 @@ def run_history(ag, ag_range, h, scale, n_tail, to_rest, params, law, x, v, log_
 
 
 @numba.njit(cache=True)
-def _row(ag, ag_range, h, scale, n_tail, to_rest, prm, law, x0, v0, logs, out, i):
+def _row(ag, ag_range, h, scale, n_tail, to_rest, prm, law, terms, x0, v0, logs, out, i):
     # called from the prange body instead of run_history itself: inlined into
     # the parallel loop, run_history runs 4-8x slower (measured, numba 0.68)
     o, t, m, k = run_history(
@@ -481,6 +569,7 @@ def _row(ag, ag_range, h, scale, n_tail, to_rest, prm, law, x0, v0, logs, out, i
         to_rest,
         prm[i],
         law[i],
+        terms,
         x0[i],
         v0[i],
         logs[0, i],
@@ -492,9 +581,10 @@ def _row(ag, ag_range, h, scale, n_tail, to_rest, prm, law, x0, v0, logs, out, i
 
 
 @numba.njit(parallel=True, cache=True)
-def batch_kernel(ag, h, scale, n_tail, to_rest, prm, law, x0, v0, max_log):
-    """:func:`run_history` of every row (history) in parallel; the Python
-    front ends are in :mod:`rocklab.simulation.batch`."""
+def batch_kernel(ag, h, scale, n_tail, to_rest, prm, law, terms, x0, v0, max_log):
+    """:func:`run_history` of every row (history) in parallel, ``terms`` the function of the terms in
+    flight of every row (:func:`rocklab.simulation.flight_terms.flight_function`); the Python front ends are in
+    :mod:`rocklab.simulation.batch`."""
     n = h.shape[0]
     over = np.zeros(n, np.bool_)
     t_over = np.full(n, np.nan)
@@ -504,5 +594,5 @@ def batch_kernel(ag, h, scale, n_tail, to_rest, prm, law, x0, v0, max_log):
     out = (over, t_over, max_ratio, n_imp)
     ag_range = _block_range(ag)
     for i in numba.prange(n):
-        _row(ag, ag_range, h, scale, n_tail, to_rest, prm, law, x0, v0, logs, out, i)
+        _row(ag, ag_range, h, scale, n_tail, to_rest, prm, law, terms, x0, v0, logs, out, i)
     return over, t_over, max_ratio, n_imp, logs[0], logs[1], logs[2], logs[3]

@@ -14,6 +14,7 @@ import numpy as np
 import pandas as pd
 
 from rocklab._imports import lazy_module
+from rocklab.simulation.engine import TURNED
 from rocklab.simulation.rocking_model import OVERTURN, REST_TOL, RockingHistory
 
 integrate = lazy_module("scipy.integrate")
@@ -48,22 +49,27 @@ class _Record:
         return min(t1, t_hard), self.a[k - 1], (self.a[k] - self.a[k - 1]) / (t1 - t0), t0
 
 
-def _onset(model, rec, t0, t_stop, theta_rest):
-    """First instant >= t0 and side at which a wall at rest starts rocking.
+def _onset(model, rec, t0, t_stop, theta_rest, held=None):
+    """First instant >= t0, side and direction in which a wall at rest starts rocking.
 
     The acceleration at rest is affine in ag, so the onset instant is the
-    linear interpolation of its zero between record samples.
+    linear interpolation of its zero between record samples.  ``held``:
+    the hinge of a wall held off the edge where a term in flight that jumps
+    at a turn stopped it (either way on it); such a term acts against the
+    direction each candidate tries (``model.jumps``).
     """
-    if theta_rest < 0:
+    if held is not None:
+        candidates = [(held, +1), (held, -1)]
+    elif theta_rest < 0:
         candidates = [(-1, +1)]
     else:
         candidates = [(+1, +1)] + ([(-1, -1)] if (not model.one_sided or model.gap > 0) else [])
     tk = rec.t[(rec.t > t0) & (rec.t < t_stop)]
     ts = np.concatenate([[t0], tk, [t_stop]])
     ag = rec(ts)
-    best = (None, None)
+    best = (None, None, None)
     for side, direction in candidates:
-        f = direction * model.acceleration(theta_rest, 0.0, side, ag)
+        f = direction * model.acceleration(theta_rest, direction * TURNED if model.jumps else 0.0, side, ag)
         pos = np.flatnonzero(f > 0)
         if pos.size == 0:
             continue
@@ -73,7 +79,7 @@ def _onset(model, rec, t0, t_stop, theta_rest):
         else:
             t_on = ts[k - 1] + (ts[k] - ts[k - 1]) * f[k - 1] / (f[k - 1] - f[k])
         if best[0] is None or t_on < best[0]:
-            best = (t_on, side)
+            best = (t_on, side, direction)
     return best
 
 
@@ -110,6 +116,21 @@ def _reference(model, rec, theta0, thetadot0, t_end, fs, overturn, rest_tol, rto
             "a rocking angle that depends on the amplitude (hinge_rounding) is defined flight by flight in "
             "free rocking: under ground motion a flight's apex is not known when it starts"
         )
+    # under ground motion a term that jumps at a turn may hold the wall where it turns (the ground
+    # pushing it less than the term resists): each turn ends a segment, and the wall moves on the
+    # other way or is held there (held: its hinge) until the ground moves it, as the engine does
+    stick, held = model.jumps and not rec.free, None
+
+    def moves(th, d, s, t):
+        """Whether the wall at th, at rest on hinge s at t, moves in the direction d (+1 / -1)."""
+        return float(model.acceleration(th, d * TURNED, s, rec(t))) * d > 0.0
+
+    if stick and thd == 0.0 and not resting:
+        d = math.copysign(1.0, float(model.acceleration(th, 0.0, side, rec(0.0))))
+        if moves(th, d, side, 0.0):
+            thd = d * TURNED
+        else:
+            resting, rest_at, held, t_rest = True, th, side, 0.0
 
     def fill(ta, tb, sol=None, value=0.0):
         sel = (t_out >= ta) & (t_out <= tb)
@@ -131,12 +152,13 @@ def _reference(model, rec, theta0, thetadot0, t_end, fs, overturn, rest_tol, rto
                 break
         if resting:
             t_stop = t_end
-            t_on, s_on = _onset(model, rec, t, t_stop, rest_at)
+            t_on, s_on, d_on = _onset(model, rec, t, t_stop, rest_at, held)
             if t_on is None:
                 fill(t, t_end, value=rest_at)
                 break
             fill(t, t_on, value=rest_at)
-            t, th, thd, side, resting, t_rest = t_on, rest_at, 0.0, s_on, False, None
+            t, th, thd, side, resting, t_rest = t_on, rest_at, (d_on * TURNED if stick else 0.0), s_on, False, None
+            held = None
         s = side
         # one straight piece of the record at a time: the solution is smooth
         # inside it, so the error control never meets the record's kinks
@@ -157,8 +179,11 @@ def _reference(model, rec, theta0, thetadot0, t_end, fs, overturn, rest_tol, rto
 
         ev_over.terminal, ev_over.direction = True, 1.0
 
-        def ev_peak(tt, y):
-            return y[1]
+        # a terminal peak must not find the turn a segment starts from (stick: the speed is TURNED)
+        def ev_peak(tt, y, t0=t, start=thd or float(s)):
+            return y[1] if not stick or tt > t0 else start
+
+        ev_peak.terminal = stick
 
         # a wall moving towards its edge that turns back: if it turns past the
         # edge, it crossed the edge and came back inside one solver step (a
@@ -201,6 +226,16 @@ def _reference(model, rec, theta0, thetadot0, t_end, fs, overturn, rest_tol, rto
             v_before = float(sol.sol(t_new)[1])
         fill(t, min(t_new, t_end), sol.sol)
         peaks = [abs(th), abs(sol.y[0, -1])] + [abs(y[0]) for y in sol.y_events[2]]
+        edge = sol.t_events[0].size or sol.t_events[1].size or (len(events) == 5 and sol.t_events[4].size)
+        if stick and sol.status == 1 and sol.t_events[2].size and not edge and not (turned and s * sol.y[0, -1] < 0):
+            # a turn: the other way, unless the term holds the wall there
+            d = -math.copysign(1.0, float(sol.sol(0.5 * (t + t_new))[1]))
+            t, th = t_new, float(sol.y[0, -1])
+            if moves(th, d, s, t):
+                thd = d * TURNED
+            else:
+                resting, rest_at, held, thd, t_rest = True, th, s, 0.0, t
+            continue
         if sol.status != 1 or (turned and s * sol.y[0, -1] >= 0.0):
             # the end of the piece, or a turn short of the edge
             t, th, thd = t_new, sol.y[0, -1], sol.y[1, -1]
@@ -221,6 +256,7 @@ def _reference(model, rec, theta0, thetadot0, t_end, fs, overturn, rest_tol, rto
         wrong_way = (model.one_sided and model.gap == 0 and thd <= 0) or (transverse and thd <= 0)
         if abs(thd) < v_rest or wrong_way:
             resting, rest_at, thd, t_rest = True, th, 0.0, t
+            held = None
         elif not transverse:
             side = 1 if thd > 0 else -1
     if resting and t < t_end:

@@ -15,7 +15,9 @@ rocking angle ``alpha_s`` (``alpha_rock`` for s = +1, ``alpha_neg`` for -1)::
 each with the optional losses in flight between impacts,
 ``- 2 zeta p thetadot - mu p^2 sign(thetadot) - kappa thetadot |thetadot|``: viscous,
 dry friction at the hinge and quadratic drag
-(:func:`rocklab.physics.flight.loss_deceleration`).
+(:func:`rocklab.physics.flight.loss_deceleration`), and the terms in flight
+of other laws (``terms``), each the deceleration its law declares
+(:class:`rocklab.physics.law.FlightTerm`).
 
 Conventions
 -----------
@@ -52,6 +54,17 @@ Overturning
     standing).  A wall beyond the instability rotation is on the falling side
     of the potential maximum: with less energy it cannot climb back and
     falls, so it is always followed.
+Terms in flight that jump
+    A term that jumps where thetadot changes sign (dry friction, a moment
+    on the rise only: :attr:`rocklab.physics.law.FlightTerm.smooth` false)
+    acts against the direction the wall moves, and a wall at rest starts
+    only when the ground overcomes it too.  Under ground motion it may hold
+    the wall where it turns, the ground pushing it less than the term
+    resists either way: the wall stays there (a rest off the edge) until
+    the ground moves it.  The engine locates every turn and starts anew
+    from it, and so does the reference under ground motion; in free
+    rocking the reference steps over the turns and looks for no hold (dry
+    friction that holds a wall at its apex, above), as it always has.
 One-sided rocking and the gap
     ``boundary="one-sided"`` keeps theta >= 0 and with ``gap == 0`` applies the
     impact law (default Eq. 14, negative: a rebound) at theta = 0.  With
@@ -75,6 +88,9 @@ from rocklab.io import cf_attrs
 from rocklab.physics import flight, wall
 from rocklab.physics import impact as _impact
 from rocklab.physics.boundary import Boundary
+from rocklab.physics.law import DRAG, DRY_FRICTION, FlightLoss
+from rocklab.simulation import engine
+from rocklab.simulation.flight_terms import flight_slots
 
 #: Rest threshold: |thetadot^+| below REST_TOL * thetadot_r (Eq. 16) is rest.
 REST_TOL = 1e-3
@@ -140,6 +156,10 @@ class RockingModel:
         the release on that of the release rotation; -1 < k < 1, 0 the rigid
         hinge.  Free rocking only (under ground motion a flight's apex is
         not known when it starts), not in the gap of a one-sided wall.
+    terms : tuple
+        Terms in flight of other laws: ``(term, values)`` pairs, ``term`` a
+        :class:`rocklab.physics.law.FlightTerm` and ``values`` its
+        parameters (floats, in the order of ``term.params``).
     """
 
     alpha: float
@@ -155,6 +175,7 @@ class RockingModel:
     form: str = "exact"
     transverse_impact: _impact.ImpactLaw | None = field(default=None)
     hinge_rounding: float = 0.0
+    terms: tuple = ()
 
     def __post_init__(self):
         if self.boundary not in set(Boundary):
@@ -167,6 +188,9 @@ class RockingModel:
             raise ValueError(f"hinge_rounding must be in (-1, 1), not {self.hinge_rounding!r}")
         if min(self.zeta, self.mu, self.kappa) < 0:
             raise ValueError("zeta, mu and kappa are losses: >= 0")
+        for term, values in self.terms:
+            if len(values) != len(term.params):
+                raise ValueError(f"{term.name} has the parameters {', '.join(term.params)}, not {values!r}")
 
     @classmethod
     def from_wall(cls, height_m, thickness_m, **kw):
@@ -206,11 +230,32 @@ class RockingModel:
             return self.alpha_pos if side > 0 else self.alpha_minus
         return np.where(np.asarray(side) > 0, self.alpha_pos, self.alpha_minus)
 
+    def flight_terms(self):
+        """The terms in flight with their values, ``(term, values)``: the losses zeta, mu and kappa
+        (:attr:`rocklab.physics.law.FlightLoss.TERMS`), then ``terms``."""
+        return (*zip(FlightLoss.TERMS, ((self.zeta,), (self.mu,), (self.kappa,))), *self.terms)
+
+    def engine_terms(self):
+        """The terms in flight the numba engine takes as declared, ``(term, values)``: all but the
+        viscous loss, which it integrates itself; none at their null."""
+        own = ((DRY_FRICTION, (self.mu,)), (DRAG, (self.kappa,)), *self.terms)
+        return tuple((t, v) for t, v in own if any(v))
+
+    @property
+    def jumps(self) -> bool:
+        """Whether a term in flight jumps where thetadot changes sign (dry friction, ...): the wall may
+        be held where it turns, or at rest until the ground overcomes the term too."""
+        return any(not t.smooth for t, _ in self.engine_terms())
+
     def acceleration(self, theta, thetadot, side, ag):
-        """Angular acceleration [rad/s^2] on hinge ``side`` under ``ag`` [m/s^2]."""
+        """Angular acceleration [rad/s^2] on hinge ``side`` under ``ag`` [m/s^2] (array_like; theta
+        [rad] and thetadot [rad/s] floats where the wall has ``terms``)."""
         a = side * self.alpha_side(side)
         restoring = _restoring(theta, a, ag / wall.G, self.form == "linear", np.sin, np.cos)
-        return self.p**2 * restoring - flight.loss_deceleration(thetadot, self.p, self.zeta, self.mu, self.kappa)
+        acc = self.p**2 * restoring - flight.loss_deceleration(thetadot, self.p, self.zeta, self.mu, self.kappa)
+        for term, values in self.terms:
+            acc = acc - term.deceleration(theta, thetadot, self.p, values, 0)
+        return acc
 
     def equation_of_motion(self, side, a0, slope, t0):
         """Right-hand side f(t, y) for solve_ivp, y = (theta, thetadot), on hinge
@@ -219,18 +264,22 @@ class RockingModel:
         a = side * float(self.alpha_side(side))
         p2, c, g, lin = self.p**2, 2.0 * self.zeta * self.p, wall.G, self.form == "linear"
 
-        if self.mu or self.kappa:
-            loss = (self.p, self.zeta, self.mu, self.kappa)
+        if self.mu or self.kappa or self.terms:
+            p = self.p
+            (first, q0), *rest = ((term.deceleration, values) for term, values in self.flight_terms())
 
-            def rhs_losses(t, y):
+            def rhs_terms(t, y):
                 ag_g = (a0 + slope * (t - t0)) / g
-                return [
-                    y[1],
-                    p2 * _restoring(y[0], a, ag_g, lin, math.sin, math.cos)
-                    - flight.loss_deceleration(y[1], *loss, sign=_sign),
-                ]
+                # the terms see the rotation on this hinge, its mirror past the edge (a solver step that
+                # finds the impact reaches past it): each continued smoothly there
+                th = side * abs(y[0])
+                # the sum in the order of the terms: that of flight.loss_deceleration for the losses
+                d = first(th, y[1], p, q0, 0)
+                for deceleration, q in rest:
+                    d = d + deceleration(th, y[1], p, q, 0)
+                return [y[1], p2 * _restoring(y[0], a, ag_g, lin, math.sin, math.cos) - d]
 
-            return rhs_losses
+            return rhs_terms
 
         def rhs(t, y):
             return [y[1], p2 * _restoring(y[0], a, (a0 + slope * (t - t0)) / g, lin, math.sin, math.cos) - c * y[1]]
@@ -265,50 +314,65 @@ class RockingModel:
         if not self.hinge_rounding or (self.one_sided and side < 0):
             return self
         a, k = self.alpha_side(side), self.hinge_rounding
-        loss = {"zeta": self.zeta, "mu": self.mu, "kappa": self.kappa, "k": k}
+        loss = {"zeta": self.zeta, "mu": self.mu, "kappa": self.kappa, "k": k, "terms": self.terms}
         A = flight.apex_after(abs(thetadot), a, self.p, **loss) if theta == 0 else abs(theta)
         angle = float(flight.flight_angle(A, a, k))
         pos, neg = (angle, self.alpha_minus) if side > 0 else (self.alpha_pos, angle)
         return replace(self, alpha_rock=pos, alpha_neg=neg, hinge_rounding=0.0)
 
-    def numba_params(self, overturn=OVERTURN, rest_tol=REST_TOL, substeps=1):
-        """Flat parameter vector of the numba engines (see ``_P_*`` indices).
+    def numba_params(self, overturn=OVERTURN, rest_tol=REST_TOL, substeps=1, terms=None):
+        """Parameter vector of the numba engine, by the names of :data:`rocklab.simulation.engine.LAYOUT`.
+
+        ``terms``: the terms in flight whose parameters the vector holds, in
+        the slots of :func:`rocklab.simulation.flight_terms.flight_slots` (a
+        batch of walls: those of all of them); default the wall's own
+        (:meth:`engine_terms`).
 
         Raises
         ------
         NotImplementedError
             For a rocking angle that depends on the amplitude (``hinge_rounding``):
             the engines integrate ground motion, where a flight's apex is not known when it starts;
-            for dry friction or drag in flight, which the engines do not
-            simulate (:mod:`rocklab.simulation.reference` does).
+            for terms in flight beyond the viscous loss in the linear form,
+            whose closed form has that loss alone
+            (:mod:`rocklab.simulation.reference` simulates them, and the
+            engine's exact form).
         """
         if self.hinge_rounding:
             raise NotImplementedError(
                 f"a rocking angle that depends on the amplitude (hinge_rounding = {self.hinge_rounding:g}) is "
                 "defined flight by flight in free rocking; the engines integrate ground motion"
             )
-        if self.mu or self.kappa:
+        own = self.engine_terms()
+        if own and self.form == "linear":
+            found = ", ".join(f"{t.name} ({', '.join(f'{n} = {v:g}' for n, v in zip(t.params, q))})" for t, q in own)
             raise NotImplementedError(
-                f"the numba engine has no dry friction or drag in flight (mu = "
-                f"{self.mu:g}, kappa = {self.kappa:g}): simulate with "
-                "rocklab.simulation.reference"
+                f"the numba engine's linear form is a closed form with the viscous loss alone, not {found}: "
+                "simulate the exact form, or with rocklab.simulation.reference"
             )
-        return np.array(
-            [
-                self.alpha_pos,
-                self.alpha_minus,
-                self.p,
-                self.zeta,
-                self.gap,
-                float(self.one_sided),
-                float(self.form == "linear"),
-                overturn,
-                rest_tol * self.thetadot_r,
-                wall.G,
-                float(substeps),
-                self.thetadot_r,
-            ]
-        )
+        slots = flight_slots(tuple(t for t, _ in own) if terms is None else terms)
+        prm = np.zeros(len(engine.LAYOUT))
+        values = {
+            "alpha_pos": self.alpha_pos,
+            "alpha_neg": self.alpha_minus,
+            "p": self.p,
+            "zeta": self.zeta,
+            "gap": self.gap,
+            "one_sided": float(self.one_sided),
+            "linear": float(self.form == "linear"),
+            "overturn": overturn,
+            "v_rest": rest_tol * self.thetadot_r,
+            "g": wall.G,
+            "substeps": float(substeps),
+            "v_r": self.thetadot_r,
+            "terms": float(bool(own)),
+            "turns": float(self.jumps),
+        }
+        for name, value in values.items():
+            prm[engine.slot(name)] = value
+        for term, q in own:
+            prm[slots[term] : slots[term] + len(q)] = q
+        return prm
 
     def numba_law(self):
         """Impact laws as a (3, 4) array: rows base +, base -, transverse;
@@ -423,5 +487,9 @@ class RockingHistory:
                 gap=m.gap,
                 impact=type(m.base_law).__name__,
             )
+            if m.terms:
+                attrs["flight_terms"] = "; ".join(
+                    f"{t.name} ({', '.join(f'{n} = {v:g}' for n, v in zip(t.params, q))})" for t, q in m.terms
+                )
         ds.attrs.update(attrs)
         return ds
