@@ -81,10 +81,11 @@ class ModelParams:
     gap: np.ndarray  # [rad]
     stop: np.ndarray  # landing speed [thetadot_r] below which the wall stops dead (0: never)
     order: np.ndarray  # the test's place in its series, 0 (first) to 1 (last)
-    mu: np.ndarray = None  # dry friction at the hinge [-] (rocklab.physics.flight.loss_deceleration)
-    kappa: np.ndarray = None  # quadratic drag in flight [1/rad]
+    # None: none, zeros of the shape of zeta once made
+    mu: np.ndarray = None  # type: ignore[assignment]  # dry friction at the hinge [-] (flight.loss_deceleration)
+    kappa: np.ndarray = None  # type: ignore[assignment]  # quadratic drag in flight [1/rad]
     extra: dict = field(default_factory=dict)
-    speed_knots: np.ndarray = None  # (tests, knots): e / e_an at the knots of physics.law.SpeedFactor
+    speed_knots: np.ndarray | None = None  # (tests, knots): e / e_an at the knots of physics.law.SpeedFactor
     terms: tuple = ()
 
     def __post_init__(self):
@@ -377,6 +378,7 @@ def simulator(mp: ModelParams, base="analytic") -> RockingModel:
         For a law of the impact speed on a wall swinging through a gap.
     """
     one = bool(mp.one_sided)
+    law: _impact.ImpactLaw
     if base == "zero":
         law = _impact.Zero()
     elif base == "two-sided-e" and one:

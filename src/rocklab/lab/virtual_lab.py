@@ -224,6 +224,8 @@ def simulate_virtual_test(test: VirtualTest, specimen, layout, rng=None, t_end=4
     thetadot0 = -sgn * test.release_ratio * w_r
     hist = simulate_free(model, theta0, thetadot0, t_end=t_end, fs=test.fs)
     t_rest = hist.t_rest if hist.t_rest is not None else float(hist.t[-1])
+    # the transducers' readings (samples, channels), or an instrument's by quantity
+    E: np.ndarray | dict[str, np.ndarray]
     t, E, truth = record_from_motion(
         hist.t,
         np.nan_to_num(hist.theta, nan=np.nanmax(np.abs(hist.theta)) * sgn),
@@ -254,6 +256,7 @@ def simulate_virtual_test(test: VirtualTest, specimen, layout, rng=None, t_end=4
             t, truth["theta"], truth["sensor_mm"], specimen["thickness_mm"], test.inertial, rng
         )
     for f in test.faults if test.instrument != "transducers" else ():
+        assert isinstance(E, dict)  # an instrument's readings
         instrument_fault(E, f.kind, rng, f.level)
     truth.update(
         {
