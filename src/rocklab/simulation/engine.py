@@ -354,8 +354,9 @@ def run_history(ag, ag_range, h, scale, n_tail, to_rest, params, law, terms, x, 
     vt = TURNED if turns else 0.0
     if turns and v == 0.0 and not resting:
         ga = scale * ag[0] if n_rec > 0 else 0.0
-        v = math.copysign(TURNED, _accel(x, 0.0, s, ga, prm, terms, 0.0))
-        if _accel(x, v, s, ga, prm, terms, 0.0) * v <= 0.0:
+        d = math.copysign(1.0, _accel(x, 0.0, s, ga, prm, terms, 0.0))
+        v = d * TURNED
+        if _accel(x, v, s, ga, prm, terms, 0.0) * d <= 0.0:
             resting, held, rest_at, v = True, True, x, 0.0
     peak = abs(x)
     max_ratio = 0.0
@@ -486,9 +487,10 @@ def run_history(ag, ag_range, h, scale, n_tail, to_rest, params, law, terms, x, 
                         # a term that jumps at the turn: a new step from it, the other way, unless the
                         # term holds the wall there (it would turn back at once, endlessly)
                         tau = tau + tm
-                        x, v = xm, math.copysign(TURNED, v1)
+                        d = math.copysign(1.0, v1)
+                        x, v = xm, d * TURNED
                         gt = ga0 + (ga1 - ga0) * (tau * ih)
-                        if _accel(x, v, s, gt, prm, terms, 0.0) * v <= 0.0:
+                        if _accel(x, v, s, gt, prm, terms, 0.0) * d <= 0.0:
                             resting, held, rest_at, v = True, True, x, 0.0
                         continue
             if ev == 0:
