@@ -8,6 +8,9 @@ selection is run again with the generalised families
 (:func:`beyond_the_catalogue`).  A named cause that a cause the design
 cannot identify (:func:`stand_ins`) or a rival the series cannot tell from it
 (:func:`rivals`) may stand in for is named with that caveat.
+
+Size: the selection's steps (entry, removal, the families, the caveats) share
+their rejections and fits; apart they would pass them back and forth.
 """
 
 from __future__ import annotations
