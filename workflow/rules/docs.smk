@@ -21,7 +21,7 @@ rule docs:
             rules.campaign_effects.output.docs_summary,
             rules.limestone_diagnosis.output.docs_summary,
             rules.map_summary.output.docs_summary,
-            rules.map_calibrated.output.docs_summary,
+            rules.calibrated_map_changes.output.docs_summary,
             rules.instrument_accuracy.output.docs_summary,
         ],
         templates=[repo_path("docs", "templates", page) for page in DOC_PAGES],

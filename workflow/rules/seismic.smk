@@ -176,7 +176,7 @@ rule map_pages:
 
 # The lab's findings on the maps (issue 13, item 4): the calibrated walls of
 # the campaign's diagnosis on every record, against the paper's e alone.
-rule map_calibrated:
+rule calibrated_map_changes:
     input:
         maps=calibrated_map_batches,
         diagnosis=rules.diagnosis.output.json,
@@ -184,20 +184,20 @@ rule map_calibrated:
         table=res("maps", "calibrated.csv"),
         docs_summary=res("summaries", "calibrated.json"),
     log:
-        res("logs", "map_calibrated.log"),
+        res("logs", "calibrated_map_changes.log"),
     benchmark:
-        res("benchmarks", "map_calibrated.tsv")
+        res("benchmarks", "calibrated_map_changes.tsv")
     params:
         maps=calibrated_map_inputs,
         schema=schema_path("map_calibrated.schema.yaml"),
         n=CALIBRATED_N,
     script:
-        "../../scripts/map_calibrated.py"
+        "../../scripts/calibrated_map_changes.py"
 
 
-rule map_calibrated_page:
+rule calibrated_map_changes_page:
     input:
-        map_calibrated=rules.map_calibrated.output.table,
+        map_calibrated=rules.calibrated_map_changes.output.table,
     output:
         map_calibrated=report_page("map_calibrated", "maps", "maps/calibrated.csv, what the lab's findings change"),
     log:

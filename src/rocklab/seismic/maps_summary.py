@@ -199,7 +199,7 @@ def calibrated_summary(path, grid_n: int) -> dict | None:
     Parameters
     ----------
     path : str or pathlib.Path
-        ``maps/calibrated.csv`` as written by the rule ``map_calibrated``.
+        ``maps/calibrated.csv`` as written by the rule ``calibrated_map_changes``.
     grid_n : int
         Values of each axis of the calibrated walls' maps (``maps.calibrated_n``),
         on which the e-alone maps are read.
