@@ -23,14 +23,30 @@ them (keyword ``terms``: ``(term, values)`` pairs of a
 each declares over the rise and over the fall: exact for a term whose
 work does not depend on the speed (a moment), beside dry friction and a
 viscous loss; beside drag, first order in it.
+
+Size: the closed forms and the compiled loops they call, in one file:
+numba's on-disk cache is per file and does not see a change in a function of
+another file that a cached loop calls; every function with its types.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
+from typing import Any, TypeAlias
 
 import numba
 import numpy as np
+import numpy.typing as npt
+
+FloatArray: TypeAlias = npt.NDArray[np.float64]
+#: A float or an array_like of floats, broadcast against the other arguments (one value per test or
+#: impact), and what such a broadcast returns: Any, as numpy takes and gives back scalars and arrays
+#: alike (a float in, a numpy float out) and the callers hand over what they hold (lists, Series).
+Floats: TypeAlias = Any
+#: ``(term, values)`` pairs: a :class:`rocklab.physics.law.FlightTerm` and its parameters (the term
+#: Any: law imports this module, the other way round would be a cycle).
+Terms: TypeAlias = Sequence[tuple[Any, Sequence[Floats]]]
 
 # 8 points: the flight integrals, made smooth by their substitutions, to 1e-8
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
@@ -41,13 +57,13 @@ _GL24_S = 0.5 * (_GL24_X + 1.0)
 _GL24_W = 0.5 * _GL24_W
 
 
-def _some(x):
+def _some(x: Floats) -> bool | np.bool_:
     """Whether any of x (a scalar or an array) is nonzero: :func:`numpy.any`, at a sixth of its
     cost on the small arrays of the diagnosis's hot path."""
     return np.count_nonzero(x) > 0
 
 
-def potential(theta, a, p):
+def potential(theta: Floats, a: Floats, p: Floats) -> Floats:
     """Energy per unit I_O of a wall at rest at |theta| on a hinge of angle a [rad^2/s^2].
 
     p^2 (cos(a - |theta|) - cos a), the exact energy balance behind Eq. 11.
@@ -55,7 +71,7 @@ def potential(theta, a, p):
     return p**2 * (np.cos(a - theta) - np.cos(a))
 
 
-def potential_linear(theta, a, p):
+def potential_linear(theta: Floats, a: Floats, p: Floats) -> Floats:
     """:func:`potential` of Housner's linearised equation theta'' = p^2 (theta - a) [rad^2/s^2].
 
     p^2 (a |theta| - theta^2 / 2), the energy balance behind Eq. 10.
@@ -63,7 +79,7 @@ def potential_linear(theta, a, p):
     return p**2 * (a * theta - 0.5 * theta**2)
 
 
-def energy(theta, thetadot, a, p, linear=False):
+def energy(theta: Floats, thetadot: Floats, a: Floats, p: Floats, linear: bool = False) -> Floats:
     """Energy per unit I_O of a wall at |theta| with speed thetadot on hinge a [rad^2/s^2].
 
     1/2 thetadot^2 plus :func:`potential` (or :func:`potential_linear`): the
@@ -73,7 +89,7 @@ def energy(theta, thetadot, a, p, linear=False):
     return 0.5 * thetadot**2 + (potential_linear if linear else potential)(theta, a, p)
 
 
-def flight_angle(A, a, k=0.0):
+def flight_angle(A: Floats, a: Floats, k: Floats = 0.0) -> Floats:
     """Rocking angle [rad] of a flight of apex A on a hinge whose angle depends on the amplitude.
 
     a (1 - k) + k min(A, a): a rounded or crushing hinge (the three-branch
@@ -98,7 +114,7 @@ def flight_angle(A, a, k=0.0):
     return a - k * (a - np.minimum(A, a))
 
 
-def _apex_on_flight_angle(E, a, p, k):
+def _apex_on_flight_angle(E: Floats, a: Floats, p: Floats, k: Floats) -> Floats:
     """Apex [rad] of a flight of energy E on the angle :func:`flight_angle` of its own apex.
 
     Solves potential(A, a (1 - k) + k A, p) = E: the linearised balance
@@ -123,13 +139,15 @@ def _apex_on_flight_angle(E, a, p, k):
     return np.where(c >= 1.0 - np.cos(a), a, A)
 
 
-def apex(E, a, p):
+def apex(E: Floats, a: Floats, p: Floats) -> Floats:
     """|theta| at which a wall with energy E per unit I_O stops on hinge a [rad] (a if it overturns)."""
     c = np.cos(a) + np.maximum(E, 0.0) / p**2
     return np.where(c >= 1.0, a, a - np.arccos(np.minimum(c, 1.0)))
 
 
-def _on_flights(integral, A, a, p):
+def _on_flights(
+    integral: Callable[[FloatArray, FloatArray, FloatArray], FloatArray], A: Floats, a: Floats, p: Floats
+) -> Floats:
     """``integral`` (a quadrature of flat arrays) of the flights of apex A on hinge a, broadcast.
 
     Computed on the flights only: a stack of tests is padded with NaN (NaN
@@ -145,7 +163,7 @@ def _on_flights(integral, A, a, p):
     return out.reshape(shape)[()]
 
 
-def path_integral(A, a, p):
+def path_integral(A: Floats, a: Floats, p: Floats) -> Floats:
     """int_0^A |thetadot| dtheta of the undamped flight with apex A on hinge a [rad^2/s].
 
     The energy a viscous loss -2 zeta p thetadot takes over half a flight is
@@ -155,13 +173,14 @@ def path_integral(A, a, p):
 
 
 @numba.njit(cache=True)
-def _sum8(r):
+def _sum8(r: FloatArray) -> float:
     """Sum of 8 nodes in :func:`numpy.sum`'s pairwise order."""
-    return ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
+    # numba compiles no cast: the nodes are floats
+    return ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))  # type: ignore[no-any-return]
 
 
 @numba.njit(cache=True)
-def _node_speeds(A, a, p, v):
+def _node_speeds(A: float, a: float, p: float, v: FloatArray) -> None:
     """|thetadot| of the undamped flight of apex A on hinge a at the nodes theta = A (1 - s^2), into ``v``."""
     c0, pp = math.cos(a - A), 2.0 * (p * p)
     for j in range(_GL_S.size):
@@ -170,7 +189,7 @@ def _node_speeds(A, a, p, v):
 
 
 @numba.njit(cache=True)
-def _path_sum(A, v, r):
+def _path_sum(A: float, v: FloatArray, r: FloatArray) -> float:
     """:func:`path_integral` of one flight from its :func:`_node_speeds` ``v`` (``r``: room for the terms)."""
     for j in range(_GL_S.size):
         r[j] = _GL_W[j] * v[j] * 2.0 * A * _GL_S[j]
@@ -178,7 +197,7 @@ def _path_sum(A, v, r):
 
 
 @numba.njit(cache=True)
-def _path_nodes(A, a, p):
+def _path_nodes(A: FloatArray, a: FloatArray, p: FloatArray) -> FloatArray:
     out = np.empty(A.size)
     v, r = np.empty(_GL_S.size), np.empty(_GL_S.size)
     for i in range(A.size):
@@ -187,7 +206,7 @@ def _path_nodes(A, a, p):
     return out
 
 
-def quarter_period(A, a, p):
+def quarter_period(A: Floats, a: Floats, p: Floats) -> Floats:
     """Flight time from an apex A [rad] to theta = 0 on hinge a, exact rigid block [s].
 
     int_0^A dtheta / |thetadot|; Housner's arccosh(1/(1 - A/a)) / p is its
@@ -197,7 +216,7 @@ def quarter_period(A, a, p):
 
 
 @numba.njit(cache=True)
-def _quarter_period_nodes(A, a, p):
+def _quarter_period_nodes(A: FloatArray, a: FloatArray, p: FloatArray) -> FloatArray:
     out = np.empty(A.size)
     r = np.empty(_GL_S.size)
     for i in range(A.size):
@@ -214,7 +233,14 @@ def _quarter_period_nodes(A, a, p):
     return out
 
 
-def loss_deceleration(thetadot, p, zeta=0.0, mu=0.0, kappa=0.0, sign=np.sign):
+def loss_deceleration(
+    thetadot: Floats,
+    p: Floats,
+    zeta: Floats = 0.0,
+    mu: Floats = 0.0,
+    kappa: Floats = 0.0,
+    sign: Callable[[Floats], Floats] = np.sign,
+) -> Floats:
     """Deceleration of the losses in flight, by their dependence on the angular velocity [rad/s^2].
 
     2 zeta p thetadot + mu p^2 sign(thetadot) + kappa thetadot |thetadot|: a viscous
@@ -231,7 +257,7 @@ def loss_deceleration(thetadot, p, zeta=0.0, mu=0.0, kappa=0.0, sign=np.sign):
 
 
 @numba.njit(cache=True)
-def _moments(A, a, c):
+def _moments(A: float, a: float, c: float) -> tuple[float, float, float]:
     """:func:`_exponential_moments` of one flight."""
     h = 0.5 * A
     sh, ch, sm, cm = math.sin(h), math.cos(h), math.sin(a - h), math.cos(a - h)
@@ -245,12 +271,14 @@ def _moments(A, a, c):
 
 
 @numba.njit(cache=True)
-def _moments_of(A, a, c, sin_m, cos_m, one):
+def _moments_of(
+    A: FloatArray, a: FloatArray, c: FloatArray, sin_m: FloatArray, cos_m: FloatArray, one: FloatArray
+) -> None:
     for i in range(A.size):
         sin_m[i], cos_m[i], one[i] = _moments(A[i], a[i], c[i])
 
 
-def _exponential_moments(A, a, c):
+def _exponential_moments(A: Floats, a: Floats, c: Floats) -> tuple[Floats, ...]:
     """int_0^A sin(a - s) e^(c s) ds, int_0^A cos(a - s) e^(c s) ds and int_0^A e^(c s) ds, closed forms.
 
     d/ds [e^(c s) (c sin(a - s) + cos(a - s))] = (1 + c^2) e^(c s) sin(a - s), and
@@ -265,7 +293,7 @@ def _exponential_moments(A, a, c):
     return tuple(x.reshape(shape)[()] for x in out)
 
 
-def _work(A, a, p, mu, kappa, rise):
+def _work(A: Floats, a: Floats, p: Floats, mu: Floats, kappa: Floats, rise: bool) -> Floats:
     """int_0^A p^2 (sin(a - s) +- mu) exp(+-2 kappa s) ds [rad^2/s^2] (+ on the rise, - on the fall).
 
     The exact energy balance of a flight with dry friction and drag: on the
@@ -280,7 +308,9 @@ def _work(A, a, p, mu, kappa, rise):
 
 
 @numba.njit(cache=True)
-def _rise_balance(A, a, p, zeta, mu, kappa, k, viscous):
+def _rise_balance(
+    A: float, a: float, p: float, zeta: float, mu: float, kappa: float, k: float, viscous: bool | np.bool_
+) -> tuple[float, float]:
     """The rise's take-off energy to the apex A (:func:`_work` and the viscous loss) and its d/dA [rad^2/s^2, rad/s^2].
 
     On the angle :func:`flight_angle` of the apex: the integrand at A plus,
@@ -313,17 +343,27 @@ def _rise_balance(A, a, p, zeta, mu, kappa, k, viscous):
 _NEWTON_MAX, _NEWTON_TOL = 40, 1e-12
 
 
-def _viscous(zeta, p, A, a):
+def _viscous(zeta: Floats, p: Floats, A: Floats, a: Floats) -> Floats:
     # first order in zeta: the loss along the undamped path
     return 2.0 * zeta * p * (path_integral(A, a, p) if _some(zeta) else 0.0)
 
 
-def _terms_work(terms, A, a, p, rise):
+def _terms_work(terms: Terms, A: Floats, a: Floats, p: Floats, rise: bool) -> Floats:
     """The energy the terms in flight ``terms`` take over the rise to A or the fall from it [rad^2/s^2]."""
     return sum(term.work(A, a, p, rise, *values) for term, values in terms)
 
 
-def landing_speed(A, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0, terms=()):
+def landing_speed(
+    A: Floats,
+    a: Floats,
+    p: Floats,
+    zeta: Floats = 0.0,
+    *,
+    mu: Floats = 0.0,
+    kappa: Floats = 0.0,
+    k: Floats = 0.0,
+    terms: Terms = (),
+) -> Floats:
     """|thetadot| on arrival at theta = 0 from an apex A on hinge a [rad/s], with the losses in flight.
 
     The losses of :func:`loss_deceleration`: dry friction and drag exact
@@ -347,7 +387,9 @@ def landing_speed(A, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0, terms=()):
     return np.where(np.sin(a - A) > mu, np.sqrt(2.0 * np.maximum(E, 0.0)), 0.0)
 
 
-def _apex_with_losses(E, A, a, p, zeta, mu, kappa, k):
+def _apex_with_losses(
+    E: Floats, A: Floats, a: Floats, p: Floats, zeta: Floats, mu: Floats, kappa: Floats, k: Floats
+) -> Floats:
     """:func:`apex_after` with dry friction or drag: Newton on the rise's balance from the undamped apex A.
 
     Each flight's Newton passes stop at its own root (a step of less than
@@ -372,7 +414,17 @@ def _apex_with_losses(E, A, a, p, zeta, mu, kappa, k):
 
 
 @numba.njit(cache=True)
-def _newton_apex(E, A, a, p, zeta, mu, kappa, k, viscous):
+def _newton_apex(
+    E: FloatArray,
+    A: FloatArray,
+    a: FloatArray,
+    p: FloatArray,
+    zeta: FloatArray,
+    mu: FloatArray,
+    kappa: FloatArray,
+    k: FloatArray,
+    viscous: bool | np.bool_,
+) -> FloatArray:
     """:func:`_apex_with_losses`'s Newton passes, flight by flight, each to its own root."""
     out = A.copy()
     for i in range(A.size):
@@ -395,7 +447,17 @@ def _newton_apex(E, A, a, p, zeta, mu, kappa, k, viscous):
     return out
 
 
-def apex_after(v, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0, terms=()):
+def apex_after(
+    v: Floats,
+    a: Floats,
+    p: Floats,
+    zeta: Floats = 0.0,
+    *,
+    mu: Floats = 0.0,
+    kappa: Floats = 0.0,
+    k: Floats = 0.0,
+    terms: Terms = (),
+) -> Floats:
     """Apex [rad] reached on hinge a by a wall leaving theta = 0 at |thetadot| = v, with the losses in flight.
 
     The inverse of :func:`landing_speed`'s balance on the rise: the undamped
@@ -410,7 +472,7 @@ def apex_after(v, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0, terms=()):
     """
     E = 0.5 * np.asarray(v, float) ** 2
 
-    def rise(E):
+    def rise(E: Floats) -> Floats:
         return _apex_on_flight_angle(E, a, p, k) if _some(k) else apex(E, a, p)
 
     A = rise(E)
@@ -423,14 +485,18 @@ def apex_after(v, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0, terms=()):
     return _apex_with_terms(E, A, a, p, zeta, mu, kappa, k, terms) if terms else A
 
 
-def _takeoff_energy(A, a, p, zeta, mu, kappa, k, terms):
+def _takeoff_energy(
+    A: Floats, a: Floats, p: Floats, zeta: Floats, mu: Floats, kappa: Floats, k: Floats, terms: Terms
+) -> Floats:
     """The take-off energy that reaches the apex A [rad^2/s^2]: the rise's balance on the flight's angle."""
     a = flight_angle(A, a, k)
     E = _work(A, a, p, mu, kappa, rise=True) + _viscous(zeta, p, A, a)
     return E + _terms_work(terms, A, a, p, rise=True) if terms else E
 
 
-def _apex_with_terms(E, A, a, p, zeta, mu, kappa, k, terms):
+def _apex_with_terms(
+    E: Floats, A: Floats, a: Floats, p: Floats, zeta: Floats, mu: Floats, kappa: Floats, k: Floats, terms: Terms
+) -> Floats:
     """:func:`apex_after` with the terms of other laws: Newton passes on the rise's balance
     (:func:`_takeoff_energy`) from the apex A without them, above the root (the terms take energy), kept
     inside the bracket of the root, each flight to its own (a step of less than :data:`_NEWTON_TOL` of a).
@@ -472,7 +538,17 @@ def _apex_with_terms(E, A, a, p, zeta, mu, kappa, k, terms):
     return out.reshape(shape)
 
 
-def takeoff_speed(A, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0, terms=()):
+def takeoff_speed(
+    A: Floats,
+    a: Floats,
+    p: Floats,
+    zeta: Floats = 0.0,
+    *,
+    mu: Floats = 0.0,
+    kappa: Floats = 0.0,
+    k: Floats = 0.0,
+    terms: Terms = (),
+) -> Floats:
     """|thetadot| at theta = 0 that reaches the apex A on hinge a with the losses in flight [rad/s].
 
     The inverse of :func:`apex_after`: the rise's energy balance (:func:`_work`,
@@ -482,19 +558,29 @@ def takeoff_speed(A, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0, terms=()):
     return np.sqrt(2.0 * _takeoff_energy(A, a, p, zeta, mu, kappa, k, terms))
 
 
-def speed_loss(A, a, p, zeta=0.0, *, mu=0.0, kappa=0.0, k=0.0, terms=()):
+def speed_loss(
+    A: Floats,
+    a: Floats,
+    p: Floats,
+    zeta: Floats = 0.0,
+    *,
+    mu: Floats = 0.0,
+    kappa: Floats = 0.0,
+    k: Floats = 0.0,
+    terms: Terms = (),
+) -> Floats:
     """Speed a flight of apex A loses between take-off and the next impact, over its take-off speed [-].
 
     1 - :func:`landing_speed` / :func:`takeoff_speed`: the flight-loss curve
     whose dependence on the speed tells the losses of
     :func:`loss_deceleration` apart.
     """
-    loss = {"zeta": zeta, "mu": mu, "kappa": kappa, "k": k, "terms": terms}
+    loss: dict[str, Any] = {"zeta": zeta, "mu": mu, "kappa": kappa, "k": k, "terms": terms}
     with np.errstate(invalid="ignore", divide="ignore"):
         return 1.0 - landing_speed(A, a, p, **loss) / takeoff_speed(A, a, p, **loss)
 
 
-def transit_time(v, u, a, p):
+def transit_time(v: Floats, u: Floats, a: Floats, p: Floats) -> Floats:
     """Time to move from theta = 0 to depth u on hinge a starting at |thetadot| = v [s].
 
     int_0^u du' / sqrt(v^2 - 2 P(u')) with the exact potential P, through
@@ -509,7 +595,7 @@ def transit_time(v, u, a, p):
     return np.sum(_GL24_W * 2.0 * u / g, axis=-1)
 
 
-def quarter_period_linear(theta0_over_alpha, thetadot0_over_p_alpha=0.0):
+def quarter_period_linear(theta0_over_alpha: npt.ArrayLike, thetadot0_over_p_alpha: npt.ArrayLike = 0.0) -> FloatArray:
     """First quarter period p T_1/4 of the linearised rocking equation [-].
 
     Released at theta0 with speed thetadot0 towards the vertical, a wall

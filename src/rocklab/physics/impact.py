@@ -42,14 +42,16 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+import numpy.typing as npt
 
 from rocklab.physics import restitution
 from rocklab.physics.boundary import Boundary
+from rocklab.physics.flight import FloatArray, Floats
 from rocklab.physics.law import speed_factor
 from rocklab.physics.wall import overturning_velocity
 
 
-def bounded_factor(e0, factor):
+def bounded_factor(e0: Floats, factor: Floats) -> Floats:
     """A law's factor on the base e ``e0`` (signed) within the physical bounds: clipped to [0, 1/|e0|] [-].
 
     The one convention of every impact law, at any speed (module
@@ -62,7 +64,7 @@ def bounded_factor(e0, factor):
     return np.clip(factor, 0.0, hi)
 
 
-def amplitude_factor(e0, a, b, thetadot_before, alpha, p):
+def amplitude_factor(e0: Floats, a: Floats, b: Floats, thetadot_before: Floats, alpha: Floats, p: Floats) -> Floats:
     """a - b (thetadot^-/thetadot_r)^2 within the bounds of :func:`bounded_factor` (the bracket of Eq. 17)."""
     ratio = np.abs(thetadot_before) / overturning_velocity(alpha, p)
     return bounded_factor(e0, a - b * ratio**2)
@@ -71,14 +73,14 @@ def amplitude_factor(e0, a, b, thetadot_before, alpha, p):
 class ImpactLaw:
     """Base class: signed coefficient of restitution of one impact."""
 
-    def coefficient(self, thetadot_before, side, alpha, p):
+    def coefficient(self, thetadot_before: Floats, side: float, alpha: Floats, p: Floats) -> Floats:
         """Signed e = thetadot^+ / thetadot^- [-] (see module docstring)."""
         e0, a, b = self._triple(side, alpha)
         if a == 1.0 and b == 0.0:
             return e0 * bounded_factor(e0, np.ones_like(np.asarray(thetadot_before, float)))
         return e0 * amplitude_factor(e0, a, b, thetadot_before, alpha, p)
 
-    def flat(self, alpha):
+    def flat(self, alpha: float) -> FloatArray:
         """Parameters for the numba engines: array (2, 3), rows side +1, -1.
 
         Raises
@@ -88,17 +90,17 @@ class ImpactLaw:
         """
         return np.array([self._triple(+1, alpha), self._triple(-1, alpha)], float)
 
-    def _triple(self, side, alpha):
+    def _triple(self, side: float, alpha: float) -> tuple[float, float, float]:
         raise NotImplementedError(f"{type(self).__name__} has no flat form")
 
 
 class HousnerTwoSided(ImpactLaw):
     """Housner's analytic e_an,2s, Eqs. 1-2 (homogeneous wall by default)."""
 
-    def __init__(self, mR2_over_Io=None):
+    def __init__(self, mR2_over_Io: float | None = None) -> None:
         self.mR2_over_Io = mR2_over_Io
 
-    def _triple(self, side, alpha):
+    def _triple(self, side: float, alpha: float) -> tuple[float, float, float]:
         return (float(restitution.two_sided(alpha, self.mR2_over_Io)), 1.0, 0.0)
 
 
@@ -120,11 +122,11 @@ class AsymmetricBody(ImpactLaw):
         Radius of gyration [m] about the centre of mass in the rocking plane.
     """
 
-    def __init__(self, b_plus, b_minus, height, gyration_radius):
+    def __init__(self, b_plus: float, b_minus: float, height: float, gyration_radius: float) -> None:
         self.b_plus, self.b_minus = float(b_plus), float(b_minus)
         self.height, self.gyration_radius = float(height), float(gyration_radius)
 
-    def _triple(self, side, alpha):
+    def _triple(self, side: float, alpha: float) -> tuple[float, float, float]:
         leave, land = (self.b_plus, self.b_minus) if side > 0 else (self.b_minus, self.b_plus)
         return (restitution.two_sided_asymmetric(leave, land, self.height, self.gyration_radius), 1.0, 0.0)
 
@@ -132,10 +134,10 @@ class AsymmetricBody(ImpactLaw):
 class OneSided(ImpactLaw):
     """Analytic e_an,1s of one-sided rocking, Eq. 14 (negative: a rebound)."""
 
-    def __init__(self, mR2_over_Io=None):
+    def __init__(self, mR2_over_Io: float | None = None) -> None:
         self.mR2_over_Io = mR2_over_Io
 
-    def _triple(self, side, alpha):
+    def _triple(self, side: float, alpha: float) -> tuple[float, float, float]:
         return (float(restitution.one_sided(alpha, self.mR2_over_Io)), 1.0, 0.0)
 
 
@@ -145,41 +147,41 @@ class Transverse(ImpactLaw):
     Used by the gap model of one-sided rocking (see :mod:`rocklab.simulation.rocking_model`).
     """
 
-    def __init__(self, mR2_over_Io=None):
+    def __init__(self, mR2_over_Io: float | None = None) -> None:
         self.mR2_over_Io = mR2_over_Io
 
-    def _triple(self, side, alpha):
+    def _triple(self, side: float, alpha: float) -> tuple[float, float, float]:
         return (float(restitution.transverse(alpha, self.mR2_over_Io)), 1.0, 0.0)
 
 
 class Constant(ImpactLaw):
     """A given signed coefficient, the same on both sides."""
 
-    def __init__(self, e):
+    def __init__(self, e: float) -> None:
         self.e = float(e)
 
-    def _triple(self, side, alpha):
+    def _triple(self, side: float, alpha: float) -> tuple[float, float, float]:
         return (self.e, 1.0, 0.0)
 
 
 class Zero(Constant):
     """e = 0: the wall stops at the first impact (Liberatore & Spera 2003)."""
 
-    def __init__(self):
+    def __init__(self) -> None:
         super().__init__(0.0)
 
 
 class Scaled(ImpactLaw):
     """c times another law, e.g. 0.95 e_an,2s or 1.05 e_an,1s (Sect. 5)."""
 
-    def __init__(self, law: ImpactLaw, c: float):
+    def __init__(self, law: ImpactLaw, c: float) -> None:
         self.law, self.c = law, float(c)
 
-    def coefficient(self, thetadot_before, side, alpha, p):
+    def coefficient(self, thetadot_before: Floats, side: float, alpha: Floats, p: Floats) -> Floats:
         e = self.law.coefficient(thetadot_before, side, alpha, p)
         return e * bounded_factor(e, self.c)
 
-    def _triple(self, side, alpha):
+    def _triple(self, side: float, alpha: float) -> tuple[float, float, float]:
         # the flat form carries the bounded constant, so that Eq. 17's bracket
         # on top clips against the e the impact really has
         e0, a, b = self.law._triple(side, alpha)
@@ -201,14 +203,14 @@ class AmplitudeLaw(ImpactLaw):
         law: ImpactLaw,
         a: float = restitution.AMPLITUDE_LAW_ONE_SIDED[0],
         b: float = restitution.AMPLITUDE_LAW_ONE_SIDED[1],
-    ):
+    ) -> None:
         self.law, self.a, self.b = law, float(a), float(b)
 
-    def coefficient(self, thetadot_before, side, alpha, p):
+    def coefficient(self, thetadot_before: Floats, side: float, alpha: Floats, p: Floats) -> Floats:
         e = self.law.coefficient(thetadot_before, side, alpha, p)
         return e * amplitude_factor(e, self.a, self.b, thetadot_before, alpha, p)
 
-    def _triple(self, side, alpha):
+    def _triple(self, side: float, alpha: float) -> tuple[float, float, float]:
         e0, a, b = self.law._triple(side, alpha)
         if (a, b) != (1.0, 0.0):
             raise NotImplementedError("nested amplitude laws have no flat form")
@@ -218,14 +220,14 @@ class AmplitudeLaw(ImpactLaw):
 class Sided(ImpactLaw):
     """A different law for each hinge being left (hinge asymmetry)."""
 
-    def __init__(self, law_pos: ImpactLaw, law_neg: ImpactLaw):
+    def __init__(self, law_pos: ImpactLaw, law_neg: ImpactLaw) -> None:
         self.law_pos, self.law_neg = law_pos, law_neg
 
-    def coefficient(self, thetadot_before, side, alpha, p):
+    def coefficient(self, thetadot_before: Floats, side: float, alpha: Floats, p: Floats) -> Floats:
         law = self.law_pos if side > 0 else self.law_neg
         return law.coefficient(thetadot_before, side, alpha, p)
 
-    def _triple(self, side, alpha):
+    def _triple(self, side: float, alpha: float) -> tuple[float, float, float]:
         return (self.law_pos if side > 0 else self.law_neg)._triple(side, alpha)
 
 
@@ -241,10 +243,10 @@ class Sticking(ImpactLaw):
     column of :meth:`rocklab.simulation.rocking_model.RockingModel.numba_law`.
     """
 
-    def __init__(self, law: ImpactLaw, v_stick: float):
+    def __init__(self, law: ImpactLaw, v_stick: float) -> None:
         self.law, self.v_stick = law, float(v_stick)
 
-    def coefficient(self, thetadot_before, side, alpha, p):
+    def coefficient(self, thetadot_before: Floats, side: float, alpha: Floats, p: Floats) -> Floats:
         e = self.law.coefficient(thetadot_before, side, alpha, p)
         slow = np.abs(thetadot_before) < self.v_stick * overturning_velocity(alpha, p)
         return np.where(slow, 0.0, e)
@@ -258,10 +260,10 @@ class SpeedLaw(ImpactLaw):
     Only the event-driven reference integrator accepts it (no flat form).
     """
 
-    def __init__(self, law: ImpactLaw, knots):
+    def __init__(self, law: ImpactLaw, knots: npt.ArrayLike) -> None:
         self.law, self.knots = law, np.asarray(knots, float)
 
-    def coefficient(self, thetadot_before, side, alpha, p):
+    def coefficient(self, thetadot_before: Floats, side: float, alpha: Floats, p: Floats) -> Floats:
         e = self.law.coefficient(thetadot_before, side, alpha, p)
         g = speed_factor(np.abs(thetadot_before) / overturning_velocity(alpha, p), self.knots)
         return e * bounded_factor(e, g)
@@ -273,20 +275,20 @@ class Custom(ImpactLaw):
     Only the event-driven reference integrator accepts it.
     """
 
-    def __init__(self, func: Callable):
+    def __init__(self, func: Callable[..., Floats]) -> None:
         self.func = func
 
-    def coefficient(self, thetadot_before, side, alpha, p):
+    def coefficient(self, thetadot_before: Floats, side: float, alpha: Floats, p: Floats) -> Floats:
         return self.func(thetadot_before, side, alpha, p)
 
 
-def analytic(boundary, gap=False) -> ImpactLaw:
+def analytic(boundary: str, gap: bool = False) -> ImpactLaw:
     """The analytic law of the base impacts of a wall: Eq. 14 for a one-sided wall without a gap
     (a rebound), Eq. 2 otherwise (two-sided, or a one-sided wall swinging through a gap, Fig. 12)."""
     return OneSided() if boundary == Boundary.ONE_SIDED and not gap else HousnerTwoSided()
 
 
-def calibrated(law: ImpactLaw, c_pos=1.0, c_neg=1.0, a=1.0, b=0.0) -> ImpactLaw:
+def calibrated(law: ImpactLaw, c_pos: Floats = 1.0, c_neg: Floats = 1.0, a: Floats = 1.0, b: Floats = 0.0) -> ImpactLaw:
     """``law`` times c_pos on leaving hinge +1, c_neg on leaving hinge -1, and Eq. 17's bracket
     a - b (thetadot^-/thetadot_r)^2: the one composition of a calibrated impact law.
 

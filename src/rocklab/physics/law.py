@@ -42,13 +42,15 @@ not negative, :class:`FlightLoss`).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import Any, ClassVar
 
 import numpy as np
+import numpy.typing as npt
 
 from rocklab.physics import restitution
+from rocklab.physics.flight import FloatArray, Floats
 
 
 class Law:
@@ -108,15 +110,16 @@ class FlightTerm:
     work_slope: Callable[..., Any] | None = None
 
 
-def _viscous(theta, thetadot, p, q, i):
+# q: the parameters, an array at run time (Sequence: its items read as floats, which numba compiles)
+def _viscous(theta: float, thetadot: float, p: float, q: Sequence[float], i: int) -> float:
     return 2.0 * q[i] * p * thetadot
 
 
-def _dry_friction(theta, thetadot, p, q, i):
+def _dry_friction(theta: float, thetadot: float, p: float, q: Sequence[float], i: int) -> float:
     return q[i] * p**2 * (1.0 if thetadot > 0.0 else (-1.0 if thetadot < 0.0 else 0.0))
 
 
-def _drag(theta, thetadot, p, q, i):
+def _drag(theta: float, thetadot: float, p: float, q: Sequence[float], i: int) -> float:
     return q[i] * thetadot * abs(thetadot)
 
 
@@ -142,7 +145,7 @@ class Restitution(Law):
     drift: float | None = None
     along: str | None = None
 
-    def factors(self, place=None):
+    def factors(self, place: Floats = None) -> tuple[Floats, Floats]:
         """The factors (hinge +1, hinge -1) of a wall at its place n [-] (read only with a drift)."""
         pos, neg = self.scale * math.exp(self.asymmetry / 2), self.scale * math.exp(-(self.asymmetry / 2))
         if self.drift is None:
@@ -150,11 +153,11 @@ class Restitution(Law):
         f = np.exp(self.drift * (place - 0.5))
         return pos * f, neg * f
 
-    def on_impacts(self, leaving_plus):
+    def on_impacts(self, leaving_plus: Floats) -> Floats:
         """The factor of each impact, ``leaving_plus`` (bool array) where it leaves hinge +1 [-]."""
         return self.scale * np.exp(np.where(leaving_plus, 0.5, -0.5) * self.asymmetry)
 
-    def act_on(self, mp):
+    def act_on(self, mp: Any) -> Any:
         pos, neg = self.factors(None if self.drift is None else mp.place(self.along))
         return replace(mp, c_pos=pos * mp.c_pos, c_neg=neg * mp.c_neg)
 
@@ -167,11 +170,11 @@ class HousnerLoss(Law):
     fraction: float = 1.0
     constant: float = 0.0
 
-    def restitution(self, e_an):
+    def restitution(self, e_an: Floats) -> Floats:
         """The base e [-] from the analytic one, ``e_an`` (array_like, signed)."""
         return np.sign(e_an) * np.clip(1.0 - self.fraction * (1.0 - np.abs(e_an)) - self.constant, 0.0, 1.0)
 
-    def act_on(self, mp):
+    def act_on(self, mp: Any) -> Any:
         return replace(mp, e0=self.restitution(mp.e0))
 
 
@@ -183,7 +186,7 @@ class Amplitude(Law):
     a: float = 1.0
     b: float = 0.0
 
-    def act_on(self, mp):
+    def act_on(self, mp: Any) -> Any:
         return replace(mp, amp_a=self.a * mp.amp_a, amp_b=self.b * np.ones_like(mp.alpha))
 
 
@@ -195,9 +198,9 @@ class SpeedFactor(Law):
     dictates.  The exact simulator's law is :class:`rocklab.physics.impact.SpeedLaw` (the
     reference integrator only: the maps' engines have none)."""
 
-    knots: tuple = (1.0, 1.0, 1.0, 1.0)
+    knots: tuple[float, ...] = (1.0, 1.0, 1.0, 1.0)
 
-    def act_on(self, mp):
+    def act_on(self, mp: Any) -> Any:
         return replace(mp, speed_knots=np.tile(np.array(self.knots), (mp.alpha.size, 1)))
 
 
@@ -205,7 +208,7 @@ class SpeedFactor(Law):
 KNOTS = np.array([0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0])
 
 
-def hats(x):
+def hats(x: Floats) -> Floats:
     """Piecewise-linear basis at :data:`KNOTS` of speeds x [thetadot_r], shape (..., knots).
 
     Beyond the last knot the last segment goes on (the convention of every
@@ -218,7 +221,7 @@ def hats(x):
     return inside + past * np.r_[np.zeros(KNOTS.size - 2), -1.0, 1.0]
 
 
-def speed_factor(x, knots):
+def speed_factor(x: Floats, knots: npt.ArrayLike) -> Floats:
     """g(x) of :class:`SpeedFactor` [-]: the piecewise-linear law of its values ``knots`` at :data:`KNOTS`
     (:func:`hats`), at speeds x [thetadot_r]; ``knots`` (..., knots) one law per leading index of x
     (a law per test of (tests, impacts) speeds) or one for all."""
@@ -239,12 +242,12 @@ class Hinge(Law):
     asymmetry: float = 0.0
     rounding: float | None = None
 
-    def angles(self, a_pos, a_neg):
+    def angles(self, a_pos: Floats, a_neg: Floats) -> tuple[Floats, Floats]:
         """The rocking angles [rad] of hinges +1 and -1 of angles ``a_pos``, ``a_neg``."""
         h = self.asymmetry / 2
         return self.ratio * a_pos * math.exp(h), self.ratio * a_neg * math.exp(-h)
 
-    def act_on(self, mp):
+    def act_on(self, mp: Any) -> Any:
         a_pos, a_neg = self.angles(mp.a_pos, mp.a_neg)
         k = mp.rounding if self.rounding is None else self.rounding * np.ones_like(mp.alpha)
         return replace(mp, a_pos=a_pos, a_neg=a_neg, rounding=k)
@@ -262,9 +265,9 @@ class FlightLoss(Law):
     kappa_alpha: float = 0.0
 
     #: Its terms in flight, those of the model's zeta, mu and kappa in that order.
-    TERMS: ClassVar = (VISCOUS, DRY_FRICTION, DRAG)
+    TERMS: ClassVar[tuple[FlightTerm, ...]] = (VISCOUS, DRY_FRICTION, DRAG)
 
-    def act_on(self, mp):
+    def act_on(self, mp: Any) -> Any:
         return replace(
             mp,
             zeta=self.zeta * np.ones_like(mp.alpha),
@@ -280,7 +283,7 @@ class Gap(Law):
 
     over_alpha: float = 0.0
 
-    def act_on(self, mp):
+    def act_on(self, mp: Any) -> Any:
         gap_model = mp.one_sided.copy()
         return replace(
             mp,
@@ -295,7 +298,7 @@ class Stop(Law):
     """A landing slower than ``v_stop`` thetadot_r (Eq. 16) sticks: e = 0
     (:class:`rocklab.physics.impact.Sticking`)."""
 
-    v_stop: float | np.ndarray = 0.0
+    v_stop: float | FloatArray = 0.0
 
-    def act_on(self, mp):
+    def act_on(self, mp: Any) -> Any:
         return replace(mp, stop=self.v_stop * np.ones_like(mp.alpha))

@@ -10,9 +10,10 @@ All functions are pure and vectorise over NumPy arrays; angles in rad.
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 
 from rocklab.physics.boundary import Boundary
-from rocklab.physics.flight import potential
+from rocklab.physics.flight import Floats, potential
 from rocklab.physics.wall import inertia_ratio
 
 #: e_exp / e_an,2s of the two-sided walls, the outlier series left out
@@ -26,7 +27,7 @@ CALIBRATED_RATIO_ONE_SIDED = 1.05
 AMPLITUDE_LAW_ONE_SIDED = (1.18, 0.473)
 
 
-def two_sided(alpha, mR2_over_Io=None):
+def two_sided(alpha: Floats, mR2_over_Io: float | None = None) -> Floats:
     """Housner's analytic coefficient of restitution e_an,2s, Eqs. 1-2.
 
     e = 1 - 2 (m R^2 / I_O) sin^2 alpha; for a homogeneous rectangle
@@ -43,7 +44,7 @@ def two_sided(alpha, mR2_over_Io=None):
     return 1.0 - 2.0 * ratio * np.sin(alpha) ** 2
 
 
-def two_sided_asymmetric(b_leave, b_land, height, gyration_radius):
+def two_sided_asymmetric(b_leave: Floats, b_land: Floats, height: Floats, gyration_radius: Floats) -> Floats:
     """Coefficient of restitution of an asymmetric planar rigid body, Eq. 1 generalised.
 
     Angular momentum about the edge the body lands on is conserved through the
@@ -81,7 +82,7 @@ def two_sided_asymmetric(b_leave, b_land, height, gyration_radius):
     return out if out.ndim else float(out)
 
 
-def energy_ratio_asymmetric(b_leave, b_land, height, gyration_radius):
+def energy_ratio_asymmetric(b_leave: Floats, b_land: Floats, height: Floats, gyration_radius: Floats) -> Floats:
     """Kinetic energy kept by the impact of :func:`two_sided_asymmetric`, T^+ / T^- [-].
 
     T^+ / T^- = (I_O,new / I_O,old) e^2 = (I_G + m h^2 - m b_1 b_2)^2 / (I_O,old I_O,new),
@@ -102,13 +103,13 @@ def energy_ratio_asymmetric(b_leave, b_land, height, gyration_radius):
     return out if out.ndim else float(out)
 
 
-def two_sided_from_slenderness(zeta):
+def two_sided_from_slenderness(zeta: Floats) -> Floats:
     """Eq. 2 in terms of zeta = h/b: (2 zeta^2 - 1) / (2 (zeta^2 + 1))."""
     z2 = np.asarray(zeta, float) ** 2
     return (2.0 * z2 - 1.0) / (2.0 * (z2 + 1.0))
 
 
-def transverse(alpha, mR2_over_Io=None):
+def transverse(alpha: Floats, mR2_over_Io: float | None = None) -> Floats:
     """Analytic coefficient of the impact on the transverse walls, Eqs. 12-13.
 
     e_an,tr = 1 - 2 (m R^2 / I_O) cos^2 alpha, the impulse passing through
@@ -118,13 +119,13 @@ def transverse(alpha, mR2_over_Io=None):
     return 1.0 - 2.0 * ratio * np.cos(alpha) ** 2
 
 
-def transverse_from_slenderness(zeta):
+def transverse_from_slenderness(zeta: Floats) -> Floats:
     """Eq. 13 in terms of zeta = h/b: (2 - zeta^2) / (2 (zeta^2 + 1))."""
     z2 = np.asarray(zeta, float) ** 2
     return (2.0 - z2) / (2.0 * (z2 + 1.0))
 
 
-def one_sided(alpha, mR2_over_Io=None):
+def one_sided(alpha: Floats, mR2_over_Io: float | None = None) -> Floats:
     """Analytic coefficient of one-sided rocking e_an,1s, Eq. 14.
 
     Base impact, transverse-wall impact, base impact:
@@ -134,7 +135,7 @@ def one_sided(alpha, mR2_over_Io=None):
     return two_sided(alpha, mR2_over_Io) ** 2 * transverse(alpha, mR2_over_Io)
 
 
-def analytic(boundary, alpha, mR2_over_Io=None):
+def analytic(boundary: npt.ArrayLike, alpha: Floats, mR2_over_Io: float | None = None) -> Floats:
     """Analytic coefficient of restitution of a boundary condition [-].
 
     Eq. 2 for ``"two-sided"`` rocking, Eq. 14 (negative: a rebound off the
@@ -145,11 +146,11 @@ def analytic(boundary, alpha, mR2_over_Io=None):
     unknown = set(np.unique(b)) - set(Boundary)
     if unknown:
         raise ValueError(f"unknown boundary {sorted(unknown)[0]!r}")
-    out = np.where(b == Boundary.ONE_SIDED, one_sided(alpha, mR2_over_Io), two_sided(alpha, mR2_over_Io))
+    out: Floats = np.where(b == Boundary.ONE_SIDED, one_sided(alpha, mR2_over_Io), two_sided(alpha, mR2_over_Io))
     return out if out.ndim else float(out)
 
 
-def peak_energy_ratio(theta_peak, alpha):
+def peak_energy_ratio(theta_peak: Floats, alpha: Floats) -> Floats:
     """Squared impact velocity reached from a peak, over that from alpha.
 
     Exact energy balance, (cos(alpha - |theta|) - cos alpha) / (1 - cos alpha);
@@ -160,13 +161,13 @@ def peak_energy_ratio(theta_peak, alpha):
     return potential(th, alpha, 1.0) / potential(alpha, alpha, 1.0)
 
 
-def _nth_root(ratio, n):
+def _nth_root(ratio: Floats, n: Floats) -> Floats:
     n = np.asarray(n, float)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where((ratio >= 0) & (n > 0), np.abs(ratio) ** (1.0 / (2.0 * n)), np.nan)
 
 
-def experimental_housner(theta_n, theta_0, alpha_ind, n):
+def experimental_housner(theta_n: Floats, theta_0: Floats, alpha_ind: Floats, n: Floats) -> Floats:
     """Experimental coefficient after n impacts, Eq. 10 (piecewise linear).
 
     e_exp = [ (1 - (1 - |theta_n|/alpha)^2) / (1 - (1 - |theta_0|/alpha)^2) ]^(1/2n)
@@ -193,7 +194,7 @@ def experimental_housner(theta_n, theta_0, alpha_ind, n):
     return _nth_root(num / den, n)
 
 
-def experimental_pena(theta_n, theta_0, alpha_ind, n):
+def experimental_pena(theta_n: Floats, theta_0: Floats, alpha_ind: Floats, n: Floats) -> Floats:
     """Experimental coefficient after n impacts, Eq. 11 (Pena et al. 2007).
 
     e_exp = [ (cos(alpha - |theta_n|) - cos alpha) /
@@ -204,7 +205,7 @@ def experimental_pena(theta_n, theta_0, alpha_ind, n):
     return _nth_root(potential(np.abs(theta_n), a, 1.0) / potential(np.abs(theta_0), a, 1.0), n)
 
 
-def ratio_peak_law(peak_over_alpha, a=1.17, b=0.453):
+def ratio_peak_law(peak_over_alpha: Floats, a: float = 1.17, b: float = 0.453) -> Floats:
     """Amplitude law of one-sided rocking in peak rotation, Eq. 15.
 
     e_exp / e_an,1s = a - b |theta^-| / alpha, with the paper's fit
@@ -213,7 +214,9 @@ def ratio_peak_law(peak_over_alpha, a=1.17, b=0.453):
     return a - b * np.asarray(peak_over_alpha, float)
 
 
-def ratio_velocity_law(velocity_ratio, a=AMPLITUDE_LAW_ONE_SIDED[0], b=AMPLITUDE_LAW_ONE_SIDED[1]):
+def ratio_velocity_law(
+    velocity_ratio: Floats, a: float = AMPLITUDE_LAW_ONE_SIDED[0], b: float = AMPLITUDE_LAW_ONE_SIDED[1]
+) -> Floats:
     """Amplitude law of one-sided rocking in impact velocity, Eq. 17.
 
     e_exp / e_an,1s = a - b (thetadot^- / thetadot_r)^2, thetadot_r from

@@ -12,10 +12,10 @@ from __future__ import annotations
 import numpy as np
 
 from rocklab.physics.constants import G
-from rocklab.physics.flight import potential
+from rocklab.physics.flight import Floats, potential
 
 
-def slenderness_angle(height, thickness):
+def slenderness_angle(height: Floats, thickness: Floats) -> Floats:
     """Nominal slenderness angle alpha = arctan(b/h) [rad] (Fig. 1).
 
     Parameters
@@ -26,7 +26,7 @@ def slenderness_angle(height, thickness):
     return np.arctan2(np.asarray(thickness, float), np.asarray(height, float))
 
 
-def half_diagonal(height, thickness):
+def half_diagonal(height: Floats, thickness: Floats) -> Floats:
     """Distance R of the centre of mass from the rocking edge (Fig. 1).
 
     R = sqrt(h^2 + b^2) / 2, in the unit of the inputs.
@@ -34,7 +34,7 @@ def half_diagonal(height, thickness):
     return 0.5 * np.hypot(height, thickness)
 
 
-def thickness(R, alpha):
+def thickness(R: Floats, alpha: Floats) -> Floats:
     """Wall thickness b = 2 R sin alpha from the half diagonal and the slenderness angle (Fig. 1).
 
     The inverse of :func:`half_diagonal` and :func:`slenderness_angle` for
@@ -43,7 +43,7 @@ def thickness(R, alpha):
     return 2.0 * np.asarray(R, float) * np.sin(np.asarray(alpha, float))
 
 
-def inertia_ratio():
+def inertia_ratio() -> float:
     """m R^2 / I_O of a homogeneous rectangle about its base edge [-].
 
     I_O = 4/3 m R^2, so the ratio is 3/4: it turns Eq. 1 into Eq. 2 and
@@ -52,7 +52,7 @@ def inertia_ratio():
     return 0.75
 
 
-def frequency_parameter(R, mR2_over_Io=None, g=G):
+def frequency_parameter(R: Floats, mR2_over_Io: float | None = None, g: float = G) -> Floats:
     """Housner's frequency parameter p = sqrt(m g R / I_O) [rad/s].
 
     Parameters
@@ -68,7 +68,7 @@ def frequency_parameter(R, mR2_over_Io=None, g=G):
     return np.sqrt(ratio * g / np.asarray(R, float))
 
 
-def overturning_velocity(alpha, p):
+def overturning_velocity(alpha: Floats, p: Floats) -> Floats:
     """Angular velocity that overturns a wall at rest, Eq. 16 [rad/s].
 
     thetadot_r^2 = 2 (m g R / I_O) (1 - cos alpha) = 2 p^2 (1 - cos alpha),
@@ -78,7 +78,7 @@ def overturning_velocity(alpha, p):
     return np.sqrt(2.0 * potential(alpha, alpha, np.asarray(p, float)))
 
 
-def no_sliding_friction(zeta):
+def no_sliding_friction(zeta: Floats) -> Floats:
     """Least static friction coefficient that prevents sliding, Eq. 9 [-].
 
     mu_s >= 3 zeta / (1 + 4 zeta^2) (Shenton 1996) for free rocking of a
