@@ -14,17 +14,25 @@ Scaling (Sect. 5): an amplitude scale multiplies ``ag``; a duration scale
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import Any, Literal, overload
+
 import numba
 import numpy as np
+import numpy.typing as npt
 import xarray as xr
+from numba.core.ccallback import CFunc
 
+from rocklab.physics.flight import FloatArray
 from rocklab.simulation.engine import batch_kernel as _kernel
 from rocklab.simulation.engine import slot
 from rocklab.simulation.flight_terms import flight_function
 from rocklab.simulation.rocking_model import OVERTURN, REST_TOL, RockingModel
 
 
-def _model_arrays(models, overturn, rest_tol, substeps):
+def _model_arrays(
+    models: Sequence[RockingModel], overturn: float, rest_tol: float, substeps: int
+) -> tuple[FloatArray, FloatArray, CFunc]:
     """The engine's parameter vectors and impact laws of ``models``, one row each, and the function of
     their terms in flight (those of every model, in the slots each vector holds them in)."""
     terms = tuple(dict.fromkeys(t for m in models for t, _ in m.engine_terms()))
@@ -33,19 +41,51 @@ def _model_arrays(models, overturn, rest_tol, substeps):
     return prm, law, flight_function(terms)
 
 
+@overload
 def overturning_batch(
-    ag,
-    dt,
+    ag: npt.ArrayLike,
+    dt: float,
     model: RockingModel,
-    amplitude_scales,
-    duration_scales,
+    amplitude_scales: npt.ArrayLike,
+    duration_scales: npt.ArrayLike,
     *,
-    overturn=OVERTURN,
-    rest_tol=REST_TOL,
-    substeps=1,
-    tail=120.0,
-    return_max=False,
-):
+    overturn: float = ...,
+    rest_tol: float = ...,
+    substeps: int = ...,
+    tail: float = ...,
+    return_max: Literal[False] = ...,
+) -> npt.NDArray[np.bool_]: ...
+
+
+@overload
+def overturning_batch(
+    ag: npt.ArrayLike,
+    dt: float,
+    model: RockingModel,
+    amplitude_scales: npt.ArrayLike,
+    duration_scales: npt.ArrayLike,
+    *,
+    overturn: float = ...,
+    rest_tol: float = ...,
+    substeps: int = ...,
+    tail: float = ...,
+    return_max: Literal[True],
+) -> tuple[npt.NDArray[np.bool_], FloatArray]: ...
+
+
+def overturning_batch(
+    ag: npt.ArrayLike,
+    dt: float,
+    model: RockingModel,
+    amplitude_scales: npt.ArrayLike,
+    duration_scales: npt.ArrayLike,
+    *,
+    overturn: float = OVERTURN,
+    rest_tol: float = REST_TOL,
+    substeps: int = 1,
+    tail: float = 120.0,
+    return_max: bool = False,
+) -> npt.NDArray[np.bool_] | tuple[npt.NDArray[np.bool_], FloatArray]:
     """Overturning map of one wall under scaled copies of one record (Sect. 5).
 
     Parameters
@@ -108,18 +148,18 @@ def overturning_batch(
 
 
 def ground_batch(
-    ag,
-    dt,
-    models,
+    ag: npt.ArrayLike,
+    dt: float,
+    models: Sequence[RockingModel],
     *,
-    amplitude_scale=1.0,
-    duration_scale=1.0,
-    overturn=OVERTURN,
-    rest_tol=REST_TOL,
-    substeps=1,
-    tail=120.0,
-    max_impacts=0,
-):
+    amplitude_scale: npt.ArrayLike = 1.0,
+    duration_scale: npt.ArrayLike = 1.0,
+    overturn: float = OVERTURN,
+    rest_tol: float = REST_TOL,
+    substeps: int = 1,
+    tail: float = 120.0,
+    max_impacts: int = 0,
+) -> xr.Dataset:
     """Many walls under one record (each optionally with its own scaling).
 
     Parameters
@@ -154,23 +194,23 @@ def ground_batch(
 
 def free_batch(
     model: RockingModel,
-    theta0,
-    thetadot0=0.0,
+    theta0: npt.ArrayLike,
+    thetadot0: npt.ArrayLike = 0.0,
     *,
-    alpha_rock=None,
-    alpha_neg=None,
-    zeta=None,
-    e_scale=None,
-    amplitude_a=None,
-    amplitude_b=None,
-    law=None,
-    t_end=30.0,
-    dt=1.0 / 400.0,
-    substeps=4,
-    max_impacts=100,
-    overturn=OVERTURN,
-    rest_tol=REST_TOL,
-):
+    alpha_rock: npt.ArrayLike | None = None,
+    alpha_neg: npt.ArrayLike | None = None,
+    zeta: npt.ArrayLike | None = None,
+    e_scale: npt.ArrayLike | None = None,
+    amplitude_a: npt.ArrayLike | None = None,
+    amplitude_b: npt.ArrayLike | None = None,
+    law: npt.ArrayLike | None = None,
+    t_end: float = 30.0,
+    dt: float = 1.0 / 400.0,
+    substeps: int = 4,
+    max_impacts: int = 100,
+    overturn: float = OVERTURN,
+    rest_tol: float = REST_TOL,
+) -> xr.Dataset:
     """Free rocking of many parameter sets at once (used by model fitting).
 
     Every keyword given as an array overrides the model's value history by
@@ -262,7 +302,7 @@ def free_batch(
     return _dataset(out)
 
 
-def _dataset(out):
+def _dataset(out: tuple[npt.NDArray[Any], ...]) -> xr.Dataset:
     over, t_over, max_ratio, n_imp, log_t, log_vb, log_va, log_pk = out
     hist, imp = ("history",), ("history", "impact")
     return xr.Dataset(
@@ -279,7 +319,7 @@ def _dataset(out):
     )
 
 
-def compile_kernels():
+def compile_kernels() -> None:
     """Compile the engine's numba kernels into numba's on-disk cache.
 
     Runs :func:`overturning_batch`, :func:`ground_batch` and

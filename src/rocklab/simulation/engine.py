@@ -13,17 +13,32 @@ dry friction, drag, the term of a law of a cause) is its declared
 deceleration, compiled into one function of the state
 (:func:`rocklab.simulation.flight_terms.flight_function`) with its
 parameters in the vector's ``flight_*`` slots, in the exact form only.
+
+Size: one compiled engine, the kernel and every function it calls: numba's
+on-disk cache is per file and does not see a change in a function of another
+file that a cached kernel calls; every function with its types.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from typing import TypeAlias
 
 import numba
 import numpy as np
+import numpy.typing as npt
 from numba.np.unsafe.ndarray import to_fixed_tuple
 
 from rocklab.physics import flight
+from rocklab.physics.flight import FloatArray
+
+#: The parameter vector of one wall as the helpers take it, a tuple (:func:`run_history`).
+Params: TypeAlias = tuple[float, ...]
+#: The function of a wall's terms in flight (:data:`rocklab.simulation.flight_terms.FLIGHT_TYPE`).
+FlightFunction: TypeAlias = Callable[[float, float, Params], float]
+#: :func:`_transition` over one step, a 2 x 2 matrix by rows.
+Transition: TypeAlias = tuple[float, float, float, float]
 
 #: Parameters of the terms in flight beyond the viscous loss that one wall may have.
 FLIGHT_SLOTS = tuple(f"flight_{j}" for j in range(6))
@@ -61,13 +76,13 @@ TURNED = 1e-300
 _BLOCK = 16
 
 
-def slot(name):
+def slot(name: str) -> int:
     """Index of parameter ``name`` in the engine's parameter vector (:data:`LAYOUT`)."""
     return LAYOUT.index(name)
 
 
 @numba.njit(cache=True, inline="always")
-def _accel(x, v, s, ag, prm, terms, d):
+def _accel(x: float, v: float, s: float, ag: float, prm: Params, terms: FlightFunction, d: float) -> float:
     """thetaddot [rad/s^2] at (x, v) on hinge s under ag [m/s^2]; the terms in flight (``terms``) see
     the rotation on hinge s, its mirror past the edge, and where ``d`` is not 0 the wall moving that
     way: each continued smoothly past the jump it makes at the edge or at a turn, for the steps that
@@ -85,7 +100,7 @@ def _accel(x, v, s, ag, prm, terms, d):
 
 
 @numba.njit(cache=True, inline="always")
-def _transition(l1, l2, E1, E2):
+def _transition(l1: float, l2: float, E1: float, E2: float) -> Transition:
     """State-transition matrix of y'' + 2 zeta p y' - p^2 y = 0 over a time u,
     from E1, E2 = exp(l1 u), exp(l2 u), the roots l1, l2 of
     l^2 + 2 zeta p l - p^2 (cosh/sinh for zeta = 0)."""
@@ -94,7 +109,9 @@ def _transition(l1, l2, E1, E2):
 
 
 @numba.njit(cache=True, inline="always")
-def _linear_state(x0, v0, c0, c1, u, zp, F):
+def _linear_state(
+    x0: float, v0: float, c0: float, c1: float, u: float, zp: float, F: Transition
+) -> tuple[float, float]:
     """Closed form of x'' + 2 zeta p x' - p^2 x = -p^2 (c0 + c1 u) after time u.
 
     ``F`` is :func:`_transition` over u: as a matrix product the new state
@@ -108,7 +125,9 @@ def _linear_state(x0, v0, c0, c1, u, zp, F):
 
 
 @numba.njit(cache=True)
-def _rk4(x, v, s, ga, gb, u, prm, terms, d):
+def _rk4(
+    x: float, v: float, s: float, ga: float, gb: float, u: float, prm: Params, terms: FlightFunction, d: float
+) -> tuple[float, float]:
     """One RK4 step of length u, ground acceleration linear from ga to gb (``d``: :func:`_accel`)."""
     gm = 0.5 * (ga + gb)
     k1x, k1v = v, _accel(x, v, s, ga, prm, terms, d)
@@ -119,7 +138,22 @@ def _rk4(x, v, s, ga, gb, u, prm, terms, d):
 
 
 @numba.njit(cache=True, inline="always")
-def _advance(x, v, s, ga, gb, u, prm, terms, d, l1, l2, zp, h, Fh):
+def _advance(
+    x: float,
+    v: float,
+    s: float,
+    ga: float,
+    gb: float,
+    u: float,
+    prm: Params,
+    terms: FlightFunction,
+    d: float,
+    l1: float,
+    l2: float,
+    zp: float,
+    h: float,
+    Fh: Transition,
+) -> tuple[float, float]:
     """State after time u from (x, v) on hinge s, ag linear from ga to gb."""
     if prm[_P_LIN] > 0:
         a = s * (prm[_P_APOS] if s > 0 else prm[_P_ANEG])
@@ -135,7 +169,7 @@ def _advance(x, v, s, ga, gb, u, prm, terms, d, l1, l2, zp, h, Fh):
 
 
 @numba.njit(cache=True)
-def _coefficient(law, row, v, prm):
+def _coefficient(law: FloatArray, row: int, v: float, prm: Params) -> float:
     """Signed e of law row ``row`` (e0, a, b, v_stick) for a landing at v [rad/s].
 
     ``E clip(a - b (v/thetadot_r)^2, 0, 1/|E|)`` with E = e0 clipped to
@@ -145,6 +179,10 @@ def _coefficient(law, row, v, prm):
     :func:`rocklab.physics.impact.amplitude_factor`), and 0 for a landing
     slower than v_stick thetadot_r (:class:`rocklab.physics.impact.Sticking`).
     """
+    # the law's entries are floats (an array's items read as Any)
+    e0: float
+    a: float
+    b: float
     e0, a, b = law[row, 0], law[row, 1], law[row, 2]
     if abs(v) < law[row, 3] * prm[_P_VR]:
         return 0.0
@@ -169,7 +207,7 @@ _potential_linear = numba.njit(cache=True, inline="always")(flight.potential_lin
 
 
 @numba.njit(cache=True)
-def _can_overturn(x, v, s, prm):
+def _can_overturn(x: float, v: float, s: float, prm: Params) -> bool:
     """Whether a wall in free motion at (x [rad], v [rad/s]) on hinge s may still overturn.
 
     Below the instability angle of its hinge it may only if its energy
@@ -182,6 +220,9 @@ def _can_overturn(x, v, s, prm):
     th = abs(x)
     if th >= a:
         return True
+    # energies of floats (the compiled potential reads as Any)
+    en: float
+    crit: float
     if prm[_P_LIN] > 0:
         en = 0.5 * v * v + _potential_linear(th, a, p)
         crit = _potential_linear(prm[_P_APOS], prm[_P_APOS], p)
@@ -196,7 +237,7 @@ def _can_overturn(x, v, s, prm):
 
 
 @numba.njit(cache=True)
-def _outside(x, s, prm, ov):
+def _outside(x: float, s: float, prm: Params, ov: float) -> int:
     """0 inside the current hinge's range, 1 base, 2 transverse, 3 overturned."""
     if abs(x) >= ov:
         return 3
@@ -210,7 +251,7 @@ def _outside(x, s, prm, ov):
 
 
 @numba.njit(cache=True, inline="always")
-def _lifts(a, A0p, A1p, two, A0n, A1n):
+def _lifts(a: float, A0p: float, A1p: float, two: bool, A0n: float, A1n: float) -> bool:
     """Whether the ground acceleration ``a`` [m/s^2] starts a wall at rest.
 
     The acceleration at rest is affine in ``a``, ``A0 + A1 a``: the wall
@@ -221,7 +262,7 @@ def _lifts(a, A0p, A1p, two, A0n, A1n):
 
 
 @numba.njit(cache=True)
-def _block_range(ag):
+def _block_range(ag: FloatArray) -> FloatArray:
     """Smallest and largest sample of each block of ``_BLOCK`` samples of ``ag``, shape (2, n_blocks).
 
     NaN samples are left out: they never start a wall at rest (:func:`_lifts`
@@ -239,7 +280,26 @@ def _block_range(ag):
 
 
 @numba.njit(cache=True)
-def _locate(x, v, s, ga, gb, u, prm, terms, l1, l2, zp, h, Fh, ov, edge, target, f0, f1):
+def _locate(
+    x: float,
+    v: float,
+    s: float,
+    ga: float,
+    gb: float,
+    u: float,
+    prm: Params,
+    terms: FlightFunction,
+    l1: float,
+    l2: float,
+    zp: float,
+    h: float,
+    Fh: Transition,
+    ov: float,
+    edge: bool,
+    target: float,
+    f0: float,
+    f1: float,
+) -> tuple[float, float, float]:
     """First root in (0, u] of theta - ``target`` (``edge``) or of thetadot.
 
     Safeguarded Newton from the linear interpolation of ``f0``, ``f1`` (the
@@ -290,7 +350,23 @@ def _locate(x, v, s, ga, gb, u, prm, terms, l1, l2, zp, h, Fh, ov, edge, target,
 
 
 @numba.njit(cache=True)
-def run_history(ag, ag_range, h, scale, n_tail, to_rest, params, law, terms, x, v, log_t, log_vb, log_va, log_peak):
+def run_history(
+    ag: FloatArray,
+    ag_range: FloatArray,
+    h: float,
+    scale: float,
+    n_tail: int,
+    to_rest: bool,
+    params: FloatArray,
+    law: FloatArray,
+    terms: FlightFunction,
+    x: float,
+    v: float,
+    log_t: FloatArray,
+    log_vb: FloatArray,
+    log_va: FloatArray,
+    log_peak: FloatArray,
+) -> tuple[bool, float, float, int]:
     """Event-driven integration of one wall, sample interval by sample interval.
 
     ``ag`` [m/s^2] (times ``scale``) is stepped with interval ``h`` [s] (the
@@ -319,7 +395,8 @@ def run_history(ag, ag_range, h, scale, n_tail, to_rest, params, law, terms, x, 
     # the helpers take the parameters as a tuple: every call that passes an
     # array costs two atomic reference counts, in the record loop and in
     # each trial of _locate
-    prm = to_fixed_tuple(params, _N_P)
+    # numba's stub of the intrinsic names its typing context too, which numba passes itself
+    prm: Params = to_fixed_tuple(params, _N_P)  # type: ignore[call-arg]
     n_rec = ag.shape[0]
     n_steps = n_rec + n_tail
     p = prm[_P_P]
@@ -559,7 +636,22 @@ def run_history(ag, ag_range, h, scale, n_tail, to_rest, params, law, terms, x, 
 
 
 @numba.njit(cache=True)
-def _row(ag, ag_range, h, scale, n_tail, to_rest, prm, law, terms, x0, v0, logs, out, i):
+def _row(
+    ag: FloatArray,
+    ag_range: FloatArray,
+    h: FloatArray,
+    scale: FloatArray,
+    n_tail: npt.NDArray[np.int64],
+    to_rest: bool,
+    prm: FloatArray,
+    law: FloatArray,
+    terms: FlightFunction,
+    x0: FloatArray,
+    v0: FloatArray,
+    logs: FloatArray,
+    out: tuple[npt.NDArray[np.bool_], FloatArray, FloatArray, npt.NDArray[np.int64]],
+    i: int,
+) -> None:
     # called from the prange body instead of run_history itself: inlined into
     # the parallel loop, run_history runs 4-8x slower (measured, numba 0.68)
     o, t, m, k = run_history(
@@ -583,7 +675,28 @@ def _row(ag, ag_range, h, scale, n_tail, to_rest, prm, law, terms, x0, v0, logs,
 
 
 @numba.njit(parallel=True, cache=True)
-def batch_kernel(ag, h, scale, n_tail, to_rest, prm, law, terms, x0, v0, max_log):
+def batch_kernel(
+    ag: FloatArray,
+    h: FloatArray,
+    scale: FloatArray,
+    n_tail: npt.NDArray[np.int64],
+    to_rest: bool,
+    prm: FloatArray,
+    law: FloatArray,
+    terms: FlightFunction,
+    x0: FloatArray,
+    v0: FloatArray,
+    max_log: int,
+) -> tuple[
+    npt.NDArray[np.bool_],
+    FloatArray,
+    FloatArray,
+    npt.NDArray[np.int64],
+    FloatArray,
+    FloatArray,
+    FloatArray,
+    FloatArray,
+]:
     """:func:`run_history` of every row (history) in parallel, ``terms`` the function of the terms in
     flight of every row (:func:`rocklab.simulation.flight_terms.flight_function`); the Python front ends are in
     :mod:`rocklab.simulation.batch`."""

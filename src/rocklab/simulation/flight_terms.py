@@ -14,16 +14,20 @@ wall.
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable, Sequence
 
 import numba
+from numba.core.ccallback import CFunc
+from numba.core.dispatcher import Dispatcher
 
-from rocklab.simulation.engine import FLIGHT_SLOTS, LAYOUT, slot
+from rocklab.physics.law import FlightTerm
+from rocklab.simulation.engine import FLIGHT_SLOTS, LAYOUT, FlightFunction, Params, slot
 
 #: Slot of p [rad/s], which every deceleration takes.
 _P = slot("p")
 
 
-def flight_slots(terms):
+def flight_slots(terms: Sequence[FlightTerm]) -> dict[FlightTerm, int]:
     """First slot of each term in flight of ``terms`` (:class:`rocklab.physics.law.FlightTerm`, in their
     order) in the engine's parameter vector, its parameters after it.
 
@@ -45,33 +49,36 @@ def flight_slots(terms):
 #: The type of the engine's function of the terms in flight: (theta [rad], thetadot [rad/s], parameter
 #: vector) -> deceleration [rad/s^2].
 FLIGHT_TYPE = numba.types.float64(
-    numba.types.float64, numba.types.float64, numba.types.UniTuple(numba.types.float64, len(LAYOUT))
+    numba.types.float64,
+    numba.types.float64,
+    # numba's type constructors are not annotated
+    numba.types.UniTuple(numba.types.float64, len(LAYOUT)),  # type: ignore[no-untyped-call]
 )
 
 
-def _zero(x, v, prm):
+def _zero(x: float, v: float, prm: Params) -> float:
     return 0.0
 
 
 @functools.cache
-def _no_terms():
+def _no_terms() -> CFunc:
     # compiled on first use, not on import: a cfunc compiles when it is made
     return numba.cfunc(FLIGHT_TYPE, cache=True)(_zero)
 
 
-def _plus(rest, deceleration, i):
+def _plus(rest: FlightFunction, deceleration: Callable[..., float], i: int) -> Dispatcher[FlightFunction]:
     """The function ``rest`` of the terms before it plus the ``deceleration`` of one more, its parameters
     from slot ``i`` on."""
 
     @numba.njit
-    def total(x, v, prm):
+    def total(x: float, v: float, prm: Params) -> float:
         return rest(x, v, prm) + deceleration(x, v, prm[_P], prm, i)
 
     return total
 
 
 @functools.cache
-def flight_function(terms=()):
+def flight_function(terms: tuple[FlightTerm, ...] = ()) -> CFunc:
     """The engine's function of the decelerations of ``terms`` in flight (in the slots of
     :func:`flight_slots`), compiled.
 
@@ -81,7 +88,7 @@ def flight_function(terms=()):
     """
     if not terms:
         return _no_terms()
-    total = numba.njit(_zero)
+    total: Dispatcher[FlightFunction] = numba.njit(_zero)
     for term, i in flight_slots(terms).items():
         total = _plus(total, numba.njit(term.deceleration), i)
     return numba.cfunc(FLIGHT_TYPE)(total.py_func)

@@ -9,13 +9,17 @@ amplitude laws: no flat form, :meth:`rocklab.simulation.rocking_model.RockingMod
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from typing import cast
 
 import numpy as np
+import numpy.typing as npt
 import pandas as pd
 
 from rocklab._imports import lazy_module
+from rocklab.physics.flight import FloatArray, Floats
 from rocklab.simulation.engine import TURNED
-from rocklab.simulation.rocking_model import OVERTURN, REST_TOL, RockingHistory
+from rocklab.simulation.rocking_model import OVERTURN, REST_TOL, RockingHistory, RockingModel
 
 integrate = lazy_module("scipy.integrate")
 optimize = lazy_module("scipy.optimize")
@@ -24,7 +28,7 @@ optimize = lazy_module("scipy.optimize")
 class _Record:
     """Linearly interpolated ground acceleration, zero after the last sample."""
 
-    def __init__(self, ag, dt):
+    def __init__(self, ag: npt.ArrayLike | None, dt: float) -> None:
         if ag is None:
             self.t = np.array([0.0, 1.0])
             self.a = np.zeros(2)
@@ -34,10 +38,10 @@ class _Record:
             self.t = np.arange(len(self.a)) * float(dt)
         self.free = ag is None
 
-    def __call__(self, t):
+    def __call__(self, t: Floats) -> Floats:
         return np.interp(t, self.t, self.a, left=self.a[0], right=0.0)
 
-    def piece(self, t, t_hard):
+    def piece(self, t: float, t_hard: float) -> tuple[float, float, float, float]:
         """End of the straight piece of the record holding ``t`` (capped at
         ``t_hard``) and the piece as ag(tt) = a0 + slope (tt - t0)."""
         # a piece shorter than rounding (an onset found at a sample up to an
@@ -49,7 +53,9 @@ class _Record:
         return min(t1, t_hard), self.a[k - 1], (self.a[k] - self.a[k - 1]) / (t1 - t0), t0
 
 
-def _onset(model, rec, t0, t_stop, theta_rest, held=None):
+def _onset(
+    model: RockingModel, rec: _Record, t0: float, t_stop: float, theta_rest: float, held: int | None = None
+) -> tuple[float | None, int | None, int | None]:
     """First instant >= t0, side and direction in which a wall at rest starts rocking.
 
     The acceleration at rest is affine in ag, so the onset instant is the
@@ -67,7 +73,7 @@ def _onset(model, rec, t0, t_stop, theta_rest, held=None):
     tk = rec.t[(rec.t > t0) & (rec.t < t_stop)]
     ts = np.concatenate([[t0], tk, [t_stop]])
     ag = rec(ts)
-    best = (None, None, None)
+    best: tuple[float | None, int | None, int | None] = (None, None, None)
     for side, direction in candidates:
         f = direction * model.acceleration(theta_rest, direction * TURNED if model.jumps else 0.0, side, ag)
         pos = np.flatnonzero(f > 0)
@@ -83,7 +89,7 @@ def _onset(model, rec, t0, t_stop, theta_rest, held=None):
     return best
 
 
-def _missed_edge(dense, t0, t1, s):
+def _missed_edge(dense: Callable[[Floats], FloatArray], t0: float, t1: float, s: float) -> float:
     """First instant in (t0, t1] at which the wall on hinge ``s`` is past its
     edge (s theta < 0), from the dense output of one segment.
 
@@ -93,10 +99,25 @@ def _missed_edge(dense, t0, t1, s):
     tt = t0 + (t1 - t0) * np.concatenate([[0.0], np.geomspace(1e-9, 1.0, 256)])
     f = s * dense(tt)[0]
     k = int(np.flatnonzero(f < 0.0)[0])
-    return optimize.brentq(lambda u: s * dense(u)[0], tt[k - 1], tt[k], xtol=1e-15, rtol=4 * np.finfo(float).eps)
+    return cast(
+        float, optimize.brentq(lambda u: s * dense(u)[0], tt[k - 1], tt[k], xtol=1e-15, rtol=4 * np.finfo(float).eps)
+    )
 
 
-def _reference(model, rec, theta0, thetadot0, t_end, fs, overturn, rest_tol, rtol, atol, max_step, tail):
+def _reference(
+    model: RockingModel,
+    rec: _Record,
+    theta0: float,
+    thetadot0: float,
+    t_end: float,
+    fs: float,
+    overturn: float,
+    rest_tol: float,
+    rtol: float,
+    atol: float,
+    max_step: float,
+    tail: float,
+) -> RockingHistory:
     v_rest = rest_tol * model.thetadot_r
     law_base, law_tr = model.base_law, model.transverse_law
     t_out = np.arange(0.0, t_end + 0.5 / fs, 1.0 / fs)
@@ -121,7 +142,7 @@ def _reference(model, rec, theta0, thetadot0, t_end, fs, overturn, rest_tol, rto
     # other way or is held there (held: its hinge) until the ground moves it, as the engine does
     stick, held = model.jumps and not rec.free, None
 
-    def moves(th, d, s, t):
+    def moves(th: float, d: float, s: float, t: float) -> bool:
         """Whether the wall at th, at rest on hinge s at t, moves in the direction d (+1 / -1)."""
         return float(model.acceleration(th, d * TURNED, s, rec(t))) * d > 0.0
 
@@ -132,7 +153,7 @@ def _reference(model, rec, theta0, thetadot0, t_end, fs, overturn, rest_tol, rto
         else:
             resting, rest_at, held, t_rest = True, th, side, 0.0
 
-    def fill(ta, tb, sol=None, value=0.0):
+    def fill(ta: float, tb: float, sol: Callable[[FloatArray], FloatArray] | None = None, value: float = 0.0) -> None:
         sel = (t_out >= ta) & (t_out <= tb)
         if sol is None:
             theta_out[sel], thetadot_out[sel] = value, 0.0
@@ -157,7 +178,15 @@ def _reference(model, rec, theta0, thetadot0, t_end, fs, overturn, rest_tol, rto
                 fill(t, t_end, value=rest_at)
                 break
             fill(t, t_on, value=rest_at)
-            t, th, thd, side, resting, t_rest = t_on, rest_at, (d_on * TURNED if stick else 0.0), s_on, False, None
+            # an onset found: its side and direction are not None
+            t, th, thd, side, resting, t_rest = (
+                t_on,
+                rest_at,
+                (cast(int, d_on) * TURNED if stick else 0.0),
+                cast(int, s_on),
+                False,
+                None,
+            )
             held = None
         s = side
         # one straight piece of the record at a time: the solution is smooth
@@ -169,38 +198,39 @@ def _reference(model, rec, theta0, thetadot0, t_end, fs, overturn, rest_tol, rto
         # must not find that edge again at its first instant: when the first
         # step spans the whole excursion, the root search would otherwise
         # return the start and log a chain of impacts at one instant
-        def ev_base(tt, y, t0=t, s=s):
+        def ev_base(tt: float, y: FloatArray, t0: float = t, s: float = s) -> float:
             return y[0] if tt > t0 else float(s)
 
-        ev_base.terminal, ev_base.direction = True, -float(s)
+        # solve_ivp reads an event's terminal and direction from attributes of the function
+        ev_base.terminal, ev_base.direction = True, -float(s)  # type: ignore[attr-defined]
 
-        def ev_over(tt, y):
-            return abs(y[0]) - overturn
+        def ev_over(tt: float, y: FloatArray) -> float:
+            return cast(float, abs(y[0]) - overturn)
 
-        ev_over.terminal, ev_over.direction = True, 1.0
+        ev_over.terminal, ev_over.direction = True, 1.0  # type: ignore[attr-defined]
 
         # a terminal peak must not find the turn a segment starts from (stick: the speed is TURNED)
-        def ev_peak(tt, y, t0=t, start=thd or float(s)):
+        def ev_peak(tt: float, y: FloatArray, t0: float = t, start: float = thd or float(s)) -> float:
             return y[1] if not stick or tt > t0 else start
 
-        ev_peak.terminal = stick
+        ev_peak.terminal = stick  # type: ignore[attr-defined]
 
         # a wall moving towards its edge that turns back: if it turns past the
         # edge, it crossed the edge and came back inside one solver step (a
         # small excursion under ground motion), an impact that the sign test
         # of ev_base misses (not at the segment's start: an onset or a turn)
-        def ev_turn(tt, y, t0=t, s=s):
+        def ev_turn(tt: float, y: FloatArray, t0: float = t, s: float = s) -> float:
             return y[1] if tt > t0 else float(s)
 
-        ev_turn.terminal, ev_turn.direction = True, float(s)
+        ev_turn.terminal, ev_turn.direction = True, float(s)  # type: ignore[attr-defined]
 
         events = [ev_base, ev_over, ev_peak, ev_turn]
         if model.one_sided and model.gap > 0 and s < 0:
 
-            def ev_tr(tt, y, t0=t):
+            def ev_tr(tt: float, y: FloatArray, t0: float = t) -> float:
                 return y[0] + model.gap if tt > t0 else 1.0
 
-            ev_tr.terminal, ev_tr.direction = True, -1.0
+            ev_tr.terminal, ev_tr.direction = True, -1.0  # type: ignore[attr-defined]
             events.append(ev_tr)
             # the excursion in the gap can be far shorter than a free step
             seg_step = min(max_step, 0.05 * math.sqrt(2.0 * model.gap / (model.p**2 * model.alpha_minus)))
@@ -266,8 +296,17 @@ def _reference(model, rec, theta0, thetadot0, t_end, fs, overturn, rest_tol, rto
 
 
 def simulate_free(
-    model, theta0, thetadot0=0.0, t_end=30.0, fs=400.0, *, overturn=OVERTURN, rest_tol=REST_TOL, rtol=1e-12, atol=1e-14
-):
+    model: RockingModel,
+    theta0: float,
+    thetadot0: float = 0.0,
+    t_end: float = 30.0,
+    fs: float = 400.0,
+    *,
+    overturn: float = OVERTURN,
+    rest_tol: float = REST_TOL,
+    rtol: float = 1e-12,
+    atol: float = 1e-14,
+) -> RockingHistory:
     """Free rocking from given initial conditions, exact event-driven reference.
 
     Parameters
@@ -294,20 +333,20 @@ def simulate_free(
 
 
 def simulate_ground(
-    model,
-    ag,
-    dt,
-    t_end=None,
-    fs=None,
-    overturn=OVERTURN,
+    model: RockingModel,
+    ag: npt.ArrayLike,
+    dt: float,
+    t_end: float | None = None,
+    fs: float | None = None,
+    overturn: float = OVERTURN,
     *,
-    theta0=0.0,
-    thetadot0=0.0,
-    rest_tol=REST_TOL,
-    rtol=1e-10,
-    atol=1e-12,
-    tail=120.0,
-):
+    theta0: float = 0.0,
+    thetadot0: float = 0.0,
+    rest_tol: float = REST_TOL,
+    rtol: float = 1e-10,
+    atol: float = 1e-12,
+    tail: float = 120.0,
+) -> RockingHistory:
     """Response to a ground acceleration record, exact event-driven reference.
 
     Parameters

@@ -78,7 +78,9 @@ One-sided rocking and the gap
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
+from typing import Any, Self, TypeAlias
 
 import numpy as np
 import pandas as pd
@@ -88,7 +90,8 @@ from rocklab.io import cf_attrs
 from rocklab.physics import flight, wall
 from rocklab.physics import impact as _impact
 from rocklab.physics.boundary import Boundary
-from rocklab.physics.law import DRAG, DRY_FRICTION, FlightLoss
+from rocklab.physics.flight import FloatArray, Floats
+from rocklab.physics.law import DRAG, DRY_FRICTION, FlightLoss, FlightTerm
 from rocklab.simulation import engine
 from rocklab.simulation.flight_terms import flight_slots
 
@@ -98,13 +101,18 @@ REST_TOL = 1e-3
 #: Default overturning rotation [rad] (wall lying on the ground).
 OVERTURN = math.pi / 2
 
+#: Terms in flight with their values, ``(term, values)``.
+TermValues: TypeAlias = tuple[tuple[FlightTerm, Sequence[Floats]], ...]
 
-def _sign(x):
+
+def _sign(x: float) -> float:
     """sign(x) of a float, 0 at 0 (the scalar right-hand side of the reference)."""
     return 1.0 if x > 0.0 else (-1.0 if x < 0.0 else 0.0)
 
 
-def _restoring(theta, a, ag_g, linear, sin, cos):
+def _restoring(
+    theta: Floats, a: Floats, ag_g: Floats, linear: bool, sin: Callable[[Any], Any], cos: Callable[[Any], Any]
+) -> Floats:
     """thetaddot / p^2 without the flight loss on the hinge at signed angle
     ``a`` (module docstring, exact or linear); ``sin``, ``cos`` from math or
     numpy."""
@@ -175,9 +183,9 @@ class RockingModel:
     form: str = "exact"
     transverse_impact: _impact.ImpactLaw | None = field(default=None)
     hinge_rounding: float = 0.0
-    terms: tuple = ()
+    terms: TermValues = ()
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.boundary not in set(Boundary):
             raise ValueError(f"boundary must be 'two-sided' or 'one-sided', not {self.boundary!r}")
         if self.form not in ("exact", "linear"):
@@ -193,7 +201,7 @@ class RockingModel:
                 raise ValueError(f"{term.name} has the parameters {', '.join(term.params)}, not {values!r}")
 
     @classmethod
-    def from_wall(cls, height_m, thickness_m, **kw):
+    def from_wall(cls, height_m: float, thickness_m: float, **kw: Any) -> Self:
         """Homogeneous wall of height h and thickness b [m] (rocklab.physics.wall)."""
         alpha = float(wall.slenderness_angle(height_m, thickness_m))
         p = float(wall.frequency_parameter(wall.half_diagonal(height_m, thickness_m)))
@@ -224,18 +232,18 @@ class RockingModel:
         """Overturning velocity of Eq. 16 (nominal alpha) [rad/s]."""
         return float(wall.overturning_velocity(self.alpha, self.p))
 
-    def alpha_side(self, side):
+    def alpha_side(self, side: Floats) -> Floats:
         """Rocking angle of hinge ``side`` (+1 / -1, array_like) [rad]."""
         if np.ndim(side) == 0:
             return self.alpha_pos if side > 0 else self.alpha_minus
         return np.where(np.asarray(side) > 0, self.alpha_pos, self.alpha_minus)
 
-    def flight_terms(self):
+    def flight_terms(self) -> TermValues:
         """The terms in flight with their values, ``(term, values)``: the losses zeta, mu and kappa
         (:attr:`rocklab.physics.law.FlightLoss.TERMS`), then ``terms``."""
         return (*zip(FlightLoss.TERMS, ((self.zeta,), (self.mu,), (self.kappa,))), *self.terms)
 
-    def engine_terms(self):
+    def engine_terms(self) -> TermValues:
         """The terms in flight the numba engine takes as declared, ``(term, values)``: all but the
         viscous loss, which it integrates itself; none at their null."""
         own = ((DRY_FRICTION, (self.mu,)), (DRAG, (self.kappa,)), *self.terms)
@@ -247,7 +255,7 @@ class RockingModel:
         be held where it turns, or at rest until the ground overcomes the term too."""
         return any(not t.smooth for t, _ in self.engine_terms())
 
-    def acceleration(self, theta, thetadot, side, ag):
+    def acceleration(self, theta: Floats, thetadot: Floats, side: Floats, ag: Floats) -> Floats:
         """Angular acceleration [rad/s^2] on hinge ``side`` under ``ag`` [m/s^2] (array_like; theta
         [rad] and thetadot [rad/s] floats where the wall has ``terms``)."""
         a = side * self.alpha_side(side)
@@ -257,7 +265,9 @@ class RockingModel:
             acc = acc - term.deceleration(theta, thetadot, self.p, values, 0)
         return acc
 
-    def equation_of_motion(self, side, a0, slope, t0):
+    def equation_of_motion(
+        self, side: float, a0: float, slope: float, t0: float
+    ) -> Callable[[float, FloatArray], list[float]]:
         """Right-hand side f(t, y) for solve_ivp, y = (theta, thetadot), on hinge
         ``side`` under ag(t) = a0 + slope (t - t0) [m/s^2]; scalar (math, not
         numpy), since the event-driven reference calls it millions of times."""
@@ -268,7 +278,7 @@ class RockingModel:
             p = self.p
             (first, q0), *rest = ((term.deceleration, values) for term, values in self.flight_terms())
 
-            def rhs_terms(t, y):
+            def rhs_terms(t: float, y: FloatArray) -> list[float]:
                 ag_g = (a0 + slope * (t - t0)) / g
                 # the terms see the rotation on this hinge, its mirror past the edge (a solver step that
                 # finds the impact reaches past it): each continued smoothly there
@@ -281,12 +291,12 @@ class RockingModel:
 
             return rhs_terms
 
-        def rhs(t, y):
+        def rhs(t: float, y: FloatArray) -> list[float]:
             return [y[1], p2 * _restoring(y[0], a, (a0 + slope * (t - t0)) / g, lin, math.sin, math.cos) - c * y[1]]
 
         return rhs
 
-    def energy(self, theta, thetadot, side):
+    def energy(self, theta: Floats, thetadot: Floats, side: Floats) -> Floats:
         """Energy per unit I_O measured as 1/2 thetadot^2 at theta = 0 [rad^2/s^2].
 
         Conserved between impacts in free undamped motion; the wall can reach
@@ -295,15 +305,15 @@ class RockingModel:
         """
         return flight.energy(np.abs(theta), thetadot, self.alpha_side(side), self.p, self.form == "linear")
 
-    def critical_energy(self, side):
+    def critical_energy(self, side: Floats) -> Floats:
         """Energy that reaches the instability rotation of hinge ``side`` [rad^2/s^2]."""
         a = self.alpha_side(side)
         return flight.energy(a, 0.0, a, self.p, self.form == "linear")
 
-    def reachable_sides(self):
+    def reachable_sides(self) -> tuple[int, ...]:
         return (1,) if self.one_sided else (1, -1)
 
-    def flight_model(self, theta, thetadot, side):
+    def flight_model(self, theta: float, thetadot: float, side: float) -> RockingModel:
         """The model of the free flight that starts at (theta, thetadot) on hinge ``side``.
 
         Itself, unless the rocking angle depends on the amplitude
@@ -314,13 +324,19 @@ class RockingModel:
         if not self.hinge_rounding or (self.one_sided and side < 0):
             return self
         a, k = self.alpha_side(side), self.hinge_rounding
-        loss = {"zeta": self.zeta, "mu": self.mu, "kappa": self.kappa, "k": k, "terms": self.terms}
+        loss: dict[str, Any] = {"zeta": self.zeta, "mu": self.mu, "kappa": self.kappa, "k": k, "terms": self.terms}
         A = flight.apex_after(abs(thetadot), a, self.p, **loss) if theta == 0 else abs(theta)
         angle = float(flight.flight_angle(A, a, k))
         pos, neg = (angle, self.alpha_minus) if side > 0 else (self.alpha_pos, angle)
         return replace(self, alpha_rock=pos, alpha_neg=neg, hinge_rounding=0.0)
 
-    def numba_params(self, overturn=OVERTURN, rest_tol=REST_TOL, substeps=1, terms=None):
+    def numba_params(
+        self,
+        overturn: float = OVERTURN,
+        rest_tol: float = REST_TOL,
+        substeps: int = 1,
+        terms: Sequence[FlightTerm] | None = None,
+    ) -> FloatArray:
         """Parameter vector of the numba engine, by the names of :data:`rocklab.simulation.engine.LAYOUT`.
 
         ``terms``: the terms in flight whose parameters the vector holds, in
@@ -374,7 +390,7 @@ class RockingModel:
             prm[slots[term] : slots[term] + len(q)] = q
         return prm
 
-    def numba_law(self):
+    def numba_law(self) -> FloatArray:
         """Impact laws as a (3, 4) array: rows base +, base -, transverse;
         columns e0, a, b of the flat form (:meth:`rocklab.physics.impact.ImpactLaw.flat`)
         and v_stick [thetadot_r] of a :class:`~rocklab.physics.impact.Sticking`
@@ -394,7 +410,7 @@ class RockingModel:
         )
 
 
-def _engine_row(law, side, alpha):
+def _engine_row(law: _impact.ImpactLaw, side: int, alpha: float) -> list[float]:
     """(e0, a, b, v_stick) of ``law`` on hinge ``side``: the flat form, with
     the sticking threshold of a :class:`~rocklab.physics.impact.Sticking`
     law (possibly per hinge, :class:`~rocklab.physics.impact.Sided`)."""
@@ -424,15 +440,15 @@ class RockingHistory:
         Start of the final rest, if the wall ends at rest.
     """
 
-    t: np.ndarray
-    theta: np.ndarray
-    thetadot: np.ndarray
+    t: FloatArray
+    theta: FloatArray
+    thetadot: FloatArray
     impacts: pd.DataFrame
     overturned: bool
     t_overturn: float | None
     t_rest: float | None
     model: RockingModel | None = None
-    ag: np.ndarray | None = None
+    ag: FloatArray | None = None
 
     def to_xarray(self) -> xr.Dataset:
         """CF-1.8 dataset: theta, thetadot (and ag) on time; impacts on their own dim.
