@@ -20,6 +20,10 @@ import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Self, TypeAlias
+
+#: A path as the callers give it: a string or a path-like object.
+StrPath: TypeAlias = str | os.PathLike[str]
 
 #: The errors of a write that found no room: the disk full, the user's quota spent.
 SPACE_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT})
@@ -41,7 +45,7 @@ class NoSpace(OSError):
     not known); ``free``: the bytes left on its filesystem.
     """
 
-    def __init__(self, path, needed: int | None, free: int):
+    def __init__(self, path: StrPath, needed: int | None, free: int) -> None:
         self.path, self.needed, self.free = Path(path), needed, free
         super().__init__(errno.ENOSPC, str(self), str(path))
 
@@ -52,7 +56,7 @@ class NoSpace(OSError):
             "Free some space and run the same command again: nothing half-written is left behind."
         )
 
-    def __reduce__(self):
+    def __reduce__(self) -> tuple[type[Self], tuple[Path, int | None, int]]:
         return type(self), (self.path, self.needed, self.free)
 
 
@@ -68,7 +72,7 @@ def _is_out_of_space(exc: BaseException, folder: Path, needed: int | None) -> bo
     return free is not None and (free < (needed or 0) or free < SPACE_FLOOR)
 
 
-def no_space(exc: BaseException, path, needed: int | None = None) -> NoSpace | None:
+def no_space(exc: BaseException, path: StrPath, needed: int | None = None) -> NoSpace | None:
     """The :class:`NoSpace` that a failed write of ``path`` stands for, None if it failed for another reason."""
     path = Path(path)
     if not _is_out_of_space(exc, path.parent, needed):
@@ -84,7 +88,7 @@ os.umask(_UMASK)
 
 
 @contextmanager
-def atomic_output(path, needed: int | None = None) -> Iterator[Path]:
+def atomic_output(path: StrPath, needed: int | None = None) -> Iterator[Path]:
     """A temporary file beside ``path``, renamed to ``path`` once the block ends without error.
 
     The file gets the mode of any new file (not ``mkstemp``'s 0600). On an
@@ -121,7 +125,7 @@ def atomic_output(path, needed: int | None = None) -> Iterator[Path]:
             os.remove(tmp)
 
 
-def free_bytes(folder) -> int | None:
+def free_bytes(folder: StrPath) -> int | None:
     """Bytes free on the filesystem of ``folder`` (or of its nearest existing parent), None if it cannot be told."""
     folder = Path(folder).absolute()
     while not folder.exists() and folder != folder.parent:
@@ -132,12 +136,12 @@ def free_bytes(folder) -> int | None:
         return None
 
 
-def write_bytes(path, data: bytes) -> None:
+def write_bytes(path: StrPath, data: bytes) -> None:
     """Write ``data`` to ``path`` through :func:`atomic_output`."""
     with atomic_output(path, len(data)) as tmp:
         tmp.write_bytes(data)
 
 
-def write_text(path, text: str) -> None:
+def write_text(path: StrPath, text: str) -> None:
     """Write ``text`` (UTF-8) to ``path`` through :func:`atomic_output`."""
     write_bytes(path, text.encode())

@@ -32,12 +32,14 @@ import logging
 import os
 import shutil
 import sys
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass
 from pathlib import Path
+from types import TracebackType
+from typing import Any
 
-from rocklab.disk import NoSpace, write_text
+from rocklab.disk import NoSpace, StrPath, write_text
 from rocklab.io import setup_logging
 
 #: The folder of the manifests, inside the results folder.
@@ -48,7 +50,7 @@ LOCK = ".lock"
 SNAKEMAKE_TIMESTAMP = ".snakemake_timestamp"
 
 
-def digest(path) -> str:
+def digest(path: StrPath) -> str:
     """The BLAKE2b digest (16 bytes, hex) of a file's bytes."""
     h = hashlib.blake2b(digest_size=16)
     with open(path, "rb") as fh:
@@ -64,18 +66,18 @@ def _files(output: Path) -> list[Path]:
     return [output] if output.is_file() else []
 
 
-def manifest_path(results_dir, first_output) -> Path:
+def manifest_path(results_dir: StrPath, first_output: StrPath) -> Path:
     """Where the manifest of the job whose first declared output is ``first_output`` lies."""
     rel = Path(os.path.relpath(Path(first_output).absolute(), Path(results_dir).absolute()))
     return Path(results_dir) / MANIFESTS / rel.parent / f"{rel.name}.json"
 
 
-def _relative(paths: Iterable, root: Path) -> list[str]:
+def _relative(paths: Iterable[StrPath], root: Path) -> list[str]:
     """``paths`` inside ``root`` (absolute), relative to it, in order."""
     return [os.path.relpath(Path(p).absolute(), root) for p in paths if root in Path(p).absolute().parents]
 
 
-def record(outputs: Iterable, results_dir, inputs: Iterable = ()) -> Path | None:
+def record(outputs: Iterable[StrPath], results_dir: StrPath, inputs: Iterable[StrPath] = ()) -> Path | None:
     """Write the manifest of a job: its declared ``outputs`` and ``inputs`` (paths) in ``results_dir``.
 
     Returns its path, None for a job with no output in ``results_dir``.
@@ -128,12 +130,12 @@ def _problem(path: Path, size: int, mtime_ns: int, blake: str) -> str | None:
     return None
 
 
-def _inside_results(rel) -> bool:
+def _inside_results(rel: object) -> bool:
     """Whether a path a manifest names stays inside the results folder (relative, no ``..``)."""
     return isinstance(rel, str) and bool(rel) and not Path(rel).is_absolute() and ".." not in Path(rel).parts
 
 
-def _well_formed(entry) -> bool:
+def _well_formed(entry: dict[str, Any]) -> bool:
     """Whether a manifest's entry is what :func:`record` writes, every path inside the results folder."""
     files = entry.get("files")
     return (
@@ -159,7 +161,7 @@ def _first_output(manifest: Path, root: Path) -> str:
     return (rel.parent / rel.name.removesuffix(".json")).as_posix()
 
 
-def _manifests(root: Path) -> dict[Path, dict | None]:
+def _manifests(root: Path) -> dict[Path, dict[str, Any] | None]:
     """Every manifest of the results folder ``root``, read (None: unreadable, or not what
     :func:`record` writes: a path it names that leaves the results folder is never followed)."""
     out = {}
@@ -172,7 +174,7 @@ def _manifests(root: Path) -> dict[Path, dict | None]:
     return out
 
 
-def damaged(results_dir) -> list[Damage]:
+def damaged(results_dir: StrPath) -> list[Damage]:
     """The jobs of ``results_dir`` with a damaged output (see the module's docstring), by manifest.
 
     A manifest that cannot be read is the damage of the job of its first output.
@@ -210,7 +212,7 @@ def _inside(path: str, folders: set[str]) -> bool:
 
 
 @contextmanager
-def _lock(root: Path, kind: int, wait: bool = True):
+def _lock(root: Path, kind: int, wait: bool = True) -> Iterator[bool]:
     """The results folder's lock (``<results>/.manifests/.lock``), shared by running jobs,
     exclusive for :func:`clear_damage`: yields whether it was taken (it is not, without
     waiting, while another holds it; nor where the folder cannot hold the file)."""
@@ -232,7 +234,7 @@ def _lock(root: Path, kind: int, wait: bool = True):
         os.close(fd)
 
 
-def clear_damage(results_dir) -> list[Cleared] | None:
+def clear_damage(results_dir: StrPath) -> list[Cleared] | None:
     """Remove the outputs of every damaged job of ``results_dir`` (:func:`damaged`) and of
     every job downstream of it, with their manifests, so that Snakemake makes them again.
 
@@ -279,7 +281,7 @@ class Job:
     ``script:`` directive, or anything with ``log``, ``input``, ``output`` and
     ``config``)."""
 
-    def __init__(self, smk):
+    def __init__(self, smk: Any) -> None:
         self.smk = smk
         sys.excepthook = _one_line_for_no_space
         setup_logging(smk.log[0])
@@ -293,12 +295,12 @@ class Job:
         self._lock.close()
 
 
-def start(smk) -> Job:
+def start(smk: Any) -> Job:
     """Start a workflow job: its log file, and a full disk said in one line (:class:`Job`)."""
     return Job(smk)
 
 
-def _one_line_for_no_space(kind, exc, tb):
+def _one_line_for_no_space(kind: type[BaseException], exc: BaseException, tb: TracebackType | None) -> None:
     """The job's end on a full disk: one line on the terminal and in its log, no traceback."""
     if isinstance(exc, NoSpace):
         logging.error("%s", exc)

@@ -10,7 +10,7 @@ job that starts before the cache is written).  ``make venv`` calls
 import numpy as np
 
 
-def compile_kernels():
+def compile_kernels() -> None:
     """Compile every numba kernel of the library into numba's on-disk cache,
     with the argument types of the library's own calls: the overturning
     engine (:func:`rocklab.simulation.batch.compile_kernels`), the
