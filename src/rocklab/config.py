@@ -13,15 +13,19 @@ from __future__ import annotations
 import contextlib
 import os
 import tempfile
+from collections.abc import Collection, Mapping
 from pathlib import Path
+from typing import Any
 
 import jsonschema
+
+from rocklab.disk import StrPath
 
 #: The schema of the workflow's configuration, relative to the checkout.
 SCHEMA = "workflow/schemas/config.schema.yaml"
 
 
-def schema_defaults(schema: dict) -> dict:
+def schema_defaults(schema: Mapping[str, Any]) -> dict[str, Any]:
     """The configuration a parsed JSON schema's defaults make, nested objects included
     (what Snakemake fills in where a configuration is silent)."""
     return {
@@ -34,7 +38,7 @@ class ConfigError(ValueError):
     """A configuration the workflow refuses; the message says why in one line."""
 
 
-def schema_error(exc) -> ConfigError:
+def schema_error(exc: BaseException) -> ConfigError:
     """The one-line :class:`ConfigError` of a configuration that fails its schema.
 
     Parameters
@@ -67,7 +71,7 @@ def schema_error(exc) -> ConfigError:
     return ConfigError(f"config key {where or '(top level)'}: {err.message} (see {SCHEMA}{hint})")
 
 
-def check_paths(raw_dir, results_dir) -> None:
+def check_paths(raw_dir: StrPath, results_dir: StrPath) -> None:
     """Refuse a ``raw_dir`` that is not a campaign or a ``results_dir`` inside it.
 
     Parameters
@@ -110,7 +114,7 @@ def check_paths(raw_dir, results_dir) -> None:
 WRITE_PROBE = 4096
 
 
-def check_writable(results_dir) -> None:
+def check_writable(results_dir: StrPath) -> None:
     """Refuse a ``results_dir`` that cannot be written, before any job starts.
 
     The folder is created if it does not exist, and a file of one block
@@ -143,7 +147,7 @@ def check_writable(results_dir) -> None:
                 os.remove(probe)
 
 
-def check_names(config, test_ids, records) -> None:
+def check_names(config: Mapping[str, Any], test_ids: Collection[str], records: Collection[str]) -> None:
     """Refuse a test or accelerogram that the configuration names and the inputs lack.
 
     They become file names of the results (``tests/<job>/<id>.nc``,
@@ -178,7 +182,7 @@ def check_names(config, test_ids, records) -> None:
             raise ConfigError(f"config key {where}: {value!r} is not a record of the accelerogram manifest")
 
 
-def calibrated_map_n(n, calibrated_n) -> int:
+def calibrated_map_n(n: int, calibrated_n: int) -> int:
     """Values of A_S/A and of D_S/D of the calibrated walls' maps: ``maps.calibrated_n``, at most ``maps.n``.
 
     Raises
@@ -198,7 +202,7 @@ def calibrated_map_n(n, calibrated_n) -> int:
     return n_cal
 
 
-def recorded_path(path, workdir=None) -> str:
+def recorded_path(path: StrPath, workdir: StrPath | None = None) -> str:
     """``path`` as the workflow records it: relative to ``workdir`` when inside it, else absolute.
 
     Snakemake stores each job's params and list of inputs with its outputs,

@@ -46,7 +46,10 @@ from __future__ import annotations
 
 import logging
 import re
+from collections.abc import Collection, Iterable, Mapping
 from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, TypeAlias, cast
 
 import numpy as np
 import pandas as pd
@@ -55,6 +58,16 @@ from rocklab.physics import wall
 from rocklab.physics.boundary import Boundary
 from rocklab.seismic.indices import FLIPPED_FRACTION
 from rocklab.seismic.reductions import record_reductions
+
+if TYPE_CHECKING:
+    from rocklab.diagnosis.evidence import MeasuredTest
+    from rocklab.diagnosis.result import CampaignDiagnosis
+    from rocklab.simulation.rocking_model import RockingModel
+
+#: A diagnosis as the callers hold it: the object, its entries or the path of its JSON file.
+DiagnosisLike: TypeAlias = "CampaignDiagnosis | str | Path | Iterable[Any]"
+#: The pooled findings of a boundary: cause name -> {parameter: value}.
+Findings: TypeAlias = dict[str, dict[str, float]]
 
 log = logging.getLogger(__name__)
 
@@ -75,7 +88,7 @@ ABSOLUTE_SIZE = {
 }
 
 
-def short_name(cause):
+def short_name(cause: str) -> str | None:
     """The short name of a finding in the model names (a drift along a column of the test log
     is a drift): the cause's attribute ``short``."""
     from rocklab.diagnosis.catalogue import by_name
@@ -83,7 +96,7 @@ def short_name(cause):
     return by_name(cause).short
 
 
-def name_pattern():
+def name_pattern() -> str:
     """Model names of the calibrated walls: ``{2s,1s}-calibrated[-no-<short>|-sizes]``, a regular expression."""
     # the catalogue is read at call time: the Snakefile and the map jobs import this module for
     # its names, and the diagnosis package costs 0.7 s to import
@@ -104,7 +117,7 @@ class MapWall:
     order: float = 0.5
 
 
-def boundary_findings(diagnosis, boundary):
+def boundary_findings(diagnosis: DiagnosisLike, boundary: str) -> Findings:
     """The pooled findings of one boundary condition, in the diagnosis' order.
 
     Parameters
@@ -138,7 +151,8 @@ def boundary_findings(diagnosis, boundary):
     for f in entry.named:
         cause = f.effect
         if by_name(cause).on_the_maps is not None:
-            member, why = by_name(cause).on_the_maps
+            # not None: just asked
+            member, why = cast(tuple[str | None, str], by_name(cause).on_the_maps)
             found = ", ".join(f"{k} = {float(v):.3g}" for k, v in f.params.items())
             # a member at its null carries nothing: a model switching it off would be the same wall
             if member is None or all(float(f.params[q.name]) == q.null for q in by_name(member).params):
@@ -153,7 +167,7 @@ def boundary_findings(diagnosis, boundary):
     return out
 
 
-def lab_thickness(diagnosis, boundary):
+def lab_thickness(diagnosis: DiagnosisLike, boundary: str) -> float | None:
     """The mean thickness [m] of the lab's walls of a boundary condition (its entry's
     ``wall_thickness_m``), None where the diagnosis does not give it."""
     from rocklab.diagnosis.result import CampaignDiagnosis
@@ -162,14 +176,14 @@ def lab_thickness(diagnosis, boundary):
     return None if entry is None else entry.wall_thickness_m
 
 
-def has_sizes(diagnosis, boundary, found=None):
+def has_sizes(diagnosis: DiagnosisLike, boundary: str, found: Findings | None = None) -> bool:
     """Whether a boundary has a ``-sizes`` wall: the thickness of its walls is known and it names a
     finding of :data:`ABSOLUTE_SIZE`."""
     found = boundary_findings(diagnosis, boundary) if found is None else found
     return lab_thickness(diagnosis, boundary) is not None and any(c in ABSOLUTE_SIZE for c in found)
 
 
-def model_names(diagnosis):
+def model_names(diagnosis: DiagnosisLike) -> list[str]:
     """Names of the calibrated models a diagnosis gives: per boundary with findings, the full
     calibrated wall, one variant per finding switched off, and the wall with absolute sizes
     (:func:`has_sizes`)."""
@@ -183,7 +197,7 @@ def model_names(diagnosis):
     return names
 
 
-def parse_name(name):
+def parse_name(name: str) -> tuple[Boundary, str | None, bool]:
     """(boundary, cause switched off or None, absolute sizes) of a calibrated model name.
 
     Raises
@@ -202,7 +216,7 @@ def parse_name(name):
     return boundary, (by_short(m.group(2)).name if m.group(2) else None), m.group(3) is not None
 
 
-def _switched_off(found, off, name, boundary):
+def _switched_off(found: Findings, off: str | None, name: str, boundary: str) -> str | None:
     """The finding of ``found`` that model ``name`` switches off (``off`` from :func:`parse_name`;
     a drift along any column of the test log is a drift), None for the full wall."""
     if off is None:
@@ -213,12 +227,12 @@ def _switched_off(found, off, name, boundary):
     return match[0]
 
 
-def is_calibrated(name):
+def is_calibrated(name: object) -> bool:
     """Whether ``name`` is a calibrated model name (:func:`name_pattern`)."""
     return re.fullmatch(name_pattern(), str(name)) is not None
 
 
-def calibrated_model(diagnosis, name, alpha, R, form="linear"):
+def calibrated_model(diagnosis: DiagnosisLike, name: str, alpha: float, R: float, form: str = "linear") -> RockingModel:
     """The wall of a calibrated model on the maps' wall.
 
     Parameters
@@ -258,7 +272,7 @@ def calibrated_model(diagnosis, name, alpha, R, form="linear"):
     return map_wall_model(boundary, alpha, R, ext, values, form=form)
 
 
-def at_absolute_size(diagnosis, boundary, found, alpha, R):
+def at_absolute_size(diagnosis: DiagnosisLike, boundary: str, found: Findings, alpha: float, R: float) -> Findings:
     """The findings ``found`` on the maps' wall (alpha [rad], R [m]) with those of :data:`ABSOLUTE_SIZE`
     as absolute sizes of the contact, measured on the lab's walls (:func:`lab_thickness`).
 
@@ -269,11 +283,20 @@ def at_absolute_size(diagnosis, boundary, found, alpha, R):
     """
     if not has_sizes(diagnosis, boundary, found):
         raise KeyError(f"{boundary}: the diagnosis gives no wall thickness or names no size ({', '.join(found)})")
-    s = float(wall.thickness(R, alpha)) / lab_thickness(diagnosis, boundary)
+    # a thickness: has_sizes asked for one
+    s = float(wall.thickness(R, alpha)) / cast(float, lab_thickness(diagnosis, boundary))
     return {c: ABSOLUTE_SIZE[c](v, s) if c in ABSOLUTE_SIZE else v for c, v in found.items()}
 
 
-def map_wall_model(boundary, alpha, R, ext=(), values=None, base="analytic", form="linear"):
+def map_wall_model(
+    boundary: str,
+    alpha: float,
+    R: float,
+    ext: Collection[str] = (),
+    values: Mapping[str, float] | None = None,
+    base: str = "analytic",
+    form: str = "linear",
+) -> RockingModel:
     """The maps' wall (:class:`MapWall`) with the causes ``ext`` of the catalogue at ``values``.
 
     Parameters
@@ -295,11 +318,14 @@ def map_wall_model(boundary, alpha, R, ext=(), values=None, base="analytic", for
     """
     from rocklab.diagnosis.extended import rocking_model
 
-    model = rocking_model(MapWall(float(alpha), float(wall.frequency_parameter(R)), boundary), ext, values, base)
+    # the diagnosis model reads of a measured test only what MapWall holds
+    model = rocking_model(
+        cast("MeasuredTest", MapWall(float(alpha), float(wall.frequency_parameter(R)), boundary)), ext, values, base
+    )
     return replace(model, form=form)
 
 
-def describe(diagnosis, name):
+def describe(diagnosis: DiagnosisLike, name: str) -> str:
     """One line on what a calibrated model holds, with the pooled parameters."""
     boundary, off, sizes = parse_name(name)
     found = boundary_findings(diagnosis, boundary)
@@ -343,7 +369,7 @@ TABLE_COLUMNS = [
 RANK_MARGIN = 4 * FLIPPED_FRACTION
 
 
-def calibrated_table(summary, diagnosis):
+def calibrated_table(summary: pd.DataFrame, diagnosis: DiagnosisLike) -> pd.DataFrame:
     """What the lab's findings do to the maps, per boundary condition.
 
     Rows: the paper's e-alone model of the boundary (:data:`E_ALONE`), the
@@ -397,7 +423,7 @@ def calibrated_table(summary, diagnosis):
         if missing:
             raise KeyError(f"the maps summary lacks the models {', '.join(missing)}")
         wide = summary.set_index(["record", "model"])[["N_O", "scatter"]].unstack("model")
-        block = []
+        block: list[dict[str, Any]] = []
         for model, off, role in zip(models, [None] * (2 + len(sizes)) + list(found), roles):
             change = -record_reductions(summary, base, model)
             shift = wide[("N_O", model)] - wide[("N_O", full)]

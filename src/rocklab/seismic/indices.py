@@ -8,7 +8,10 @@ calibrated walls' table (:func:`rocklab.seismic.calibrated.calibrated_table`) re
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 import numpy as np
+import numpy.typing as npt
 import pandas as pd
 import xarray as xr
 
@@ -22,7 +25,7 @@ import xarray as xr
 FLIPPED_FRACTION = 0.002
 
 
-def map_indices(overturned):
+def map_indices(overturned: xr.DataArray | npt.ArrayLike) -> dict[str, float]:
     """Normalised overturning and change counts of one map (Sect. 5, Fig. 22).
 
     N_O is the number of overturnings over the number of histories (Fig. 22a).
@@ -69,7 +72,7 @@ def map_indices(overturned):
     }
 
 
-def summary_table(maps):
+def summary_table(maps: Iterable[xr.Dataset]) -> pd.DataFrame:
     """One row of :func:`map_indices` per map, with its record and model.
 
     Parameters

@@ -40,15 +40,21 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 import xarray as xr
 
 from rocklab import __version__
 from rocklab.io import cf_attrs
+from rocklab.physics.flight import FloatArray
 from rocklab.seismic import calibrated
 from rocklab.seismic.walls import ALPHA, MODELS, R, named_model
 from rocklab.simulation.rocking_model import OVERTURN
+
+if TYPE_CHECKING:
+    from rocklab.seismic.calibrated import DiagnosisLike
 
 log = logging.getLogger(__name__)
 
@@ -60,12 +66,12 @@ OVERTURNING_CRITERION = (
 )
 
 
-def scales(n=201, lo=0.5, hi=1.5):
+def scales(n: int = 201, lo: float = 0.5, hi: float = 1.5) -> FloatArray:
     """Grid of A_S/A (or D_S/D) values: ``n`` values from ``lo`` to ``hi``."""
     return np.linspace(float(lo), float(hi), int(n))
 
 
-def subgrid_step(n, n_sub):
+def subgrid_step(n: int, n_sub: int) -> int:
     """Stride k such that every k-th of :func:`scales` ``(n)`` is :func:`scales` ``(n_sub)`` (same range).
 
     Raises
@@ -81,7 +87,7 @@ def subgrid_step(n, n_sub):
     return (n - 1) // (n_sub - 1)
 
 
-def subgrid(ds, n):
+def subgrid(ds: xr.Dataset, n: int) -> xr.Dataset:
     """Map ``ds`` (:func:`overturning_map`) read on the cells of an ``n`` x ``n`` grid of the same range.
 
     The scatter index of :func:`rocklab.seismic.indices.map_indices` depends on the grid (changes
@@ -92,25 +98,26 @@ def subgrid(ds, n):
 
 
 def overturning_map(
-    record,
-    dt=None,
-    model="2s-housner",
-    n=201,
-    lo=0.5,
-    hi=1.5,
+    # an obspy Trace or an array_like (obspy is untyped, and the two are told apart by their attributes)
+    record: Any,
+    dt: float | None = None,
+    model: str = "2s-housner",
+    n: int = 201,
+    lo: float = 0.5,
+    hi: float = 1.5,
     *,
-    alpha=ALPHA,
-    R=R,
-    form="linear",
-    eq17=None,
-    diagnosis=None,
-    polarity=1,
-    chunks=10,
-    overturn=OVERTURN,
-    tail=120.0,
-    name=None,
-    progress=None,
-):
+    alpha: float = ALPHA,
+    R: float = R,
+    form: str = "linear",
+    eq17: tuple[float, float] | None = None,
+    diagnosis: DiagnosisLike | None = None,
+    polarity: int = 1,
+    chunks: int = 10,
+    overturn: float = OVERTURN,
+    tail: float = 120.0,
+    name: str | None = None,
+    progress: Callable[[int, int], object] | None = None,
+) -> xr.Dataset:
     """Overturning map of a named wall under one record (Sect. 5, Figs. 21, 23).
 
     Parameters
@@ -217,7 +224,10 @@ def overturning_map(
             "polarity": int(polarity),
             "model": model,
             "model_description": (
-                calibrated.describe(diagnosis, model) if calibrated.is_calibrated(model) else MODELS[model][1]
+                # a calibrated model has its diagnosis: named_model refused it without one
+                calibrated.describe(cast("DiagnosisLike", diagnosis), model)
+                if calibrated.is_calibrated(model)
+                else MODELS[model][1]
             ),
             "alpha": wall_model.alpha,
             "R": float(R),

@@ -22,11 +22,13 @@ calibrated walls' sixteen maps; every move within a fifth of its tolerance.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
+from rocklab.disk import StrPath
 from rocklab.physics.boundary import Boundary
 from rocklab.seismic.indices import FLIPPED_FRACTION
 from rocklab.summaries import Tolerance
@@ -77,7 +79,7 @@ TOLERANCES = {
 }
 
 
-def _scatter_reductions(summary: pd.DataFrame, baseline: str, model: str) -> dict:
+def _scatter_reductions(summary: pd.DataFrame, baseline: str, model: str) -> dict[str, Any]:
     """Reductions (%) of the map scatter from ``baseline`` to ``model`` under
     two other normalisations of the changes than the paper's (by the number
     of overturnings): the reversals only (overturning to standing as the
@@ -89,16 +91,16 @@ def _scatter_reductions(summary: pd.DataFrame, baseline: str, model: str) -> dic
     both = (b["n_overturned"] > 0) & (m["n_overturned"] > 0)
     b, m = b[both], m[both]
 
-    def changes(x):
+    def changes(x: pd.DataFrame) -> pd.Series:
         return (x["changes_duration"] + x["changes_amplitude"]) / 2
 
-    def reversals(x):
+    def reversals(x: pd.DataFrame) -> pd.Series:
         return (x["reversals_duration"] + x["reversals_amplitude"]) / 2 / x["n_overturned"]
 
-    def bounded(x):
+    def bounded(x: pd.DataFrame) -> pd.Series:
         return changes(x) / np.minimum(x["n_overturned"], x["n_cells"] - x["n_overturned"])
 
-    def reduction(f):
+    def reduction(f: Callable[[pd.DataFrame], pd.Series]) -> dict[str, float]:
         r = 100 * (1 - f(m) / f(b))
         return {"mean": r.mean(), "min": r.min(), "max": r.max()}
 
@@ -110,7 +112,7 @@ def _scatter_reductions(summary: pd.DataFrame, baseline: str, model: str) -> dic
     }
 
 
-def _record_comparison(comparison: pd.DataFrame) -> dict:
+def _record_comparison(comparison: pd.DataFrame) -> dict[str, Any]:
     """Record by record, each comparison of ``comparison.csv`` (the reductions
     against the paper's per-record range) and the Table 4 rows without a
     shipped record."""
@@ -146,7 +148,7 @@ def _record_comparison(comparison: pd.DataFrame) -> dict:
     return out
 
 
-def maps_summary(summary_csv, reductions_csv, comparison_csv) -> dict:
+def maps_summary(summary_csv: StrPath, reductions_csv: StrPath, comparison_csv: StrPath) -> dict[str, Any]:
     """Sect. 5: the overturning indices of every record and model, the reductions.
 
     Parameters
@@ -193,7 +195,7 @@ def maps_summary(summary_csv, reductions_csv, comparison_csv) -> dict:
     return out
 
 
-def calibrated_summary(path, grid_n: int) -> dict | None:
+def calibrated_summary(path: StrPath, grid_n: int) -> dict[str, Any] | None:
     """Issue 13, item 4: the calibrated wall on the maps, per boundary (``2s``, ``1s``).
 
     Parameters

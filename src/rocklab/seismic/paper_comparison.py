@@ -12,6 +12,9 @@ sets each record's reduction against the paper's range and its Table 4 row
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping
+from typing import Any
+
 import numpy as np
 import pandas as pd
 
@@ -27,7 +30,11 @@ PAPER_REDUCTIONS = {
 }
 
 
-def reductions(summary, comparisons=COMPARISONS, subsets=None):
+def reductions(
+    summary: pd.DataFrame,
+    comparisons: Iterable[tuple[str, str]] = COMPARISONS,
+    subsets: Mapping[str, Iterable[str]] | None = None,
+) -> pd.DataFrame:
     """Mean, min and max over records of the per-record reductions (Sect. 5).
 
     The paper reports, from e_an,2s to 0.95 e_an,2s over its 20 records, an
@@ -107,12 +114,12 @@ COMPARISON_COLUMNS = [
 ]
 
 
-def _in_paper_range(reduction, paper):
+def _in_paper_range(reduction: float, paper: Mapping[str, float]) -> bool:
     """True if ``reduction`` [%] rounds into the paper's range (it prints whole percents)."""
     return bool(paper["min"] - 0.5 <= reduction < paper["max"] + 0.5)
 
 
-def _comparison_reason(row, paper):
+def _comparison_reason(row: Mapping[str, Any], paper: Mapping[str, float]) -> str:
     """Why a record's reduction is undefined or outside the paper's per-record range (empty if it is not)."""
     base, new, red = row["N_O_baseline"], row["N_O_model"], row["N_O_reduction_pct"]
     b, m = row["baseline"], row["model"]
@@ -137,7 +144,12 @@ def _comparison_reason(row, paper):
     return "; ".join(words)
 
 
-def record_comparison(summary, agreement=None, table4=None, comparisons=COMPARISONS):
+def record_comparison(
+    summary: pd.DataFrame,
+    agreement: pd.DataFrame | None = None,
+    table4: pd.DataFrame | None = None,
+    comparisons: Iterable[tuple[str, str]] = COMPARISONS,
+) -> pd.DataFrame:
     """Record by record: each comparison's reductions beside Table 4 and the paper's range.
 
     The paper gives no per-record value in its text (Fig. 22 shows them as
@@ -176,7 +188,7 @@ def record_comparison(summary, agreement=None, table4=None, comparisons=COMPARIS
     table4 = read_table4() if table4 is None else table4
     present = set(summary["model"])
     s = summary.set_index(["record", "model"])
-    records = [(int(r.row), r.record) for r in table4.itertuples()]
+    records: list[tuple[int | None, str]] = [(int(r.row), r.record) for r in table4.itertuples()]
     records += [(None, r) for r in dict.fromkeys(summary["record"]) if r not in set(table4["record"])]
     rows = []
     for baseline, model in comparisons:
@@ -188,7 +200,7 @@ def record_comparison(summary, agreement=None, table4=None, comparisons=COMPARIS
         for t4_row, record in records:
             shipped = (record, baseline) in s.index and (record, model) in s.index
             known = record in agreement.index
-            row = {
+            row: dict[str, Any] = {
                 "table4_row": t4_row,
                 "record": record,
                 "baseline": baseline,

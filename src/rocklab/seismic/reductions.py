@@ -9,7 +9,7 @@ from __future__ import annotations
 import pandas as pd
 
 
-def record_reductions(summary, baseline, model):
+def record_reductions(summary: pd.DataFrame, baseline: str, model: str) -> pd.DataFrame:
     """Per-record reduction [%] of N_O and of the scatter from ``baseline`` to ``model``.
 
     100 (1 - x_model / x_baseline); NaN where the baseline's index is zero or

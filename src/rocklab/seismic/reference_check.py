@@ -9,19 +9,37 @@ difference by the overturning boundary (``bench/maps_reference.py``).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from multiprocessing.pool import Pool
+from typing import Any
+
 import numpy as np
+import numpy.typing as npt
 
 from rocklab.simulation.reference import simulate_ground
-from rocklab.simulation.rocking_model import OVERTURN
+from rocklab.simulation.rocking_model import OVERTURN, RockingModel
 
 
-def _reference_one(args):
+def _reference_one(
+    args: tuple[RockingModel, npt.NDArray[np.float64], float, float, float, float, float, float, float],
+) -> bool:
     """Whether the reference overturns the wall at one cell (one job of :func:`reference_decisions`)."""
     model, ag, dt, a, d, rtol, atol, overturn, tail = args
     return simulate_ground(model, a * ag, dt * d, overturn=overturn, rtol=rtol, atol=atol, tail=tail).overturned
 
 
-def reference_decisions(ag, dt, model, cells, *, rtol=1e-10, atol=1e-12, overturn=OVERTURN, tail=120.0, pool=None):
+def reference_decisions(
+    ag: npt.ArrayLike,
+    dt: float,
+    model: RockingModel,
+    cells: Sequence[tuple[float, float]],
+    *,
+    rtol: float = 1e-10,
+    atol: float = 1e-12,
+    overturn: float = OVERTURN,
+    tail: float = 120.0,
+    pool: Pool | None = None,
+) -> npt.NDArray[np.bool_]:
     """Overturning of the scipy event-driven reference at given (A_S/A, D_S/D) cells.
 
     Parameters
@@ -46,7 +64,18 @@ def reference_decisions(ag, dt, model, cells, *, rtol=1e-10, atol=1e-12, overtur
     return np.fromiter(results, bool, count=len(jobs))
 
 
-def check_against_reference(ag, dt, model, amplitude_scales, duration_scales, fast, step, *, pool=None, **kw):
+def check_against_reference(
+    ag: npt.ArrayLike,
+    dt: float,
+    model: RockingModel,
+    amplitude_scales: npt.ArrayLike,
+    duration_scales: npt.ArrayLike,
+    fast: npt.ArrayLike,
+    step: float,
+    *,
+    pool: Pool | None = None,
+    **kw: Any,
+) -> dict[str, Any]:
     """Compare a map with the reference and explain each difference by the boundary.
 
     Criterion: a cell where the map and the reference disagree lies on the

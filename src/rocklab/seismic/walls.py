@@ -11,6 +11,8 @@ records.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from rocklab.physics.boundary import Boundary
 from rocklab.physics.restitution import (
     AMPLITUDE_LAW_ONE_SIDED,
@@ -18,6 +20,10 @@ from rocklab.physics.restitution import (
     CALIBRATED_RATIO_TWO_SIDED,
 )
 from rocklab.seismic import calibrated
+
+if TYPE_CHECKING:
+    from rocklab.seismic.calibrated import DiagnosisLike
+    from rocklab.simulation.rocking_model import RockingModel
 
 #: Paper's wall of Figs. 21 and 23: slenderness [rad] and half diagonal [m].
 ALPHA = 0.1
@@ -33,7 +39,9 @@ MODELS = {
 }
 
 
-def causes_of(name, eq17=AMPLITUDE_LAW_ONE_SIDED):
+def causes_of(
+    name: str, eq17: tuple[float, float] = AMPLITUDE_LAW_ONE_SIDED
+) -> tuple[dict[str, dict[str, float]], str]:
     """What a map model of :data:`MODELS` adds to Housner's wall of its boundary.
 
     Parameters
@@ -63,7 +71,14 @@ def causes_of(name, eq17=AMPLITUDE_LAW_ONE_SIDED):
     }[name]
 
 
-def named_model(name, alpha=ALPHA, R=R, form="linear", eq17=None, diagnosis=None):
+def named_model(
+    name: str,
+    alpha: float = ALPHA,
+    R: float = R,
+    form: str = "linear",
+    eq17: tuple[float, float] | None = None,
+    diagnosis: DiagnosisLike | None = None,
+) -> RockingModel:
     """The wall of a named map model (:data:`MODELS`, or a calibrated wall).
 
     Parameters

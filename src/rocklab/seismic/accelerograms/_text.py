@@ -8,11 +8,16 @@ in the format dictionary as ``units_in_file``.
 from __future__ import annotations
 
 import re
+from collections.abc import Iterable, Mapping, Sequence
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 from obspy import Stream, Trace, UTCDateTime
 
+from rocklab.disk import StrPath
 from rocklab.physics.constants import G
+from rocklab.physics.flight import FloatArray
 
 #: Factor from each accepted acceleration unit to m/s^2.
 UNIT_FACTORS = {"g": G, "m/s2": 1.0, "cm/s2": 0.01, "gal": 0.01, "mm/s2": 1e-3}
@@ -24,7 +29,7 @@ _FLOAT = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 FLOAT_RE = re.compile(rf"^{_FLOAT}$")
 
 
-def to_si(values, units):
+def to_si(values: npt.ArrayLike, units: str) -> FloatArray:
     """Acceleration in m/s^2 (float64) from ``values`` in ``units``.
 
     ``units`` is one of :data:`UNIT_FACTORS` (case-insensitive, ``m/s^2`` and
@@ -34,7 +39,7 @@ def to_si(values, units):
     return np.asarray(values, dtype=np.float64) * UNIT_FACTORS[key]
 
 
-def canonical_units(units):
+def canonical_units(units: object) -> str:
     """Normalised spelling of an acceleration unit (key of :data:`UNIT_FACTORS`)."""
     key = str(units).lower().replace("^", "").replace("**", "")
     if key not in UNIT_FACTORS:
@@ -42,7 +47,7 @@ def canonical_units(units):
     return key
 
 
-def head_lines(filename, nbytes=8192):
+def head_lines(filename: StrPath, nbytes: int = 8192) -> list[str] | None:
     """First complete lines of a text file, or ``None`` if it is not ASCII text.
 
     Cheap by construction: reads at most ``nbytes``.  A partial last line is
@@ -65,12 +70,12 @@ def head_lines(filename, nbytes=8192):
     return lines
 
 
-def is_float(token):
+def is_float(token: str) -> bool:
     """True if ``token`` is a plain decimal/exponent number."""
     return bool(FLOAT_RE.match(token))
 
 
-def all_floats(line, count=None):
+def all_floats(line: str, count: int | None = None) -> bool:
     """True if ``line`` holds only numbers (exactly ``count`` of them if given)."""
     tokens = line.split()
     if not tokens or (count is not None and len(tokens) != count):
@@ -78,38 +83,38 @@ def all_floats(line, count=None):
     return all(is_float(t) for t in tokens)
 
 
-def parse_values(lines):
+def parse_values(lines: Iterable[str]) -> FloatArray:
     """All whitespace-separated numbers in ``lines`` as one float64 array."""
     return np.array(" ".join(lines).split(), dtype=np.float64)
 
 
-def read_lines(filename):
+def read_lines(filename: StrPath) -> list[str]:
     """All lines of an ASCII text file (the file is opened read-only)."""
     with open(filename, encoding="ascii", errors="strict") as fh:
         return fh.read().splitlines()
 
 
 def make_trace(
-    values,
-    units,
-    delta,
-    fmt_key,
-    fmt_header,
+    values: FloatArray | Sequence[float],
+    units: str,
+    delta: float,
+    fmt_key: str,
+    fmt_header: Mapping[str, Any],
     *,
-    headonly=False,
-    npts=None,
-    network="",
-    station="",
-    location="",
-    channel="",
-    starttime=None,
-):
+    headonly: bool = False,
+    npts: int | None = None,
+    network: str = "",
+    station: str = "",
+    location: str = "",
+    channel: str = "",
+    starttime: float | str | UTCDateTime | None = None,
+) -> Trace:
     """Trace in m/s^2 from ``values`` in ``units``, with the format header kept.
 
     ``fmt_header`` goes to ``stats[fmt_key]`` with ``units_in_file`` added;
     ``stats.units`` is set to ``"m/s2"``.
     """
-    header = {
+    header: dict[str, Any] = {
         "delta": float(delta),
         "network": network,
         "station": station,
@@ -126,6 +131,6 @@ def make_trace(
     return Trace(data=to_si(values, units), header=header)
 
 
-def single(trace):
+def single(trace: Trace) -> Stream:
     """A one-trace :class:`obspy.Stream`."""
     return Stream(traces=[trace])

@@ -22,8 +22,14 @@ record's npts and duration, band-pass corners (Hz), the header peaks
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
+from obspy import Stream
+
+from rocklab.disk import StrPath
+from rocklab.physics.flight import FloatArray
 
 from ._text import head_lines, make_trace, parse_values, read_lines, single
 
@@ -38,7 +44,7 @@ _COMP = re.compile(r"^%COMP\s+(\S+)")
 _STATION = re.compile(r"^%STATION\s+(.*?)\s{2,}")
 
 
-def _is_caltech_vol2(filename):
+def _is_caltech_vol2(filename: StrPath) -> bool:
     """True for a ``%``-commented Caltech Vol. II corrected accelerogram."""
     lines = head_lines(filename, 8192)
     if not lines or not lines[0].upper().startswith(MAGIC):
@@ -46,8 +52,8 @@ def _is_caltech_vol2(filename):
     return any(_POINTS.match(line) for line in lines if line.startswith("%"))
 
 
-def _parse_header(comments):
-    info = {
+def _parse_header(comments: Sequence[str]) -> dict[str, Any]:
+    info: dict[str, Any] = {
         "record_id": comments[0][len(MAGIC) :].split()[0] if len(comments[0]) > len(MAGIC) else "",
         "event": comments[2][1:].strip() if len(comments) > 2 else "",
         "date": comments[3][1:].strip() if len(comments) > 3 else "",
@@ -80,7 +86,7 @@ def _parse_header(comments):
     return info
 
 
-def _read_caltech_vol2(filename, headonly=False, **kwargs):
+def _read_caltech_vol2(filename: StrPath, headonly: bool = False, **kwargs: Any) -> Stream:
     """Read a Caltech Vol. II ``%``-header file: one trace, m/s^2 (from cm/s^2)."""
     lines = read_lines(filename)
     if not lines or not lines[0].upper().startswith(MAGIC):
@@ -93,7 +99,7 @@ def _read_caltech_vol2(filename, headonly=False, **kwargs):
         raise ValueError(f"{filename}: unexpected acceleration units {info['acceleration_units']}")
     info["header"] = comments
     npts = info["npts"]
-    values = []
+    values: FloatArray | list[float] = []
     if not headonly:
         values = parse_values([line for line in lines if line.strip() and not line.startswith("%")])
         if len(values) < npts:

@@ -27,8 +27,13 @@ Header in ``stats.text_columns``: ``column`` (1-based column of the file),
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import Any
+
 import numpy as np
 from obspy import Stream
+
+from rocklab.disk import StrPath
 
 from ._text import all_floats, head_lines, make_trace
 
@@ -38,7 +43,7 @@ DEFAULT_UNITS = "g"
 _PROBE_LINES = 50
 
 
-def _ncolumns(filename, delimiter=None):
+def _ncolumns(filename: StrPath, delimiter: str | None = None) -> int | None:
     """Number of columns if the head is uniform numeric columns with a time axis, else None.
 
     ``delimiter`` None: columns separated by whitespace; else by that character.
@@ -63,23 +68,30 @@ def _ncolumns(filename, delimiter=None):
     return ncol
 
 
-def _is_two_column(filename):
+def _is_two_column(filename: StrPath) -> bool:
     """True for header-less ``t a`` text with a uniform time column."""
     return _ncolumns(filename) == 2
 
 
-def _is_multi_column(filename):
+def _is_multi_column(filename: StrPath) -> bool:
     """True for header-less ``t a1 a2 ...`` text (3+ columns) with a uniform time column."""
     ncol = _ncolumns(filename)
     return ncol is not None and ncol >= 3
 
 
-def _is_csv_two_column(filename):
+def _is_csv_two_column(filename: StrPath) -> bool:
     """True for header-less ``t,a`` comma-separated text with a uniform time column."""
     return _ncolumns(filename, ",") == 2
 
 
-def _read_columns(filename, headonly, units, components, station, delimiter=None):
+def _read_columns(
+    filename: StrPath,
+    headonly: bool,
+    units: str,
+    components: str | Sequence[str] | None,
+    station: str,
+    delimiter: str | None = None,
+) -> Stream:
     table = np.loadtxt(filename, dtype=np.float64, ndmin=2, delimiter=delimiter)
     t = table[:, 0]
     n, ncol = table.shape
@@ -115,17 +127,38 @@ def _read_columns(filename, headonly, units, components, station, delimiter=None
     return Stream(traces=traces)
 
 
-def _read_two_column(filename, headonly=False, units=DEFAULT_UNITS, components=None, station="", **kwargs):
+def _read_two_column(
+    filename: StrPath,
+    headonly: bool = False,
+    units: str = DEFAULT_UNITS,
+    components: str | Sequence[str] | None = None,
+    station: str = "",
+    **kwargs: Any,
+) -> Stream:
     """Read ``t a`` text: one trace in m/s^2 (``units`` default g, see module doc)."""
     return _read_columns(filename, headonly, units, components, station)
 
 
-def _read_multi_column(filename, headonly=False, units=DEFAULT_UNITS, components=None, station="", **kwargs):
+def _read_multi_column(
+    filename: StrPath,
+    headonly: bool = False,
+    units: str = DEFAULT_UNITS,
+    components: str | Sequence[str] | None = None,
+    station: str = "",
+    **kwargs: Any,
+) -> Stream:
     """Read ``t a1 a2 ...`` text: one trace per column in m/s^2 (see module doc)."""
     return _read_columns(filename, headonly, units, components, station)
 
 
-def _read_csv_two_column(filename, headonly=False, units=DEFAULT_UNITS, components=None, station="", **kwargs):
+def _read_csv_two_column(
+    filename: StrPath,
+    headonly: bool = False,
+    units: str = DEFAULT_UNITS,
+    components: str | Sequence[str] | None = None,
+    station: str = "",
+    **kwargs: Any,
+) -> Stream:
     """Read ``t,a`` comma-separated text: one trace in m/s^2 (``units`` default g, see module doc)."""
     if _ncolumns(filename, ",") != 2:
         raise ValueError(f"{filename}: not two comma-separated columns t,a")

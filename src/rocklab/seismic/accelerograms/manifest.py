@@ -27,18 +27,31 @@ import hashlib
 import os
 from importlib import resources
 from pathlib import Path
+from typing import Any, TypedDict
 
 import numpy as np
 import pandas as pd
+from obspy import Stream, Trace
 
 from rocklab.data import data_path
+from rocklab.disk import StrPath
 
 from . import processing
 from .native import read_accelerogram
 
+
 #: Baseline correction applied by :func:`load_record` and :func:`build_manifest`
 #: (the records are already corrected; see :mod:`rocklab.seismic.accelerograms.processing`).
-DEFAULT_PROCESSING = {"pre_event": None, "velocity_order": 1, "freqmin": None, "freqmax": None}
+class Processing(TypedDict):
+    """A setting of :func:`rocklab.seismic.accelerograms.processing.baseline_correct`."""
+
+    pre_event: float | None
+    velocity_order: int | None
+    freqmin: float | None
+    freqmax: float | None
+
+
+DEFAULT_PROCESSING: Processing = {"pre_event": None, "velocity_order": 1, "freqmin": None, "freqmax": None}
 
 #: Environment variable overriding the folder of shipped records.
 ENV_DIR = "ROCKLAB_ACCELEROGRAMS"
@@ -80,7 +93,7 @@ MANIFEST_COLUMNS = [
 ]
 
 
-def accelerogram_dir():
+def accelerogram_dir() -> Path:
     """Folder of the shipped records and their ``manifest.csv``.
 
     Returns
@@ -94,19 +107,19 @@ def accelerogram_dir():
     return data_path("accelerograms")
 
 
-def read_table4():
+def read_table4() -> pd.DataFrame:
     """Table 4 of the paper (20 rows): row, event, mw, station, record, distance_km, pga_g, pgv_cm_s, duration_s."""
     with resources.files(__package__).joinpath("table4.csv").open() as fh:
         return pd.read_csv(fh)
 
 
-def read_selection():
+def read_selection() -> pd.DataFrame:
     """Which shipped file stands for which Table 4 row (``records.csv``)."""
     with resources.files(__package__).joinpath("records.csv").open() as fh:
         return pd.read_csv(fh, dtype={"column": "Int64"}, keep_default_na=False, na_values={"column": [""]})
 
 
-def read_manifest(path=None):
+def read_manifest(path: StrPath | None = None) -> pd.DataFrame:
     """The manifest (one row per shipped Table 4 record) as a DataFrame.
 
     Parameters
@@ -120,14 +133,14 @@ def read_manifest(path=None):
     )
 
 
-def _reader_kwargs(row):
+def _reader_kwargs(row: pd.Series) -> dict[str, Any]:
     kwargs = {"format": row["format"]}
     if row["format"] in ("TWO_COLUMN", "MULTI_COLUMN", "CSV_TWO_COLUMN", "SOMERVILLE", "SLAMMER"):
         kwargs["units"] = row["units"]
     return kwargs
 
 
-def _pick(stream, column, path):
+def _pick(stream: Stream, column: int | str | None, path: StrPath) -> Trace:
     if len(stream) == 1:
         return stream[0]
     if column is None or pd.isna(column):
@@ -138,13 +151,19 @@ def _pick(stream, column, path):
     raise ValueError(f"{path}: no trace for column/component {column!r}")
 
 
-def _find(name, manifest):
+def _find(name: StrPath, manifest: pd.DataFrame) -> pd.Series | None:
     key = str(name).lower()
     hits = manifest[(manifest["record"].str.lower() == key) | (manifest["file"].str.lower() == key)]
     return None if hits.empty else hits.iloc[0]
 
 
-def load_record(name, corrected=True, column=None, manifest=None, **kwargs):
+def load_record(
+    name: StrPath,
+    corrected: bool = True,
+    column: int | str | None = None,
+    manifest: pd.DataFrame | None = None,
+    **kwargs: Any,
+) -> Trace:
     """One accelerogram as an obspy Trace in m/s^2, baseline-corrected by default.
 
     Parameters
@@ -181,15 +200,15 @@ def load_record(name, corrected=True, column=None, manifest=None, **kwargs):
     return processing.baseline_correct(tr, **DEFAULT_PROCESSING) if corrected else tr
 
 
-def _pct(value, reference):
+def _pct(value: float, reference: float) -> float:
     return round(100.0 * (value - reference) / reference, 2)
 
 
-def _sha256(path):
+def _sha256(path: StrPath) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
-def build_manifest(raw_dir=None):
+def build_manifest(raw_dir: StrPath | None = None) -> pd.DataFrame:
     """Manifest DataFrame measured from the files in ``raw_dir`` (default :func:`accelerogram_dir`)."""
     raw_dir = Path(raw_dir) if raw_dir is not None else accelerogram_dir()
     table4 = read_table4().set_index("row")
@@ -234,7 +253,7 @@ def build_manifest(raw_dir=None):
     return pd.DataFrame(rows)[MANIFEST_COLUMNS].astype({"column": "Int64"})
 
 
-def table4_agreement(manifest=None):
+def table4_agreement(manifest: pd.DataFrame | None = None) -> pd.DataFrame:
     """How each shipped record compares with its Table 4 row, in a flag and in words.
 
     Parameters
@@ -253,7 +272,7 @@ def table4_agreement(manifest=None):
         long against 40 s"``.
     """
     m = read_manifest() if manifest is None else manifest
-    rows = {}
+    rows: dict[str, dict[str, Any]] = {}
     for r in m.itertuples():
         pga_ok = abs(r.pga_match_pct) <= PGA_TOLERANCE_PCT
         pgv_ok = abs(r.pgv_match_pct) <= PGV_TOLERANCE_PCT
@@ -269,7 +288,7 @@ def table4_agreement(manifest=None):
     return pd.DataFrame.from_dict(rows, orient="index").rename_axis("record")
 
 
-def write_manifest(raw_dir=None):
+def write_manifest(raw_dir: StrPath | None = None) -> Path:
     """Write ``manifest.csv`` into ``raw_dir`` and return its path."""
     raw_dir = Path(raw_dir) if raw_dir is not None else accelerogram_dir()
     out = raw_dir / "manifest.csv"

@@ -9,6 +9,9 @@ rest of rocklab sees one convention whatever the source.
 
 from __future__ import annotations
 
+import os
+from typing import Any
+
 import numpy as np
 import obspy
 
@@ -18,7 +21,7 @@ from ._text import SI_UNITS
 CALIBRATED_FORMATS = ("KNET", "KINEMETRICS_EVT")
 
 
-def to_si_stream(stream):
+def to_si_stream(stream: obspy.Stream) -> obspy.Stream:
     """Apply ``calib`` to traces of :data:`CALIBRATED_FORMATS` (in place); return the stream.
 
     Traces of other formats must already be in m/s^2 (rocklab's plugins are).
@@ -34,7 +37,7 @@ def to_si_stream(stream):
     return stream
 
 
-def read_accelerogram(path, format=None, **kwargs):
+def read_accelerogram(path: str | os.PathLike[str], format: str | None = None, **kwargs: Any) -> obspy.Stream:
     """Any supported accelerogram file as an obspy Stream in m/s^2 (float64).
 
     Parameters

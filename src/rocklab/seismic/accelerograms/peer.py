@@ -24,6 +24,13 @@ carry no trigger time, so ``starttime`` stays at the obspy default.
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
+from typing import Any, cast
+
+from obspy import Stream
+
+from rocklab.disk import StrPath
+from rocklab.physics.flight import FloatArray
 
 from ._text import head_lines, make_trace, parse_values, read_lines, single
 
@@ -35,7 +42,7 @@ _NPTS_DT = re.compile(r"^\s*NPTS\s*=\s*(\d+)\s*,\s*DT\s*=\s*([-+]?\d*\.?\d+(?:[e
 _ACC_IN_G = re.compile(r"^\s*ACCELERATION TIME (SERIES|HISTORY) IN UNITS OF G\b", re.I)
 
 
-def _flavour(lines):
+def _flavour(lines: Sequence[str] | None) -> str | None:
     """'nga', 'legacy' or None from the first four header lines."""
     if lines is None or len(lines) < 5:
         return None
@@ -49,17 +56,17 @@ def _flavour(lines):
     return None
 
 
-def _is_peer_nga_at2(filename):
+def _is_peer_nga_at2(filename: StrPath) -> bool:
     """True for a PEER NGA-West2 AT2 acceleration file (header checked only)."""
     return _flavour(head_lines(filename, 1024)) == "nga"
 
 
-def _is_peer_legacy_at2(filename):
+def _is_peer_legacy_at2(filename: StrPath) -> bool:
     """True for a legacy PEER-2000 AT2 ("PROCESSING BY PACIFIC ENGINEERING") file."""
     return _flavour(head_lines(filename, 1024)) == "legacy"
 
 
-def _parse_title(line, flavour):
+def _parse_title(line: str, flavour: str) -> dict[str, str]:
     """Event, date, station name and component from header line 2."""
     parts = [p.strip() for p in line.split(",")]
     if flavour == "nga" and len(parts) >= 4:
@@ -79,20 +86,21 @@ def _parse_title(line, flavour):
     return {"event": line.strip(), "date": "", "station_name": "", "component": ""}
 
 
-def _read_at2(filename, flavour, headonly):
+def _read_at2(filename: StrPath, flavour: str, headonly: bool) -> Stream:
     lines = read_lines(filename)
     if _flavour(lines[:5]) != flavour:
         raise ValueError(f"{filename} is not a PEER {flavour} AT2 file")
-    m = _NPTS_DT.match(lines[3])
+    # a match: _flavour has checked this line
+    m = cast(re.Match[str], _NPTS_DT.match(lines[3]))
     npts, dt = int(m.group(1)), float(m.group(2))
-    info = {
+    info: dict[str, Any] = {
         "flavour": "NGA-West2" if flavour == "nga" else "legacy PEER-2000",
         **_parse_title(lines[1], flavour),
         "npts": npts,
         "dt": dt,
         "header": lines[:4],
     }
-    values = [] if headonly else parse_values(lines[4:])
+    values: FloatArray | list[float] = [] if headonly else parse_values(lines[4:])
     if not headonly and len(values) != npts:
         raise ValueError(f"{filename}: header says NPTS={npts}, found {len(values)} values")
     tr = make_trace(
@@ -109,11 +117,11 @@ def _read_at2(filename, flavour, headonly):
     return single(tr)
 
 
-def _read_peer_nga_at2(filename, headonly=False, **kwargs):
+def _read_peer_nga_at2(filename: StrPath, headonly: bool = False, **kwargs: Any) -> Stream:
     """Read a PEER NGA-West2 AT2 file: one trace, m/s^2 (from g)."""
     return _read_at2(filename, "nga", headonly)
 
 
-def _read_peer_legacy_at2(filename, headonly=False, **kwargs):
+def _read_peer_legacy_at2(filename: StrPath, headonly: bool = False, **kwargs: Any) -> Stream:
     """Read a legacy PEER-2000 AT2 file: one trace, m/s^2 (from g)."""
     return _read_at2(filename, "legacy", headonly)

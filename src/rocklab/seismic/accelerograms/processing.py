@@ -34,12 +34,17 @@ duration D5-95 between 5 % and 95 % of the Arias intensity.
 
 from __future__ import annotations
 
+from typing import Any, cast
+
 import numpy as np
+import numpy.typing as npt
+from obspy import Trace
 
 from rocklab.physics.constants import G
+from rocklab.physics.flight import FloatArray
 
 
-def cumulative_trapezoid(y, dx):
+def cumulative_trapezoid(y: npt.ArrayLike, dx: float) -> FloatArray:
     """Cumulative trapezoidal integral of ``y`` sampled every ``dx``, starting at 0.
 
     The arithmetic of ``scipy.integrate.cumulative_trapezoid(y, dx=dx,
@@ -63,12 +68,21 @@ def cumulative_trapezoid(y, dx):
     return np.concatenate(([0.0], np.cumsum(dx * (y[1:] + y[:-1]) / 2.0)))
 
 
-def velocity(acc, dt):
+def velocity(acc: npt.ArrayLike, dt: float) -> FloatArray:
     """Velocity [m/s] by cumulative trapezoid of ``acc`` [m/s^2], v(0) = 0."""
     return cumulative_trapezoid(acc, dt)
 
 
-def baseline_correct_array(acc, dt, pre_event=None, velocity_order=1, freqmin=None, freqmax=None, corners=4, taper=1.0):
+def baseline_correct_array(
+    acc: npt.ArrayLike,
+    dt: float,
+    pre_event: float | None = None,
+    velocity_order: int | None = 1,
+    freqmin: float | None = None,
+    freqmax: float | None = None,
+    corners: int = 4,
+    taper: float = 1.0,
+) -> FloatArray:
     """Baseline-corrected copy of ``acc`` [m/s^2] (steps 1-3 of the module doc).
 
     Parameters
@@ -115,11 +129,12 @@ def baseline_correct_array(acc, dt, pre_event=None, velocity_order=1, freqmin=No
     elif freqmin:
         sos = signal.butter(corners, freqmin / nyq, btype="highpass", output="sos")
     else:
-        sos = signal.butter(corners, freqmax / nyq, btype="lowpass", output="sos")
-    return signal.sosfiltfilt(sos, x)[pad : pad + n]
+        # not None: one of the corners is, and freqmin is not
+        sos = signal.butter(corners, cast(float, freqmax) / nyq, btype="lowpass", output="sos")
+    return cast(FloatArray, signal.sosfiltfilt(sos, x)[pad : pad + n])
 
 
-def baseline_correct(trace, **kwargs):
+def baseline_correct(trace: Trace, **kwargs: Any) -> Trace:
     """Baseline-corrected copy of an obspy Trace in m/s^2 (see :func:`baseline_correct_array`).
 
     The parameters used are appended to ``stats.processing``.
@@ -130,7 +145,14 @@ def baseline_correct(trace, **kwargs):
     return out
 
 
-def describe(pre_event=None, velocity_order=1, freqmin=None, freqmax=None, corners=4, taper=1.0):
+def describe(
+    pre_event: float | None = None,
+    velocity_order: int | None = 1,
+    freqmin: float | None = None,
+    freqmax: float | None = None,
+    corners: int = 4,
+    taper: float = 1.0,
+) -> str:
     """One-line text of a baseline-correction setting (for manifests and stats.processing)."""
     steps = [f"mean removed (pre-event {pre_event:.2f} s)" if pre_event is not None else "mean removed (whole record)"]
     if velocity_order:
@@ -140,27 +162,27 @@ def describe(pre_event=None, velocity_order=1, freqmin=None, freqmax=None, corne
     return "; ".join(steps)
 
 
-def peak_ground_acceleration(acc):
+def peak_ground_acceleration(acc: npt.ArrayLike) -> float:
     """PGA: max |a|, in the units of ``acc``."""
     return float(np.max(np.abs(acc)))
 
 
-def peak_ground_velocity(acc, dt):
+def peak_ground_velocity(acc: npt.ArrayLike, dt: float) -> float:
     """PGV [m/s]: max |v| of the trapezoidal integral of ``acc`` [m/s^2]."""
     return float(np.max(np.abs(velocity(acc, dt))))
 
 
-def record_duration(npts, dt):
+def record_duration(npts: int, dt: float) -> float:
     """Record length [s] as the time of the last sample, (npts - 1) dt (Table 4's D)."""
     return (npts - 1) * dt
 
 
-def arias_intensity(acc, dt):
+def arias_intensity(acc: npt.ArrayLike, dt: float) -> FloatArray:
     """Cumulative Arias intensity [m/s]: pi / (2 g) * integral of a^2 dt."""
     return np.pi / (2 * G) * cumulative_trapezoid(np.asarray(acc, float) ** 2, dt)
 
 
-def significant_duration(acc, dt, start=0.05, end=0.95):
+def significant_duration(acc: npt.ArrayLike, dt: float, start: float = 0.05, end: float = 0.95) -> float:
     """Significant duration [s] between ``start`` and ``end`` fractions of the Arias intensity."""
     ia = arias_intensity(acc, dt)
     frac = ia / ia[-1]
@@ -168,7 +190,7 @@ def significant_duration(acc, dt, start=0.05, end=0.95):
     return float(np.interp(end, frac, t) - np.interp(start, frac, t))
 
 
-def ground_motion_parameters(trace):
+def ground_motion_parameters(trace: Trace) -> dict[str, float]:
     """PGA [g], PGV [cm/s], record length and D5-95 [s] of a Trace in m/s^2."""
     acc, dt = trace.data, trace.stats.delta
     return {

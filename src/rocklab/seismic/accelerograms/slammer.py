@@ -33,6 +33,12 @@ Format name ``SLAMMER``; header in ``stats.slammer``: ``record``, ``dt``,
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
+
+from obspy import Stream
+
+from rocklab.disk import StrPath
+from rocklab.physics.flight import FloatArray
 
 from ._text import head_lines, is_float, make_trace, parse_values, read_lines, single
 
@@ -60,7 +66,7 @@ TABLE_COLUMNS = (
 _PROBE_LINES = 50
 
 
-def _is_slammer(filename):
+def _is_slammer(filename: StrPath) -> bool:
     """True for header-less text holding one number per line (at least three lines)."""
     lines = head_lines(filename, 2048)
     if not lines:
@@ -69,7 +75,7 @@ def _is_slammer(filename):
     return len(lines) >= 3 and all(len(line.split()) == 1 and is_float(line.strip()) for line in lines)
 
 
-def _table_rows(table):
+def _table_rows(table: StrPath) -> list[dict[str, Any]]:
     """Rows of an ``EQdata.txt`` as dictionaries (:data:`TABLE_COLUMNS` plus ``extra``)."""
     rows = []
     # the full table has a few Latin-1 bytes (non-breaking spaces in station names)
@@ -81,13 +87,13 @@ def _table_rows(table):
         fields = line.split("\t")
         if len(fields) < len(TABLE_COLUMNS) or not is_float(fields[10].strip()):
             raise ValueError(f"{table}, line {number}: not a SLAMMER record row (event, ..., dt in column 11)")
-        row = dict(zip(TABLE_COLUMNS, (f.strip() for f in fields)))
+        row: dict[str, Any] = dict(zip(TABLE_COLUMNS, (f.strip() for f in fields)))
         row["extra"] = [f.strip() for f in fields[len(TABLE_COLUMNS) :]]
         rows.append(row)
     return rows
 
 
-def record_metadata(filename):
+def record_metadata(filename: StrPath) -> dict[str, Any] | None:
     """The ``EQdata.txt`` row of a SLAMMER record file, or ``None`` if no table lists it.
 
     Parameters
@@ -126,7 +132,9 @@ def record_metadata(filename):
     return None
 
 
-def _read_slammer(filename, headonly=False, dt=None, units=DEFAULT_UNITS, **kwargs):
+def _read_slammer(
+    filename: StrPath, headonly: bool = False, dt: float | None = None, units: str = DEFAULT_UNITS, **kwargs: Any
+) -> Stream:
     """Read a SLAMMER record: one trace in m/s^2 (from g), dt from ``EQdata.txt`` or ``dt=``."""
     meta = record_metadata(filename)
     if dt is not None:
@@ -143,7 +151,7 @@ def _read_slammer(filename, headonly=False, dt=None, units=DEFAULT_UNITS, **kwar
     info.pop("table", None)
     info["record"] = Path(filename).name
     lines = read_lines(filename)
-    values = parse_values(lines) if not headonly else []
+    values: FloatArray | list[float] = parse_values(lines) if not headonly else []
     if not headonly and len(values) != sum(1 for line in lines if line.strip()):
         raise ValueError(f"{filename}: a line holds more than one value; SLAMMER records hold one per line")
     tr = make_trace(

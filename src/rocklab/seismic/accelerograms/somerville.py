@@ -21,7 +21,13 @@ Format name ``SOMERVILLE``; header in ``stats.somerville`` (``code``,
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
+from obspy import Stream
+
+from rocklab.disk import StrPath
+from rocklab.physics.flight import FloatArray
 
 from ._text import all_floats, head_lines, is_float, make_trace, parse_values, read_lines, single
 
@@ -29,7 +35,7 @@ from ._text import all_floats, head_lines, is_float, make_trace, parse_values, r
 DEFAULT_UNITS = "cm/s2"
 
 
-def _npts_dt(line):
+def _npts_dt(line: str) -> tuple[int, float, list[float]] | None:
     """(npts, dt, extra) from header line 2, or None if it is not of that form."""
     if not line.startswith("%"):
         return None
@@ -42,7 +48,7 @@ def _npts_dt(line):
     return int(tokens[0]), dt, [float(t) for t in tokens[2:]]
 
 
-def _is_somerville(filename):
+def _is_somerville(filename: StrPath) -> bool:
     """True for a two-``%``-line near-fault record followed by 6-value data lines."""
     lines = head_lines(filename, 2048)
     if not lines or len(lines) < 4 or not lines[0].startswith("%"):
@@ -52,7 +58,7 @@ def _is_somerville(filename):
     return all_floats(lines[2], 6) and all_floats(lines[3], 6)
 
 
-def _read_somerville(filename, headonly=False, units=DEFAULT_UNITS, **kwargs):
+def _read_somerville(filename: StrPath, headonly: bool = False, units: str = DEFAULT_UNITS, **kwargs: Any) -> Stream:
     """Read a SAC/Somerville near-fault file: one trace, m/s^2 (from ``units``, default cm/s^2)."""
     lines = read_lines(filename)
     parsed = _npts_dt(lines[1]) if len(lines) > 1 and lines[0].startswith("%") else None
@@ -60,7 +66,7 @@ def _read_somerville(filename, headonly=False, units=DEFAULT_UNITS, **kwargs):
         raise ValueError(f"{filename} is not a SAC/Somerville near-fault file")
     npts, dt, extra = parsed
     title = lines[0][1:].split(maxsplit=2)
-    info = {
+    info: dict[str, Any] = {
         "code": title[0] if title else "",
         "component": title[1] if len(title) > 1 else "",
         "description": title[2].strip() if len(title) > 2 else "",
@@ -69,7 +75,7 @@ def _read_somerville(filename, headonly=False, units=DEFAULT_UNITS, **kwargs):
         "extra": extra,
         "header": lines[:2],
     }
-    values = []
+    values: FloatArray | list[float] = []
     if not headonly:
         values = parse_values(lines[2:])
         if len(values) < npts:
