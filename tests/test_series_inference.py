@@ -185,18 +185,15 @@ def test_the_points_of_a_finite_difference_evaluated_together_are_each_alone(bou
         ext = problem.combine((x,), y)
         if ext is None:
             continue
-        params = problem.params(ext)
-
-        def point():
-            # some parameters at their null value: a branch of the closed forms left or taken
-            return {
-                q.name: q.null if rng.random() < 0.4 else q.null + rng.uniform(0.0, 0.3) * (min(q.upper, q.null + 1) - q.null)
-                for q in params
-            }
-
-        points = [point() for _ in range(5)]
-        alone = [problem.residuals(sub, ext, v) for v in points]
-        for alone, together in zip(alone, problem.residuals_at(sub, ext, points)):
+        points = [_point(problem.params(ext), rng) for _ in range(5)]
+        each = [problem.residuals(sub, ext, v) for v in points]
+        for alone, together in zip(each, problem.residuals_at(sub, ext, points)):
             assert alone.keys() == together.keys()
             for g in alone:
                 assert np.array_equal(alone[g], together[g], equal_nan=True), (ext, g)
+
+
+def _point(params, rng):
+    """Parameter values, some at their null: a branch of the closed forms left or taken."""
+    span = {q.name: min(q.upper, q.null + 1.0) - q.null for q in params}
+    return {q.name: q.null if rng.random() < 0.4 else q.null + rng.uniform(0.0, 0.3) * span[q.name] for q in params}
