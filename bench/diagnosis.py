@@ -9,7 +9,7 @@ workflow's settings (``config/config.yaml``, defaults from its schema):
 CPU and wall seconds, the verdict; then the boundary conditions summed up
 over the series (:func:`rocklab.diagnosis.with_boundaries`, the checkpoint
 job's work).  With the workflow's job benchmarks
-(``<results>/benchmarks/diagnosis/<boundary>.tsv`` and
+(``<results>/benchmarks/diagnosis/<job>.tsv``, one per pack of series, and
 ``diagnosis.tsv``) it also sums the job times of the diagnosis, start-up
 and reading included.  Writes
 ``<out>/diagnosis.json`` and prints the totals.
@@ -57,10 +57,9 @@ def main():
     c0 = time.process_time()
     with_boundaries(entries)
     boundaries_cpu_s = time.process_time() - c0
-    # the workflow's jobs: one per boundary condition, then the checkpoint summing them up
+    # the workflow's jobs: one per pack of series (Campaign.diagnosis_jobs), then the checkpoint summing them up
     bench = args.results / "benchmarks"
-    jobs = [bench / "diagnosis" / f"{b}.tsv" for b in ("two-sided", "one-sided")] + [bench / "diagnosis.tsv"]
-    jobs = [p for p in jobs if p.exists()]
+    jobs = sorted((bench / "diagnosis").glob("*.tsv")) + [p for p in [bench / "diagnosis.tsv"] if p.exists()]
     job_s = [float(pd.read_csv(p, sep="\t")["s"].iloc[0]) for p in jobs]
     out = {
         "n_series": len(series),

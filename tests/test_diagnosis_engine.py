@@ -213,3 +213,46 @@ def test_a_rejection_is_decided_on_its_step_and_worded_as_the_files_had_it():
         "a": "its signature in the data is absent",
         "b": "",
     }
+
+
+def test_the_compiled_bounded_search_is_scipys_step_for_step():
+    """The noise model's search (:func:`noise._profile_minimum`) ends where scipy's
+    ``minimize_scalar(method="bounded")`` ends, bit for bit, on residuals of every shape of noise."""
+    rng = np.random.default_rng(11)
+    for k in range(300):
+        n = int(rng.integers(4, 150))
+        x2 = np.maximum(rng.lognormal(-3.0, 2.0, n) ** 2, 1e-300)
+        r2 = (rng.normal(size=n) * np.sqrt(10 ** rng.uniform(-6, -2) + 10 ** rng.uniform(-6, -2) * x2)) ** 2
+        r2 = r2 + noise.VAR_FLOOR
+        lo, hi = -np.log(x2.max()) - 12.0, -np.log(x2.min()) + 12.0
+        ref = optimize.minimize_scalar(
+            noise._profile, bounds=(lo, hi), args=(r2, x2), method="bounded", options={"xatol": 1e-3}
+        )
+        assert noise._profile_minimum(lo, hi, 1e-3, r2, x2) == (float(ref.x), float(ref.fun)), k
+
+
+class TogetherDecay(DecayProblem):
+    """:class:`DecayProblem` that evaluates the points of a finite difference together, as one array."""
+
+    def __init__(self, **kw):
+        super().__init__(**kw)
+        self.together = []
+
+    def residuals_at(self, sub, ext, values):
+        self.together.append(len(values))
+        k = np.array([v.get("k", 0.0) for v in values])[:, None, None]
+        q = np.array([v.get("q", 0.0) for v in values])[:, None, None]
+        x = self.x[sub][None]
+        return [{"g": r} for r in np.log(np.exp(-k * x) * (1 + q * x**2) / self.y[sub][None])]
+
+
+def test_a_fit_evaluates_its_finite_differences_together_and_ends_where_it_did():
+    """least_squares' finite differences (its own steps, bounds respected) and the linearisation
+    of the intervals go through :meth:`Problem.residuals_at`: a problem that evaluates the points
+    together is fitted as one that evaluates them one by one, to the last bit."""
+    alone, together = DecayProblem(q=0.2), TogetherDecay(q=0.2)
+    idx = np.arange(alone.n_tests)
+    a, b = fit(alone, idx, ("decay",)), fit(together, idx, ("decay",))
+    assert (a.values, a.m2ll, a.passes) == (b.values, b.m2ll, b.passes)
+    assert together.together and max(together.together) == 2
+    assert parameter_intervals(alone, a, n_boot=20, seed=1) == parameter_intervals(together, b, n_boot=20, seed=1)

@@ -167,3 +167,33 @@ def test_a_loss_at_its_bound_has_an_interval_that_holds_it_as_wide_as_refits_say
     se = np.sqrt((n - 1) / n * np.sum((jack - jack.mean(axis=0)) ** 2, axis=0))
     width = np.array([np.diff(f.ci95[k])[0] for k in f.params])
     assert np.all(width >= se), dict(zip(f.params, zip(width, se)))
+
+
+@pytest.mark.parametrize("boundary", ["two-sided", "one-sided"])
+def test_the_points_of_a_finite_difference_evaluated_together_are_each_alone(boundary):
+    """WallProblem.residuals_at stacks the models of one branch of the closed forms (viscous damping
+    alone, friction or drag, an angle that depends on the amplitude, each at zero or not) on the tests
+    repeated: every residual equals, bit for bit, the model's own evaluation, whatever mix of branches
+    the points hold (a finite difference from a loss at its null value leaves it)."""
+    model = {"impact": H(), "mu": 0.01 * A2} if boundary == "two-sided" else {"impact": I.Scaled(I.OneSided(), 0.95)}
+    recs = virtual_series("mix", boundary, model, n=4, seed=8, theta0_range=(0.7, 0.95))
+    problem = WallProblem(in_series_order([D.measured_test(r) for r in recs]))
+    sub = problem.subset(np.arange(problem.n_tests))
+    rng = np.random.default_rng(5)
+    pairs = [(x, y) for x in problem.candidates(True) for y in problem.candidates(True) if x < y]
+    for x, y in pairs:
+        ext = problem.combine((x,), y)
+        if ext is None:
+            continue
+        points = [_point(problem.params(ext), rng) for _ in range(5)]
+        each = [problem.residuals(sub, ext, v) for v in points]
+        for alone, together in zip(each, problem.residuals_at(sub, ext, points)):
+            assert alone.keys() == together.keys()
+            for g in alone:
+                assert np.array_equal(alone[g], together[g], equal_nan=True), (ext, g)
+
+
+def _point(params, rng):
+    """Parameter values, some at their null: a branch of the closed forms left or taken."""
+    span = {q.name: min(q.upper, q.null + 1.0) - q.null for q in params}
+    return {q.name: q.null if rng.random() < 0.4 else q.null + rng.uniform(0.0, 0.3) * span[q.name] for q in params}

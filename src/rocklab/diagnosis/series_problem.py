@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Collection, Iterable, Mapping
+from collections.abc import Collection, Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
@@ -13,7 +13,7 @@ from rocklab.diagnosis.estimation import Problem
 from rocklab.diagnosis.evidence import MeasuredTest, TestStack, covariates, log_ratio, noise_covariates, residuals
 from rocklab.diagnosis.extended import model_params
 from rocklab.diagnosis.result import Structure
-from rocklab.diagnosis.wall_model import base_params, free_run, log_columns
+from rocklab.diagnosis.wall_model import base_params, branches, free_run, log_columns, stacked
 
 if TYPE_CHECKING:
     from rocklab.diagnosis.causes import Unexplained
@@ -41,6 +41,38 @@ class WallProblem(Problem[TestStack]):
         if self._cache.get("base_of") is not sub:
             self._cache.update(base_of=sub, base=base_params(sub.tests))
         return residuals(sub, model_params(sub.tests, ext, values, self._cache["base"]), self._cache)
+
+    def residuals_at(
+        self, sub: TestStack, ext: Collection[str], values: Sequence[Mapping[str, float]]
+    ) -> list[dict[str, np.ndarray]]:
+        """:meth:`residuals` at each of ``values``, equal to them bit for bit: the models that take the
+        same branches of the closed forms (:func:`branches`) evaluated as one, stacked on the tests
+        repeated (:func:`rocklab.diagnosis.wall_model.stacked`), the fixed cost of an evaluation (some
+        hundred small array operations) paid once a branch."""
+        if self._cache.get("base_of") is not sub:
+            self._cache.update(base_of=sub, base=base_params(sub.tests))
+        models = [model_params(sub.tests, ext, v, self._cache["base"]) for v in values]
+        together: dict[tuple[bool, ...], list[int]] = {}
+        for i, mp in enumerate(models):
+            together.setdefault(branches(mp), []).append(i)
+        out: list[dict[str, np.ndarray]] = [{} for _ in models]
+        n = len(sub.tests)
+        for same in together.values():
+            if len(same) == 1:
+                out[same[0]] = residuals(sub, models[same[0]], self._cache)
+                continue
+            # the repeated tests and evidence.residuals' cache of them, kept while the subset lasts
+            tiled = self._cache.setdefault("tiled", {})
+            if tiled.get("of") is not sub:
+                tiled.clear()
+                tiled["of"] = sub
+            if len(same) not in tiled:
+                tiled[len(same)] = (sub.subset(np.tile(np.arange(n), len(same))), {})
+            S, cache = tiled[len(same)]
+            R = residuals(S, stacked([models[i] for i in same]), cache)
+            for j, i in enumerate(same):
+                out[i] = {g: r[j * n : (j + 1) * n] for g, r in R.items()}
+        return out
 
     def covariates(self, sub: TestStack) -> dict[str, dict[str, np.ndarray]]:
         return covariates(sub)

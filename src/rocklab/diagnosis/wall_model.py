@@ -159,6 +159,33 @@ class ModelParams:
         return replace(self, **arrays, extra={k: np.asarray(v)[i] for k, v in self.extra.items()}, terms=terms)
 
 
+def stacked(models):
+    """The models of several parameter vectors of one set of tests as one model of their tests
+    repeated (:class:`ModelParams` of the same laws, their per-test arrays concatenated in order):
+    the closed forms act element by element, so one call on the stack gives each model's values
+    at the cost of one call."""
+    first = models[0]
+    names = [k for k, v in vars(first).items() if isinstance(v, np.ndarray)]
+    arrays = {k: np.concatenate([getattr(m, k) for m in models]) for k in names}
+    extra = {k: np.concatenate([m.extra[k] for m in models]) for k in first.extra}
+    terms = tuple(
+        (t, tuple(np.concatenate([m.terms[j][1][i] for m in models]) for i in range(len(values))))
+        for j, (t, values) in enumerate(first.terms)
+    )
+    return replace(first, **arrays, extra=extra, terms=terms)
+
+
+def branches(mp):
+    """Which branches of the closed forms of a flight the model ``mp`` takes: whether any test has a
+    rocking angle that depends on the amplitude, viscous damping, dry friction, drag, each parameter
+    of a term in flight, a law of the impact speed.  The closed forms choose a method on the whole
+    array (:mod:`rocklab.physics.flight`: Newton's passes with friction or drag, fixed-point passes
+    with viscous damping alone), so only models of one branch evaluate stacked
+    (:func:`stacked`) as each alone."""
+    arrays = (mp.rounding, mp.zeta, mp.mu, mp.kappa, *(v for _, values in mp.terms for v in values))
+    return (*(bool(np.count_nonzero(x)) for x in arrays), mp.speed_knots is None)
+
+
 def log_columns(tests):
     """The columns of the test log that the tests share (those :func:`rocklab.diagnosis.evidence.in_series_order`
     kept; none for a wall without a log)."""

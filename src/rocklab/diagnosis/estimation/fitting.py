@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Collection, Mapping
+from collections.abc import Callable, Collection, Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any, TypeAlias, TypeVar
 
@@ -114,10 +114,15 @@ def fit(
             def res(xx: np.ndarray) -> np.ndarray:
                 return stacked(problem.residuals(sub, ext, dict(zip(names, xx))))
 
+            def together(_: object, points: Iterable[np.ndarray], stacked: Callable[..., np.ndarray] = stacked) -> list:
+                # the points of least_squares' finite differences (its own steps and bounds), evaluated at once
+                at = [dict(zip(names, xx)) for xx in points]
+                return [stacked(R) for R in problem.residuals_at(sub, ext, at)]
+
             wv = np.concatenate([w[g] for g in masks])
             if jac is None:
                 sol = optimize.least_squares(
-                    res, x, bounds=(lo, hi), x_scale="jac", diff_step=1e-5, xtol=1e-9, ftol=1e-9
+                    res, x, bounds=(lo, hi), x_scale="jac", diff_step=1e-5, xtol=1e-9, ftol=1e-9, workers=together
                 )
                 step, jac = sol.x - x, sol.jac / wv[:, None]
             else:
@@ -157,15 +162,13 @@ def _jacobian(
     Returns (R, J): group -> residual array, group -> list of derivative
     arrays (one per parameter of ``ext``, like the residuals).
     """
-    R = problem.residuals(sub, ext, values)
-    J: dict[str, list[np.ndarray]] = {g: [] for g in R}
+    steps = []
     for q in problem.params(ext):
         # the step least_squares takes (diff_step 1e-5, relative), away from the nearer bound
         h = 1e-5 * max(abs(values[q.name]), 1.0)
-        h = -h if values[q.name] + h > q.upper else h
-        Rq = problem.residuals(sub, ext, {**values, q.name: values[q.name] + h})
-        for g in R:
-            J[g].append((Rq[g] - R[g]) / h)
+        steps.append((q.name, -h if values[q.name] + h > q.upper else h))
+    R, *moved = problem.residuals_at(sub, ext, [values, *({**values, k: values[k] + h} for k, h in steps)])
+    J: dict[str, list[np.ndarray]] = {g: [(Rq[g] - R[g]) / h for Rq, (_, h) in zip(moved, steps)] for g in R}
     return R, J
 
 

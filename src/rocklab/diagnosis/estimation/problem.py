@@ -42,6 +42,14 @@ class Problem(Generic[Sub]):
     def residuals(self, sub: Sub, ext: Collection[str], values: Mapping[str, float]) -> dict[str, np.ndarray]:
         raise NotImplementedError
 
+    def residuals_at(
+        self, sub: Sub, ext: Collection[str], values: Sequence[Mapping[str, float]]
+    ) -> list[dict[str, np.ndarray]]:
+        """:meth:`residuals` at each set of parameter ``values``, in order: the points of a
+        finite-difference Jacobian.  A subclass whose evaluation is dominated by its fixed cost
+        evaluates them together; the results are those of :meth:`residuals`, value for value."""
+        return [self.residuals(sub, ext, v) for v in values]
+
     def candidates(self, families: bool = False) -> list[str]:
         """Names of the candidate causes (the listed ones; with ``families``, the generalised families too)."""
         return [c.name for c in self.causes if families or not getattr(c, "family", None)]

@@ -95,6 +95,14 @@ class _Groups(Problem[Sub]):
             self.memo[key] = self.problem.residuals(sub, ext, values)
         return {g: r for g, r in self.memo[key].items() if g in self.groups}
 
+    def residuals_at(
+        self, sub: Sub, ext: Collection[str], values: Sequence[Mapping[str, float]]
+    ) -> list[dict[str, np.ndarray]]:
+        keys = [(id(sub), tuple(ext), tuple(v.items())) for v in values]
+        missing = {k: v for k, v in zip(keys, values) if k not in self.memo}
+        self.memo.update(zip(missing, self.problem.residuals_at(sub, ext, list(missing.values()))))
+        return [{g: r for g, r in self.memo[k].items() if g in self.groups} for k in keys]
+
 
 def by_group(
     problem: Problem[Any], fitted: Fit
