@@ -27,6 +27,7 @@ This module knows no cause by name: the catalogue resolves names to laws
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -159,7 +160,7 @@ class ModelParams:
         return replace(self, **arrays, extra={k: np.asarray(v)[i] for k, v in self.extra.items()}, terms=terms)
 
 
-def stacked(models):
+def stacked(models: Sequence[ModelParams]) -> ModelParams:
     """The models of several parameter vectors of one set of tests as one model of their tests
     repeated (:class:`ModelParams` of the same laws, their per-test arrays concatenated in order):
     the closed forms act element by element, so one call on the stack gives each model's values
@@ -175,7 +176,7 @@ def stacked(models):
     return replace(first, **arrays, extra=extra, terms=terms)
 
 
-def branches(mp):
+def branches(mp: ModelParams) -> tuple[bool, ...]:
     """Which branches of the closed forms of a flight the model ``mp`` takes: whether any test has a
     rocking angle that depends on the amplitude, viscous damping, dry friction, drag, each parameter
     of a term in flight, a law of the impact speed.  The closed forms choose a method on the whole
