@@ -88,3 +88,17 @@ def damped():
 def test_the_interval_of_a_loss_in_flight_holds_it_by_the_models_bias(damped):
     assert damped["verdict"] == ["flight_damping"]
     assert damped["outside"] == [] and damped["params_covered"] == 1
+
+
+def test_the_bias_is_measured_on_at_most_a_fixed_number_of_tests_spread_over_the_series():
+    """A series ten times longer simulates no more tests for its model's bias (its job would grow with
+    the campaign): at most MAX_BIAS_TESTS, from its first test to its last; a shorter one, all."""
+    from rocklab.diagnosis.series import MAX_BIAS_TESTS, spread_over
+
+    short = list(range(MAX_BIAS_TESTS))
+    assert spread_over(short, MAX_BIAS_TESTS) == short
+    long = list(range(10 * MAX_BIAS_TESTS + 7))
+    picked = spread_over(long, MAX_BIAS_TESTS)
+    assert len(picked) == MAX_BIAS_TESTS and picked[0] == 0 and picked[-1] == long[-1]
+    gaps = np.diff(picked)
+    assert gaps.min() >= 1 and gaps.max() - gaps.min() <= 1

@@ -50,6 +50,12 @@ log = logging.getLogger(__name__)
 
 #: Tests a series needs to name a cause: an interval over tests needs two to vary.
 MIN_TESTS_TO_NAME = 2
+#: Tests of a series simulated to measure the bias of its model, at most, spread over the series
+#: (:func:`spread_over`): the bias is a property of the model, the same on any tests; the noise of
+#: fewer is in its standard error, which u_model takes off (:mod:`rocklab.diagnosis.estimation.bias`).
+#: Above every series of the embedded campaign (29 tests at most); a series ten times longer would
+#: otherwise simulate ten times the tests, and its job grow with the campaign.
+MAX_BIAS_TESTS = 32
 
 
 class _Head(TypedDict):
@@ -330,8 +336,9 @@ def _with_model_bias(
     seed: int,
 ) -> ModelBias:
     """Widen the intervals of the findings by the bias of the model, measured on the tests simulated at
-    the extended model (:mod:`rocklab.diagnosis.estimation.bias`): the selected causes fitted again, a
-    cause estimated after selection (a stop) estimated again.
+    the extended model (:mod:`rocklab.diagnosis.estimation.bias`; at most :data:`MAX_BIAS_TESTS` of
+    them, spread over the series): the selected causes fitted again, a cause estimated after selection
+    (a stop) estimated again.
 
     Returns
     -------
@@ -341,7 +348,7 @@ def _with_model_bias(
     if not sel["effects"]:
         return {}
     try:
-        simulated = simulated_tests(tests, ext, values, seed=seed)
+        simulated = simulated_tests(spread_over(tests, MAX_BIAS_TESTS), ext, values, seed=seed)
         if len(simulated) < 2:
             raise ValueError(f"{len(simulated)} simulated tests of two impacts or more (2 needed)")
     except (NotImplementedError, ValueError) as err:
@@ -370,6 +377,14 @@ def _with_model_bias(
                 widened(cast("list[float]", ci), cast(float, f.params[k]), q.lower, q.upper, u.get(k, 0.0)),
             )
     return {"b": b, "u_model": u}
+
+
+def spread_over(tests: Sequence[MeasuredTest], at_most: int) -> list[MeasuredTest]:
+    """At most ``at_most`` of ``tests`` (in series order), evenly spread from the first to the last;
+    all of them where there are no more."""
+    if len(tests) <= at_most:
+        return list(tests)
+    return [tests[i] for i in np.unique(np.round(np.linspace(0, len(tests) - 1, at_most)).astype(int))]
 
 
 def _estimated(left: list[Structure], found: StopEstimate | None) -> str:
