@@ -38,6 +38,7 @@ from pathlib import Path
 import pandas as pd
 import psutil
 
+from rocklab.benchmarks import measured_code
 from rocklab.io import benchmark_times
 from rocklab.lab import virtual_lab
 
@@ -150,6 +151,8 @@ def summary(runs: list, cores: int, baseline: dict | None = None) -> dict:
     with ``baseline`` (another checkout's ``scale.json`` on the same sizes),
     its wall and CPU times and the ratio of the largest campaign's wall times."""
     out = {"cores": cores, "cpu_count": os.cpu_count(), "load_avg_1min": os.getloadavg()[0], "runs": runs}
+    # the code these numbers are of: the README and the performance page quote them for it (tests/test_docs.py)
+    out["measured"] = measured_code(ROOT, "bench/scale.py")
     if baseline is not None:
         old = {r["n_tests"]: r for r in baseline["runs"]}
         out["baseline"] = {

@@ -10,8 +10,10 @@ run: the pages quote them, the check of the committed pages leaves them out
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
+import subprocess
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -20,6 +22,50 @@ import pandas as pd
 import yaml
 
 from rocklab.io import benchmark_times
+
+#: What can change a benchmark's numbers: the library, the workflow, its scripts, settings and
+#: build, the pinned packages (and the benchmark's own script, :func:`measured_code`'s ``extra``).
+CODE_PATHS = (
+    "src/rocklab",
+    "scripts",
+    "workflow",
+    "Snakefile",
+    "config",
+    "requirements.lock",
+    "pyproject.toml",
+    "Makefile",
+)
+#: The benchmarks whose numbers the README quotes: each must be a measurement of the code it describes.
+QUOTED = {"fresh_clone": "bench/fresh_clone.py", "scale": "bench/scale.py"}
+
+
+def measured_code(checkout: str | Path, *extra: str) -> dict[str, Any]:
+    """The code a benchmark measures in the git checkout ``checkout``.
+
+    Returns
+    -------
+    dict
+        ``commit`` (HEAD), ``code`` (a hash of the git objects of :data:`CODE_PATHS` and ``extra`` at
+        HEAD: two commits whose code is the same have the same, whatever else they change: the
+        pages a measurement regenerates, the changelog), ``dirty`` (whether the working tree's code
+        differs from HEAD's: then the numbers are those of no commit) and ``paths``.
+
+    Raises
+    ------
+    RuntimeError
+        Where ``checkout`` is no git checkout: what was measured cannot be told.
+    """
+    paths = [*CODE_PATHS, *extra]
+
+    def git(*args: str) -> subprocess.CompletedProcess[str]:
+        return subprocess.run(["git", *args], cwd=checkout, capture_output=True, text=True)
+
+    head, tree = git("rev-parse", "HEAD"), git("ls-tree", "-r", "HEAD", "--", *paths)
+    if head.returncode or tree.returncode:
+        raise RuntimeError(f"{checkout} is no git checkout: {(head.stderr or tree.stderr).strip()}")
+    dirty = git("diff", "--quiet", "HEAD", "--", *paths).returncode != 0
+    code = hashlib.sha256(tree.stdout.encode()).hexdigest()[:16]
+    return {"commit": head.stdout.strip(), "code": code, "dirty": dirty, "paths": paths}
 
 
 def _benchmarks(results: Path) -> dict[str, dict[str, float]]:
@@ -64,6 +110,7 @@ def _scale(bench: Mapping[str, Any]) -> dict[str, Any]:
     out["large_over_baseline"] = base.get("largest_wall_ratio")
     return {
         "cores": bench["cores"],
+        "measured": bench.get("measured"),
         **out,
         "cpu_s_per_test": bench.get("cpu_s_per_test"),
         "memory_ratio": bench.get("memory_ratio"),
@@ -257,7 +304,9 @@ def performance_summary(results: str | Path, checkout: str | Path | None = None)
     fc = _bench(results, "fresh_clone")
     keys = ("cores", "load_before", "install_s", "workflow_s", "total_s", "install_cpu_s", "workflow_cpu_s")
     keys += ("target_total_s", "target_workflow_s", "total_over_target", "workflow_over_target")
-    out["fresh_clone"] = {k: fc[k] for k in keys} | {"load_1min": fc["load_before"][0]} if fc else None
+    out["fresh_clone"] = (
+        {k: fc[k] for k in keys} | {"load_1min": fc["load_before"][0], "measured": fc.get("measured")} if fc else None
+    )
     sc = _bench(results, "scale")
     out["scale"] = _scale(sc) if sc else None
     out["projection"] = _projection(sc, mp, checkout) if checkout is not None else None
