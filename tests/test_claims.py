@@ -136,3 +136,17 @@ def test_the_rule_in_numbers():
     # the two-sided wall, four times less damped, rocks longer
     assert rule["duration_p"]["two-sided"] > 4 * rule["duration_p"]["one-sided"]
     assert rule["zero"] == ["contact_gap.gap_over_alpha"]
+
+
+def test_no_effect_claims_follow_their_margin_whatever_the_p():
+    """A no-effect claim is about an effect that matters (issue 41): an effect the test detects but the
+    interval holds within the margin is negligible (supported), one it puts beyond the margin
+    contradicts, one that straddles it is inconclusive; with no margin known, only the test can
+    contradict the claim of no effect at all."""
+    assert verdict("zero", 0.001, 0.004, 1e-6, 0.0, 0.01) == "supported"
+    assert verdict("zero", 0.02, 0.05, 1e-6, 0.0, 0.01) == "contradicted"
+    assert verdict("zero", -0.05, -0.02, 0.3, 0.0, 0.01) == "contradicted"
+    assert verdict("zero", 0.005, 0.02, 1e-6, 0.0, 0.01) == "inconclusive"
+    assert verdict("zero", -0.005, 0.005, 0.6, 0.0, 0.01) == "supported"
+    assert verdict("zero", 0.001, 0.004, 1e-6, 0.0, np.nan) == "contradicted"
+    assert verdict("zero", -0.001, 0.004, 0.6, 0.0, np.nan) == "inconclusive"

@@ -183,10 +183,14 @@ def test_no_contact_depth_or_material_effect_unless_planted():
     u = factor_effect(planted, "unit", walls=walls).set_index("boundary")
     # the wall is the unit of its material: 3 walls of clay brick, 2 of tuff, however many series; the
     # tuff walls ranked lowest give H = 3 and p = 0.083, the least five walls allow: no rank test on
-    # five walls reaches 0.05
+    # five walls reaches 0.05, so the row is not testable, not a p that reads as no effect
     assert u.loc["two-sided", "n_units"] == [3, 2] and u.loc["two-sided", "unit_level"] == "wall"
-    assert u.loc["two-sided", "statistic"] == pytest.approx(3.0)
-    assert u.loc["two-sided", "p"] == pytest.approx(stats.chi2.sf(3.0, 1)) and not u.loc["two-sided", "systematic"]
+    assert np.isnan(u.loc["two-sided", "p"]) and not u.loc["two-sided", "systematic"]
+    assert u.loc["two-sided", "test"] == "not testable: 5 walls: the test reaches p = 0.083 at best, not below 0.05"
+    # with the level of the test above that floor, the same walls are tested
+    loose = factor_effect(planted, "unit", walls=walls, p_crit=0.1).set_index("boundary")
+    assert loose.loc["two-sided", "statistic"] == pytest.approx(3.0)
+    assert loose.loc["two-sided", "p"] == pytest.approx(stats.chi2.sf(3.0, 1)) and loose.loc["two-sided", "systematic"]
     # one-sided: two walls of clay brick and one of tuff, 18 series: no test
     assert np.isnan(u.loc["one-sided", "p"]) and u.loc["one-sided", "test"].startswith("not testable: 2 walls")
 
@@ -381,3 +385,24 @@ def test_a_series_whose_tests_were_all_rejected_leaves_the_pooled_laws_whole():
     out = _laws(laws, series)
     assert out["two_sided"]["peak"]["series_median_r2"] == pytest.approx(0.3)
     assert out["two_sided"]["peak"]["a"] == 0.98 and out["one_sided"] == {}
+
+
+@pytest.mark.parametrize("sizes", [[3, 2], [2, 2], [1, 3], [4, 6, 6], [5, 5, 5], [2, 3, 4], [3, 1, 2, 2]])
+def test_the_floor_of_a_rank_test_is_the_p_of_groups_wholly_apart(sizes):
+    """smallest_kruskal_p: scipy's Kruskal-Wallis p of groups wholly apart, in the order of ranks that
+    gives the largest H; no arrangement of distinct values reaches below it."""
+    from itertools import permutations
+
+    from rocklab.inference.power import smallest_kruskal_p
+
+    def wholly_apart(order):
+        ends = np.cumsum([0, *order])
+        return stats.kruskal(*[np.arange(a, b, dtype=float) for a, b in zip(ends[:-1], ends[1:])]).pvalue
+
+    floor = smallest_kruskal_p(sizes)
+    assert floor == pytest.approx(min(wholly_apart(order) for order in permutations(sizes)), rel=1e-12)
+    ends = np.cumsum([0, *sizes])
+    rng = np.random.default_rng(len(sizes))
+    for _ in range(200):
+        x = rng.permutation(int(ends[-1])).astype(float)
+        assert stats.kruskal(*np.split(x, ends[1:-1])).pvalue >= floor * (1 - 1e-12)

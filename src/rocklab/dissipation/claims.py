@@ -167,7 +167,10 @@ def verdict(
     Parameters
     ----------
     kind : {'zero', 'below', 'near'}
-        No effect; the mean below ``value``; the mean within ``value`` +- ``margin``.
+        No effect (none beyond ``margin``: supported where the interval lies within +- margin, even
+        where ``p`` is below ``alpha``, contradicted where it lies beyond, or where no margin is
+        known and ``p`` is below ``alpha``); the mean below ``value``; the mean within ``value`` +-
+        ``margin``.
     margin : float
         Absolute margin: the effect (or distance from ``value``) that counts as
         negligible (:func:`margin_of`); NaN where none is known, and then
@@ -180,9 +183,14 @@ def verdict(
     """
     V = ClaimVerdict
     if kind == "zero":
-        if p < alpha:
+        # no effect that matters: an effect the test detects but the interval holds within the margin
+        # is negligible, one the interval puts beyond it contradicts; between the two, only a claim
+        # of no effect at all (no margin known) is contradicted by the test
+        if -margin <= low and high <= margin:
+            return V.SUPPORTED
+        if low > margin or high < -margin or (p < alpha and not margin >= 0):
             return V.CONTRADICTED
-        return V.SUPPORTED if -margin <= low and high <= margin else V.INCONCLUSIVE
+        return V.INCONCLUSIVE
     if kind == "below":
         return V.SUPPORTED if high < value else V.CONTRADICTED if low >= value else V.INCONCLUSIVE
     if kind == "near":

@@ -64,8 +64,9 @@ from rocklab.inference.intervals import (
 )
 from rocklab.inference.multiplicity import holm
 from rocklab.inference.notes import counted, note_lines, note_mark
+from rocklab.inference.power import smallest_kruskal_p
 from rocklab.inference.verdicts import ClaimVerdict
-from rocklab.lab.hierarchy import COVARIATE_LEVEL, UNIT_COLUMN, too_few_units
+from rocklab.lab.hierarchy import COVARIATE_LEVEL, UNIT_COLUMN, plural, too_few_units
 from rocklab.lab.validity import Verdict
 from rocklab.physics.boundary import Boundary
 from rocklab.physics.restitution import CALIBRATED_RATIO_ONE_SIDED
@@ -374,8 +375,10 @@ def factor_effect(
     depth, the wall for the unit material), grouped by the factor's levels,
     per boundary condition: two series of one wall are one wall's evidence
     about its material.  Below the units a test needs
-    (:func:`rocklab.lab.hierarchy.too_few_units`) the row gives no statistic
-    and its ``test`` says why.
+    (:func:`rocklab.lab.hierarchy.too_few_units`), or where even groups wholly
+    apart cannot reach ``p_crit`` (:func:`rocklab.inference.power.smallest_kruskal_p`:
+    3 walls against 2 reach 0.083 at best), the row gives no statistic and its
+    ``test`` says why.
 
     Parameters
     ----------
@@ -400,6 +403,10 @@ def factor_effect(
             continue
         per_level = {str(k): len(v) for k, v in groups.items()}
         reason = too_few_units(level, len(sm), len(sm) - len(groups), per_level)
+        floor = smallest_kruskal_p(list(per_level.values()))
+        if not reason and floor >= p_crit:
+            # wholly apart, these units cannot reach the level: a p above it says nothing of an effect
+            reason = f"{plural(level, len(sm))}: the test reaches p = {floor:.2g} at best, not below {p_crit}"
         H, p = (np.nan, np.nan) if reason else stats.kruskal(*groups.values())
         rows.append(
             {
