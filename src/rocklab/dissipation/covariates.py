@@ -58,9 +58,10 @@ one level among the units that carry the response, or constant within
 every unit of the level above, is "not testable", never given a verdict.
 
 Verdicts (:func:`rocklab.dissipation.claims.verdict`) never over-claim.  A claim of no effect is
-"contradicted" when the effect differs from zero, "supported" only when its
-whole interval lies within +-margin (an equivalence test: absence of
-evidence is not evidence of absence), else "inconclusive"; a claim "below
+"supported" only when its whole interval lies within +-margin (an equivalence test: absence of
+evidence is not evidence of absence; an effect the test detects inside the margin is negligible),
+"contradicted" when the interval lies beyond the margin, or, where no margin is known, when the
+effect differs from zero, else "inconclusive"; a claim "below
 v" is supported when the interval lies below v, contradicted when it lies
 at or above; a claim "close to v" is supported when the interval lies
 within v +- margin, contradicted when it lies outside.  The margin follows
