@@ -153,7 +153,10 @@ def test_the_place_counts_the_rejected_tests_of_the_series():
     [
         ("zero", -0.01, 0.01, 0.5, 0, 0.05, "supported"),
         ("zero", -0.10, 0.10, 0.5, 0, 0.05, "inconclusive"),
-        ("zero", 0.01, 0.03, 0.001, 0, 0.05, "contradicted"),
+        # detected, but within the margin: negligible (issue 41)
+        ("zero", 0.01, 0.03, 0.001, 0, 0.05, "supported"),
+        ("zero", 0.01, 0.08, 0.001, 0, 0.05, "inconclusive"),
+        ("zero", 0.06, 0.08, 0.001, 0, 0.05, "contradicted"),
         ("below", 0.92, 0.97, 0.01, 1.0, 0, "supported"),
         ("below", 0.98, 1.02, 0.5, 1.0, 0, "inconclusive"),
         ("below", 1.01, 1.05, 0.01, 1.0, 0, "contradicted"),
@@ -183,14 +186,20 @@ def test_a_planted_aspect_ratio_effect_is_found_with_its_sign_and_interval():
 
 
 def test_a_planted_unit_and_contact_depth_effect_is_found():
-    table = campaign_effects(synthetic_tests(seed=4, tuff=0.3, per_mm=3e-4, tau=0.005))
+    table = campaign_effects(synthetic_tests(seed=4, tuff=0.3, per_mm=4e-4, tau=0.005))
     unit = row(table, "one-sided", "unit")
     assert unit.term == "tuff - clay brick" and unit.ci_low <= 0.3 <= unit.ci_high
     # the wall is the unit of its material: 4 walls, 2 coefficients
     assert unit.unit_level == "wall" and unit.n_units == 4 and unit.df == 2 and unit.n_series == 24
     assert unit.verdict == "contradicted"
     cd = row(table, "one-sided", "contact_depth_mm")
-    assert cd.slope > 0 and cd.ci_low <= 3e-4 * 200 <= cd.ci_high and cd.verdict == "contradicted"
+    assert cd.slope > 0 and cd.ci_low <= 4e-4 * 200 <= cd.ci_high and cd.ci_low > cd.margin
+    assert cd.verdict == "contradicted"
+    # a smaller effect, detected, whose interval straddles the margin: whether it matters is open
+    small = row(
+        campaign_effects(synthetic_tests(seed=4, tuff=0.3, per_mm=3e-4, tau=0.005)), "one-sided", "contact_depth_mm"
+    )
+    assert small.p < 1e-6 and small.ci_low < small.margin < small.ci_high and small.verdict == "inconclusive"
     # compared between the series of one specimen: 24 series, 8 specimen means and a slope
     assert cd.unit_level == "series" and cd.df == 24 - 8 - 1
     # two-sided walls have no contact depth: no row
@@ -199,7 +208,11 @@ def test_a_planted_unit_and_contact_depth_effect_is_found():
 
 def test_a_drift_over_the_tests_of_a_series_is_found():
     r = row(campaign_effects(synthetic_tests(seed=5, drift=-0.02)), "one-sided", "order")
-    assert r.ci_low <= -0.02 <= r.ci_high < 0 and r.verdict == "contradicted"
+    # found, and within the margin of e: a drift too small to change the outcome is negligible
+    assert r.ci_low <= -0.02 <= r.ci_high < 0 and r.p < 0.01
+    assert -r.margin <= r.ci_low and r.verdict == "supported"
+    large = row(campaign_effects(synthetic_tests(seed=5, drift=-0.1)), "one-sided", "order")
+    assert large.ci_low <= -0.1 <= large.ci_high < -large.margin and large.verdict == "contradicted"
     # each series' slope, then the mean over walls
     assert r.n_series == 24 and r.n_units == 4 and r.df == 3
 
