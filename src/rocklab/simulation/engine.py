@@ -78,7 +78,7 @@ TURNED = 1e-300
 #: :data:`rocklab.physics.law.KNOTS` in the columns after it: none (0, or a row without the column), on each
 #: impact, or on an excursion through a gap as a whole, read at its return.
 _L_SPEED = 4
-SPEED_NONE, SPEED_EACH, SPEED_EXCURSION = 0.0, 1.0, 2.0
+SPEED_EACH, SPEED_EXCURSION = 1.0, 2.0
 #: Samples of a record per block of :func:`_block_range`.
 _BLOCK = 16
 
