@@ -81,6 +81,15 @@ def diagnosis_markdown(
         "",
     ]
     diagnosis = CampaignDiagnosis.of(diagnosis)
+    if diagnosis.not_finished:
+        # named before the rest, since what follows leaves them out (their boundary's entry too)
+        out += ["## Series whose diagnosis did not finish", ""]
+        out += [
+            # an unfinished series' entry has its tests counted (series.not_finished)
+            f"- {e.key} ({e.boundary}, {counted(cast(int, e.n_tests), 'test')}): {e.not_finished}"
+            for e in diagnosis.not_finished
+        ]
+        out += [""]
     # a boundary condition's entry or a series', told apart by ``pooled``; an entry has its key (the schema)
     e: Any
     for e in [

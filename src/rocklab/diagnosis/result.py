@@ -457,11 +457,19 @@ class SeriesDiagnosis(_Entry):
     ``model_bias`` the bias of the model measured where a cause is selected
     (:mod:`rocklab.diagnosis.estimation.bias`); ``unnamed_estimates`` the
     parameters of the candidates it does not name whose signature its data
-    carry (:func:`rocklab.diagnosis.series.unnamed_estimates`).
+    carry (:func:`rocklab.diagnosis.series.unnamed_estimates`).  A series whose
+    diagnosis could not finish (it raised) has ``not_finished``, the exception
+    that stopped it, its tests and impacts, and no model (no ``base``,
+    ``what_is_wrong`` nor ``sample_test``): the campaign's readers skip it
+    (:attr:`CampaignDiagnosis.series`, :attr:`CampaignDiagnosis.not_finished`).
     """
 
     _optional = frozenset(
         {
+            "base",
+            "what_is_wrong",
+            "sample_test",
+            "not_finished",
             "too_small",
             "not_identifiable",
             "listed_verdict",
@@ -482,6 +490,7 @@ class SeriesDiagnosis(_Entry):
     n_impacts: int | None = None
     base: BaseRun | None = None
     what_is_wrong: str | None = None
+    not_finished: str | None = None
     too_small: str | None = None
     verdict: list[str] = field(default_factory=list)
     not_identifiable: dict[str, str] | None = None
@@ -602,8 +611,14 @@ class CampaignDiagnosis(_Document):
 
     @property
     def series(self) -> list[SeriesDiagnosis]:
-        """The entries of the series, in the file's order."""
-        return [e for e in self.entries if isinstance(e, SeriesDiagnosis)]
+        """The entries of the series diagnosed, in the file's order (not those whose diagnosis did not
+        finish: :attr:`not_finished`)."""
+        return [e for e in self.entries if isinstance(e, SeriesDiagnosis) and e.not_finished is None]
+
+    @property
+    def not_finished(self) -> list[SeriesDiagnosis]:
+        """The entries of the series whose diagnosis did not finish, in the file's order."""
+        return [e for e in self.entries if isinstance(e, SeriesDiagnosis) and e.not_finished is not None]
 
     @property
     def boundaries(self) -> list[BoundaryDiagnosis]:

@@ -410,10 +410,32 @@ def diagnose_records(
     seed: int = 0,
 ) -> SeriesDiagnosis | None:
     """:func:`diagnose_series` of one series' records, or None when none of its
-    tests has two impacts or more (nothing to compare a model with)."""
+    tests has two impacts or more (nothing to compare a model with).
+
+    A diagnosis that raises does not stop the job: the series' entry says it did
+    not finish (:func:`not_finished`), and the campaign's other series run on.
+    """
     tests = [r if isinstance(r, MeasuredTest) else measured_test(r) for r in records]
     tests = [t for t in tests if t.n_impacts >= 2]
     if not tests:
         log.warning("series %s: no test with two impacts or more, nothing to diagnose", key)
         return None
-    return diagnose_series(tests, key=str(key), n_boot=n_boot, n_history=n_history, seed=seed)
+    try:
+        return diagnose_series(tests, key=str(key), n_boot=n_boot, n_history=n_history, seed=seed)
+    except Exception as err:  # any failure of one series' diagnosis: reported in its entry
+        return not_finished(tests, str(key), err)
+
+
+def not_finished(tests: Sequence[MeasuredTest], key: str, err: BaseException) -> SeriesDiagnosis:
+    """The entry of a series whose diagnosis raised ``err``: its tests and impacts and the exception
+    (``not_finished``, its type and message), logged as a warning with its traceback."""
+    reason = f"{type(err).__name__}: {err}"
+    log.warning("series %s: the diagnosis did not finish (%s)", key, reason, exc_info=err)
+    return SeriesDiagnosis(
+        scope="series",
+        key=key,
+        boundary=tests[0].boundary,
+        n_tests=len(tests),
+        n_impacts=int(sum(t.n_impacts for t in tests)),
+        not_finished=reason,
+    )

@@ -396,14 +396,9 @@ def simulator(mp: ModelParams, base="analytic") -> RockingModel:
     and a change of the base e (:class:`~rocklab.physics.law.SpeedFactor`,
     :class:`~rocklab.physics.law.HousnerLoss`) are the base e of the model
     (``mp.e0``) and a law of the impact speed after the others
-    (:class:`rocklab.physics.impact.SpeedLaw`, the reference integrator only),
-    as :func:`impact_speeds` reads them; a law of the speed of the whole
-    excursion through a gap has no law of single impacts.
-
-    Raises
-    ------
-    NotImplementedError
-        For a law of the impact speed on a wall swinging through a gap.
+    (:class:`rocklab.physics.impact.SpeedLaw`), as :func:`impact_speeds` reads
+    them: on a wall swinging through a gap, a law of the excursion as a whole,
+    read at the return from it (``excursion``).
     """
     one = bool(mp.one_sided)
     law: _impact.ImpactLaw
@@ -419,9 +414,8 @@ def simulator(mp: ModelParams, base="analytic") -> RockingModel:
     )
     law, transverse = (law, calibrated) if mp.gap_model else (calibrated, None)
     if mp.speed_knots is not None:
-        if mp.gap_model:
-            raise NotImplementedError("a law of the impact speed has no simulator law on a wall with a gap")
-        law = _impact.SpeedLaw(law, mp.speed_knots)
+        # through a gap the law acts on the excursion as a whole, as impact_speeds reads it
+        law = _impact.SpeedLaw(law, mp.speed_knots, excursion=bool(mp.gap_model))
     if mp.stop > 0:
         # the landing from the outer hinge only, as free_run and stop_speeds
         # read it: with a gap the base law also serves the return from it

@@ -257,16 +257,39 @@ class SpeedLaw(ImpactLaw):
     at :data:`rocklab.physics.law.KNOTS` (:class:`rocklab.physics.law.SpeedFactor`, its last segment
     continued past them), within the bounds of :func:`bounded_factor`.
 
-    Only the event-driven reference integrator accepts it (no flat form).
+    ``excursion``: the law of a one-sided wall swinging through a gap (Fig. 12), where the factor acts
+    on the sequence base impact, flight in the gap, transverse impact, flight back, base impact as a
+    whole, as the diagnosis' closed form reads it
+    (:func:`rocklab.diagnosis.wall_model.impact_speeds`): no factor on a single impact
+    (:meth:`coefficient` is the other law's), g of the landing speed v that started the excursion on
+    the speed the wall leaves the base with at its return, v_out -> v_out bounded_factor(v_out / v,
+    g(v / thetadot_r)) (:meth:`factor`, read by the simulators at the return).
+
+    The numba engine reads it from the columns past the fourth of
+    :meth:`rocklab.simulation.rocking_model.RockingModel.numba_law`.
     """
 
-    def __init__(self, law: ImpactLaw, knots: npt.ArrayLike) -> None:
-        self.law, self.knots = law, np.asarray(knots, float)
+    def __init__(self, law: ImpactLaw, knots: npt.ArrayLike, excursion: bool = False) -> None:
+        self.law, self.knots, self.excursion = law, np.asarray(knots, float), bool(excursion)
+
+    def factor(self, e: Floats, thetadot_before: Floats, alpha: Floats, p: Floats) -> Floats:
+        """g(|thetadot^-| / thetadot_r) within the bounds of :func:`bounded_factor` on the signed e ``e``
+        of the impact (or of the excursion as a whole: v_out / v) [-]."""
+        return bounded_factor(e, speed_factor(np.abs(thetadot_before) / overturning_velocity(alpha, p), self.knots))
 
     def coefficient(self, thetadot_before: Floats, side: float, alpha: Floats, p: Floats) -> Floats:
         e = self.law.coefficient(thetadot_before, side, alpha, p)
-        g = speed_factor(np.abs(thetadot_before) / overturning_velocity(alpha, p), self.knots)
-        return e * bounded_factor(e, g)
+        return e if self.excursion else e * self.factor(e, thetadot_before, alpha, p)
+
+
+def speed_law(law: ImpactLaw, side: float) -> SpeedLaw | None:
+    """The law of the impact speed that ``law`` applies on leaving hinge ``side`` (through a
+    :class:`Sided` or :class:`Sticking`), or None."""
+    if isinstance(law, Sided):
+        return speed_law(law.law_pos if side > 0 else law.law_neg, side)
+    if isinstance(law, Sticking):
+        return speed_law(law.law, side)
+    return law if isinstance(law, SpeedLaw) else None
 
 
 class Custom(ImpactLaw):

@@ -196,7 +196,7 @@ class SpeedFactor(Law):
     :data:`KNOTS` (its last segment continued beyond them, :func:`hats`; e within the bounds of
     :func:`rocklab.physics.impact.bounded_factor`): a law of the impact speed no closed form
     dictates.  The exact simulator's law is :class:`rocklab.physics.impact.SpeedLaw` (the
-    reference integrator only: the maps' engines have none)."""
+    reference integrator and the numba engine)."""
 
     knots: tuple[float, ...] = (1.0, 1.0, 1.0, 1.0)
 
@@ -230,6 +230,19 @@ def speed_factor(x: Floats, knots: npt.ArrayLike) -> Floats:
     if 1 < k.ndim < h.ndim:
         k = k.reshape(k.shape[:-1] + (1,) * (h.ndim - k.ndim) + k.shape[-1:])
     return np.sum(h * k, axis=-1)
+
+
+def speed_factor_at(x: float, knots: FloatArray) -> float:
+    """g(x) of :func:`speed_factor` at one speed x [thetadot_r], ``knots`` one law, in scalar
+    arithmetic: the form the numba engine compiles (:mod:`rocklab.simulation.engine`).
+
+    Linear between the knots of :data:`KNOTS` (a uniform grid), the last segment continued past them.
+    """
+    n = KNOTS.size
+    h = KNOTS[1] - KNOTS[0]
+    x = max(x, KNOTS[0])
+    j = min(int((x - KNOTS[0]) / h), n - 2)
+    return float(knots[j] + (knots[j + 1] - knots[j]) * ((x - KNOTS[j]) / h))
 
 
 @dataclass(frozen=True)

@@ -187,7 +187,7 @@ def overturning_map(
         )
         if progress is not None:
             progress(int(rows[-1]) + 1, amp.size)
-    e0, a, b, v_stick = wall_model.numba_law()[0]
+    e0, a, b, v_stick = wall_model.numba_law()[0, :4]
     return xr.Dataset(
         {
             "overturned": (

@@ -37,7 +37,10 @@ def _model_arrays(
     their terms in flight (those of every model, in the slots each vector holds them in)."""
     terms = tuple(dict.fromkeys(t for m in models for t, _ in m.engine_terms()))
     prm = np.array([m.numba_params(overturn, rest_tol, substeps, terms) for m in models])
-    law = np.array([m.numba_law() for m in models])
+    laws = [m.numba_law() for m in models]
+    # a wall without a law of the impact speed has no columns for one: zeros, none
+    width = max(w.shape[1] for w in laws)
+    law = np.array([np.pad(w, ((0, 0), (0, width - w.shape[1]))) for w in laws])
     return prm, law, flight_function(terms)
 
 

@@ -32,6 +32,7 @@ from numba.np.unsafe.ndarray import to_fixed_tuple
 
 from rocklab.physics import flight
 from rocklab.physics.flight import FloatArray
+from rocklab.physics.law import speed_factor_at
 
 #: The parameter vector of one wall as the helpers take it, a tuple (:func:`run_history`).
 Params: TypeAlias = tuple[float, ...]
@@ -72,6 +73,12 @@ _N_P = len(LAYOUT)
 #: The speed a wall leaves a turn or its rest with, in the direction it moves [rad/s]: 0 to the last
 #: bit of every sum, but a sign a term that jumps at the turn reads (its first RK4 stage).
 TURNED = 1e-300
+#: The column of an impact law's row (:meth:`rocklab.simulation.rocking_model.RockingModel.numba_law`) that
+#: says whether it has a law of the impact speed (:class:`rocklab.physics.impact.SpeedLaw`), its values at
+#: :data:`rocklab.physics.law.KNOTS` in the columns after it: none (0, or a row without the column), on each
+#: impact, or on an excursion through a gap as a whole, read at its return.
+_L_SPEED = 4
+SPEED_EACH, SPEED_EXCURSION = 1.0, 2.0
 #: Samples of a record per block of :func:`_block_range`.
 _BLOCK = 16
 
@@ -169,8 +176,18 @@ def _advance(
 
 
 @numba.njit(cache=True)
+def _bounded(e: float, f: float) -> float:
+    """The factor f on the signed e ``e`` clipped to [0, 1/|e|] (:func:`rocklab.physics.impact.bounded_factor`)."""
+    if f < 0.0:
+        f = 0.0
+    if e != 0.0 and f > 1.0 / abs(e):
+        f = 1.0 / abs(e)
+    return f
+
+
+@numba.njit(cache=True)
 def _coefficient(law: FloatArray, row: int, v: float, prm: Params) -> float:
-    """Signed e of law row ``row`` (e0, a, b, v_stick) for a landing at v [rad/s].
+    """Signed e of law row ``row`` (e0, a, b, v_stick, and a law of the impact speed) for a landing at v [rad/s].
 
     ``E clip(a - b (v/thetadot_r)^2, 0, 1/|E|)`` with E = e0 clipped to
     [-1, 1] (:func:`rocklab.physics.impact.bounded_factor`: a scale, a
@@ -178,6 +195,9 @@ def _coefficient(law: FloatArray, row: int, v: float, prm: Params) -> float:
     create energy, as in :class:`rocklab.physics.impact.Scaled`;
     :func:`rocklab.physics.impact.amplitude_factor`), and 0 for a landing
     slower than v_stick thetadot_r (:class:`rocklab.physics.impact.Sticking`).
+    A row with a law of the impact speed on each impact (fifth column 1,
+    :class:`rocklab.physics.impact.SpeedLaw`) multiplies that e by its factor
+    g(v / thetadot_r) within the same bounds.
     """
     # the law's entries are floats (an array's items read as Any)
     e0: float
@@ -190,18 +210,29 @@ def _coefficient(law: FloatArray, row: int, v: float, prm: Params) -> float:
         e0 = 1.0
     elif e0 < -1.0:
         e0 = -1.0
-    if a == 1.0 and b == 0.0:
-        return e0
-    r = abs(v) / prm[_P_VR]
-    f = a - b * r * r
-    if f < 0.0:
-        f = 0.0
-    if e0 != 0.0 and f > 1.0 / abs(e0):
-        f = 1.0 / abs(e0)
-    return e0 * f
+    e = e0
+    if not (a == 1.0 and b == 0.0):
+        r = abs(v) / prm[_P_VR]
+        e = e0 * _bounded(e0, a - b * r * r)
+    if law.shape[1] > _L_SPEED and law[row, _L_SPEED] == SPEED_EACH:
+        e = e * _bounded(e, _speed_factor(abs(v) / prm[_P_VR], law[row, _L_SPEED + 1 :]))
+    return e
 
 
-# the one definition of the block's energy, compiled for the engine
+@numba.njit(cache=True)
+def _excursion_factor(law: FloatArray, v_out: float, v_entry: float, prm: Params) -> float:
+    """The factor of a law of the impact speed on an excursion through a gap as a whole (row base -1,
+    fifth column :data:`SPEED_EXCURSION`; :class:`rocklab.physics.impact.SpeedLaw`): g(v / thetadot_r)
+    of the landing speed v = ``v_entry`` [rad/s] that started it, within the bounds of the excursion's
+    ratio v_out / v, v_out [rad/s] the speed the wall leaves the base with at its return; 1 without one
+    (or without an entry: a wall that came into the gap from rest)."""
+    if law.shape[1] <= _L_SPEED or law[1, _L_SPEED] != SPEED_EXCURSION or not v_entry > 0.0:
+        return 1.0
+    return _bounded(abs(v_out) / v_entry, _speed_factor(v_entry / prm[_P_VR], law[1, _L_SPEED + 1 :]))
+
+
+# the one definition of a law of the impact speed and of the block's energy, compiled for the engine
+_speed_factor = numba.njit(cache=True, inline="always")(speed_factor_at)
 _potential = numba.njit(cache=True, inline="always")(flight.potential)
 _potential_linear = numba.njit(cache=True, inline="always")(flight.potential_linear)
 
@@ -410,6 +441,8 @@ def run_history(
     ov = prm[_P_OV]
     gap = prm[_P_GAP]
     one = prm[_P_ONE] > 0
+    # the landing speed that started an excursion through the gap (0: none)
+    v_entry = 0.0
     nsub = 1 if prm[_P_LIN] > 0 else max(1, int(prm[_P_SUB]))
     hs = h / nsub
     # the linear form's full record intervals in free motion, without the
@@ -599,6 +632,14 @@ def run_history(
             else:
                 e = _coefficient(law, 0 if s > 0 else 1, vm, prm)
                 x = 0.0
+                if one and gap > 0.0:
+                    # a law of the impact speed acts on the excursion through the gap as a whole, on the
+                    # speed of the landing that started it (wall_model.impact_speeds)
+                    if s > 0:
+                        v_entry = abs(vm)
+                    else:
+                        e = e * _excursion_factor(law, e * vm, v_entry, prm)
+                        v_entry = 0.0
             peak = max(peak, abs(xm))
             a_s = prm[_P_APOS] if s > 0 else prm[_P_ANEG]
             max_ratio = max(max_ratio, peak / a_s)
@@ -622,6 +663,7 @@ def run_history(
                 resting, held = True, False
                 rest_at = x
                 v = 0.0
+                v_entry = 0.0
             else:
                 v = v_after
                 if ev == 1:

@@ -17,6 +17,7 @@ import numpy.typing as npt
 import pandas as pd
 
 from rocklab._imports import lazy_module
+from rocklab.physics import impact as _impact
 from rocklab.physics.flight import FloatArray, Floats
 from rocklab.simulation.engine import TURNED
 from rocklab.simulation.rocking_model import OVERTURN, REST_TOL, RockingHistory, RockingModel
@@ -120,6 +121,10 @@ def _reference(
 ) -> RockingHistory:
     v_rest = rest_tol * model.thetadot_r
     law_base, law_tr = model.base_law, model.transverse_law
+    # a law of the impact speed on the excursions through a gap, and the landing speed that started one
+    excursion = _impact.speed_law(law_base, -1)
+    excursion = excursion if excursion is not None and excursion.excursion else None
+    v_entry = 0.0
     t_out = np.arange(0.0, t_end + 0.5 / fs, 1.0 / fs)
     theta_out = np.full(t_out.shape, np.nan)
     thetadot_out = np.full(t_out.shape, np.nan)
@@ -281,12 +286,20 @@ def _reference(
         else:
             e = float(law_base.coefficient(v_before, s, model.alpha, model.p))
             th = 0.0
+            if model.one_sided and model.gap > 0:
+                # a law of the impact speed acts on the excursion through the gap as a whole, on the
+                # speed of the landing that started it (wall_model.impact_speeds)
+                if s > 0:
+                    v_entry = abs(v_before)
+                elif excursion is not None and v_entry > 0:
+                    e *= float(excursion.factor(e * v_before / v_entry, v_entry, model.alpha, model.p))
+                    v_entry = 0.0
         thd = e * v_before
         rows.append((t, "transverse" if transverse else "base", v_before, thd, max(peaks)))
         wrong_way = (model.one_sided and model.gap == 0 and thd <= 0) or (transverse and thd <= 0)
         if abs(thd) < v_rest or wrong_way:
             resting, rest_at, thd, t_rest = True, th, 0.0, t
-            held = None
+            held, v_entry = None, 0.0
         elif not transverse:
             side = 1 if thd > 0 else -1
     if resting and t < t_end:

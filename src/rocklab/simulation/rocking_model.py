@@ -394,30 +394,40 @@ class RockingModel:
         """Impact laws as a (3, 4) array: rows base +, base -, transverse;
         columns e0, a, b of the flat form (:meth:`rocklab.physics.impact.ImpactLaw.flat`)
         and v_stick [thetadot_r] of a :class:`~rocklab.physics.impact.Sticking`
-        law (0: none).
+        law (0: none); a wall with a law of the impact speed
+        (:class:`~rocklab.physics.impact.SpeedLaw`) has two more columns and one per
+        knot of :data:`rocklab.physics.law.KNOTS`: whether it acts on each impact or
+        on an excursion through a gap as a whole (:data:`rocklab.simulation.engine.SPEED_EACH`,
+        :data:`~rocklab.simulation.engine.SPEED_EXCURSION`) and its values g at the knots.
 
         Raises
         ------
         NotImplementedError
             For a law the engines cannot evaluate (no flat form).
         """
-        return np.array(
-            [
-                _engine_row(self.base_law, 1, self.alpha),
-                _engine_row(self.base_law, -1, self.alpha),
-                _engine_row(self.transverse_law, -1, self.alpha),
-            ]
-        )
+        rows = [
+            _engine_row(self.base_law, 1, self.alpha),
+            _engine_row(self.base_law, -1, self.alpha),
+            _engine_row(self.transverse_law, -1, self.alpha),
+        ]
+        width = max(len(r) for r in rows)
+        return np.array([r + [0.0] * (width - len(r)) for r in rows])
 
 
 def _engine_row(law: _impact.ImpactLaw, side: int, alpha: float) -> list[float]:
     """(e0, a, b, v_stick) of ``law`` on hinge ``side``: the flat form, with
     the sticking threshold of a :class:`~rocklab.physics.impact.Sticking`
-    law (possibly per hinge, :class:`~rocklab.physics.impact.Sided`)."""
+    law (possibly per hinge, :class:`~rocklab.physics.impact.Sided`), then the
+    columns of a :class:`~rocklab.physics.impact.SpeedLaw` where it has one
+    (:meth:`RockingModel.numba_law`)."""
     if isinstance(law, _impact.Sided):
         return _engine_row(law.law_pos if side > 0 else law.law_neg, side, alpha)
     if isinstance(law, _impact.Sticking):
-        return [*_engine_row(law.law, side, alpha)[:3], law.v_stick]
+        row = _engine_row(law.law, side, alpha)
+        return [*row[:3], law.v_stick, *row[4:]]
+    if isinstance(law, _impact.SpeedLaw):
+        mode = engine.SPEED_EXCURSION if law.excursion else engine.SPEED_EACH
+        return [*_engine_row(law.law, side, alpha)[:4], mode, *law.knots]
     return [*law.flat(alpha)[0 if side > 0 else 1], 0.0]
 
 

@@ -118,5 +118,5 @@ CAUSE = Cause(
     replaces=(restitution_scale.CAUSE.name, restitution_amplitude.CAUSE.name),
     family=restitution_amplitude.CAUSE.name,
     closed_form=closed_form,
-    on_the_maps=(None, "an impact law the maps' engines lack (the reference integrator only)"),
+    on_the_maps=(None, "a flexible impact law the calibrated walls do not carry (the engine could: issue 42)"),
 )
