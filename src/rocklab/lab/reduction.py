@@ -32,6 +32,7 @@ from rocklab.lab import channels as health
 from rocklab.lab import inertial, instrument, kinematics, release, rotation, validity
 from rocklab.lab.campaign import TEST_COLUMNS, Campaign, row_series
 from rocklab.lab.motion import noise_level
+from rocklab.lab.native_files import check_setup_channels
 from rocklab.lab.raw_format import RawFormatError
 from rocklab.lab.records import (
     INERTIAL_COLUMNS,
@@ -257,6 +258,10 @@ def _reduce_transducers(
             meta,
             RawFormatError(path, None, f"channel(s) {missing} not described in setups.csv for setup {meta['setup']}"),
         )
+    try:
+        check_setup_channels(rec, described.channel)
+    except RawFormatError as exc:
+        return _unreadable(meta, exc)
     setup = described.set_index("channel").loc[rec.channels].reset_index()
 
     c = opt["channels"]
