@@ -62,6 +62,25 @@ def _header(expected_test_id: str | None, record: str, source: str) -> dict[str,
     return head
 
 
+#: What a TDMS file starts with: the tag of its first segment's lead-in.
+TDMS_TAG = b"TDSm"
+#: The second byte of a C3D file: the key of its header (ObsPy-style sniffing, not a parser).
+C3D_KEY = 0x50
+
+
+def _is_tdms(path: Path) -> bool:
+    """Whether the file starts as a TDMS file does (npTDMS reads any other bytes as an empty file)."""
+    with path.open("rb") as fh:
+        return fh.read(4) == TDMS_TAG
+
+
+def _is_c3d(path: Path) -> bool:
+    """Whether the file starts as a C3D file does."""
+    with path.open("rb") as fh:
+        head = fh.read(2)
+    return len(head) == 2 and head[1] == C3D_KEY
+
+
 def tdms_record(path: Path, expected_test_id: str | None = None) -> Record:
     """A transducer record from a LabVIEW TDMS file (``docs/raw-format.md``, "``.tdms``").
 
@@ -81,6 +100,8 @@ def tdms_record(path: Path, expected_test_id: str | None = None) -> Record:
     """
     from nptdms import TdmsFile  # imported here: only campaigns with TDMS files need it
 
+    if not _is_tdms(path):
+        raise RawFormatError(path, None, f"not a TDMS file (it does not start with {TDMS_TAG!r})")
     try:
         tdms = TdmsFile.read(path)
         groups = {g.name: g for g in tdms.groups()}
@@ -168,6 +189,8 @@ def c3d_record(path: Path, expected_test_id: str | None = None) -> RotationRecor
     """
     import c3d  # imported here: only campaigns with C3D files need it
 
+    if not _is_c3d(path):
+        raise RawFormatError(path, None, "not a C3D file (its header's key is not 0x50)")
     try:
         with path.open("rb") as fh, warnings.catch_warnings():
             # a file without analog channels is usual for motion capture
