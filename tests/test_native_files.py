@@ -13,9 +13,16 @@ import pandas as pd
 import pytest
 
 from rocklab.lab.campaign import open_campaign
-from rocklab.lab.native_files import c3d_record, check_setup_channels, native_reader, tdms_record, video_record
+from rocklab.lab.native_files import (
+    c3d_record,
+    check_setup_channels,
+    native_reader,
+    read_test_file,
+    tdms_record,
+    video_record,
+)
 from rocklab.lab.raw_format import RawFormatError
-from rocklab.lab.records import Record, RotationRecord, read_any_record
+from rocklab.lab.records import Record, RotationRecord
 from rocklab.lab.reduction import qc_row, reduce_test
 from rocklab.lab.video_tracking import find_markers, theta_from_markers, track_video
 from rocklab.lab.virtual_lab import VirtualTest, write_campaign
@@ -48,7 +55,7 @@ def test_a_tdms_file_reads_as_the_transducer_record_it_holds(tmp_path):
     readings[100:104, 2] = np.nan
     path = tmp_path / "T.tdms"
     write_tdms(path, t, readings, [0, 1, 2, 3, 4])
-    rec = read_any_record(path, "T")
+    rec = read_test_file(path, "T")
     assert isinstance(rec, Record)
     assert rec.channels == [0, 1, 2, 3, 4] and rec.fs == pytest.approx(400.0)
     np.testing.assert_allclose(rec.time, t, atol=1e-9)
@@ -103,7 +110,7 @@ def test_theta_from_a_c3d_file_is_the_wall_markers_angle_with_lost_frames_empty(
     w = np.linspace(0, 2.0, 600)  # sliding moves both markers: not theta
     path = tmp_path / "C.c3d"
     write_c3d(path, fs, theta, 0 * theta, 0 * theta, w, SPEC, MarkerEffects(noise_mm=0.0, occlusions=3), rng=1)
-    rec = read_any_record(path, "C")
+    rec = read_test_file(path, "C")
     assert isinstance(rec, RotationRecord) and rec.fs == pytest.approx(fs)
     lost = np.isnan(rec.dof["theta"])
     assert 3 <= lost.sum() < 60

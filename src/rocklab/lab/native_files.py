@@ -15,6 +15,7 @@ reduction and everything downstream run unchanged:
   markers tracked in every frame (:mod:`rocklab.lab.video_tracking`), a
   :class:`~rocklab.lab.records.RotationRecord` (:func:`video_record`).
 
+:func:`read_test_file` is the door of every test's file, text or native.
 Every reader follows the contract of :data:`rocklab.lab.records.READERS`:
 called on a path past :func:`rocklab.lab.records.check_file` (the campaign's
 path checks, :func:`rocklab.lab.raw_format.campaign_file`, come before), it
@@ -33,7 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from rocklab.lab.raw_format import RawFormatError
-from rocklab.lab.records import Record, RotationRecord
+from rocklab.lab.records import InertialRecord, Record, RotationRecord, check_file, read_any_record
 
 #: The group of a TDMS file that holds the transducers, one channel ``ch<n>`` each.
 TDMS_GROUP = "displacements"
@@ -256,3 +257,19 @@ NATIVE_READERS: dict[str, Callable[[Path, str | None], Record | RotationRecord]]
 def native_reader(path: str | Path) -> Callable[[Path, str | None], Record | RotationRecord] | None:
     """The reader of a native file by its extension (any case), None for a text record."""
     return NATIVE_READERS.get(Path(path).suffix.lower())
+
+
+def read_test_file(path: str | Path, expected_test_id: str | None = None) -> Record | RotationRecord | InertialRecord:
+    """Read one test's file, the door of every record: a native file by its extension
+    (:func:`native_reader`), a text record of any kind otherwise
+    (:func:`rocklab.lab.records.read_any_record`).
+
+    Raises
+    ------
+    RawFormatError
+        Naming the file and the problem (and the line, in a text record).
+    """
+    native = native_reader(path)
+    if native is None:
+        return read_any_record(path, expected_test_id)
+    return native(check_file(path), expected_test_id)

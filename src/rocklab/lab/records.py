@@ -495,21 +495,16 @@ READERS: dict[str, Callable[[RecordText, str | None], Record | RotationRecord | 
 
 
 def read_any_record(path: str | Path, expected_test_id: str | None = None) -> Record | RotationRecord | InertialRecord:
-    """Read one test's record of whatever kind its header declares (``# record:``, :data:`RECORD_KINDS`),
-    or the native file of an instrument that its extension names (:data:`rocklab.lab.native_files.NATIVE_READERS`).
+    """Read one test's record of whatever kind its header declares (``# record:``, :data:`RECORD_KINDS`).
 
-    The door checks are the same for all (:func:`read_text`, :func:`check_header`, :func:`read_rows`).
+    The door checks are the same for all (:func:`read_text`, :func:`check_header`, :func:`read_rows`);
+    the native files of the instruments come through the same door in
+    :func:`rocklab.lab.native_files.read_test_file`.
 
     Raises
     ------
     RawFormatError
         Naming the file, the line and the problem.
     """
-    # imported here: the native readers import this module, and OpenCV costs a start-up
-    from rocklab.lab.native_files import native_reader
-
-    native = native_reader(path)
-    if native is not None:
-        return native(check_file(path), expected_test_id)
     rec = read_text(path)
     return READERS[rec.kind](rec, expected_test_id)
