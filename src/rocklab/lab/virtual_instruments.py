@@ -198,12 +198,15 @@ def write_instrument_record(
     cols: Mapping[str, np.ndarray],
     sensor_mm: Iterable[float] | None = None,
     unreadable: bool = False,
+    source: str = "rocklab virtual lab, motion capture",
 ) -> None:
     """Write a ``# record: rotation`` or ``# record: inertial`` file in the lab's format.
 
     Time with 5 decimals, rotations with 7, rates with 6, forces and lengths
-    with 5; empty fields for NaN.  With ``unreadable`` the gzip stream is cut
-    in the middle (a broken transfer).
+    with 5; empty fields for NaN.  Gzip-compressed unless ``path`` ends in
+    ``.csv`` (the plain text the format accepts too).  With ``unreadable``
+    the gzip stream is cut in the middle (a broken transfer).  ``source``:
+    the rotation record's ``# source:`` line.
     """
     units = {"rotation": ROTATION_UNITS, "inertial": INERTIAL_UNITS}[instrument]
     head = f"# test_id: {test_id}\n# record: {instrument}\n# sampling_rate_hz: {fs:g}\n# units: {', '.join(units)}\n"
@@ -212,7 +215,7 @@ def write_instrument_record(
         head += "# sensor_mm: " + ", ".join(f"{x:g}" for x in sensor_mm) + "\n"
         names = list(INERTIAL_COLUMNS)
     else:
-        head += "# source: rocklab virtual lab, motion capture\n"
+        head += f"# source: {source}\n"
         names = list(cols)
     decimals = {"theta_rad": 7, "phi_rad": 7, "gyro_x_rad_s": 6}
     head += "time_s," + ",".join(names) + "\n"
@@ -220,7 +223,8 @@ def write_instrument_record(
     fmt = ["%.5f"] + [f"%.{decimals.get(c, 5)}f" for c in names]
     np.savetxt(buf, np.column_stack([t, *(cols[c] for c in names)]), fmt=fmt, delimiter=",")
     body = buf.getvalue().replace("nan", "")
-    data = gzip.compress((head + body).encode(), compresslevel=6, mtime=0)
+    text = (head + body).encode()
+    data = text if Path(path).suffix == ".csv" else gzip.compress(text, compresslevel=6, mtime=0)
     if unreadable:
         data = data[: len(data) // 2]
     Path(path).parent.mkdir(parents=True, exist_ok=True)

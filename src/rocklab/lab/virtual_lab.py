@@ -295,7 +295,13 @@ def simulate_virtual_test(test: VirtualTest, specimen, layout, rng=None, t_end=4
             "e_first": float(ratios[0]) if ratios.size else np.nan,
             "e_true": float(np.median(ratios)) if ratios.size else np.nan,
             "impacts": pd.DataFrame(
-                {"t": base["t"].to_numpy(float) + truth["t_release"], "e": ratios} if len(base) else {"t": [], "e": []}
+                {
+                    "t": base["t"].to_numpy(float) + truth["t_release"],
+                    "e": ratios,
+                    "thetadot_before": base["thetadot_before"].to_numpy(float),
+                }
+                if len(base)
+                else {"t": [], "e": [], "thetadot_before": []}
             ),
             "e_analytic": float(e_an),
             "n_impacts": int(len(imp)),
