@@ -312,3 +312,48 @@ def test_a_bad_native_file_is_unreadable_with_its_reason_and_the_rest_runs(mixed
     _, rows = mixed
     assert rows["BAD"]["reject_reason"] == "unreadable" and "leaves the campaign folder" in rows["BAD"]["reject_detail"]
     assert rows["CUT"]["reject_reason"] == "unreadable" and "CUT.tdms" in rows["CUT"]["reject_detail"]
+
+
+# --- rocklab track --------------------------------------------------------
+
+
+def test_rocklab_track_writes_the_rotation_record_and_the_figure(tmp_path, capsys):
+    from rocklab.cli import main
+    from rocklab.lab.records import read_any_record
+
+    fs = 60.0
+    _, theta = motion(60, fs)
+    video = tmp_path / "wall.mp4"
+    write_video(video, fs, theta, 0 * theta, SPEC, TINY, rng=5)
+    out, fig = tmp_path / "wall.csv.gz", tmp_path / "wall.png"
+    assert main(["track", str(video), "-o", str(out), "--figure", str(fig), "--test-id", "W1"]) == 0
+    rec = read_any_record(out, "W1")
+    assert isinstance(rec, RotationRecord) and rec.fs == pytest.approx(fs)
+    np.testing.assert_allclose(rec.dof["theta"], theta, atol=1e-2)
+    assert rec.header["source"].startswith("rocklab track wall.mp4: 60 of 60 frames tracked")
+    assert fig.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "60 tracked" in capsys.readouterr().out
+
+
+def test_rocklab_track_refuses_a_film_without_four_markers_in_one_line(tmp_path, capsys):
+    from rocklab.cli import main
+
+    video = tmp_path / "three.avi"
+    _film(video, 30.0, [np.array([[10.0, 20.0], [10.0, 60.0], [40.0 + k, 20.0]]) for k in range(10)])
+    assert main(["track", str(video)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("rocklab track: ") and "three.avi: fewer than four markers found" in err
+    assert "\n" not in err and not (tmp_path / "three.rotation.csv.gz").exists()
+
+
+# --- accuracy -------------------------------------------------------------
+
+
+def test_the_smallest_resolved_impact_is_the_slowest_found_within_005():
+    from rocklab.lab.accuracy import smallest_resolved
+
+    truth = pd.DataFrame({"t": [1.0, 2.0, 3.0, 4.0], "e": [0.9] * 4, "thetadot_before": [0.4, -0.3, 0.2, -0.1]})
+    found = pd.DataFrame({"t_s": [1.001, 2.0, 3.002, 4.0], "e_velocity": [0.91, 0.94, 0.80, np.nan]})
+    # the impact at 3 s is off by 0.1, the one at 4 s has no velocities
+    assert smallest_resolved(found, truth) == pytest.approx(0.3)
+    assert np.isnan(smallest_resolved(found.iloc[2:], truth))

@@ -98,6 +98,10 @@ class VideoEffects:
     extension: str = ".mp4"
 
 
+#: The film of the benchmarks: a phone's slow motion cropped to 480 x 360 pixels, markers 10 pixels across.
+BENCH_FILM = VideoEffects(height_px=480, width_px=360, marker_px=10.0)
+
+
 def _occluded(n: int, fs: float, count: int, max_s: float, rng: np.random.Generator) -> np.ndarray:
     """Samples lost in ``count`` stretches of one to ``max_s`` [s], away from the ends."""
     lost = np.zeros(n, bool)
