@@ -87,6 +87,33 @@ class InertialEffects:
     sensor: tuple[float, float, float] = (1.0, 0.0, 0.8)
 
 
+def occluded(n: int, fs: float, count: int, max_s: float, rng: np.random.Generator) -> np.ndarray:
+    """Samples an optical instrument lost: ``count`` stretches of one sample to ``max_s`` [s], away from the ends.
+
+    Parameters
+    ----------
+    n : int
+        Samples of the record.
+    fs : float
+        Sampling rate [Hz].
+    count : int
+        Stretches lost.
+    max_s : float
+        Longest stretch [s].
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    ndarray (n,) of bool
+    """
+    lost = np.zeros(n, bool)
+    longest = max(int(max_s * fs), 1)
+    if count and n > longest + 10:
+        for i0 in rng.integers(5, n - longest - 5, count):
+            lost[i0 : i0 + rng.integers(1, longest + 1)] = True
+    return lost
+
+
 def rotation_readings(
     t: np.ndarray,
     theta: ArrayLike,
@@ -110,11 +137,7 @@ def rotation_readings(
         cols["phi_rad"] = np.asarray(phi, float) + rng.normal(0.0, effects.noise_rad, n)
         cols["v_mm"] = np.asarray(v, float) + rng.normal(0.0, 0.03, n)
         cols["w_mm"] = np.asarray(w, float) + rng.normal(0.0, 0.03, n)
-    fs = 1.0 / (t[1] - t[0])
-    longest = max(int(effects.max_occlusion_s * fs), 1)
-    lost = np.zeros(n, bool)
-    for i0 in rng.integers(5, n - longest - 5, effects.occlusions) if effects.occlusions else ():
-        lost[i0 : i0 + rng.integers(1, longest + 1)] = True
+    lost = occluded(n, 1.0 / (t[1] - t[0]), effects.occlusions, effects.max_occlusion_s, rng)
     for x in cols.values():
         x[lost] = np.nan
     return cols

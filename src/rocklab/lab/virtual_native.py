@@ -34,6 +34,7 @@ from numpy.typing import ArrayLike
 
 from rocklab.lab.kinematics import lab_points
 from rocklab.lab.native_files import C3D_WALL_MARKERS, TDMS_GROUP, TDMS_UNIT
+from rocklab.lab.virtual_instruments import occluded
 
 #: Heights of the wall's two markers (lower, upper) as fractions of the wall's height.
 MARKER_HEIGHTS = (0.25, 0.9)
@@ -100,16 +101,6 @@ class VideoEffects:
 
 #: The film of the benchmarks: a phone's slow motion cropped to 480 x 360 pixels, markers 10 pixels across.
 BENCH_FILM = VideoEffects(height_px=480, width_px=360, marker_px=10.0)
-
-
-def _occluded(n: int, fs: float, count: int, max_s: float, rng: np.random.Generator) -> np.ndarray:
-    """Samples lost in ``count`` stretches of one to ``max_s`` [s], away from the ends."""
-    lost = np.zeros(n, bool)
-    longest = max(int(max_s * fs), 1)
-    if count and n > longest + 10:
-        for i0 in rng.integers(5, n - longest - 5, count):
-            lost[i0 : i0 + rng.integers(1, longest + 1)] = True
-    return lost
 
 
 def _truncate(path: Path) -> None:
@@ -179,7 +170,7 @@ def write_c3d(
     pts = np.concatenate([wall, frame], axis=1) + rng.normal(0.0, effects.noise_mm, (n, 3, 3))
     residual = np.full((n, 3, 1), 0.5)
     for k, count in enumerate(((effects.occlusions + 1) // 2, effects.occlusions // 2)):
-        residual[_occluded(n, fs, count, effects.max_occlusion_s, rng), k] = -1.0
+        residual[occluded(n, fs, count, effects.max_occlusion_s, rng), k] = -1.0
     cameras = np.zeros((n, 3, 1))
     points = np.concatenate([pts, residual, cameras], axis=2).astype(np.float32)
     writer = c3d.Writer(point_rate=float(fs), analog_rate=float(fs))
@@ -289,7 +280,7 @@ def render_frames(
     X = marker_points(specimen)
     face = np.array([[0.0, -b / 2, 0.0], [0.0, b / 2, 0.0], [0.0, b / 2, h], [0.0, -b / 2, h]])
     post = post_points(specimen)
-    hidden = np.column_stack([_occluded(n, fs, effects.occlusions, effects.max_occlusion_s, rng) for _ in range(2)])
+    hidden = np.column_stack([occluded(n, fs, effects.occlusions, effects.max_occlusion_s, rng) for _ in range(2)])
     shape = (effects.height_px, effects.width_px)
     still = np.full(shape, 20.0, np.float32)
     post_px = image_points(np.array([[post[0, 0], 0.0], [post[0, 0], h]]), specimen, effects)
