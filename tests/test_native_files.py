@@ -357,3 +357,20 @@ def test_the_smallest_resolved_impact_is_the_slowest_found_within_005():
     # the impact at 3 s is off by 0.1, the one at 4 s has no velocities
     assert smallest_resolved(found, truth) == pytest.approx(0.3)
     assert np.isnan(smallest_resolved(found.iloc[2:], truth))
+
+
+def test_lab_points_are_the_rigid_body_map_the_transducers_read():
+    from rocklab.lab.kinematics import lab_points, transducer_elongation
+
+    X = np.array([[710.0, 0.0, 300.0], [-710.0, 56.0, 1000.0]])
+    F = np.array([[710.0, -200.0, 300.0], [-710.0, -180.0, 1000.0]])
+    th, ph = np.array([0.05, -0.03, 0.0]), np.array([0.001, -0.002, 0.0])
+    v, w = np.array([0.1, 0.2, 0.0]), np.array([0.3, -0.1, 0.0])
+    P = lab_points(th, ph, v, w, X, 113.0)
+    E = np.linalg.norm(P - F, axis=2) - np.linalg.norm(X - F, axis=1)
+    np.testing.assert_allclose(E, transducer_elongation(th, ph, v, w, X, F, 113.0), atol=1e-9)
+    np.testing.assert_allclose(P[2], X)
+    # theta about the active edge y = +b/2: the top moves towards +y, the edge stays
+    edge = lab_points([0.1], [0.0], [0.0], [0.0], [[0.0, 56.5, 0.0], [0.0, 0.0, 1000.0]], 113.0)[0]
+    np.testing.assert_allclose(edge[0], [0.0, 56.5, 0.0], atol=1e-12)
+    assert edge[1, 1] > 90.0

@@ -84,7 +84,10 @@ class VideoEffects:
     max_occlusion_s : float
         Longest stretch hidden [s].
     extension : str
-        Container: ``.mp4``, ``.avi`` or ``.mov`` (:data:`CODECS`).
+        Container: ``.mp4``, ``.avi`` or ``.mov``.
+    codec : str or None
+        FourCC of the codec; None: the container's of :data:`CODECS`
+        (``FFV1`` in ``.avi``: lossless, a film without compression's errors).
     """
 
     height_px: int = 320
@@ -97,6 +100,7 @@ class VideoEffects:
     occlusions: int = 2
     max_occlusion_s: float = 0.03
     extension: str = ".mp4"
+    codec: str | None = None
 
 
 #: The film of the benchmarks: a phone's slow motion cropped to 480 x 360 pixels, markers 10 pixels across.
@@ -338,7 +342,7 @@ def write_video(
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     frames, hidden = render_frames(fs, theta, w, specimen, effects, rng)
-    codec = CODECS[path.suffix.lower()]
+    codec = effects.codec or CODECS[path.suffix.lower()]
     size = (effects.width_px, effects.height_px)
     writer = cv2.VideoWriter(str(path), cv2.VideoWriter.fourcc(*codec), float(fs), size, False)
     try:
