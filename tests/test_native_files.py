@@ -226,11 +226,14 @@ def test_bad_films_are_refused_naming_the_file_and_the_problem(tmp_path, monkeyp
     crossing = tmp_path / "cross.avi"
     # the wall's upper marker runs into the post's
     _film(crossing, 30.0, [np.r_[still, [[40.0, 60.0], [40.0 - 1.6 * k, 20.0]]] for k in range(n)])
+    five = tmp_path / "five.avi"
+    _film(five, 30.0, [np.r_[still, m, [[70.0, 40.0]]] for m in moving])
     junk = tmp_path / "junk.mp4"
     junk.write_bytes(b"not a film" * 50)
     for path, why in [
         (three, "fewer than four markers found"),
         (crossing, "two markers meet"),
+        (five, "no frame shows exactly four markers"),
         (junk, "not a video that can be decoded"),
     ]:
         with pytest.raises(RawFormatError, match=why) as err:

@@ -163,7 +163,12 @@ def link_markers(blobs: list[np.ndarray], areas: list[np.ndarray], path: str | P
     counts = np.array([len(b) for b in blobs])
     four = np.flatnonzero(counts == 4)
     if not four.size:
-        raise RawFormatError(path, None, f"fewer than four markers found (at most {counts.max(initial=0)} in a frame)")
+        most = int(counts.max(initial=0))
+        if most < 4:
+            raise RawFormatError(path, None, f"fewer than four markers found (at most {most} in a frame)")
+        raise RawFormatError(
+            path, None, f"no frame shows exactly four markers ({most} bright blobs): something else is as bright"
+        )
     first = int(four[0])
     diameter = float(2 * np.sqrt(np.median(areas[first]) / np.pi))
     reach, meet = REACH_DIAMETERS * diameter, MEET_DIAMETERS * diameter
