@@ -3,7 +3,7 @@
 For labs that only want theta: the four markers of the film tracked
 (:func:`rocklab.lab.video_tracking.track_video`), theta written as the lab's
 ``# record: rotation`` text (``docs/raw-format.md``; lost frames empty), and
-the markers found drawn on the first frame (:func:`rocklab.plots.video.tracked_markers`).
+the markers found drawn on the first frame (:func:`rocklab.plots.video_tracking.tracked_markers`).
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ def track(args: argparse.Namespace) -> int:
     from rocklab.lab.video_tracking import first_frame, track_video
     from rocklab.lab.virtual_instruments import write_instrument_record
     from rocklab.plots import save_png
-    from rocklab.plots.video import tracked_markers
+    from rocklab.plots.video_tracking import tracked_markers
 
     video = Path(args.video)
     if not video.is_file():
