@@ -79,3 +79,27 @@ def test_a_campaign_without_transducers_runs_through_the_campaign_target(tmp_pat
     qc = pd.read_csv(results / "qc.csv", keep_default_na=False).set_index("test_id")
     assert qc.valid.all() and set(qc.instrument) == {"rotation", "inertial"}
     assert list((results / "figures").glob("fig06*")), sorted(p.name for p in (results / "figures").iterdir())
+
+
+@pytest.mark.skipif(not SNAKEMAKE.exists(), reason="snakemake not installed beside this interpreter")
+def test_a_campaign_of_text_and_native_files_runs_through_the_campaign_target(tmp_path):
+    """Issue 43: text, TDMS, C3D and a small film of the same walls in one campaign, every test valid."""
+    from rocklab.lab.virtual_native import VideoEffects
+
+    film = VideoEffects(height_px=160, width_px=120, marker_px=7.0)
+    native = {"transducers": ("X", 400.0), "tdms": ("D", 400.0), "c3d": ("C", 240.0), "video": ("V", 60.0)}
+    plan = [
+        vl.VirtualTest(f"{prefix}{k}", specimen="1a", fs=fs, instrument=kind, theta0_ratio=0.99 + 0.004 * k)
+        for kind, (prefix, fs) in native.items()
+        for k in range(2)
+    ]
+    for test in plan:
+        test.video = film
+    truth, results = _campaign_target(tmp_path, plan)
+    qc = pd.read_csv(results / "qc.csv", keep_default_na=False).set_index("test_id")
+    assert qc.valid.all(), qc.reject_detail.to_dict()
+    recorded = {"transducers": "transducers", "tdms": "transducers", "c3d": "rotation", "video": "rotation"}
+    assert qc.instrument.to_dict() == truth.instrument.map(recorded).to_dict()
+    assert (qc.frames_tracked[["V0", "V1"]] > 0).all() and (qc.frames_tracked[["X0", "D0", "C0"]] == 0).all()
+    tests = pd.read_csv(results / "tests.csv").set_index("test_id")
+    assert set(tests.index) == set(truth.index)

@@ -251,7 +251,8 @@ def performance_summary(results: str | Path, checkout: str | Path | None = None)
         target ``shake_table``, ``None`` where it did not run) and one entry
         per benchmark of ``make bench`` (``None`` where it did not run;
         ``discovery``, the diagnosis' calibration, with its series one by one
-        and what each missed), and ``projection`` (``None`` without ``checkout``).
+        and what each missed; ``video_tracking`` and ``native_accuracy``, the
+        native files of issue 43), and ``projection`` (``None`` without ``checkout``).
     """
     results = Path(results)
     jobs = _benchmarks(results)
@@ -331,6 +332,12 @@ def performance_summary(results: str | Path, checkout: str | Path | None = None)
     out["discovery"] = _discovery(disc) if disc else None
     env = _bench(results, "environments")
     out["environments"] = _environments(env) if env else None
+    vt = _bench(results, "video_tracking")
+    keys = ("seconds", "fps", "frames", "frame_px", "track_cpu_s", "frames_per_s", "frames_tracked", "target_s", "pass")
+    out["video_tracking"] = {k: vt[k] for k in keys} if vt else None
+    na = _bench(results, "native_accuracy")
+    keys = ("n_tests", "film_px", "marker_px", "resolved_e", "formats", "target_e", "pass")
+    out["native_accuracy"] = {k: na[k] for k in keys} if na else None
     return out
 
 

@@ -5,7 +5,9 @@ event-driven reference of :mod:`rocklab.simulation.rocking_model` and writes its
 history to netCDF.  ``rocklab map`` computes overturning maps of Sect. 5
 (:func:`rocklab.seismic.maps.overturning_map`) for a shipped or a
 user's record, writes them to netCDF and a figure and prints their indices.
-One module per command (:mod:`rocklab.cli.simulate`, :mod:`rocklab.cli.map`),
+``rocklab track`` tracks the markers of a filmed test and writes its
+rotation record (:mod:`rocklab.lab.video_tracking`).
+One module per command (:mod:`rocklab.cli.simulate`, :mod:`rocklab.cli.map`, :mod:`rocklab.cli.track`),
 each registering its parser in :data:`COMMANDS`; what they share (argument
 types and checks, records, outputs) is in :mod:`rocklab.cli.arguments`.
 
@@ -25,11 +27,11 @@ from collections.abc import Sequence
 from datetime import UTC, datetime
 
 from rocklab import __version__
-from rocklab.cli import map, simulate
+from rocklab.cli import map, simulate, track
 from rocklab.cli.arguments import CommandError, Parser, UsageError
 
 #: Subcommand registrars: each adds its parser and sets ``func`` and ``parser``.
-COMMANDS = [simulate.add_parser, map.add_parser]
+COMMANDS = [simulate.add_parser, map.add_parser, track.add_parser]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -35,6 +35,20 @@ RATES = {"transducers": (100.0, 400.0), "rotation": (100.0, 240.0, 500.0), "iner
 TOLERANCES = {"*": LAST_DIGIT}
 #: Largest distance in time between a found impact and the true one it is compared with [s].
 MATCH_S = 0.02
+#: An impact whose e is found within this of the truth is resolved (:func:`smallest_resolved`).
+RESOLVED_E = 0.05
+
+
+def _matches(found: pd.DataFrame, truth: pd.DataFrame, tol_s: float) -> tuple[pd.DataFrame, np.ndarray, np.ndarray]:
+    """The impacts found with velocities, which of them match a true impact, and the true impact of each."""
+    found = found[np.isfinite(found.e_velocity)]
+    if not len(found) or not len(truth):
+        return found, np.zeros(len(found), bool), np.zeros(len(found), int)
+    t_true = truth.t.to_numpy(float)
+    j = np.clip(np.searchsorted(t_true, found.t_s.to_numpy(float)), 1, len(t_true) - 1)
+    j = np.where(np.abs(t_true[j - 1] - found.t_s) < np.abs(t_true[j] - found.t_s), j - 1, j)
+    near = np.abs(t_true[j] - found.t_s.to_numpy(float)) <= tol_s
+    return found, near, j
 
 
 def impact_errors(found: pd.DataFrame, truth: pd.DataFrame, tol_s: float = MATCH_S) -> np.ndarray:
@@ -50,17 +64,24 @@ def impact_errors(found: pd.DataFrame, truth: pd.DataFrame, tol_s: float = MATCH
     tol_s : float
         Largest distance in time of a match [s].
     """
-    found = found[np.isfinite(found.e_velocity)]
-    if not len(found) or not len(truth):
-        return np.array([])
-    t_true = truth.t.to_numpy(float)
-    j = np.clip(np.searchsorted(t_true, found.t_s.to_numpy(float)), 1, len(t_true) - 1)
-    j = np.where(np.abs(t_true[j - 1] - found.t_s) < np.abs(t_true[j] - found.t_s), j - 1, j)
-    near = np.abs(t_true[j] - found.t_s.to_numpy(float)) <= tol_s
+    found, near, j = _matches(found, truth, tol_s)
     return found.e_velocity.to_numpy(float)[near] - truth.e.to_numpy(float)[j[near]]
 
 
-def instrument_accuracy(instrument: str, fs: float, n_tests: int = 4, seed: int = 0) -> dict[str, Any]:
+def smallest_resolved(found: pd.DataFrame, truth: pd.DataFrame, tol_s: float = MATCH_S) -> float:
+    """The slowest true impact whose e was found within :data:`RESOLVED_E`: its |thetadot_before| [rad/s].
+
+    ``truth`` also gives ``thetadot_before`` [rad/s]; NaN when no impact is resolved.
+    """
+    found, near, j = _matches(found, truth, tol_s)
+    err = found.e_velocity.to_numpy(float)[near] - truth.e.to_numpy(float)[j[near]]
+    speed = np.abs(truth.thetadot_before.to_numpy(float)[j[near]])[np.abs(err) <= RESOLVED_E]
+    return float(speed.min()) if speed.size else np.nan
+
+
+def instrument_accuracy(
+    instrument: str, fs: float, n_tests: int = 4, seed: int = 0, resolution: bool = False, **options: Any
+) -> dict[str, Any]:
     """Per-impact e error and theta error of one instrument at one sampling rate.
 
     ``n_tests`` two-sided tests of the default specimens with the default
@@ -73,7 +94,12 @@ def instrument_accuracy(instrument: str, fs: float, n_tests: int = 4, seed: int 
         ``e_abs_error_median``, ``e_abs_error_p90``, ``theta_rms_rad``
         (median over the tests), ``theta_rms_over_alpha``, and for an
         inertial record ``bound_rad`` (median stated bound) and ``bound_held``
-        (tests whose largest error is within it).
+        (tests whose largest error is within it); with ``resolution``,
+        ``smallest_resolved_rad_s`` (the slowest impact of all the tests
+        whose e was found within :data:`RESOLVED_E`, :func:`smallest_resolved`)
+        and ``first_impact_rad_s`` (the median first impact's, for scale).
+        ``options``: further :class:`~rocklab.lab.virtual_lab.VirtualTest`
+        fields of every test (``video``, ``markers``, ...).
     """
     from rocklab.lab.campaign import open_campaign
     from rocklab.lab.motion import motion_from_dataset, stored_motion
@@ -83,12 +109,15 @@ def instrument_accuracy(instrument: str, fs: float, n_tests: int = 4, seed: int 
 
     specs = DEFAULT_SPECIMENS.specimen.tolist()
     plan = [
-        VirtualTest(f"A{k:02d}", specimen=specs[k % len(specs)], fs=fs, instrument=instrument) for k in range(n_tests)
+        VirtualTest(f"A{k:02d}", specimen=specs[k % len(specs)], fs=fs, instrument=instrument, **options)
+        for k in range(n_tests)
     ]
     errors: list[np.ndarray] = []
     rms: list[float] = []
     rms_alpha: list[float] = []
     bounds: list[float] = []
+    resolved: list[float] = []
+    first: list[float] = []
     held = 0
     with tempfile.TemporaryDirectory() as tmp:
         write_campaign(tmp, plan, seed=seed)
@@ -102,6 +131,9 @@ def instrument_accuracy(instrument: str, fs: float, n_tests: int = 4, seed: int 
             ds = reduce_test(campaign, test.test_id)
             motion = motion_from_dataset(stored_motion(ds))
             errors.append(impact_errors(motion.impacts, truth["impacts"]))
+            if resolution and len(truth["impacts"]):
+                resolved.append(smallest_resolved(motion.impacts, truth["impacts"]))
+                first.append(abs(float(truth["impacts"].thetadot_before.iloc[0])))
             diff = ds.theta.values - truth["theta"]
             rms.append(float(np.sqrt(np.mean(diff**2))))
             rms_alpha.append(rms[-1] / truth["alpha"])
@@ -118,6 +150,11 @@ def instrument_accuracy(instrument: str, fs: float, n_tests: int = 4, seed: int 
         "theta_rms_rad": float(np.median(rms)),
         "theta_rms_over_alpha": float(np.median(rms_alpha)),
     }
+    if resolution:
+        out.update(
+            smallest_resolved_rad_s=float(np.nanmin(resolved)) if np.isfinite(resolved).any() else None,
+            first_impact_rad_s=float(np.median(first)) if first else None,
+        )
     if instrument == "inertial":
         out.update(bound_rad=float(np.median(bounds)), bound_held=held)
     return out

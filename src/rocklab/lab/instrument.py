@@ -20,10 +20,25 @@ import numpy as np
 
 #: The columns of ``qc.csv`` of the instruments: which one recorded the test,
 #: how many lost samples were bridged, how many impacts fell on a lost
-#: stretch, the bound on theta's error that an integrated rate leaves [rad].
-QC_COLUMNS = ("instrument", "samples_bridged", "impacts_unseen", "theta_error_bound_rad")
+#: stretch, the bound on theta's error that an integrated rate leaves [rad],
+#: the frames of a video in which the four markers were tracked and the
+#: tracking noise (theta's scatter at rest) [rad].
+QC_COLUMNS = (
+    "instrument",
+    "samples_bridged",
+    "impacts_unseen",
+    "theta_error_bound_rad",
+    "frames_tracked",
+    "tracking_noise_rad",
+)
 #: The values of :data:`QC_COLUMNS` of a test whose instrument gives none of them.
-NO_VALUES = {"samples_bridged": 0, "impacts_unseen": 0, "theta_error_bound_rad": np.nan}
+NO_VALUES = {
+    "samples_bridged": 0,
+    "impacts_unseen": 0,
+    "theta_error_bound_rad": np.nan,
+    "frames_tracked": 0,
+    "tracking_noise_rad": np.nan,
+}
 #: A signal whose whole span is below this fraction of what the wall's motion
 #: must show (its release from about alpha) is dead.
 DEAD_FRACTION = 0.1

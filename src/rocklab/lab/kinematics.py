@@ -79,6 +79,40 @@ def _pose(
     return L, J
 
 
+def lab_points(
+    theta: ArrayLike, phi: ArrayLike, v: ArrayLike, w: ArrayLike, X: ArrayLike, thickness: float
+) -> np.ndarray:
+    """Where body points of the wall are in the lab for a motion (the rigid-body map of ``docs/raw-format.md``).
+
+    ``X' = Rz(phi) . (Rx(theta) . (X - E) + E) + (v, w, 0)``, E on the
+    active base edge (y = +-b/2 as theta > 0 or < 0).
+
+    Parameters
+    ----------
+    theta, phi : array_like (N,)
+        Rotations [rad].
+    v, w : array_like (N,)
+        Sliding [mm].
+    X : array_like (npt, 3)
+        Body points [mm].
+    thickness : float
+        Wall thickness b [mm].
+
+    Returns
+    -------
+    ndarray (N, npt, 3)
+        Lab positions [mm].
+    """
+    X = np.atleast_2d(np.asarray(X, float))
+    th, ph, vv, ww = (np.atleast_1d(np.asarray(a, float))[:, None] for a in (theta, phi, v, w))
+    ey = np.where(th < 0.0, -0.5 * thickness, 0.5 * thickness)
+    x, dy, z = X[:, 0], X[:, 1] - ey, X[:, 2]
+    qy = np.cos(th) * dy + np.sin(th) * z + ey
+    qz = -np.sin(th) * dy + np.cos(th) * z
+    out = [np.cos(ph) * x - np.sin(ph) * qy + vv, np.sin(ph) * x + np.cos(ph) * qy + ww, qz + 0 * vv]
+    return np.stack(out, axis=-1)
+
+
 def rest_length(wall_xyz: ArrayLike, frame_xyz: ArrayLike) -> np.ndarray:
     """Length of each transducer with the wall vertical and at rest [mm]."""
     X, F = _geometry(wall_xyz, frame_xyz)

@@ -21,8 +21,9 @@ import io
 import re
 import zlib
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -155,6 +156,22 @@ TRANSDUCERS = "transducers"
 RECORD_KINDS = (TRANSDUCERS, "rotation", "inertial")
 
 
+def check_file(path: str | Path) -> Path:
+    """The first door check of every record, text or native: ``path`` is a regular file.
+
+    Raises
+    ------
+    RawFormatError
+        Naming the file: not found, or not a regular file.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise RawFormatError(path, None, "file not found")
+    if not path.is_file():
+        raise RawFormatError(path, None, "not a regular file")
+    return path
+
+
 def read_text(path: str | Path) -> RecordText:
     """The door checks of every record: a regular file, whole gzip (or plain) UTF-8 text
     without control characters, its ``#`` header, and a known ``# record:`` kind.
@@ -164,11 +181,7 @@ def read_text(path: str | Path) -> RecordText:
     RawFormatError
         Naming the file and, where there is one, the line.
     """
-    path = Path(path)
-    if not path.exists():
-        raise RawFormatError(path, None, "file not found")
-    if not path.is_file():
-        raise RawFormatError(path, None, "not a regular file")
+    path = check_file(path)
     text, digest = _decompress(path)
     # a byte-order mark and CRLF line ends are harmless
     lines = text.removeprefix("\ufeff").splitlines()
@@ -344,6 +357,9 @@ class RotationRecord:
         ``v``, ``w`` [mm]; NaN where a marker was lost.
     fs, header, sha256, path
         As :class:`Record`.
+    attrs : dict
+        What the instrument's own reader measured, for ``qc.csv``
+        (a video's ``frames_tracked`` and ``tracking_noise_rad``).
     """
 
     time: np.ndarray
@@ -352,6 +368,7 @@ class RotationRecord:
     header: dict[str, str]
     sha256: str
     path: str
+    attrs: dict[str, Any] = field(default_factory=dict)
 
 
 @dataclass
@@ -480,7 +497,9 @@ READERS: dict[str, Callable[[RecordText, str | None], Record | RotationRecord | 
 def read_any_record(path: str | Path, expected_test_id: str | None = None) -> Record | RotationRecord | InertialRecord:
     """Read one test's record of whatever kind its header declares (``# record:``, :data:`RECORD_KINDS`).
 
-    The door checks are the same for all (:func:`read_text`, :func:`check_header`, :func:`read_rows`).
+    The door checks are the same for all (:func:`read_text`, :func:`check_header`, :func:`read_rows`);
+    the native files of the instruments come through the same door in
+    :func:`rocklab.lab.native_files.read_test_file`.
 
     Raises
     ------

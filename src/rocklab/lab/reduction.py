@@ -32,6 +32,7 @@ from rocklab.lab import channels as health
 from rocklab.lab import inertial, instrument, kinematics, release, rotation, validity
 from rocklab.lab.campaign import TEST_COLUMNS, Campaign, row_series
 from rocklab.lab.motion import noise_level
+from rocklab.lab.native_files import check_setup_channels, read_test_file
 from rocklab.lab.raw_format import RawFormatError
 from rocklab.lab.records import (
     INERTIAL_COLUMNS,
@@ -40,7 +41,6 @@ from rocklab.lab.records import (
     Record,
     RotationRecord,
     check_sensor,
-    read_any_record,
 )
 from rocklab.physics import wall
 from rocklab.physics.boundary import Boundary
@@ -187,7 +187,7 @@ def reduce_test(campaign: Campaign, test_id: str, options: Mapping[str, Any] | N
     path = campaign.record_path(test_id)
     meta["source_file"] = str(path)
     try:
-        rec = read_any_record(path, expected_test_id=test_id)
+        rec = read_test_file(path, expected_test_id=test_id)
         if isinstance(rec, InertialRecord):
             check_sensor(rec, meta["length_mm"], meta["height_mm"], meta["thickness_mm"])
     except RawFormatError as exc:
@@ -257,6 +257,10 @@ def _reduce_transducers(
             meta,
             RawFormatError(path, None, f"channel(s) {missing} not described in setups.csv for setup {meta['setup']}"),
         )
+    try:
+        check_setup_channels(rec, described.channel)
+    except RawFormatError as exc:
+        return _unreadable(meta, exc)
     setup = described.set_index("channel").loc[rec.channels].reset_index()
 
     c = opt["channels"]

@@ -142,7 +142,7 @@ def rotation_motion(
         flags,
         faults,
         variables,
-        {"samples_bridged": int(lost.sum()), "impacts_unseen": len(unseen), "theta_noise_rad": noise},
+        {"samples_bridged": int(lost.sum()), "impacts_unseen": len(unseen), "theta_noise_rad": noise, **rec.attrs},
     )
 
 

@@ -87,6 +87,33 @@ class InertialEffects:
     sensor: tuple[float, float, float] = (1.0, 0.0, 0.8)
 
 
+def occluded(n: int, fs: float, count: int, max_s: float, rng: np.random.Generator) -> np.ndarray:
+    """Samples an optical instrument lost: ``count`` stretches of one sample to ``max_s`` [s], away from the ends.
+
+    Parameters
+    ----------
+    n : int
+        Samples of the record.
+    fs : float
+        Sampling rate [Hz].
+    count : int
+        Stretches lost.
+    max_s : float
+        Longest stretch [s].
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    ndarray (n,) of bool
+    """
+    lost = np.zeros(n, bool)
+    longest = max(int(max_s * fs), 1)
+    if count and n > longest + 10:
+        for i0 in rng.integers(5, n - longest - 5, count):
+            lost[i0 : i0 + rng.integers(1, longest + 1)] = True
+    return lost
+
+
 def rotation_readings(
     t: np.ndarray,
     theta: ArrayLike,
@@ -110,11 +137,7 @@ def rotation_readings(
         cols["phi_rad"] = np.asarray(phi, float) + rng.normal(0.0, effects.noise_rad, n)
         cols["v_mm"] = np.asarray(v, float) + rng.normal(0.0, 0.03, n)
         cols["w_mm"] = np.asarray(w, float) + rng.normal(0.0, 0.03, n)
-    fs = 1.0 / (t[1] - t[0])
-    longest = max(int(effects.max_occlusion_s * fs), 1)
-    lost = np.zeros(n, bool)
-    for i0 in rng.integers(5, n - longest - 5, effects.occlusions) if effects.occlusions else ():
-        lost[i0 : i0 + rng.integers(1, longest + 1)] = True
+    lost = occluded(n, 1.0 / (t[1] - t[0]), effects.occlusions, effects.max_occlusion_s, rng)
     for x in cols.values():
         x[lost] = np.nan
     return cols
@@ -198,12 +221,15 @@ def write_instrument_record(
     cols: Mapping[str, np.ndarray],
     sensor_mm: Iterable[float] | None = None,
     unreadable: bool = False,
+    source: str = "rocklab virtual lab, motion capture",
 ) -> None:
     """Write a ``# record: rotation`` or ``# record: inertial`` file in the lab's format.
 
     Time with 5 decimals, rotations with 7, rates with 6, forces and lengths
-    with 5; empty fields for NaN.  With ``unreadable`` the gzip stream is cut
-    in the middle (a broken transfer).
+    with 5; empty fields for NaN.  Gzip-compressed unless ``path`` ends in
+    ``.csv`` (the plain text the format accepts too).  With ``unreadable``
+    the gzip stream is cut in the middle (a broken transfer).  ``source``:
+    the rotation record's ``# source:`` line.
     """
     units = {"rotation": ROTATION_UNITS, "inertial": INERTIAL_UNITS}[instrument]
     head = f"# test_id: {test_id}\n# record: {instrument}\n# sampling_rate_hz: {fs:g}\n# units: {', '.join(units)}\n"
@@ -212,7 +238,7 @@ def write_instrument_record(
         head += "# sensor_mm: " + ", ".join(f"{x:g}" for x in sensor_mm) + "\n"
         names = list(INERTIAL_COLUMNS)
     else:
-        head += "# source: rocklab virtual lab, motion capture\n"
+        head += f"# source: {source}\n"
         names = list(cols)
     decimals = {"theta_rad": 7, "phi_rad": 7, "gyro_x_rad_s": 6}
     head += "time_s," + ",".join(names) + "\n"
@@ -220,7 +246,8 @@ def write_instrument_record(
     fmt = ["%.5f"] + [f"%.{decimals.get(c, 5)}f" for c in names]
     np.savetxt(buf, np.column_stack([t, *(cols[c] for c in names)]), fmt=fmt, delimiter=",")
     body = buf.getvalue().replace("nan", "")
-    data = gzip.compress((head + body).encode(), compresslevel=6, mtime=0)
+    text = (head + body).encode()
+    data = text if Path(path).suffix == ".csv" else gzip.compress(text, compresslevel=6, mtime=0)
     if unreadable:
         data = data[: len(data) // 2]
     Path(path).parent.mkdir(parents=True, exist_ok=True)

@@ -42,6 +42,7 @@ from rocklab.lab.virtual_instruments import (
     sensor_point,
     write_instrument_record,
 )
+from rocklab.lab.virtual_native import MarkerEffects, VideoEffects, write_c3d, write_tdms, write_video
 from rocklab.lab.virtual_record import (
     LOSING_FAULTS,
     Effects,
@@ -53,6 +54,11 @@ from rocklab.lab.virtual_record import (
 )
 from rocklab.physics import restitution, wall
 from rocklab.physics.boundary import Boundary
+
+#: The instruments whose file holds the transducers of a setup: the text record and LabVIEW's TDMS.
+TRANSDUCER_FILES = ("transducers", "tdms")
+#: The file extension of each instrument's record (a filmed test: :attr:`VideoEffects.extension`).
+EXTENSIONS = {"tdms": ".tdms", "c3d": ".c3d"}
 
 #: Specimens like those of the real campaign (Table 2 of the paper).
 DEFAULT_SPECIMENS = pd.DataFrame(
@@ -105,12 +111,17 @@ class VirtualTest:
     log : dict
         Further columns of the test's row of tests.csv (column -> value: a
         date, a temperature the operator wrote, ...).
-    instrument : {'transducers', 'rotation', 'inertial'}
-        What records the test (:mod:`rocklab.lab.virtual_instruments`): the
-        same true motion whatever it is.  A rotation or inertial test has no
-        setup; its ``faults`` are of :data:`rocklab.lab.virtual_instruments.INSTRUMENT_FAULTS`.
+    instrument : {'transducers', 'rotation', 'inertial', 'tdms', 'c3d', 'video'}
+        What records the test (:mod:`rocklab.lab.virtual_instruments`, and
+        the native files of :mod:`rocklab.lab.virtual_native`): the same
+        true motion whatever it is.  A test without transducers has no
+        setup; its ``faults`` are of
+        :data:`rocklab.lab.virtual_instruments.INSTRUMENT_FAULTS` (C3D and
+        video: ``unreadable`` only); a TDMS test has the transducers' faults.
     rotation, inertial : RotationEffects, InertialEffects
         What the motion-capture system and the inertial sensor do to the motion.
+    markers, video : MarkerEffects, VideoEffects
+        What a C3D file's motion capture and a filmed test's camera do.
     """
 
     test_id: str
@@ -132,11 +143,19 @@ class VirtualTest:
     instrument: str = "transducers"
     rotation: RotationEffects = field(default_factory=RotationEffects)
     inertial: InertialEffects = field(default_factory=InertialEffects)
+    markers: MarkerEffects = field(default_factory=MarkerEffects)
+    video: VideoEffects = field(default_factory=VideoEffects)
+
+    @property
+    def file(self) -> str:
+        """The test's record, relative to the campaign folder."""
+        ext = self.video.extension if self.instrument == "video" else EXTENSIONS.get(self.instrument, ".csv.gz")
+        return f"tests/{self.test_id}{ext}"
 
     @property
     def setup(self) -> str:
         """The transducer setup of the test (none for the other instruments)."""
-        if self.instrument != "transducers":
+        if self.instrument not in TRANSDUCER_FILES:
             return ""
         bc = "2s" if self.boundary == Boundary.TWO_SIDED else f"1s-cd{self.contact_depth_mm:g}"
         return f"S-{self.specimen}-{bc}"
@@ -155,7 +174,7 @@ def expected_verdict(faults, layout, thickness_mm, release_ratio, residual_top_m
     """
     if any(f.kind == "unreadable" for f in faults):
         return Verdict.UNREADABLE, "file truncated"
-    if instrument != "transducers":
+    if instrument not in TRANSDUCER_FILES:
         lost = [f.kind for f in faults if f.kind in LOSING_FAULTS]
         if lost:
             return Verdict.INSTRUMENT_MALFUNCTION, f"{instrument} instrument {lost[0]}"
@@ -235,7 +254,7 @@ def simulate_virtual_test(test: VirtualTest, specimen, layout, rng=None, t_end=4
         impacts=hist.impacts,
         t_rest=t_rest,
         effects=test.effects,
-        faults=test.faults if test.instrument == "transducers" else (),
+        faults=test.faults if test.instrument in TRANSDUCER_FILES else (),
         residual_top_mm=test.residual_top_mm,
         residual_kind=test.residual_kind,
         rng=rng,
@@ -255,7 +274,7 @@ def simulate_virtual_test(test: VirtualTest, specimen, layout, rng=None, t_end=4
         E, truth["gyro_bias_rad_s"] = inertial_readings(
             t, truth["theta"], truth["sensor_mm"], specimen["thickness_mm"], test.inertial, rng
         )
-    for f in test.faults if test.instrument != "transducers" else ():
+    for f in test.faults if test.instrument in ("rotation", "inertial") else ():
         assert isinstance(E, dict)  # an instrument's readings
         instrument_fault(E, f.kind, rng, f.level)
     truth.update(
@@ -276,7 +295,13 @@ def simulate_virtual_test(test: VirtualTest, specimen, layout, rng=None, t_end=4
             "e_first": float(ratios[0]) if ratios.size else np.nan,
             "e_true": float(np.median(ratios)) if ratios.size else np.nan,
             "impacts": pd.DataFrame(
-                {"t": base["t"].to_numpy(float) + truth["t_release"], "e": ratios} if len(base) else {"t": [], "e": []}
+                {
+                    "t": base["t"].to_numpy(float) + truth["t_release"],
+                    "e": ratios,
+                    "thetadot_before": base["thetadot_before"].to_numpy(float),
+                }
+                if len(base)
+                else {"t": [], "e": [], "thetadot_before": []}
             ),
             "e_analytic": float(e_an),
             "n_impacts": int(len(imp)),
@@ -426,11 +451,19 @@ def write_campaign(out_dir, tests, specimens=None, layouts=None, seed=0, t_end=4
                 key, sp.length_mm, sp.height_mm, sp.thickness_mm, test.boundary == Boundary.ONE_SIDED
             )
         layout = layouts[key]
-        t, E, truth = simulate_virtual_test(test, sp, layout, np.random.default_rng(ss), t_end)
-        rel = f"tests/{test.test_id}.csv.gz"
+        rng = np.random.default_rng(ss)
+        t, E, truth = simulate_virtual_test(test, sp, layout, rng, t_end)
+        rel = test.file
         unreadable = any(f.kind == "unreadable" for f in test.faults)
         if test.instrument == "transducers":
             write_record(out / rel, test.test_id, test.fs, t, E, layout.channel.tolist(), unreadable=unreadable)
+        elif test.instrument == "tdms":
+            write_tdms(out / rel, t, E, layout.channel.tolist(), unreadable)
+        elif test.instrument == "c3d":
+            dof = (truth[k] for k in ("theta", "phi", "v", "w"))
+            write_c3d(out / rel, test.fs, *dof, sp, test.markers, rng, unreadable)
+        elif test.instrument == "video":
+            write_video(out / rel, test.fs, truth["theta"], truth["w"], sp, test.video, rng, unreadable)
         else:
             write_instrument_record(
                 out / rel, test.test_id, test.instrument, test.fs, t, E, truth.get("sensor_mm"), unreadable
