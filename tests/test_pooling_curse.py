@@ -11,6 +11,7 @@ leaves out the series that cannot estimate it, listed with why.
 import numpy as np
 import pytest
 from scipy import stats
+from test_diagnosis import SPEC
 
 from rocklab import diagnosis as D
 from rocklab.diagnosis.diagnosis_summary import diagnosis_summary
@@ -25,6 +26,7 @@ from rocklab.diagnosis.result import (
     SeriesDiagnosis,
 )
 from rocklab.inference.intervals import mean_over_units, random_effects_mean
+from rocklab.lab import virtual_lab as vl
 from rocklab.report.tables import findings
 
 
@@ -184,3 +186,14 @@ def test_the_pooled_bias_is_in_units_of_the_smallest_effect_worth_naming():
     assert one.ci95 is None and "1 campaign" in one.note and one.mean == pytest.approx(1.0)
     with pytest.raises(ValueError, match="smallest effect"):
         pooled_bias([0.1], [0.1], [0.0], ["c1"])
+
+
+def test_a_series_unnamed_estimates_carry_their_standard_errors():
+    """A one-sided series of three tests names the instability angle; the amplitude-dependent angle, whose
+    signature its data carry, it estimates without naming: each estimate with its sandwich error."""
+    records = vl.series_records("c", SPEC.loc["5c"], "one-sided", {}, alpha_ratio=0.9, n=3, seed=1)
+    e = D.diagnose_series(records, key="c", n_boot=10, n_history=0)
+    assert e.unnamed_estimates and set(e.unnamed_se) == set(e.unnamed_estimates)
+    for cause, est in e.unnamed_estimates.items():
+        assert set(e.unnamed_se[cause]) <= set(est)
+        assert all(0 < v < np.inf for v in e.unnamed_se[cause].values())

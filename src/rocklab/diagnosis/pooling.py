@@ -205,7 +205,9 @@ def _parameter_values(
         elif cause in (e.not_identifiable or {}):
             out.left_out[key] = (LeftOutBecause.NOT_IDENTIFIABLE, cast(dict, e.not_identifiable)[cause])
         else:
-            out.left_out[key] = (LeftOutBecause.NO_ESTIMATE, "no estimate of it: its data carry no sign of the cause")
+            # unnamed_estimates gives none where the data carry no signature of the cause or its fit left
+            # the parameter on a bound
+            out.left_out[key] = (LeftOutBecause.NO_ESTIMATE, "no estimate: no sign of the cause, or one on a bound")
     return out
 
 
