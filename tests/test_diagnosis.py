@@ -10,10 +10,12 @@ import json
 
 import numpy as np
 import pytest
-from scipy import stats
 
 from rocklab import diagnosis as D
+from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.causes import stop_threshold
+from rocklab.diagnosis.pooling import pooled_parameter, statistical_error
+from rocklab.diagnosis.result import LeftOutBecause
 from rocklab.lab import virtual_lab as vl
 from rocklab.physics import impact as I
 from rocklab.physics import restitution, wall
@@ -545,19 +547,32 @@ def test_boundary_entries_json_and_markdown(diagnosed, tmp_path):
     assert b.verdict == ["instability_angle"]
     f = next(f for f in b.findings if f.effect == "instability_angle")
     assert f.n_series == 3 and f.n_tests == 18 and f.evidence["series"] == "named in 3 of 5 series"
-    # three series name it, two do not: all five pooled, those two at the null value (no winner's curse)
-    named = [e.findings for e in series if "instability_angle" in e.verdict]
-    values = [next(f for f in fs if f.effect == "instability_angle").params["alpha_r_over_alpha"] for fs in named]
-    assert f.params["alpha_r_over_alpha"] == pytest.approx((sum(values) + 2 * 1.0) / 5)
-    assert f.params["alpha_r_over_alpha"] == pytest.approx((0.9 + 0.9 + 0.95 + 1 + 1) / 5, abs=2e-3)
-    # a t interval over the five series (4 df), widened by the systematic part they share: the mean of
-    # theirs, the two at the null value with none
-    x = np.array([*values, 1.0, 1.0])
-    half = stats.t.ppf(0.975, 4) * x.std(ddof=1) / np.sqrt(5)
-    u = [next(f for f in fs if f.effect == "instability_angle").u_systematic["alpha_r_over_alpha"] for fs in named]
-    assert f.u_systematic["alpha_r_over_alpha"] == pytest.approx(sum(u) / 5)
-    half = np.hypot(half, stats.norm.ppf(0.975) * sum(u) / 5)
-    assert f.ci95["alpha_r_over_alpha"] == pytest.approx([x.mean() - half, x.mean() + half])
+    # three series name it, two do not: every series at its own estimate with its standard error, named or
+    # not; one with no estimate is left out and listed, never put at the null value (issue 41, item 4)
+    key, name = "instability_angle", "alpha_r_over_alpha"
+    values, se, u_sys, gone = {}, {}, {}, []
+    for e in series:
+        g = e.finding(key)
+        if g is not None:
+            values[e.key], u_sys[e.key] = g.params[name], g.u_systematic[name]
+            se[e.key] = statistical_error(g.ci95[name], g.u_systematic[name], g.n_tests)
+        elif name in (e.unnamed_estimates or {}).get(key, {}):
+            values[e.key], se[e.key] = e.unnamed_estimates[key][name], (e.unnamed_se or {}).get(key, {}).get(name)
+        else:
+            gone.append(e.key)
+    assert [g.series for g in f.left_out or []] == gone
+    assert all(g.reason is LeftOutBecause.NO_ESTIMATE for g in f.left_out or [])
+    u_sys |= dict.fromkeys(set(values) - set(u_sys), np.mean(list(u_sys.values())))
+    q = next(q for q in catalogue.by_name(key).params if q.name == name)
+    known = {k: v for k, v in se.items() if v is not None}
+    m, ci, *_ = pooled_parameter(values, None, u_sys, (q.lower, q.upper), known)
+    assert f.params[name] == pytest.approx(m) and f.ci95.get(name) == (None if ci is None else pytest.approx(ci))
+    assert min(values.values()) <= f.params[name] <= max(values.values())
+    # every unnamed estimate of every series has its standard error, from the sandwich of its fit
+    for e in diagnosed.values():
+        for cause, est in (e.unnamed_estimates or {}).items():
+            assert all(0 < v < np.inf for v in e.unnamed_se[cause].values()), (e.key, cause, e.unnamed_se)
+            assert set(e.unnamed_se[cause]) <= set(est)
     # with the walls known, the walls are the units: two walls, one residual df, no interval
     walls = dict(zip((e.key for e in series), "11122"))
     fw = next(

@@ -156,6 +156,9 @@ def diagnosis_markdown(
                     f"{f.evidence.get('fit', '') if by_name(f.effect).stage is Stage.AFTER_SELECTION else ''} |"
                 )
             out += ["", *(line for note in note_lines(notes) for line in (note, ""))]
+            # a series that cannot estimate a cause is left out of its pool, never put at the null value
+            gone = [f for f in e.findings if pooled and f.left_out]
+            out += [f"{f.effect}, left out: {'; '.join(map(str, f.left_out))}." for f in gone] + ([""] if gone else [])
         for f in e.discovered:
             g = f.heldout_gain
             out += [

@@ -48,6 +48,8 @@ def _finding(f: PooledFinding) -> dict:
         "ci95": f.ci95,
         "range": f.evidence.get("range", {}),
         "n_series": f.n_series,
+        # the series its parameters leave out, and why, in words (the page's "left out" column)
+        "left_out": [str(g) for g in f.left_out or []],
     }
 
 

@@ -3,7 +3,8 @@
 The series of a boundary condition are different walls and set-ups, so
 their parameters are not fitted together: :func:`diagnose_boundary` names
 the causes most of its series name and pools each parameter over all of
-them (:func:`pooled_parameter`: a random-effects mean over walls, its t
+them, each at its own estimate, a series that cannot estimate one left
+out (:func:`pooled_parameter`: a random-effects mean over walls, its t
 interval widened by the systematic part the series share);
 :func:`diagnose_campaign` diagnoses every series
 (:func:`rocklab.diagnosis.series.diagnose_records`) and then every boundary
@@ -14,14 +15,15 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Iterable, Mapping, Sequence
-from typing import TYPE_CHECKING, Any, cast
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, NamedTuple, cast
 
 import numpy as np
 import numpy.typing as npt
 
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.errors import what_is_wrong
-from rocklab.diagnosis.estimation.systematic import widened
+from rocklab.diagnosis.estimation.systematic import standard_error, widened
 from rocklab.diagnosis.evidence import MeasuredTest
 from rocklab.diagnosis.result import (
     BaseRun,
@@ -30,6 +32,8 @@ from rocklab.diagnosis.result import (
     CampaignDiagnosis,
     Errors,
     HeldOut,
+    LeftOut,
+    LeftOutBecause,
     Number,
     PooledEvidence,
     PooledFinding,
@@ -38,7 +42,7 @@ from rocklab.diagnosis.result import (
     Structure,
 )
 from rocklab.diagnosis.series import MIN_TESTS_TO_NAME, base_name, diagnose_records
-from rocklab.inference.intervals import mean_over_units, no_interval_note, t_interval
+from rocklab.inference.intervals import mean_over_units, no_interval_note, random_effects_mean, t_interval
 from rocklab.lab.hierarchy import plural
 from rocklab.physics.boundary import Boundary
 
@@ -73,16 +77,22 @@ def pooled_parameter(
     walls: Mapping[str, str] | None = None,
     u_sys: Mapping[str, float] | None = None,
     bounds: tuple[float, float] = (-np.inf, np.inf),
+    se: Mapping[str, float] | None = None,
 ) -> tuple[float, list[float] | None, str, int, str, float]:
     """The random-effects mean of one parameter over series, and its 95 % interval.
 
-    Each series is one unit (the scatter between series, sd ~0.01-0.05 of
-    e/e_an, dwarfs a series' own standard error, so a random-effects mean
-    weighs the series equally); where the series' walls are known, each
-    wall's value is the mean of its series and the walls are the units
+    Each series is one unit; where the series' walls are known, each wall's
+    value is the mean of its series and the walls are the units
     (:mod:`rocklab.lab.hierarchy`: a boundary condition's parameter holds for
-    walls, and the series of one wall are one wall's evidence).  Student's t
-    on units - 1 degrees of freedom; none below the units a verdict needs
+    walls, and the series of one wall are one wall's evidence).  With every
+    series' standard error (``se``) the units weigh 1 / (v_j + tau^2), tau^2
+    the variance between them, and the standard error is Hartung-Knapp's
+    (:func:`~rocklab.inference.intervals.random_effects_mean`): a precise
+    series counts more only where the units agree within their errors.
+    Without them (or with one missing) the units weigh the same (the scatter
+    between series, sd ~0.01-0.05 of e/e_an, dwarfs a series' own standard
+    error: :func:`~rocklab.inference.intervals.mean_over_units`).  Student's
+    t on units - 1 degrees of freedom; none below the units a verdict needs
     (:func:`rocklab.lab.hierarchy.too_few_units`).
 
     The scatter between units holds what varies between them and nothing
@@ -100,13 +110,16 @@ def pooled_parameter(
     Parameters
     ----------
     values : dict
-        Series -> its value.
+        Series -> its value [the parameter's unit].
     walls : mapping, optional
         Series -> wall.
     u_sys : dict, optional
-        Series -> the systematic standard uncertainty of its value (none: 0).
+        Series -> the systematic standard uncertainty of its value [the parameter's unit] (none: 0).
     bounds : tuple of float
         The parameter's bounds, which the interval does not cross.
+    se : dict, optional
+        Series -> the statistical standard error of its value [the parameter's unit]; a series missing
+        gives the units equal weights.
 
     Returns
     -------
@@ -121,52 +134,171 @@ def pooled_parameter(
     """
     level = "series" if walls is None else "wall"
     units = [s if walls is None else walls[s] for s in values]
-    m, se, k, note = mean_over_units(list(values.values()), units, level)
+    errors = [np.nan if se is None else se.get(s, np.nan) for s in values]
+    m, sd, k, note, _ = random_effects_mean(list(values.values()), errors, units, level)
     u_sys = u_sys or {}
     u_shared, *_ = mean_over_units([u_sys.get(s, 0.0) for s in values], units, level)
     if note:
         return m, None, level, k, no_interval_note(note), u_shared
-    lo, hi, _ = t_interval(m, se, k - 1)
+    lo, hi, _ = t_interval(m, sd, k - 1)
     return m, widened([float(lo), float(hi)], m, *bounds, u_shared), level, k, "", u_shared
 
 
+def statistical_error(ci: Sequence[Number], u_sys: float, n_tests: int | None) -> float:
+    """The statistical standard error of a series' estimate from its 95 % interval [the parameter's unit].
+
+    The interval's half-width h holds the statistical part, Student's t on
+    the tests less one times the standard error, and the systematic part
+    1.96 ``u_sys`` in quadrature (:func:`~rocklab.diagnosis.estimation.systematic.widened`):
+    the statistical part is what a mean over series averages, the
+    systematic part is shared and added once to the mean's interval
+    (:func:`pooled_parameter`).  An interval cut at a bound is taken by its
+    half-width (:func:`~rocklab.diagnosis.estimation.systematic.standard_error`).
+    NaN where there is no interval or it holds nothing but the systematic part.
+    """
+    if len(ci) != 2 or ci[0] is None or ci[1] is None:
+        return np.nan
+    df = max((n_tests or 2) - 1, 1)
+    # the half-width in standard errors of the normal (the systematic part's scale) and of Student's t
+    z, t = (1.0 / standard_error([-1.0, 1.0], df=d) for d in (np.inf, df))
+    stat = ((ci[1] - ci[0]) / 2.0) ** 2 - (z * u_sys) ** 2
+    return float(np.sqrt(stat) / t) if stat > 0 else np.nan
+
+
+class _Values(NamedTuple):
+    """The series' own estimates of one parameter and the series left out of it."""
+
+    values: dict[str, float]
+    se: dict[str, float]
+    own: list[str]
+    left_out: dict[str, tuple[LeftOutBecause, str]]
+
+
 def _parameter_values(
-    cause: str, name: str, usable: Sequence[SeriesDiagnosis], named: Mapping[str | None, Finding]
-) -> tuple[dict[str | None, Number], list[str | None], int]:
-    """Every usable series' value of one parameter of ``cause``: its estimate where it named the cause;
-    where it did not, its own estimate where its data carry the cause's signature (its
-    ``unnamed_estimates``: a series short of the evidence to name it still says how large it is), else
-    the parameter's null value (the data show no sign of it); a parameter without a null value in the
-    catalogue (one that only exists with its cause, the spread of the stop speeds) from the series that
-    estimated it only.  Returns (values, the series that did not name it counted at their own
-    estimates, how many at the null value)."""
-    null = next((q.null for q in catalogue.by_name(cause).params if q.name == name), None)
-    out, own, n_null = {}, [], 0
-    for e in usable:
-        f = named.get(e.key)
+    cause: str, name: str, series: Sequence[SeriesDiagnosis], named: Mapping[str | None, Finding]
+) -> _Values:
+    """Every series' own estimate of one parameter of ``cause`` under its extended model, with its
+    statistical standard error: its finding's where it named the cause; where it did not, its unnamed
+    estimate (a series short of the evidence to name it still says how large it is: ``unnamed_estimates``,
+    its standard error in ``unnamed_se``).  A series that cannot estimate it is left out, never put at
+    the null value: zeros for the series that cannot see a cause are the loser's curse, as a mean over
+    the namers alone is the winner's (a wall whose series names zeta 0.0062 beside one that cannot see
+    it would pool at 0.0031).  Its design cannot carry the cause (``not_identifiable``), it is too
+    small to name any, or it has no estimate of the parameter (no signature of the cause in its data,
+    or its fit on a bound)."""
+    out = _Values({}, {}, [], {})
+    for e in series:
+        key = cast(str, e.key)
+        f = named.get(key)
         mine = (e.unnamed_estimates or {}).get(cause, {})
-        if f is not None and name in f.params:
-            out[e.key] = f.params[name]
+        if e.too_small:
+            out.left_out[key] = (LeftOutBecause.TOO_SMALL, e.too_small)
+        elif f is not None and name in f.params and f.params[name] is not None:
+            out.values[key] = cast(float, f.params[name])
+            out.se[key] = statistical_error(
+                f.ci95.get(name, []), (f.u_systematic or {}).get(name, 0.0), f.n_tests or e.n_tests
+            )
         elif name in mine:
-            out[e.key] = mine[name]
-            own.append(e.key)
-        elif null is not None:
-            out[e.key], n_null = null, n_null + 1
-    return out, own, n_null
+            out.values[key] = mine[name]
+            out.se[key] = (e.unnamed_se or {}).get(cause, {}).get(name, np.nan)
+            out.own.append(key)
+        elif cause in (e.not_identifiable or {}):
+            out.left_out[key] = (LeftOutBecause.NOT_IDENTIFIABLE, cast(dict, e.not_identifiable)[cause])
+        else:
+            # unnamed_estimates gives none where the data carry no signature of the cause or its fit left
+            # the parameter on a bound
+            out.left_out[key] = (LeftOutBecause.NO_ESTIMATE, "no estimate: no sign of the cause, or one on a bound")
+    return out
 
 
-def _pooled_text(units: str, n_values: int, n_unnamed: int, n_own: int, n_null: int) -> str:
+def left_out(per_param: Mapping[str, _Values]) -> list[LeftOut]:
+    """The series the parameters of one cause leave out, each once with the parameters it is left out of."""
+    out: dict[str, LeftOut] = {}
+    for name, v in per_param.items():
+        for key, (reason, why) in v.left_out.items():
+            out.setdefault(key, LeftOut(series=key, reason=reason, why=why)).params.append(name)
+    return list(out.values())
+
+
+def _pooled_text(units: str, n_values: int, n_named: int, n_own: int, gone: Sequence[LeftOut]) -> str:
     """How a pooled parameter counts the series, in words."""
-    head = f"random-effects mean over {units} of {n_values} series"
-    if not n_unnamed:
-        return head + ", every one of which named it"
-    left = n_unnamed - n_own - n_null
-    how = [
-        f"{n_own} at their own estimates (their data carry its signature)" if n_own else "",
-        f"{n_null} at its null value" if n_null else "",
-        f"{left} left out (the parameter has no null value)" if left else "",
-    ]
-    return f"{head}; of the {n_unnamed} that did not name it, " + ", ".join(h for h in how if h)
+    head = f"random-effects mean over {units} of {n_values} series at their own estimates"
+    how = [f"{n_named} that named it", f"{n_own} that did not (their data carry its signature)" if n_own else ""]
+    text = f"{head}: " + ", ".join(h for h in how if h)
+    if gone:
+        text += "; left out: " + ", ".join(map(str, gone))
+    return text
+
+
+@dataclass(frozen=True)
+class PooledBias:
+    """The mean signed error of pooled parameters in units of the smallest effect worth naming
+    (:func:`pooled_bias`).
+
+    ``mean`` and ``ci95`` are in units of each parameter's
+    :attr:`~rocklab.diagnosis.parameters.Param.practical`; ``ci95`` is None
+    where the units are too few for an interval and ``note`` says so
+    (:func:`rocklab.inference.intervals.no_interval_note`).
+    """
+
+    mean: float
+    ci95: tuple[float, float] | None
+    n_units: int
+    level: str
+    note: str
+
+
+def pooled_bias(
+    estimates: Sequence[float],
+    truths: Sequence[float],
+    smallest: Sequence[float],
+    units: Sequence[str],
+    level: str = "campaign",
+) -> PooledBias:
+    """The pooled bias: the mean signed error of pooled values, each in units of its smallest effect worth
+    naming, with its 95 % interval.
+
+    A boundary condition's pooled value of a parameter against the truth it
+    was built with, (estimate - truth) / practical: 1 is an error as large as
+    the smallest effect the diagnosis would name a cause for, so errors of
+    parameters of different sizes (zeta ~0.006, v_stop/v_r ~0.1) are read on
+    one scale.  The errors of one unit (a campaign: its parameters share its
+    walls and its draw) are one unit's evidence: their mean, and the mean
+    over units with Student's t on units - 1 degrees of freedom
+    (:func:`~rocklab.inference.intervals.mean_over_units`); none from too few
+    units, and ``note`` says so.  A pooled value without the curse has 0
+    within the interval.
+
+    Parameters
+    ----------
+    estimates, truths : sequence of float
+        The pooled values and their truths [each parameter's unit].
+    smallest : sequence of float
+        Each parameter's smallest effect worth naming [its unit]
+        (:attr:`~rocklab.diagnosis.parameters.Param.practical`), > 0.
+    units : sequence of str
+        The unit of each value (the campaign it was pooled in).
+    level : str
+        The level of the units (:data:`rocklab.lab.hierarchy.LEVELS`).
+
+    Returns
+    -------
+    PooledBias
+
+    Raises
+    ------
+    ValueError
+        For a smallest effect that is not positive (a parameter that never names a cause has none).
+    """
+    scale = np.asarray(smallest, float)
+    if not (np.isfinite(scale).all() and (scale > 0).all()):
+        raise ValueError("a pooled bias needs every parameter's smallest effect worth naming, > 0")
+    err = (np.asarray(estimates, float) - np.asarray(truths, float)) / scale
+    m, se, k, reason = mean_over_units(err, list(units), level)
+    if reason:
+        return PooledBias(m, None, k, level, no_interval_note(reason))
+    lo, hi, _ = t_interval(m, se, k - 1)
+    return PooledBias(m, (float(lo), float(hi)), k, level, "")
 
 
 def diagnose_boundary(
@@ -184,13 +316,15 @@ def diagnose_boundary(
     pooled into one fit: a cause is in the verdict when it is named in at
     least half of the series large enough to name one (not ``too_small``),
     and its parameters pool ALL those series, never only the ones that named
-    it (a mean over the namers alone is the winner's curse): a series that
-    did not name it counts at its own estimate where its data carry the
-    cause's signature, at the parameter's null value where they do not
-    (:func:`_parameter_values`), and the mean is a random-effects mean over
-    series, or over walls where ``walls`` (series -> wall) is given, with a
-    t interval (:func:`pooled_parameter`; ``ci_note`` says why there is
-    none).  Each finding gives the ``n_series`` that named it, the
+    it (a mean over the namers alone is the winner's curse): every series
+    counts at its own estimate under its extended model with its standard
+    error, its finding's where it named the cause, its unnamed estimate
+    where it did not, and a series that cannot estimate the parameter is
+    left out and listed in ``left_out`` with why, never put at the null
+    value (the loser's curse: :func:`_parameter_values`).  The mean is a
+    random-effects mean over series, or over walls where ``walls`` (series
+    -> wall) is given, with a t interval (:func:`pooled_parameter`;
+    ``ci_note`` says why there is none).  Each finding gives the ``n_series`` that named it, the
     ``n_units`` its parameters rest on and ``n_tests``.  Errors are
     test-weighted means over all series.  With ``thickness`` (wall ->
     thickness [m]) the entry gives ``wall_thickness_m``, the mean over its
@@ -219,20 +353,24 @@ def diagnose_boundary(
         named = {e.key: f for e, f in lst}
         params, ci, notes, units, shared = {}, {}, {}, {}, {}
         bounds = {q.name: (q.lower, q.upper) for q in catalogue.by_name(eff).params}
+        per_param = {}
         for name in lst[0][1].params:
-            values, own, n_null = _parameter_values(eff, name, usable, named)
+            # the too small series too: each is listed where it is left out
+            v = per_param[name] = _parameter_values(eff, name, ser, named)
             u_sys = {k: (f.u_systematic or {}).get(name, 0.0) for k, f in named.items()}
             # an own estimate comes through the chain and the model the namers' came through, with no
-            # interval of its own: their mean systematic part (a null value has none)
-            u_sys |= dict.fromkeys(own, float(np.mean(list(u_sys.values()))))
+            # systematic part of its own: their mean systematic part
+            u_sys |= dict.fromkeys(v.own, float(np.mean(list(u_sys.values()))))
             params[name], interval, level, units[name], note, shared[name] = pooled_parameter(
-                cast("dict[str, float]", values), walls, u_sys, bounds.get(name, (-np.inf, np.inf))
+                v.values, walls, u_sys, bounds.get(name, (-np.inf, np.inf)), v.se
             )
             if interval is None:
                 notes[name] = note
             else:
                 ci[name] = interval
         note = "; ".join(f"{k}: {v}" for k, v in notes.items())
+        gone = left_out(per_param)
+        n_own = max(len(v.own) for v in per_param.values())
         findings.append(
             PooledFinding(
                 effect=eff,
@@ -242,7 +380,11 @@ def diagnose_boundary(
                 evidence=PooledEvidence(
                     series=f"named in {len(lst)} of {of_series}",
                     pooled=_pooled_text(
-                        plural(level, max(units.values())), len(values), len(usable) - len(lst), len(own), n_null
+                        plural(level, max(units.values())),
+                        max(len(v.values) for v in per_param.values()),
+                        len(lst),
+                        n_own,
+                        gone,
                     ),
                     range={
                         n: [float(min(f.params[n] for _, f in lst)), float(max(f.params[n] for _, f in lst))]
@@ -254,6 +396,7 @@ def diagnose_boundary(
                 n_series=len(lst),
                 n_tests=int(w.sum()),
                 ci_note=note or None,
+                left_out=gone or None,
             )
         )
     findings.sort(key=lambda f: (-(f.n_series or 0), -(f.gain["deviance_per_obs"] or 0)))

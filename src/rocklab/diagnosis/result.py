@@ -20,6 +20,7 @@ object                      file
 :class:`Finding`            a cause a series (or a limestone block group) names
 :class:`Structure`          structure a model leaves, where and in words
 :class:`PooledFinding`      a cause named in enough series of a boundary condition
+:class:`LeftOut`            a series a pooled parameter leaves out, and why
 :class:`LimestoneDiagnosis` results/limestone_diagnosis.json
                             (:func:`~rocklab.diagnosis.block_tests.diagnose_blocks`)
 ==========================  =========================================================
@@ -44,6 +45,7 @@ place beside the schemas they are checked against key by key.
 
 from __future__ import annotations
 
+import enum
 import json
 import math
 import os
@@ -380,19 +382,52 @@ class Finding(_Record):
     curve: Curve | None = None
 
 
+class LeftOutBecause(enum.StrEnum):
+    """Why a boundary condition's pooled parameter leaves a series out (:class:`LeftOut`)."""
+
+    #: The series' design cannot carry the cause (its ``not_identifiable``): it says nothing of its size.
+    NOT_IDENTIFIABLE = "not_identifiable"
+    #: The series neither names the cause nor has an estimate of the parameter (its data carry no
+    #: signature of it, or its fit put the parameter on a bound: the data did not fix it).
+    NO_ESTIMATE = "no_estimate"
+    #: The series is too small to name any cause (its ``too_small``).
+    TOO_SMALL = "too_small"
+
+
+@dataclass
+class LeftOut(_Record):
+    """A series a pooled parameter leaves out (never counted at the null value), the parameters it is
+    left out of, why (``reason``, typed) and why in words (``why``: the series' own where it has one)."""
+
+    series: str
+    reason: LeftOutBecause
+    params: list[str] = field(default_factory=list)
+    why: str = ""
+
+    def __post_init__(self) -> None:
+        # a file holds the reason's value: the object holds the member
+        self.reason = LeftOutBecause(self.reason)
+
+    def __str__(self) -> str:
+        """ "series 2b-1s (why)", as the pages say it."""
+        return f"series {self.series} ({self.why})"
+
+
 @dataclass
 class PooledFinding(_Record):
     """A cause named in at least half of the series of a boundary condition that can name one.
 
-    The random-effects means of its parameters over all those series (walls
-    where known; a series that does not name it at the null value), their t
-    intervals widened by the systematic uncertainty the series share
-    (``u_systematic``), the range over the series that name it, and the test-weighted
-    means of their held-out errors and gains
-    (:func:`rocklab.diagnosis.pooling.diagnose_boundary`).
+    The random-effects means of its parameters over every series that can
+    estimate them, each at its own estimate under the extended model, named
+    or not (walls where known), their t intervals widened by the systematic
+    uncertainty the series share (``u_systematic``), the series left out and
+    why (``left_out``: never at the null value), the range over the series
+    that name it, and the test-weighted means of their held-out errors and
+    gains (:func:`rocklab.diagnosis.pooling.diagnose_boundary`).
     """
 
-    _optional = frozenset({"ci_note", "u_systematic"})
+    _optional = frozenset({"ci_note", "u_systematic", "left_out"})
+    _nested = {"left_out": [LeftOut]}
 
     effect: str
     params: dict[str, float | None] = field(default_factory=dict)
@@ -404,6 +439,7 @@ class PooledFinding(_Record):
     n_series: int | None = None
     n_tests: int | None = None
     ci_note: str | None = None
+    left_out: list[LeftOut] | None = None
 
 
 @dataclass
@@ -457,7 +493,8 @@ class SeriesDiagnosis(_Entry):
     ``model_bias`` the bias of the model measured where a cause is selected
     (:mod:`rocklab.diagnosis.estimation.bias`); ``unnamed_estimates`` the
     parameters of the candidates it does not name whose signature its data
-    carry (:func:`rocklab.diagnosis.series.unnamed_estimates`).  A series whose
+    carry (:func:`rocklab.diagnosis.series.unnamed_estimates`), ``unnamed_se`` their statistical
+    standard errors where known.  A series whose
     diagnosis could not finish (it raised) has ``not_finished``, the exception
     that stopped it, its tests and impacts, and no model (no ``base``,
     ``what_is_wrong`` nor ``sample_test``): the campaign's readers skip it
@@ -476,6 +513,7 @@ class SeriesDiagnosis(_Entry):
             "listed_params",
             "signatures",
             "unnamed_estimates",
+            "unnamed_se",
             "heldout",
             "model_bias",
             "extended",
@@ -503,6 +541,7 @@ class SeriesDiagnosis(_Entry):
     rejected: dict[str, str] = field(default_factory=dict)
     signatures: dict[str, str] | None = None
     unnamed_estimates: dict[str, dict[str, float]] | None = None
+    unnamed_se: dict[str, dict[str, float]] | None = None
     heldout: HeldOut | None = None
     model_bias: ModelBias | None = None
     extended: SeriesExtended | None = None

@@ -31,7 +31,8 @@ from rocklab.diagnosis.discovery import discovery
 from rocklab.diagnosis.errors import what_is_wrong
 from rocklab.diagnosis.estimation import beyond_the_catalogue, rivals, select_effects, stand_ins
 from rocklab.diagnosis.estimation.bias import model_bias, net_of_noise
-from rocklab.diagnosis.estimation.resampling import heldout_gain, heldout_means
+from rocklab.diagnosis.estimation.fitting import linearised
+from rocklab.diagnosis.estimation.resampling import heldout_gain, heldout_means, sandwich_errors
 from rocklab.diagnosis.estimation.selection import sentences, supported
 from rocklab.diagnosis.estimation.systematic import standard_error, verdict_intervals, widened
 from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_test, observe
@@ -134,6 +135,32 @@ def unnamed_estimates(problem: WallProblem, sel: Selection, fits: Fits) -> dict[
         tol = [1e-6 * (q.upper - q.lower) for q in own]
         if own and all(q.lower + t < f.values[q.name] < q.upper - t for q, t in zip(own, tol)):
             out[x] = {q.name: float(f.values[q.name]) for q in own}
+    return out
+
+
+def unnamed_standard_errors(
+    problem: WallProblem, sel: Selection, fits: Fits, unnamed: Mapping[str, Mapping[str, float]]
+) -> dict[str, dict[str, float]]:
+    """The statistical standard errors of :func:`unnamed_estimates` [each parameter's unit].
+
+    The cluster-robust (by test) sandwich of the fit that gave each estimate,
+    linearised at it (:func:`~rocklab.diagnosis.estimation.resampling.sandwich_errors`,
+    as a named cause's interval is where the tests are too few to resample):
+    an unnamed estimate was never resampled, and the boundary's
+    random-effects mean weighs every series' estimate by its error
+    (:func:`rocklab.diagnosis.pooling.pooled_parameter`).  A direction the
+    tests do not fix has no finite error and is left without one.
+    """
+    named = tuple(sel["effects"])
+    every = problem.subset(np.arange(problem.n_tests))
+    out = {}
+    for x, values in unnamed.items():
+        f = fits[problem.combine(named, x)]  # type: ignore[index]  # the fit unnamed_estimates read
+        names, *_, A, y = linearised(problem, every, f)
+        se = dict(zip(names, sandwich_errors(A, y)))
+        finite = {k: float(se[k]) for k in values if np.isfinite(se.get(k, np.inf))}
+        if finite:
+            out[x] = finite
     return out
 
 
@@ -289,6 +316,7 @@ def diagnose_series(
         next(f for f in findings if f.effect == y).may_stand_in_for = xs
     listed = "catalogue" in sel
     unnamed = unnamed_estimates(problem, sel, fits)
+    unnamed_se = unnamed_standard_errors(problem, sel, fits, unnamed)
     ext_err = engineering_errors(tests, ext, ext_values, n_history=n_history) if ext else None
     entry = SeriesDiagnosis(
         **head,
@@ -304,6 +332,7 @@ def diagnose_series(
         rejected=sentences(sel["rejected"]),
         signatures={k: v["text"] for k, v in sig.items()},
         unnamed_estimates=unnamed or None,
+        unnamed_se=unnamed_se or None,
         heldout=HeldOut(base=heldout_means(sel["base"]), model=heldout_means(sel["final"])),
         model_bias=bias or None,
         extended=SeriesExtended(

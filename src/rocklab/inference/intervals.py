@@ -2,7 +2,8 @@
 
 The rules every stage applies to the units it rests on (tests, series,
 walls: :mod:`rocklab.lab.hierarchy`): Student's t on the units' degrees of
-freedom (:func:`t_interval`, :func:`mean_over_units`), the cluster-robust
+freedom (:func:`t_interval`, :func:`mean_over_units`; with the units'
+standard errors, :func:`random_effects_mean`), the cluster-robust
 mean of tests with walls as clusters (:func:`clustered_mean`), percentile
 bootstrap intervals expanded for few units (:func:`percentile_interval`,
 :func:`expanded`, :func:`bootstrap_ci`), and the fewest units an interval
@@ -68,6 +69,72 @@ def mean_over_units(values: ArrayLike, units: ArrayLike, level: str) -> tuple[fl
     k = len(by_unit)
     se = float(by_unit.std(ddof=1) / np.sqrt(k)) if k > 1 else np.nan
     return float(by_unit.mean()), se, k, too_few_units(level, k, k - 1)
+
+
+def random_effects_mean(
+    values: ArrayLike, se: ArrayLike, units: ArrayLike, level: str
+) -> tuple[float, float, int, str, float]:
+    """The random-effects mean over units of ``level`` of estimates with standard errors, on units - 1 df.
+
+    Each unit is the mean of its estimates (a wall the mean of its series:
+    they measure the same wall), its variance the mean of their squared
+    standard errors over their number.  Between units the truth itself
+    varies: the mean weighs unit j by 1 / (v_j + tau^2), tau^2 the
+    DerSimonian-Laird moment estimate of the variance between units, and its
+    standard error is that of Hartung & Knapp (2001; Sidik & Jonkman 2002),
+    sum_j w_j (m_j - mean)^2 / ((k - 1) sum_j w_j), on k - 1 degrees of
+    freedom, never below the DerSimonian-Laird 1 / sum_j w_j (the floor of
+    Knapp & Hartung 2003: k units that agree by chance would otherwise claim
+    a precision their own errors deny).  Where the units scatter far more
+    than their errors, tau^2 dominates, the weights are equal and this is
+    :func:`mean_over_units`; where they agree within their errors, the mean
+    is the inverse-variance one.  A standard error that is missing, not
+    finite or zero gives no weight: the plain mean over units
+    (:func:`mean_over_units`) stands instead.
+
+    Parameters
+    ----------
+    values : sequence of float
+        The estimates [their unit].
+    se : sequence of float
+        Their standard errors [the same unit]; NaN where unknown.
+    units : sequence
+        The unit of each estimate.
+    level : str
+        The level of the units (:data:`rocklab.lab.hierarchy.LEVELS`).
+
+    Returns
+    -------
+    mean, se : float
+        ``se`` NaN from one unit.
+    n_units : int
+    reason : str
+        Why no verdict or interval rests on these units
+        (:func:`rocklab.lab.hierarchy.too_few_units`); "" when it can.
+    tau : float
+        The standard deviation between units [the values' unit]; NaN where the plain mean stands.
+    """
+    x = np.asarray(values, float)
+    s = np.asarray(se, float)
+    if not (np.isfinite(s).all() and (s > 0).all()):
+        m, e, k, reason = mean_over_units(x, units, level)
+        return m, e, k, reason, np.nan
+    frame = pd.DataFrame({"x": x, "v": s**2, "u": np.asarray(units)}).groupby("u", sort=False)
+    m_j = frame["x"].mean().to_numpy()
+    # the mean of n estimates of one unit: the sum of their variances over n^2
+    v_j = (frame["v"].sum() / frame["v"].count() ** 2).to_numpy()
+    k = len(m_j)
+    reason = too_few_units(level, k, k - 1)
+    if k < 2:
+        return float(m_j[0]), np.nan, k, reason, np.nan
+    w = 1.0 / v_j
+    fixed = np.sum(w * m_j) / w.sum()
+    q = float(np.sum(w * (m_j - fixed) ** 2))
+    tau2 = max(0.0, (q - (k - 1)) / (w.sum() - np.sum(w**2) / w.sum()))
+    w = 1.0 / (v_j + tau2)
+    mean = float(np.sum(w * m_j) / w.sum())
+    var = max(float(np.sum(w * (m_j - mean) ** 2)) / ((k - 1) * w.sum()), 1.0 / float(w.sum()))
+    return mean, float(np.sqrt(var)), k, reason, float(np.sqrt(tau2))
 
 
 def clustered_mean(values: ArrayLike, units: ArrayLike, level: str) -> tuple[float, float, float, int, str]:

@@ -146,9 +146,11 @@ def findings(n: Mapping[str, Any], boundary: str) -> str:
                     f"{show(value, '.4g')} [{show(ci[0], '.4g')}, {show(ci[1], '.4g')}]",
                     f"{show(span[0], '.4g')}-{show(span[1], '.4g')}",
                     f"{show(f['n_series'])} of {show(d['n_series'])}",
+                    # a summary written before the pool listed the series it left out did not measure it
+                    ("; ".join(f["left_out"]) or "none") if "left_out" in f else show(None),
                 ]
             )
-    return markdown_table(["cause", "parameter", "value [95 % CI]", "range over series", "named in"], rows)
+    return markdown_table(["cause", "parameter", "value [95 % CI]", "range over series", "named in", "left out"], rows)
 
 
 @_of("diagnosis")
