@@ -248,7 +248,8 @@ def channel_gains(
     J = kinematics.elongation_jacobian(th, ph, v, w, Xu, Fu, thickness)[:, :, free]
     # leverage of each channel: diag of J (J^T J)^-1 J^T, per time step
     A = np.einsum("nck,ncl->nkl", J, J)
-    H = np.einsum("nck,nkc->nc", J, np.linalg.solve(A, J.transpose(0, 2, 1)))
+    # pseudo-inverse: a degenerate geometry at some step gives its leverage, not an exception
+    H = np.einsum("nck,nkl,ncl->nc", J, np.linalg.pinv(A), J)
     perp = np.clip(1.0 - H, 0.0, 1.0)
     starts = _blocks(n, n_blocks)
     num = np.add.reduceat(y * r, starts, axis=0)
