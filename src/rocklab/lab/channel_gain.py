@@ -42,7 +42,8 @@ rigid body shows as a sliding w that follows the rotation (w ~ -1.4 % of the
 top displacement for the wrong low channel).  A wall rocking on its base
 edge does not slide in step with theta (it slides, if at all, at impacts),
 so the channel named is the one whose correction leaves the least sliding in
-step with theta (:func:`sliding_slope`), *identifiable* when the runner-up
+step with theta, step to step (:func:`sliding_slope`: a sliding that grows over
+the test, a wall walking on its base, is not taken for it), *identifiable* when the runner-up
 leaves :data:`IDENTIFY_RATIO` times more and at least :data:`SLOPE_FLOOR`.
 This rests on that assumption: a wall whose hinge is not at its base edge
 (rocking on a joint above it) would make the choice unreliable, and
@@ -320,16 +321,18 @@ def sliding_slope(
     Returns
     -------
     float
-        Least-squares slope of w [mm] on z_max theta [mm] (with an intercept), z_max the highest
-        transducer point: 0 for a wall that does not slide in step with its rotation.
+        Least-squares slope of w's step-to-step change [mm] on that of z_max theta [mm], z_max the
+        highest transducer point: 0 for a wall that does not slide in step with its rotation.
     """
     y = readings.copy()
     y[:, column] /= gain
     sol = kinematics.solve_wall_motion(y, wall_xyz, frame_xyz, thickness, solve_v=solve_v)
-    top = sol["theta"] * float(np.max(wall_xyz[:, 2]))
-    ok = np.isfinite(top) & np.isfinite(sol["w"])
-    x = top[ok] - top[ok].mean()
-    return float(np.sum(x * (sol["w"][ok] - sol["w"][ok].mean())) / np.sum(x * x))
+    # step to step: a sliding that grows over the test (the wall walking on its base, a residual
+    # offset) or steps at impacts does not follow theta's oscillation; a moved hinge does, at every step
+    dtop = np.diff(sol["theta"]) * float(np.max(wall_xyz[:, 2]))
+    dw = np.diff(sol["w"])
+    ok = np.isfinite(dtop) & np.isfinite(dw)
+    return float(np.sum(dtop[ok] * dw[ok]) / np.sum(dtop[ok] ** 2))
 
 
 #: Columns of ``qc.csv`` of a test's gain check (:func:`qc_values`).
