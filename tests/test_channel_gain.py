@@ -76,6 +76,22 @@ def test_a_residual_offset_does_not_mislead_the_choice(kind):
     assert c.channel == 1 and c.identifiable and abs(c.named.gain - 0.98) < 2e-4
 
 
+@pytest.mark.parametrize("channel", [0, 1, 2, 3, 5])
+def test_the_one_sided_layout_tells_the_channel_from_its_residual(channel):
+    """Six channels, two redundant directions: channel 5 at mid-length breaks the collinearity."""
+    import pandas as pd
+
+    one = vr.usual_layout("S-1a-1s", SPEC.length_mm, SPEC.height_mm, SPEC.thickness_mm, True)
+    X1, F1 = vr.transducer_geometry(one)
+    t, theta, imp = free_motion()
+    _, E, _ = vr.record_from_motion(
+        t, np.abs(theta), 400.0, one, SPEC, impacts=pd.DataFrame(imp), faults=[vr.Fault("gain", channel)], rng=3
+    )
+    c = cg.channel_gains(E, X1, F1, SPEC.thickness_mm, one.channel.tolist())
+    assert c.redundancy == 2 and c.channel == channel and c.identifiable
+    assert abs(c.named.gain - 0.98) < 2e-4 and c.named.explained > 0.999
+
+
 def test_the_corrected_motion_matches_the_truth_better():
     _, E, truth = record(12, [vr.Fault("gain", 0, level=0.98)])
     _, clean, _ = record(12)  # the same record, channel 0 in calibration

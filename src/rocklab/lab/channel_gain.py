@@ -45,8 +45,13 @@ so the channel named is the one whose correction leaves the least sliding in
 step with theta, step to step (:func:`sliding_slope`: a sliding that grows over
 the test, a wall walking on its base, is not taken for it), *identifiable* when the runner-up
 leaves :data:`IDENTIFY_RATIO` times more and at least :data:`SLOPE_FLOOR`.
-This rests on that assumption: a wall whose hinge is not at its base edge
-(rocking on a joint above it) would make the choice unreliable, and
+Where the readings are not collinear (two redundant directions and more: the
+one-sided layout's channel 5 at mid-height and mid-length) the residual
+tells the channel itself, the candidate that explains it leaving
+:data:`IDENTIFY_RATIO` times less unexplained than any other; the sliding
+is the tie-breaker of the collinear case only.  That rests on an assumption:
+a wall whose hinge is not at its base edge (rocking on a joint above it)
+would make the choice unreliable, and
 ``identifiable`` False then keeps the readings as recorded (no correction
 on a guess; the QC row says ``unidentified``).
 
@@ -113,7 +118,8 @@ class ChannelGain:
         Share of the redundant residual's sum of squares this gain explains [-].
     sliding_slope : float
         The sliding w per top displacement of the rigid body once this channel is
-        corrected (:func:`sliding_slope`) [-]; NaN when no channel disagrees (not computed).
+        corrected (:func:`sliding_slope`) [-]; NaN where not computed (no channel disagrees,
+        or the residual alone told the channel).
     """
 
     channel: int
@@ -274,6 +280,12 @@ def channel_gains(
     ]
     if not any(g.disagrees for g in gains):
         return GainCheck(gains, redundancy, n)
+    # Where the candidates' readings are not collinear (two redundant directions and more, as in the
+    # one-sided layout) the residual itself tells the channel: one explains it, the others leave a share.
+    by_share = sorted(gains, key=lambda g: -g.explained)
+    if len(by_share) > 1 and (1.0 - by_share[1].explained) >= IDENTIFY_RATIO * max(1.0 - by_share[0].explained, 0.0):
+        best = by_share[0]
+        return GainCheck(gains, redundancy, n, best.channel if best.disagrees else -1, best.disagrees)
     # Which channel: each disagreeing candidate's correction gives a consistent rigid body, but only the
     # right one leaves no sliding that follows the rotation (a wall on its edge does not slide in step with
     # theta; the wrong channel's correction moves the hinge and shows as w ~ theta).
