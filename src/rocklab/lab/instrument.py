@@ -18,11 +18,14 @@ from typing import Any
 
 import numpy as np
 
+from rocklab.lab import channel_gain
+
 #: The columns of ``qc.csv`` of the instruments: which one recorded the test,
 #: how many lost samples were bridged, how many impacts fell on a lost
 #: stretch, the bound on theta's error that an integrated rate leaves [rad],
 #: the frames of a video in which the four markers were tracked and the
-#: tracking noise (theta's scatter at rest) [rad].
+#: tracking noise (theta's scatter at rest) [rad]; of transducers, the
+#: channel whose gain disagrees with the rigid body (:mod:`rocklab.lab.channel_gain`).
 QC_COLUMNS = (
     "instrument",
     "samples_bridged",
@@ -30,6 +33,7 @@ QC_COLUMNS = (
     "theta_error_bound_rad",
     "frames_tracked",
     "tracking_noise_rad",
+    *channel_gain.QC_COLUMNS,
 )
 #: The values of :data:`QC_COLUMNS` of a test whose instrument gives none of them.
 NO_VALUES = {
@@ -38,6 +42,7 @@ NO_VALUES = {
     "theta_error_bound_rad": np.nan,
     "frames_tracked": 0,
     "tracking_noise_rad": np.nan,
+    **channel_gain.NO_VALUES,
 }
 #: A signal whose whole span is below this fraction of what the wall's motion
 #: must show (its release from about alpha) is dead.

@@ -154,6 +154,39 @@ def transducer_elongation(
     return L - rest_length(X, F)
 
 
+def elongation_jacobian(
+    theta: ArrayLike,
+    phi: ArrayLike,
+    v: ArrayLike,
+    w: ArrayLike,
+    wall_xyz: ArrayLike,
+    frame_xyz: ArrayLike,
+    thickness: float,
+) -> np.ndarray:
+    """Derivatives of the transducer readings with respect to the four degrees of freedom.
+
+    The analytic Jacobian of :func:`transducer_elongation` that the solver
+    uses, for callers that need the fit's local geometry (the redundant
+    directions of :mod:`rocklab.lab.channel_gain`).
+
+    Parameters
+    ----------
+    theta, phi, v, w, wall_xyz, frame_xyz, thickness
+        As in :func:`transducer_elongation` [rad, mm].
+
+    Returns
+    -------
+    ndarray, shape (N, nch, 4)
+        d(elongation)/d(theta, phi) [mm/rad] and d(elongation)/d(v, w) [mm/mm],
+        in the order of :data:`DOF`.
+    """
+    X, F = _geometry(wall_xyz, frame_xyz)
+    th, ph, vv, ww = np.broadcast_arrays(*(np.atleast_1d(np.asarray(a, float)) for a in (theta, phi, v, w)))
+    _, J = _pose(th.ravel(), ph.ravel(), vv.ravel(), ww.ravel(), X, F, float(thickness), jacobian=True)
+    assert J is not None  # asked for
+    return np.stack(J, axis=-1)
+
+
 def _cholesky_solve(A: Sequence[Sequence[Any]], g: Sequence[np.ndarray]) -> np.ndarray:
     """Solve the stacked symmetric positive definite systems A x = g.
 

@@ -28,8 +28,8 @@ import xarray as xr
 
 from rocklab.disk import write_text
 from rocklab.io import cf_attrs
+from rocklab.lab import channel_gain, inertial, instrument, kinematics, release, rotation, validity
 from rocklab.lab import channels as health
-from rocklab.lab import inertial, instrument, kinematics, release, rotation, validity
 from rocklab.lab.campaign import TEST_COLUMNS, Campaign, row_series
 from rocklab.lab.motion import noise_level
 from rocklab.lab.native_files import check_setup_channels, read_test_file
@@ -62,6 +62,7 @@ QC_COLUMNS = [
     "flags",
     *validity.FAULT_COLUMNS,
     *instrument.QC_COLUMNS,
+    *channel_gain.SETUP_COLUMNS,
 ]
 
 
@@ -281,6 +282,20 @@ def _reduce_transducers(
     col = {ch: i for i, ch in enumerate(rec.channels)}
     weights = np.zeros(len(rec.channels))
     weights[[col[ch] for ch in choice.used]] = 1.0
+    # every healthy channel, backups included, is a witness of the rigid body: a gain that
+    # disagrees with it is corrected before the motion is solved (issue 42, item 1)
+    healthy = np.array([ch not in lost for ch in rec.channels], float)
+    gains = channel_gain.channel_gains(
+        repaired, wall_xyz, frame_xyz, meta["thickness_mm"], rec.channels, weights=healthy, solve_v=choice.solve_v
+    )
+    named = gains.named
+    gain_flags = []
+    if named is not None and gains.identifiable:
+        repaired = repaired.copy()
+        repaired[:, col[named.channel]] /= named.gain
+        gain_flags.append(f"ch{named.channel} gain {named.gain:.4f} [{named.low:.4f}, {named.high:.4f}] corrected")
+    elif named is not None:
+        gain_flags.append(f"a channel's gain disagrees with the rigid body (ch{named.channel}?), not identified")
     motion = kinematics.wall_motion_dataset(
         rec.time,
         repaired,
@@ -295,7 +310,7 @@ def _reduce_transducers(
     theta, phi, v, w = (motion[k].values for k in DOF_LONG_NAMES)
     judged, top = _judged(meta, rec.time, rec.fs, theta, phi, v, w, choice.malfunction, opt["validity"])
 
-    flags = [d for d in (r.describe() for r in reports) if d] + choice.flags
+    flags = [d for d in (r.describe() for r in reports) if d] + choice.flags + gain_flags
     # the channel variables in one assign: each added one by one is a merge
     channel_vars: dict[str, tuple[Any, np.ndarray, dict[str, Any]]] = {
         # an identifier, but CF wants units on a numeric coordinate: a number is dimensionless
@@ -332,6 +347,15 @@ def _reduce_transducers(
             "channel",
             np.array([r.noise_mm for r in reports]),
             {"units": "mm", "long_name": "robust noise standard deviation"},
+        ),
+        "channel_gain": (
+            "channel",
+            np.array([next((g.gain for g in gains.gains if g.channel == ch), np.nan) for ch in rec.channels]),
+            {
+                "units": "1",
+                "long_name": "gain of the transducer against the rigid-body fit of the healthy channels "
+                "(NaN: in no redundant direction)",
+            },
         ),
     }
     for axis in "xyz":
@@ -377,6 +401,7 @@ def _reduce_transducers(
         if np.isfinite(ds.residual_rms.values).any()
         else np.nan,
         instrument=TRANSDUCERS,
+        **channel_gain.qc_values(gains),
     )
     return ds
 
@@ -496,7 +521,28 @@ def qc_table(datasets: Iterable[xr.Dataset | SimpleNamespace], campaign: Campaig
             continue
         seen.add(tid)
         table.append(rows[tid])
+    _pool_gains(table, campaign)
+    for row in out:
+        row.update(NO_SETUP_GAIN)
     return pd.DataFrame(table + out, columns=QC_COLUMNS)
+
+
+#: :data:`rocklab.lab.channel_gain.SETUP_COLUMNS` of a row with no setup pooled.
+NO_SETUP_GAIN = dict(zip(channel_gain.SETUP_COLUMNS, ("", np.nan, np.nan, np.nan, 0)))
+
+
+def _pool_gains(table: list[dict[str, Any]], campaign: Campaign) -> None:
+    """Fill the rows' per-setup gain columns (in place): each transducer test's setup pooled over its tests."""
+    setups = [str(campaign.test_row(r["test_id"]).setup) if r["instrument"] == TRANSDUCERS else "" for r in table]
+    idx = [i for i, s in enumerate(setups) if s]
+    pooled = channel_gain.pool_setups(
+        [setups[i] for i in idx],
+        [table[i]["gain_channel"] for i in idx],
+        [table[i]["gain_action"] for i in idx],
+        [table[i]["channel_gains"] for i in idx],
+    )
+    for i, row in enumerate(table):
+        row.update(pooled.get(setups[i], NO_SETUP_GAIN) if setups[i] else NO_SETUP_GAIN)
 
 
 KINEMATICS_COLUMNS = [

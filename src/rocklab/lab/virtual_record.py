@@ -104,12 +104,13 @@ class Fault:
 
     Attributes
     ----------
-    kind : {'dead', 'stuck', 'clipped', 'spikes', 'gaps', 'unreadable'}
+    kind : {'dead', 'stuck', 'clipped', 'spikes', 'gaps', 'gain', 'unreadable'}
         ``dead``: the channel reads ~0 (noise only) throughout; ``stuck``:
         frozen at its value from ``start_s`` on; ``clipped``: saturates at
         ``level`` times its largest |reading| (default 0.6); ``spikes``:
         ``count`` isolated samples off by 2-30 mm; ``gaps``: ``count`` runs of
-        1 to ``max_len`` lost samples (empty fields); ``unreadable``: the file
+        1 to ``max_len`` lost samples (empty fields); ``gain``: every reading
+        times ``level`` (default 0.98, a transducer out of calibration); ``unreadable``: the file
         is truncated in the middle of the gzip stream (``channel`` ignored).
     channel : int
         Channel number (as in ``setups.csv``).
@@ -128,7 +129,8 @@ class Fault:
             return "unreadable file"
         extra = f" from {self.start_s:.2f} s" if self.start_s is not None and self.kind == "stuck" else ""
         n = f" x{self.count}" if self.kind in REPAIRABLE_FAULTS else ""
-        return f"ch{self.channel} {self.kind}{extra}{n}"
+        g = f" {0.98 if self.level is None else self.level:g}" if self.kind == "gain" else ""
+        return f"ch{self.channel} {self.kind}{extra}{n}{g}"
 
 
 def usual_layout(setup: str, length_mm: float, height_mm: float, thickness_mm: float, one_sided: bool) -> pd.DataFrame:
@@ -295,6 +297,9 @@ def apply_faults(
         elif f.kind == "spikes":
             idx = rng.choice(np.arange(5, n - 5), size=f.count, replace=False)
             x[idx] += rng.choice([-1.0, 1.0], f.count) * rng.uniform(2.0, 30.0, f.count)
+        elif f.kind == "gain":
+            # a transducer out of calibration: every reading scaled (level: the gain, default 0.98)
+            x *= 0.98 if f.level is None else f.level
         elif f.kind == "gaps":
             for i0 in rng.choice(np.arange(5, n - f.max_len - 5), size=f.count, replace=False):
                 x[i0 : i0 + rng.integers(1, f.max_len + 1)] = np.nan
