@@ -95,6 +95,13 @@ def test_too_few_tests_to_split_says_so():
     assert c.kind is ChangeKind.NONE and "needs 4 tests" in c.note
 
 
+def test_tests_too_few_to_reach_the_level_say_so_and_name_nothing():
+    """Four tests have 24 orders: the rarest, an order or its reverse, is 1 in 12, above the level."""
+    c = _changes(LevelProblem(n_tests=4, jump=0.2, split=2))
+    assert c.kind is ChangeKind.NONE and "cannot carry a change" in c.note
+    assert _changes(LevelProblem(n_tests=6)).note is None
+
+
 def test_the_level_is_shared_by_every_parameter_and_both_kinds():
     c = _changes(LevelProblem(seed=1))
     assert c.level == pytest.approx(LEVEL / 2) and c.n_permutations == 199

@@ -31,11 +31,12 @@ place in the series, the test being the unit:
   which must drop by the strong evidence a cause needs to enter the
   selection (:data:`~rocklab.diagnosis.estimation.selection.BIC_MARGIN`);
   and its size must exceed the parameter's smallest effect worth naming.
-  The permutation test has few orders to draw on: a step after 3 of 10
-  tests is one order in C(10, 3) = 120, and its p-value is no smaller than
-  that; a step two tests from an end of ten (1 / 45) cannot clear a
-  Bonferroni level below 0.022.  A series too short to test says so
-  (``note``).
+  The permutation test has few orders to draw on: a step's statistic is the
+  same for a partition of the tests and its mirror, so a step after 3 of 10
+  tests has a p-value no smaller than 2 / C(10, 3) = 0.017, and one two tests
+  from an end of ten no smaller than 2 / 45 = 0.044, above the level: such a
+  step is named only where the gradual statistic carries it.  A series whose
+  rarest order is above the level names nothing and says so (``note``).
 - its size, on the tests.  A change point: the model refitted on the tests
   before and after the split, warm from the series' fit, each side's
   cluster-robust t interval on its tests less one
@@ -163,6 +164,14 @@ def changes_over_tests(
             for x, ks in own.items()
             for k in ks
         ]
+    # the rarest order of n tests (the gradual statistic's: the order and its reverse), or of the shuffles drawn
+    rarest = max(2.0 / math.factorial(n), 1.0 / (n_permutations + 1))
+    note = (
+        f"no order of {n} tests is rarer than {rarest:.2g} among their orders, above the level {per_test:.2g}: "
+        "these tests cannot carry a change"
+        if rarest > per_test
+        else None
+    )
     every = problem.subset(np.arange(n))
     place = np.arange(n) / (n - 1)
     rng = np.random.default_rng(seed)
@@ -201,6 +210,7 @@ def changes_over_tests(
                 dbic_gradual=dbic_gr,
                 level=per_test,
                 n_permutations=n_permutations,
+                note=note,
             )
             # whether there is a change is the permutation test's (either kind at the level); which kind, the
             # information criterion's: a step near the end of ten tests has a permutation p-value no smaller
