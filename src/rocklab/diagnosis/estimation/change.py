@@ -133,7 +133,8 @@ def changes_over_tests(
     test_ids : sequence of str
         The tests' ids, to name where a change point is.
     n_permutations : int
-        Shuffles of the test order for the permutation test.
+        Shuffles of the test order for the permutation test, at least; more where the level over the
+        parameters needs them (4 / the level of each).
     level : float
         Family-wise level over every parameter tested and the two kinds (Bonferroni).
     bic_margin : float, optional
@@ -158,12 +159,15 @@ def changes_over_tests(
     per_test = level / (2 * n_params)
     splits = list(range(MIN_SIDE, n - MIN_SIDE + 1))
     if not splits:
-        note = f"a change over tests needs {2 * MIN_SIDE} tests ({MIN_SIDE} each side of a split), the series has {n}"
+        short = f"a change over tests needs {2 * MIN_SIDE} tests ({MIN_SIDE} each side of a split), the series has {n}"
         return [
-            SeriesChange(parameter=k, effect=x, n_tests=n, level=per_test, note=note)
+            SeriesChange(parameter=k, effect=x, n_tests=n, level=per_test, note=short)
             for x, ks in own.items()
             for k in ks
         ]
+    # enough shuffles that the Monte Carlo's smallest p-value, 1 / (N + 1), is a quarter of the level at most:
+    # many parameters tested must not make the shuffles, rather than the tests, what names nothing
+    n_permutations = max(n_permutations, math.ceil(4 / per_test) - 1)
     # the rarest order of n tests (the gradual statistic's: the order and its reverse), or of the shuffles drawn
     rarest = max(2.0 / math.factorial(n), 1.0 / (n_permutations + 1))
     note = (
