@@ -129,6 +129,7 @@ def test_a_corner_crushed_part_way_is_named_where_and_how_much(tmp_path):
     assert c.ci95_size[0] <= -0.1 <= c.ci95_size[1]
     # the verdict is no one wall state: flagged, its change in the structure left
     assert entry.unexplained and any(st.where == "instability_angle" for st in entry.residual_structure)
+    assert entry.changed == [c]
     back = _roundtrip(entry, tmp_path)
     assert back.changes[0].kind is ChangeKind.CHANGE_POINT and back.changes[0].to_dict() == c.to_dict()
 
@@ -144,7 +145,7 @@ def test_a_rocking_edge_worn_test_after_test_is_named_gradual_and_its_law_kept()
 def test_a_rocking_edge_that_stays_names_no_change():
     entry = diagnose_series(_rocking_edge(0.9), key="s")
     assert entry.verdict == ["instability_angle"]
-    assert [c.kind for c in entry.changes] == [ChangeKind.NONE]
+    assert [c.kind for c in entry.changes] == [ChangeKind.NONE] and entry.changed == []
     assert entry.finding("instability_angle").changes_within is None
 
 

@@ -575,6 +575,11 @@ class SeriesDiagnosis(_Entry):
     extended: SeriesExtended | None = None
     sample_test: str | None = None
 
+    @property
+    def changed(self) -> list[SeriesChange]:
+        """The parameters tested that change over the series' tests (a kind other than none)."""
+        return [c for c in self.changes or () if c.kind is not ChangeKind.NONE]
+
 
 @dataclass
 class BoundaryDiagnosis(_Entry):
