@@ -72,6 +72,13 @@ SLOW = {
         "test_every_pair_of_causes_is_simulated_by_the_reference_and_the_engine_alike",
         "test_a_series_whose_diagnosis_raises_is_reported_not_finished_and_the_rest_runs",
     },
+    # ten-test virtual series simulated and diagnosed: 30-50 s each; a hundred null series of the engine: 1.5 s
+    "test_series_change.py": {
+        "test_a_corner_crushed_part_way_is_named_where_and_how_much",
+        "test_a_rocking_edge_worn_test_after_test_is_named_gradual_and_its_law_kept",
+        "test_a_rocking_edge_that_stays_names_no_change",
+        "test_a_series_of_one_state_names_no_change_at_the_level_though_its_tests_vary",
+    },
 }
 #: Tests that run Snakemake without a ``skipif`` that names it: file -> test names.
 WORKFLOW = {"test_config.py": {"test_every_run_takes_the_workflow_profile"}}

@@ -250,6 +250,7 @@ RECORDS = [
     (R.DIAGNOSIS_SCHEMA, "pooled_finding", R.PooledFinding),
     (R.DIAGNOSIS_SCHEMA, "base", R.BaseRun),
     (R.DIAGNOSIS_SCHEMA, "structure", R.Structure),
+    (R.DIAGNOSIS_SCHEMA, "series_change", R.SeriesChange),
     (R.LIMESTONE_SCHEMA, "block_entry", R.BlockDiagnosis),
     (R.LIMESTONE_SCHEMA, "finding", R.Finding),
     (R.LIMESTONE_SCHEMA, "family", R.FamilyComparison),

@@ -19,6 +19,7 @@ object                      file
                             (:func:`~rocklab.diagnosis.pooling.diagnose_boundary`)
 :class:`Finding`            a cause a series (or a limestone block group) names
 :class:`Structure`          structure a model leaves, where and in words
+:class:`SeriesChange`       a parameter's change over the tests of a series, or none
 :class:`PooledFinding`      a cause named in enough series of a boundary condition
 :class:`LeftOut`            a series a pooled parameter leaves out, and why
 :class:`LimestoneDiagnosis` results/limestone_diagnosis.json
@@ -331,6 +332,59 @@ class Structure(_Record):
         return self.sentence
 
 
+class ChangeKind(enum.StrEnum):
+    """What a named parameter does over the tests of a series
+    (:func:`rocklab.diagnosis.estimation.change.changes_over_tests`)."""
+
+    NONE = "none"
+    GRADUAL = "gradual"
+    CHANGE_POINT = "change point"
+
+
+@dataclass
+class SeriesChange(_Record):
+    """A named parameter tested for a change over the tests of its series, and what was found.
+
+    ``kind`` is :attr:`ChangeKind.NONE` where neither a change point nor a
+    gradual change clears the test (a permutation test over the test order,
+    Bonferroni over the parameters and the two kinds, and the information
+    criterion); otherwise ``where`` the change is (a change point: the index,
+    in series order from 0, and the id of the first test after it; no interval
+    is given for it), the value ``before`` and ``after`` it with their 95 %
+    intervals over the tests of each side (a gradual change: at the first and
+    the last test), and the ``size`` (after less before) with its interval.
+    The tests are the unit: every interval rests on them.
+    """
+
+    _optional = frozenset(
+        {"where_index", "where_test", "before", "after", "ci95_before", "ci95_after", "size", "ci95_size", "note"}
+    )
+
+    parameter: str
+    effect: str = ""
+    kind: ChangeKind = ChangeKind.NONE
+    n_tests: int = 0
+    where_index: int | None = None
+    where_test: str | None = None
+    before: float | None = None
+    after: float | None = None
+    ci95_before: list[Number] | None = None
+    ci95_after: list[Number] | None = None
+    size: float | None = None
+    ci95_size: list[Number] | None = None
+    p_change_point: Number = None
+    p_gradual: Number = None
+    dbic_change_point: Number = None
+    dbic_gradual: Number = None
+    level: float = 0.05
+    n_permutations: int = 0
+    note: str | None = None
+
+    def __post_init__(self) -> None:
+        # a file holds the kind's value: the object holds the enum, which decisions read
+        self.kind = ChangeKind(self.kind)
+
+
 @dataclass
 class Finding(_Record):
     """A cause named by the data of one series (or of the limestone blocks).
@@ -346,6 +400,9 @@ class Finding(_Record):
     the series' design cannot identify whose effect this one may carry
     (:func:`rocklab.diagnosis.estimation.selection.stand_ins`), each with why
     it cannot be identified: the cause is then named with that caveat.
+    ``changes_within`` names its parameters that change over the tests of
+    the series (the entry's ``changes`` say where and by how much): their
+    values are means over wall states, not one state's.
     """
 
     _optional = frozenset(
@@ -360,6 +417,7 @@ class Finding(_Record):
             "best_listed",
             "heldout_gain",
             "curve",
+            "changes_within",
         }
     )
 
@@ -374,6 +432,7 @@ class Finding(_Record):
     error_heldout: dict[str, float | None] = field(default_factory=dict)
     gain: dict[str, float | None] = field(default_factory=dict)
     may_stand_in_for: dict[str, str] | None = None
+    changes_within: list[str] | None = None
     discovered: bool | None = None
     family: str | None = None
     reduces_to: str | None = None
@@ -517,9 +576,15 @@ class SeriesDiagnosis(_Entry):
             "heldout",
             "model_bias",
             "extended",
+            "changes",
         }
     )
-    _nested = {"base": BaseRun, "findings": [Finding], "residual_structure": [Structure]}
+    _nested = {
+        "base": BaseRun,
+        "findings": [Finding],
+        "residual_structure": [Structure],
+        "changes": [SeriesChange],
+    }
 
     scope: str
     key: str | None = None
@@ -535,6 +600,7 @@ class SeriesDiagnosis(_Entry):
     unexplained: bool = False
     residual_structure: list[Structure] = field(default_factory=list)
     findings: list[Finding] = field(default_factory=list)
+    changes: list[SeriesChange] | None = None
     listed_verdict: list[str] | None = None
     listed_params: dict[str, float | None] | None = None
     weak_evidence: dict[str, str] = field(default_factory=dict)
@@ -546,6 +612,11 @@ class SeriesDiagnosis(_Entry):
     model_bias: ModelBias | None = None
     extended: SeriesExtended | None = None
     sample_test: str | None = None
+
+    @property
+    def changed(self) -> list[SeriesChange]:
+        """The parameters tested that change over the series' tests (a kind other than none)."""
+        return [c for c in self.changes or () if c.kind is not ChangeKind.NONE]
 
 
 @dataclass

@@ -31,13 +31,24 @@ from rocklab.diagnosis.discovery import discovery
 from rocklab.diagnosis.errors import what_is_wrong
 from rocklab.diagnosis.estimation import beyond_the_catalogue, rivals, select_effects, stand_ins
 from rocklab.diagnosis.estimation.bias import model_bias, net_of_noise
+from rocklab.diagnosis.estimation.change import changes_over_tests
 from rocklab.diagnosis.estimation.fitting import linearised
 from rocklab.diagnosis.estimation.resampling import heldout_gain, heldout_means, sandwich_errors
-from rocklab.diagnosis.estimation.selection import sentences, supported
+from rocklab.diagnosis.estimation.selection import RejectedBy, sentences, supported
 from rocklab.diagnosis.estimation.systematic import standard_error, verdict_intervals, widened
 from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_test, observe
 from rocklab.diagnosis.extended import engineering_errors, model_params, simulated_tests
-from rocklab.diagnosis.result import BaseRun, Finding, HeldOut, ModelBias, SeriesDiagnosis, SeriesExtended
+from rocklab.diagnosis.result import (
+    BaseRun,
+    ChangeKind,
+    Finding,
+    HeldOut,
+    ModelBias,
+    SeriesChange,
+    SeriesDiagnosis,
+    SeriesExtended,
+    Structure,
+)
 from rocklab.diagnosis.series_problem import WallProblem
 from rocklab.physics.boundary import Boundary
 
@@ -45,7 +56,7 @@ if TYPE_CHECKING:
     from rocklab.diagnosis.causes.stop_threshold import StopEstimate
     from rocklab.diagnosis.estimation.fitting import Fits
     from rocklab.diagnosis.estimation.selection import Selection
-    from rocklab.diagnosis.result import Number, Structure
+    from rocklab.diagnosis.result import Number
 
 log = logging.getLogger(__name__)
 
@@ -303,6 +314,10 @@ def diagnose_series(
     caveats = stand_ins(problem, sel, blind, fits=fits)
     rival, preferred = rivals(problem, sel, sig, fits=fits)
     structure += preferred
+    changes = within_series(problem, sel, findings, [t.test_id for t in tests], fits, seed)
+    # a change of a candidate the selection turned down: the tests are not one wall state, and the
+    # verdict that pools them is no explanation of the series
+    structure += [moved(c) for c in changes if c.kind is not ChangeKind.NONE and c.effect not in sel["effects"]]
     unexplained = bool(structure) and not sel["weak"]
     if not findings and not unexplained and not off:
         verdict_text = "the base model explains the data within the noise"
@@ -326,6 +341,7 @@ def diagnose_series(
         unexplained=unexplained,
         residual_structure=structure,
         findings=findings,
+        changes=changes or None,
         listed_verdict=sel["catalogue"]["effects"] if listed else None,
         listed_params=cast("dict[str, Number]", sel["catalogue"]["fit"].values) if listed else None,
         weak_evidence=sentences({k: v["reason"] for k, v in sel["weak"].items()}),
@@ -354,6 +370,54 @@ def diagnose_series(
         time.perf_counter() - t0,
     )
     return entry
+
+
+def within_series(
+    problem: WallProblem,
+    sel: Selection,
+    findings: list[Finding],
+    test_ids: Sequence[str],
+    fits: Fits,
+    seed: int,
+) -> list[SeriesChange]:
+    """The parameters of the selected causes, and of the candidates a change between tests may have
+    turned down, tested for a change over the series' tests before the boundary condition pools them
+    (:func:`rocklab.diagnosis.estimation.change.changes_over_tests`).
+
+    The selected causes are tested in the selection's fit; a candidate whose signature the data carry
+    but that the held-out test or the bootstrap turned down in the fit of the chosen model with it (a
+    rocking edge crushed half-way: its fit predicts neither half's tests left out, and nothing is
+    named).  A finding whose parameter changes is flagged (``changes_within``): its value is a mean over
+    the wall states the series went through, and its law is still named.  No cold fit: the cost is a
+    linearisation per fit tested, and two warm refits where a change point is found.
+    """
+    named = tuple(sel["effects"])
+    tested = {eff: sel["fit"] for eff in named}
+    for x, why in sel["rejected"].items():
+        ext = problem.combine(named, x) if x not in named else None
+        if why.by in (RejectedBy.HELD_OUT, RejectedBy.INTERVAL) and ext is not None and ext in fits:
+            tested[x] = fits[ext]
+    changes = changes_over_tests(problem, tested, test_ids=test_ids, seed=seed)
+    for f in findings:
+        changed = [c.parameter for c in changes if c.effect == f.effect and c.kind is not ChangeKind.NONE]
+        f.changes_within = changed or None
+    return changes
+
+
+def moved(change: SeriesChange) -> Structure:
+    """A change of a parameter over the tests as structure the verdict leaves, in words."""
+    # a change found is always sized (rocklab.diagnosis.estimation.change)
+    assert change.before is not None and change.after is not None and change.ci95_size is not None
+    if change.kind is ChangeKind.CHANGE_POINT:
+        how = f"changes from test {change.where_test or change.where_index} on"
+    else:
+        how = "changes gradually over the series"
+    return Structure(
+        change.effect,
+        f"{change.effect}: {change.parameter} {how}, {change.before:.4g} to {change.after:.4g} "
+        f"(95 % interval of the change [{change.ci95_size[0]:.3g}, {change.ci95_size[1]:.3g}] on {change.n_tests} "
+        "tests): the tests are not one wall state",
+    )
 
 
 def _with_model_bias(

@@ -346,6 +346,9 @@ def series_records(
         between tests).
     fs : float
         Sampling rate [Hz].
+    alpha_ratio : float or callable
+        ``VirtualTest.alpha_ratio`` (the rocking angle over the nominal alpha), or test index -> it: a
+        rocking edge that changes within the series (a corner crushed after some test).
     pull : bool
         Every other test released towards the other hinge (two-sided).
     theta0_range : tuple
@@ -373,7 +376,7 @@ def series_records(
             direction=direction,
             contact_depth_mm=contact_depth_mm if one else None,
             fs=fs,
-            alpha_ratio=alpha_ratio,
+            alpha_ratio=alpha_ratio(i) if callable(alpha_ratio) else alpha_ratio,
             theta0_ratio=float(rng.uniform(*theta0_range)),
             model=model(i) if callable(model) else dict(model),
             effects=Effects(noise_mm=noise_mm, hum_mm=noise_mm),
