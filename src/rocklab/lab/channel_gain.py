@@ -83,9 +83,11 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy import stats
 
+from rocklab._imports import lazy_module
 from rocklab.lab import kinematics
+
+stats = lazy_module("scipy.stats")
 
 #: Practical margin on a gain [-]: a channel is named when its interval excludes 1 -+ MARGIN.
 MARGIN = 0.005
