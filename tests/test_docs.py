@@ -13,6 +13,7 @@ import pytest
 import yaml
 
 from rocklab import summaries
+from rocklab.benchmarks import QUOTED, measured_code
 from rocklab.diagnosis.diagnosis_summary import diagnosis_summary, limestone_summary
 from rocklab.dissipation.dissipation_summary import dissipation_summary
 from rocklab.lab.qc_summary import quality_control_summary
@@ -144,6 +145,24 @@ def test_readme_states_the_measured_times():
     assert f"({sc['large_n_tests']} tests" in text and f"{sc['large_cpu_s']:.0f} s of CPU time" in text
     assert f"({sc['large_s']:.0f} s at a load average of {sc['large_load']:.1f})" in text
     assert f"peak memory of {sc['large_peak_mb'] / 1000:.1f} GB" in text
+
+
+def test_the_quoted_performance_is_a_measurement_of_this_code():
+    """The README and the performance page quote bench/fresh_clone.py and bench/scale.py (issue 44): each
+    must be a measurement of the code this checkout holds (rocklab.benchmarks.measured_code: the library,
+    workflow, settings, build and pinned packages, and the benchmark's script).  A change of any of them
+    fails here until the benchmark runs again on it (then `make docs`, and the README's lines)."""
+    perf = committed_numbers()["performance"]
+    stale = {}
+    for name, script in QUOTED.items():
+        was, now = (perf.get(name) or {}).get("measured"), measured_code(ROOT, script)
+        if not was:
+            stale[name] = "no record of the code it measured"
+        elif was["dirty"]:
+            stale[name] = f"measured on uncommitted code beside {was['commit'][:8]}"
+        elif was["code"] != now["code"]:
+            stale[name] = f"measured at {was['commit'][:8]}, whose code differs from this checkout's"
+    assert not stale, "; ".join(f"{name}: {why} (run python {QUOTED[name]} again)" for name, why in stale.items())
 
 
 def readme_example():
