@@ -178,6 +178,9 @@ def test_the_virtual_lab_records_the_hidden_losses(tmp_path):
 
 # name: (simulator model, series keywords, truth of the family's parameters, member it reduces to)
 FRICTION = {"theta0_range": (0.85, 0.95)}  # released below alpha - mu: friction would hold it at rest
+#: Each form at a weak and a strong loss, each at both noises, the weaker loss at the higher
+#: noise: half the crossed design, every level of each factor still met (the discovery bench
+#: crosses them all).
 SCENARIOS = {
     **{
         f"friction-{m}-noise-{noise}": (
@@ -186,8 +189,7 @@ SCENARIOS = {
             {"zeta": 0.0, "mu_over_alpha": m, "kappa_alpha": 0.0},
             "dry friction",
         )
-        for m in (0.006, 0.02)
-        for noise in (0.002, 0.01)
+        for m, noise in ((0.006, 0.01), (0.02, 0.002))
     },
     **{
         f"drag-{k}-noise-{noise}": (
@@ -196,8 +198,7 @@ SCENARIOS = {
             {"zeta": 0.0, "mu_over_alpha": 0.0, "kappa_alpha": k},
             "quadratic drag",
         )
-        for k in (0.03, 0.06)
-        for noise in (0.002, 0.01)
+        for k, noise in ((0.03, 0.01), (0.06, 0.002))
     },
 }
 

@@ -17,11 +17,14 @@ pytestmark = pytest.mark.skipif(not SNAKEMAKE.exists(), reason="snakemake not in
 
 
 def test_the_committed_numbers_hold_under_a_second_floating_point_environment(tmp_path):
-    """The whole main job on the embedded campaign (maps, calibrated maps, diagnosis, every
+    """The main job's numbers on the embedded campaign (maps, calibrated maps, diagnosis, every
     fit and every numba kernel) on kernels other than the machine's own: every number of
-    docs/numbers.json within its stage's tolerance (bench/environments.py measures the spread)."""
+    docs/numbers.json within its stage's tolerance (bench/environments.py measures the spread).
+    Its targets are the stages' summaries, what the numbers are made of: the figures and the
+    report, which print none, are left out (a third of the run's jobs)."""
     results = tmp_path / "results"
-    cmd = [str(SNAKEMAKE), "all", "--cores", "2", "--quiet", "--snakefile", str(ROOT / "Snakefile")]
+    targets = [str(path) for name, path in pages.summary_paths(results).items() if name not in pages.VOLATILE]
+    cmd = [str(SNAKEMAKE), *targets, "--cores", "2", "--quiet", "--snakefile", str(ROOT / "Snakefile")]
     cmd += ["--directory", str(tmp_path), "--config", f"raw_dir={ROOT / 'raw' / 'campaign'}", f"results_dir={results}"]
     env = environment(SECOND_ENVIRONMENT, numba_cache=tmp_path / "numba-cache")
     run = subprocess.run(cmd, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=1500)

@@ -7,9 +7,12 @@ columns of tests.csv left out, a specimen without tests.  Hypothesis draws a
 few shapes (derandomised: the same ones on every run) and each runs the
 default target ``all`` (the campaign, the maps of one record on a tiny grid,
 the limestone blocks, the docs pages): no shape may stop it, except a campaign
-with no valid test, which ends with a message that says so and its ``qc.csv``.
+with no valid test, which ends with a message that says so and its ``qc.csv``;
+what a shape lacks (a boundary, a rejection, enough tests for the diagnosis to
+name a cause) is zero or "not measured" on its pages.
 """
 
+import json
 import os
 import subprocess
 import sys
@@ -160,3 +163,14 @@ def test_every_target_on_any_campaign_shape(shape, tmp_path_factory):
     pages = {p.name for p in (ROOT / "docs" / "templates").glob("*.md")}
     assert {p.name for p in (results / "docs").iterdir()} == pages | {"numbers.json"}
     assert (results / "report" / "qc.html").is_file() and (results / "figures" / "fig09.png").is_file()
+    # what the campaign lacks (a boundary, a rejection, a series) is zero or "not measured",
+    # never an error, and its pages keep no placeholder
+    numbers = json.loads((results / "docs" / "numbers.json").read_text())
+    qc_numbers = numbers["quality_control"]
+    assert qc_numbers["verdicts"]["valid"] == len(valid)
+    for absent in {"two-sided", "one-sided"} - set(shape.boundaries):
+        assert numbers["dissipation"][absent.replace("-", "_")]["stands_apart"] == []
+    page = (results / "docs" / "quality-control.md").read_text()
+    for s in qc_numbers["series"]:
+        assert f"| {s['series']} | {s['n_valid']} | {s['n_rejected']} |" in page, s
+    assert not [p for p in (results / "docs").glob("*.md") if "{{" in p.read_text()]

@@ -13,7 +13,7 @@ from rocklab.diagnosis.estimation import Problem
 from rocklab.diagnosis.evidence import MeasuredTest, TestStack, covariates, log_ratio, noise_covariates, residuals
 from rocklab.diagnosis.extended import model_params
 from rocklab.diagnosis.result import Structure
-from rocklab.diagnosis.wall_model import base_params, branches, free_run, log_columns, stacked
+from rocklab.diagnosis.wall_model import ModelParams, base_params, branches, free_run, log_columns, stacked
 
 if TYPE_CHECKING:
     from rocklab.diagnosis.causes import Unexplained
@@ -37,10 +37,13 @@ class WallProblem(Problem[TestStack]):
         return self.S.subset(np.asarray(idx))
 
     def residuals(self, sub: TestStack, ext: Collection[str], values: Mapping[str, float]) -> dict[str, np.ndarray]:
+        return residuals(sub, model_params(sub.tests, ext, values, self._base(sub)), self._cache)
+
+    def _base(self, sub: TestStack) -> ModelParams:
         # a fit evaluates one subset many times: its base model is made once
         if self._cache.get("base_of") is not sub:
             self._cache.update(base_of=sub, base=base_params(sub.tests))
-        return residuals(sub, model_params(sub.tests, ext, values, self._cache["base"]), self._cache)
+        return cast("ModelParams", self._cache["base"])
 
     def residuals_at(
         self, sub: TestStack, ext: Collection[str], values: Sequence[Mapping[str, float]]
@@ -49,9 +52,7 @@ class WallProblem(Problem[TestStack]):
         same branches of the closed forms (:func:`branches`) evaluated as one, stacked on the tests
         repeated (:func:`rocklab.diagnosis.wall_model.stacked`), the fixed cost of an evaluation (some
         hundred small array operations) paid once a branch."""
-        if self._cache.get("base_of") is not sub:
-            self._cache.update(base_of=sub, base=base_params(sub.tests))
-        models = [model_params(sub.tests, ext, v, self._cache["base"]) for v in values]
+        models = [model_params(sub.tests, ext, v, self._base(sub)) for v in values]
         together: dict[tuple[bool, ...], list[int]] = {}
         for i, mp in enumerate(models):
             together.setdefault(branches(mp), []).append(i)

@@ -90,10 +90,7 @@ class _Groups(Problem[Sub]):
         return self.problem.params(ext)
 
     def residuals(self, sub: Sub, ext: Collection[str], values: Mapping[str, float]) -> dict[str, np.ndarray]:
-        key = (id(sub), tuple(ext), tuple(values.items()))
-        if key not in self.memo:
-            self.memo[key] = self.problem.residuals(sub, ext, values)
-        return {g: r for g, r in self.memo[key].items() if g in self.groups}
+        return self.residuals_at(sub, ext, [values])[0]
 
     def residuals_at(
         self, sub: Sub, ext: Collection[str], values: Sequence[Mapping[str, float]]
