@@ -82,6 +82,8 @@ def test_per_impact_restitution_within_0005_of_the_truth_at_240_and_1000_hz():
     for acc in (rotation_240, inertial_1000):
         assert acc["n_impacts"] >= 40
         assert abs(acc["e_error_median"]) <= 0.005
+    # from the rate's steps (0.0025 here); the flight fits of the integrated rate gave 0.016
+    assert inertial_1000["e_abs_error_median"] <= 0.005
     assert inertial_1000["bound_held"] == 2
 
 

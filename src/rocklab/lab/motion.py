@@ -71,6 +71,7 @@ from rocklab.io import cf_attrs, read_dataset, valid_tests, write_netcdf
 from rocklab.lab import kinematics
 from rocklab.lab.channels import LOST_STATUSES
 from rocklab.lab.flight_fit import local_fit, model_value, model_velocity, odd_samples, root_tau, stationary_tau
+from rocklab.lab.inertial import impacts_from_rate
 from rocklab.lab.release import screw_departure
 from rocklab.lab.rotation import unseen_impacts
 from rocklab.physics.boundary import Boundary
@@ -586,7 +587,9 @@ def stored_motion(ds: xr.Dataset) -> xr.Dataset:
     rigid-body motion (:func:`monitor_readings`,
     :func:`centre_amplification`; NaN without a working monitor).  The
     impacts of a rotation record that fell on a lost stretch keep no
-    velocities (:func:`rocklab.lab.rotation.unseen_impacts`).  A test
+    velocities (:func:`rocklab.lab.rotation.unseen_impacts`); those of an
+    inertial record take them from the steps of the gyroscope's rate
+    (:func:`rocklab.lab.inertial.impacts_from_rate`).  A test
     with no rotation (unreadable) or no motion found keeps the reason in
     ``motion_error`` instead of the motion.
 
@@ -610,6 +613,9 @@ def stored_motion(ds: xr.Dataset) -> xr.Dataset:
         impacts = m.impacts.copy()
         impacts.loc[unseen, ["thetadot_before", "thetadot_after", "e_velocity"]] = np.nan
         m = replace(m, impacts=impacts)
+    if a.get("instrument") == "inertial" and len(m.impacts):
+        # the gyroscope measures the velocities themselves: the steps of its rate, not the flights of its integral
+        m = replace(m, impacts=impacts_from_rate(ds, m.impacts))
     amp = np.nan
     mon = monitor_readings(ds)
     if mon is not None and np.isfinite(m.t_first_impact):
