@@ -4,7 +4,9 @@ A campaign is a plan of :class:`VirtualTest` (the specimen, the boundary,
 the wall's physics as any model of the simulator, the release, disturbed
 or not, the instrument effects and faults of :mod:`rocklab.lab.virtual_record`);
 :func:`simulate_virtual_test` runs one with
-:func:`rocklab.simulation.reference.simulate_free` and records it,
+:func:`rocklab.simulation.reference.simulate_free` and records it
+(:func:`record_virtual_test`, the seam where any simulated motion becomes a
+record: :mod:`rocklab.lab.contact_lab` plugs in there),
 :func:`write_campaign` writes the folder in the lab's format
 (``docs/raw-format.md``) plus ``truth.csv``, so that each stage of the
 reduction can be tested on data in which effects were hidden on purpose;
