@@ -56,6 +56,8 @@ SLOW = {
     "test_campaign.py": {"test_embedded_records_read_as_python_reads_them"},
     # the mixed campaign of every instrument, reduced once: 8 s; the accuracy at 240 and 1000 Hz: 3 s
     "test_instruments.py": {"mixed", "test_per_impact_restitution_within_0005_of_the_truth_at_240_and_1000_hz"},
+    # a wall of the contact lab (MuJoCo) written and reduced once: 7 s
+    "test_contact_lab.py": {"campaign"},
     # a mixed campaign of text, TDMS, C3D and video, written and reduced once: 4 s
     "test_native_files.py": {"mixed"},
     # one series per instrument and scenario diagnosed once: 16 s

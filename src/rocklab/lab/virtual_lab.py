@@ -4,7 +4,9 @@ A campaign is a plan of :class:`VirtualTest` (the specimen, the boundary,
 the wall's physics as any model of the simulator, the release, disturbed
 or not, the instrument effects and faults of :mod:`rocklab.lab.virtual_record`);
 :func:`simulate_virtual_test` runs one with
-:func:`rocklab.simulation.reference.simulate_free` and records it,
+:func:`rocklab.simulation.reference.simulate_free` and records it
+(:func:`record_virtual_test`, the seam where any simulated motion becomes a
+record: :mod:`rocklab.lab.contact_lab` plugs in there),
 :func:`write_campaign` writes the folder in the lab's format
 (``docs/raw-format.md``) plus ``truth.csv``, so that each stage of the
 reduction can be tested on data in which effects were hidden on purpose;
@@ -200,6 +202,81 @@ def _law_name(law):
     return f"{type(law).__name__}({inner})"
 
 
+def record_virtual_test(
+    test: VirtualTest,
+    specimen,
+    layout,
+    t_free,
+    theta_free,
+    rng: np.random.Generator,
+    *,
+    impacts: pd.DataFrame | None = None,
+    t_rest: float | None = None,
+    w_free: np.ndarray | None = None,
+):
+    """Record a free motion as ``test`` says: the seam between a wall's physics and the lab.
+
+    Whatever simulated the wall (the reference simulator of
+    :func:`simulate_virtual_test`, the contact mechanics of
+    :mod:`rocklab.lab.contact_lab`), its free rocking goes through the same
+    protocol, instruments, effects and faults here.
+
+    Parameters
+    ----------
+    test : VirtualTest
+    specimen : Mapping
+        Row of specimens.csv (mm).
+    layout : DataFrame
+        setups.csv rows of the test's setup.
+    t_free, theta_free : ndarray
+        Free rocking from the release on the grid 1/test.fs [s, rad].
+    rng : numpy.random.Generator
+    impacts : DataFrame, optional
+        ``t`` [s from release] and ``thetadot_before`` [rad/s] of each impact (ringing).
+    t_rest : float, optional
+        Time from release at which the wall is at rest [s].
+    w_free : ndarray, optional
+        Sliding of the base along y [mm]; default the ``effects``' random slips.
+
+    Returns
+    -------
+    t, readings, truth
+        As :func:`record_from_motion`, truth with the expected verdict
+        (``expected_reason``, ``expected_detail``, ``expected_valid``).
+    """
+    E: np.ndarray | dict[str, np.ndarray]  # the transducers' readings, or an instrument's by quantity
+    t, E, truth = record_from_motion(
+        t_free,
+        theta_free,
+        test.fs,
+        layout,
+        specimen,
+        w_free=w_free,
+        impacts=impacts,
+        t_rest=t_rest,
+        effects=test.effects,
+        faults=test.faults if test.instrument in TRANSDUCER_FILES else (),
+        residual_top_mm=test.residual_top_mm,
+        residual_kind=test.residual_kind,
+        rng=rng,
+    )
+    reason, why = expected_verdict(
+        test.faults, layout, specimen["thickness_mm"], test.release_ratio, truth["residual_top_mm"], test.instrument
+    )
+    if test.instrument == "rotation":
+        E = rotation_readings(t, truth["theta"], truth["phi"], truth["v"], truth["w"], test.rotation, rng)
+    elif test.instrument == "inertial":
+        truth["sensor_mm"] = sensor_point(specimen, test.inertial)
+        E, truth["gyro_bias_rad_s"] = inertial_readings(
+            t, truth["theta"], truth["sensor_mm"], specimen["thickness_mm"], test.inertial, rng
+        )
+    for f in test.faults if test.instrument in ("rotation", "inertial") else ():
+        assert isinstance(E, dict)  # an instrument's readings
+        instrument_fault(E, f.kind, rng, f.level)
+    truth.update({"expected_reason": reason, "expected_detail": why, "expected_valid": reason == "valid"})
+    return t, E, truth
+
+
 def simulate_virtual_test(test: VirtualTest, specimen, layout, rng=None, t_end=40.0):
     """Simulate one test with :func:`rocklab.simulation.reference.simulate_free` and record it.
 
@@ -243,40 +320,21 @@ def simulate_virtual_test(test: VirtualTest, specimen, layout, rng=None, t_end=4
     thetadot0 = -sgn * test.release_ratio * w_r
     hist = simulate_free(model, theta0, thetadot0, t_end=t_end, fs=test.fs)
     t_rest = hist.t_rest if hist.t_rest is not None else float(hist.t[-1])
-    # the transducers' readings (samples, channels), or an instrument's by quantity
-    E: np.ndarray | dict[str, np.ndarray]
-    t, E, truth = record_from_motion(
+    t, E, truth = record_virtual_test(
+        test,
+        specimen,
+        layout,
         hist.t,
         np.nan_to_num(hist.theta, nan=np.nanmax(np.abs(hist.theta)) * sgn),
-        test.fs,
-        layout,
-        specimen,
+        rng,
         impacts=hist.impacts,
         t_rest=t_rest,
-        effects=test.effects,
-        faults=test.faults if test.instrument in TRANSDUCER_FILES else (),
-        residual_top_mm=test.residual_top_mm,
-        residual_kind=test.residual_kind,
-        rng=rng,
     )
     imp = hist.impacts
     base = imp[imp["kind"] == "base"] if len(imp) else imp
     ratios = (base["thetadot_after"] / base["thetadot_before"]).to_numpy() if len(base) else np.array([])
     # a one-sided wall with a gap rocks on the base impacts of Eq. 2
     e_an = restitution.analytic(Boundary.ONE_SIDED if one and model.gap == 0 else Boundary.TWO_SIDED, alpha)
-    reason, why = expected_verdict(
-        test.faults, layout, specimen["thickness_mm"], test.release_ratio, truth["residual_top_mm"], test.instrument
-    )
-    if test.instrument == "rotation":
-        E = rotation_readings(t, truth["theta"], truth["phi"], truth["v"], truth["w"], test.rotation, rng)
-    elif test.instrument == "inertial":
-        truth["sensor_mm"] = sensor_point(specimen, test.inertial)
-        E, truth["gyro_bias_rad_s"] = inertial_readings(
-            t, truth["theta"], truth["sensor_mm"], specimen["thickness_mm"], test.inertial, rng
-        )
-    for f in test.faults if test.instrument in ("rotation", "inertial") else ():
-        assert isinstance(E, dict)  # an instrument's readings
-        instrument_fault(E, f.kind, rng, f.level)
     truth.update(
         {
             "alpha": alpha,
@@ -306,9 +364,6 @@ def simulate_virtual_test(test: VirtualTest, specimen, layout, rng=None, t_end=4
             "e_analytic": float(e_an),
             "n_impacts": int(len(imp)),
             "overturned": bool(hist.overturned),
-            "expected_reason": reason,
-            "expected_detail": why,
-            "expected_valid": reason == "valid",
         }
     )
     return t, E, truth
@@ -408,7 +463,7 @@ def _effects_on(e: Effects):
     return names
 
 
-def write_campaign(out_dir, tests, specimens=None, layouts=None, seed=0, t_end=40.0):
+def write_campaign(out_dir, tests, specimens=None, layouts=None, seed=0, t_end=40.0, simulate=None):
     """Simulate and write a virtual campaign in the lab's format, with its truth.
 
     Parameters
@@ -425,6 +480,11 @@ def write_campaign(out_dir, tests, specimens=None, layouts=None, seed=0, t_end=4
         Seed of everything random (one independent stream per test).
     t_end : float
         Longest free rocking simulated [s].
+    simulate : callable, optional
+        ``(test, specimen, layout, rng, t_end) -> (t, readings, truth)``, the
+        wall's physics; default :func:`simulate_virtual_test`.  Another
+        generator (:func:`rocklab.lab.contact_lab.simulate_contact_test`)
+        gives the truth's keys too, and its own columns as ``truth["columns"]``.
 
     Returns
     -------
@@ -432,6 +492,7 @@ def write_campaign(out_dir, tests, specimens=None, layouts=None, seed=0, t_end=4
         truth.csv: one row per test with every parameter used, the true
         theta0 and e, the effects on, the faults and the expected verdict.
     """
+    simulate = simulate_virtual_test if simulate is None else simulate
     out = Path(out_dir)
     (out / "tests").mkdir(parents=True, exist_ok=True)
     specimens = DEFAULT_SPECIMENS if specimens is None else specimens
@@ -455,7 +516,7 @@ def write_campaign(out_dir, tests, specimens=None, layouts=None, seed=0, t_end=4
             )
         layout = layouts[key]
         rng = np.random.default_rng(ss)
-        t, E, truth = simulate_virtual_test(test, sp, layout, rng, t_end)
+        t, E, truth = simulate(test, sp, layout, rng, t_end)
         rel = test.file
         unreadable = any(f.kind == "unreadable" for f in test.faults)
         if test.instrument == "transducers":
@@ -523,6 +584,7 @@ def write_campaign(out_dir, tests, specimens=None, layouts=None, seed=0, t_end=4
                 "expected_valid": truth["expected_valid"],
                 "expected_reason": truth["expected_reason"],
                 "expected_detail": truth["expected_detail"],
+                **truth.get("columns", {}),
             }
         )
     specimens.to_csv(out / "specimens.csv", index=False)
