@@ -200,9 +200,7 @@ def state_spread(change: SeriesChange) -> float:
     if change.kind is ChangeKind.NONE:
         return 0.0
     # a change found is always sized (rocklab.diagnosis.estimation.change)
-    size = abs(
-        cast(float, change.size if change.size is not None else cast(float, change.after) - cast(float, change.before))
-    )
+    size = abs(cast(float, change.size))
     n = max(change.n_tests, 2)
     if change.kind is ChangeKind.CHANGE_POINT:
         after = (n - cast(int, change.where_index)) / n
