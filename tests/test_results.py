@@ -251,6 +251,7 @@ RECORDS = [
     (R.DIAGNOSIS_SCHEMA, "base", R.BaseRun),
     (R.DIAGNOSIS_SCHEMA, "structure", R.Structure),
     (R.DIAGNOSIS_SCHEMA, "series_change", R.SeriesChange),
+    (R.DIAGNOSIS_SCHEMA, "changing_series", R.ChangingSeries),
     (R.LIMESTONE_SCHEMA, "block_entry", R.BlockDiagnosis),
     (R.LIMESTONE_SCHEMA, "finding", R.Finding),
     (R.LIMESTONE_SCHEMA, "family", R.FamilyComparison),

@@ -90,6 +90,7 @@ def diagnosis_markdown(
             for e in diagnosis.not_finished
         ]
         out += [""]
+    out += _changes_section(diagnosis)
     # a boundary condition's entry or a series', told apart by ``pooled``; an entry has its key (the schema)
     e: Any
     for e in [
@@ -159,6 +160,15 @@ def diagnosis_markdown(
             # a series that cannot estimate a cause is left out of its pool, never put at the null value
             gone = [f for f in e.findings if pooled and f.left_out]
             out += [f"{f.effect}, left out: {'; '.join(map(str, f.left_out))}." for f in gone] + ([""] if gone else [])
+            # a series whose parameter changes over its tests is counted, not as one wall state
+            moving = [f for f in e.findings if pooled and f.changes_within]
+            out += [
+                f"{f.effect}, counted though changing over their tests: {'; '.join(map(str, f.changes_within))}."
+                for f in moving
+            ] + ([""] if moving else [])
+        if not pooled and e.changed:
+            # beside the law, which stays named
+            out += ["Changes over the tests: " + "; ".join(f"{c.effect}: {c}" for c in e.changed) + ".", ""]
         for f in e.discovered:
             g = f.heldout_gain
             out += [
@@ -198,6 +208,24 @@ def diagnosis_markdown(
                 )
             out.append("")
     return "\n".join(out)
+
+
+def _changes_section(diagnosis: CampaignDiagnosis) -> list[str]:
+    """The lines of "Changes within a series": how many series were tested, and each change found."""
+    tested = [e for e in diagnosis.series if e.changes]
+    if not tested:
+        return []
+    changed = [e for e in tested if e.changed]
+    out = [
+        "## Changes within a series",
+        "",
+        f"{counted(len(tested), 'series')} tested for a change of their parameters over their tests "
+        f"({counted(sum(len(e.changes or []) for e in tested), 'parameter')}): "
+        + (f"{len(changed)} {'shows' if len(changed) == 1 else 'show'} one." if changed else "none shows one."),
+        "",
+    ]
+    out += [f"- series {e.key}, {c.effect}: {c}" for e in changed for c in e.changed]
+    return out + ([""] if changed else [])
 
 
 def _f(x: float | None, fmt: str = ".4f") -> str:

@@ -19,6 +19,7 @@ from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.causes import Stage
 from rocklab.diagnosis.result import (
     CampaignDiagnosis,
+    ChangingSeries,
     FamilyComparison,
     LimestoneDiagnosis,
     PooledFinding,
@@ -50,6 +51,42 @@ def _finding(f: PooledFinding) -> dict:
         "n_series": f.n_series,
         # the series its parameters leave out, and why, in words (the page's "left out" column)
         "left_out": [str(g) for g in f.left_out or []],
+    }
+
+
+def _changes(d: CampaignDiagnosis) -> dict:
+    """The series tested for a change of their parameters over their tests, and each change found: where,
+    how much, and what its boundary condition's pool made of it (``u_states``, the spread of its states its
+    standard error was widened by; None where no pool counts it)."""
+    tested = [s for s in d.series if s.changes]
+    pooled: dict[tuple[str | None, str, str], ChangingSeries] = {
+        (c.series, f.effect, c.parameter): c
+        for b in d.boundaries
+        for f in b.findings
+        for c in f.changes_within or []
+        if f.effect in b.verdict
+    }
+    return {
+        "n_series": len(tested),
+        "n_parameters": sum(len(s.changes or []) for s in tested),
+        "changed": [
+            {
+                "series": s.key,
+                "boundary": s.boundary,
+                "effect": c.effect,
+                "parameter": c.parameter,
+                "kind": str(c.kind),
+                "where_test": c.where_test,
+                "before": c.before,
+                "after": c.after,
+                "size": c.size,
+                "ci95_size": c.ci95_size,
+                "n_tests": c.n_tests,
+                "u_states": p.u_states if (p := pooled.get((s.key, c.effect, c.parameter))) is not None else None,
+            }
+            for s in tested
+            for c in s.changed
+        ],
     }
 
 
@@ -90,7 +127,8 @@ def diagnosis_summary(diagnosis: CampaignDiagnosis | str | Path) -> dict:
     Returns
     -------
     dict
-        ``series`` (the verdict of each), ``n_series``, ``n_unexplained`` and per
+        ``series`` (the verdict of each), ``n_series``, ``n_unexplained``, ``changes`` (the series tested
+        for a change of their parameters over their tests, the changes found, :func:`_changes`) and per
         boundary (``two_sided``, ``one_sided``; ``None`` where the campaign has
         none) the base model's errors, the causes named with their intervals, the
         held-out errors, the gain of each cause estimated after selection (``after_selection``) and
@@ -99,7 +137,12 @@ def diagnosis_summary(diagnosis: CampaignDiagnosis | str | Path) -> dict:
     d = CampaignDiagnosis.of(diagnosis)
     series = d.series
     rows: list[dict] = []
-    out: dict = {"series": rows, "n_series": len(series), "n_unexplained": len(d.unexplained)}
+    out: dict = {
+        "series": rows,
+        "n_series": len(series),
+        "n_unexplained": len(d.unexplained),
+        "changes": _changes(d),
+    }
     out.update({b.key: None for b in Boundary})
     for s in series:
         rows.append(

@@ -8,7 +8,9 @@ out (:func:`pooled_parameter`: a random-effects mean over walls, its t
 interval widened by the systematic part the series share);
 :func:`diagnose_campaign` diagnoses every series
 (:func:`rocklab.diagnosis.series.diagnose_records`) and then every boundary
-condition.  Method: docs/diagnosis-method.md.
+condition.  A series whose parameter changes over its tests counts in its
+pool with its standard error widened by the spread of its states
+(:func:`state_spread`).  Method: docs/diagnosis-method.md.
 """
 
 from __future__ import annotations
@@ -30,6 +32,8 @@ from rocklab.diagnosis.result import (
     BoundaryDiagnosis,
     BoundaryExtended,
     CampaignDiagnosis,
+    ChangeKind,
+    ChangingSeries,
     Errors,
     HeldOut,
     LeftOut,
@@ -37,6 +41,7 @@ from rocklab.diagnosis.result import (
     Number,
     PooledEvidence,
     PooledFinding,
+    SeriesChange,
     SeriesDiagnosis,
     SeriesExtended,
     Structure,
@@ -165,13 +170,53 @@ def statistical_error(ci: Sequence[Number], u_sys: float, n_tests: int | None) -
     return float(np.sqrt(stat) / t) if stat > 0 else np.nan
 
 
+def state_spread(change: SeriesChange) -> float:
+    """The standard deviation over a series' tests of the states a changing parameter went through.
+
+    The pool of a boundary condition takes a series' estimate as one wall's
+    value; a parameter that changes over the series' tests
+    (:class:`~rocklab.diagnosis.result.SeriesChange`) has no one value, and
+    its estimate is a mean over the states the wall went through, weighed by
+    how many tests each state had: the test protocol's doing, not the
+    wall's.  Which state is the wall's is not known, and the spread of the
+    states over the tests is what that costs: a change point of size d
+    with a share p of the tests after it, |d| sqrt(p (1 - p)); a gradual
+    change of d from the first of n tests to the last, the tests evenly
+    placed, |d| sqrt((n + 1) / (12 (n - 1))).  0 where none was found.
+
+    Why widen rather than leave the series out (:func:`_parameter_values`):
+    its states are states of a wall of the boundary condition, evidence on
+    what the pool estimates; leaving out the series whose change cleared the
+    test conditions the pool on walls that did not change, by a test whose
+    power is low on ten tests (a selection on the outcome, like the winner's
+    curse).  Widened, the series weighs less the more its states differ,
+    and the pool moves continuously with the size of the change, where a
+    series left out at the test's threshold would jump from full weight to
+    none.  Where its states span the other walls' values, its departure
+    from them is its change's, not the walls' scatter: the variance between
+    walls falls, and the interval may narrow.  The size is taken at its
+    estimate; its own uncertainty is not added.
+    """
+    if change.kind is ChangeKind.NONE:
+        return 0.0
+    # a change found is always sized (rocklab.diagnosis.estimation.change)
+    size = abs(cast(float, change.size))
+    n = max(change.n_tests, 2)
+    if change.kind is ChangeKind.CHANGE_POINT:
+        after = (n - cast(int, change.where_index)) / n
+        return size * float(np.sqrt(after * (1.0 - after)))
+    return size * float(np.sqrt((n + 1) / (12.0 * (n - 1))))
+
+
 class _Values(NamedTuple):
-    """The series' own estimates of one parameter and the series left out of it."""
+    """The series' own estimates of one parameter, the series left out of it and those counted though the
+    parameter changes over their tests."""
 
     values: dict[str, float]
     se: dict[str, float]
     own: list[str]
     left_out: dict[str, tuple[LeftOutBecause, str]]
+    changing: dict[str, ChangingSeries]
 
 
 def _parameter_values(
@@ -185,8 +230,9 @@ def _parameter_values(
     the namers alone is the winner's (a wall whose series names zeta 0.0062 beside one that cannot see
     it would pool at 0.0031).  Its design cannot carry the cause (``not_identifiable``), it is too
     small to name any, or it has no estimate of the parameter (no signature of the cause in its data,
-    or its fit on a bound)."""
-    out = _Values({}, {}, [], {})
+    or its fit on a bound).  A series whose parameter changes over its tests is counted, its standard
+    error widened by the spread of its states (:func:`state_spread`, which says why it is not left out)."""
+    out = _Values({}, {}, [], {}, {})
     for e in series:
         key = cast(str, e.key)
         f = named.get(key)
@@ -208,6 +254,20 @@ def _parameter_values(
             # unnamed_estimates gives none where the data carry no signature of the cause or its fit left
             # the parameter on a bound
             out.left_out[key] = (LeftOutBecause.NO_ESTIMATE, "no estimate: no sign of the cause, or one on a bound")
+        change = next((c for c in e.changed if c.effect == cause and c.parameter == name), None)
+        if key in out.values and change is not None:
+            u = state_spread(change)
+            # an unknown standard error stays unknown: the units then weigh alike and their scatter holds it
+            out.se[key] = float(np.hypot(out.se[key], u))
+            out.changing[key] = ChangingSeries(
+                series=key,
+                parameter=name,
+                kind=change.kind,
+                where_test=change.where_test if change.kind is ChangeKind.CHANGE_POINT else None,
+                before=change.before,
+                after=change.after,
+                u_states=u,
+            )
     return out
 
 
@@ -220,13 +280,17 @@ def left_out(per_param: Mapping[str, _Values]) -> list[LeftOut]:
     return list(out.values())
 
 
-def _pooled_text(units: str, n_values: int, n_named: int, n_own: int, gone: Sequence[LeftOut]) -> str:
+def _pooled_text(
+    units: str, n_values: int, n_named: int, n_own: int, gone: Sequence[LeftOut], changing: Sequence[ChangingSeries]
+) -> str:
     """How a pooled parameter counts the series, in words."""
     head = f"random-effects mean over {units} of {n_values} series at their own estimates"
     how = [f"{n_named} that named it", f"{n_own} that did not (their data carry its signature)" if n_own else ""]
     text = f"{head}: " + ", ".join(h for h in how if h)
     if gone:
         text += "; left out: " + ", ".join(map(str, gone))
+    if changing:
+        text += "; changing over their tests: " + ", ".join(map(str, changing))
     return text
 
 
@@ -321,7 +385,10 @@ def diagnose_boundary(
     error, its finding's where it named the cause, its unnamed estimate
     where it did not, and a series that cannot estimate the parameter is
     left out and listed in ``left_out`` with why, never put at the null
-    value (the loser's curse: :func:`_parameter_values`).  The mean is a
+    value (the loser's curse: :func:`_parameter_values`); a series whose
+    parameter changes over its tests counts with its standard error widened
+    by the spread of its states, listed in ``changes_within``
+    (:func:`state_spread`).  The mean is a
     random-effects mean over series, or over walls where ``walls`` (series
     -> wall) is given, with a t interval (:func:`pooled_parameter`;
     ``ci_note`` says why there is none).  Each finding gives the ``n_series`` that named it, the
@@ -370,6 +437,7 @@ def diagnose_boundary(
                 ci[name] = interval
         note = "; ".join(f"{k}: {v}" for k, v in notes.items())
         gone = left_out(per_param)
+        changing = [c for v in per_param.values() for c in v.changing.values()]
         n_own = max(len(v.own) for v in per_param.values())
         findings.append(
             PooledFinding(
@@ -385,6 +453,7 @@ def diagnose_boundary(
                         len(lst),
                         n_own,
                         gone,
+                        changing,
                     ),
                     range={
                         n: [float(min(f.params[n] for _, f in lst)), float(max(f.params[n] for _, f in lst))]
@@ -397,6 +466,7 @@ def diagnose_boundary(
                 n_tests=int(w.sum()),
                 ci_note=note or None,
                 left_out=gone or None,
+                changes_within=changing or None,
             )
         )
     findings.sort(key=lambda f: (-(f.n_series or 0), -(f.gain["deviance_per_obs"] or 0)))

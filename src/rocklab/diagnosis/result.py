@@ -22,6 +22,8 @@ object                      file
 :class:`SeriesChange`       a parameter's change over the tests of a series, or none
 :class:`PooledFinding`      a cause named in enough series of a boundary condition
 :class:`LeftOut`            a series a pooled parameter leaves out, and why
+:class:`ChangingSeries`     a series a pooled parameter counts though it changes
+                            over the series' tests
 :class:`LimestoneDiagnosis` results/limestone_diagnosis.json
                             (:func:`~rocklab.diagnosis.block_tests.diagnose_blocks`)
 ==========================  =========================================================
@@ -384,6 +386,21 @@ class SeriesChange(_Record):
         # a file holds the kind's value: the object holds the enum, which decisions read
         self.kind = ChangeKind(self.kind)
 
+    def __str__(self) -> str:
+        """ "zeta changes from test T7 on, 0.0062 to 0.0081 (95 % interval of the change [...] on 10 tests)",
+        as the pages say it; "zeta: no change over 10 tests" where none was found."""
+        if self.kind is ChangeKind.NONE or self.before is None or self.after is None or self.ci95_size is None:
+            return f"{self.parameter}: no change over {self.n_tests} tests"
+        if self.kind is ChangeKind.CHANGE_POINT:
+            how = f"changes from test {self.where_test or self.where_index} on"
+        else:
+            how = "changes gradually over the series"
+        lo, hi = self.ci95_size
+        return (
+            f"{self.parameter} {how}, {self.before:.4g} to {self.after:.4g} "
+            f"(95 % interval of the change [{lo:.3g}, {hi:.3g}] on {self.n_tests} tests)"
+        )
+
 
 @dataclass
 class Finding(_Record):
@@ -473,6 +490,45 @@ class LeftOut(_Record):
 
 
 @dataclass
+class ChangingSeries(_Record):
+    """A series a pooled parameter counts though the parameter changes over the series' tests.
+
+    The change (``kind``, where a change point is: ``where_test``, the
+    values ``before`` and ``after`` it) is the series' own
+    (:class:`SeriesChange`); ``u_states`` is the standard deviation of the
+    series' states over its tests, added in quadrature to its standard
+    error in the pool (:func:`rocklab.diagnosis.pooling.state_spread`).
+    """
+
+    _optional = frozenset({"where_test"})
+
+    series: str
+    parameter: str
+    kind: ChangeKind = ChangeKind.NONE
+    where_test: str | None = None
+    before: Number = None
+    after: Number = None
+    u_states: Number = None
+
+    def __post_init__(self) -> None:
+        # a file holds the kind's value: the object holds the enum
+        self.kind = ChangeKind(self.kind)
+
+    def __str__(self) -> str:
+        """ "series 2b-1s (zeta 0.0062 to 0.0081 from test T7 on; ...)", as the pages say it."""
+        how = f"from test {self.where_test} on" if self.where_test else str(self.kind)
+        return (
+            f"series {self.series} ({self.parameter} {_g(self.before)} to {_g(self.after)} {how}; "
+            f"counted with its standard error widened by the spread of its states, {_g(self.u_states)})"
+        )
+
+
+def _g(x: Number) -> str:
+    """A number as the pages give a parameter, "n/a" for none."""
+    return "n/a" if x is None else f"{x:.4g}"
+
+
+@dataclass
 class PooledFinding(_Record):
     """A cause named in at least half of the series of a boundary condition that can name one.
 
@@ -480,13 +536,15 @@ class PooledFinding(_Record):
     estimate them, each at its own estimate under the extended model, named
     or not (walls where known), their t intervals widened by the systematic
     uncertainty the series share (``u_systematic``), the series left out and
-    why (``left_out``: never at the null value), the range over the series
-    that name it, and the test-weighted means of their held-out errors and
-    gains (:func:`rocklab.diagnosis.pooling.diagnose_boundary`).
+    why (``left_out``: never at the null value), the series counted though
+    the parameter changes over their tests (``changes_within``: their
+    standard errors widened by the spread of their states), the range over
+    the series that name it, and the test-weighted means of their held-out
+    errors and gains (:func:`rocklab.diagnosis.pooling.diagnose_boundary`).
     """
 
-    _optional = frozenset({"ci_note", "u_systematic", "left_out"})
-    _nested = {"left_out": [LeftOut]}
+    _optional = frozenset({"ci_note", "u_systematic", "left_out", "changes_within"})
+    _nested = {"left_out": [LeftOut], "changes_within": [ChangingSeries]}
 
     effect: str
     params: dict[str, float | None] = field(default_factory=dict)
@@ -499,6 +557,7 @@ class PooledFinding(_Record):
     n_tests: int | None = None
     ci_note: str | None = None
     left_out: list[LeftOut] | None = None
+    changes_within: list[ChangingSeries] | None = None
 
 
 @dataclass

@@ -408,16 +408,7 @@ def moved(change: SeriesChange) -> Structure:
     """A change of a parameter over the tests as structure the verdict leaves, in words."""
     # a change found is always sized (rocklab.diagnosis.estimation.change)
     assert change.before is not None and change.after is not None and change.ci95_size is not None
-    if change.kind is ChangeKind.CHANGE_POINT:
-        how = f"changes from test {change.where_test or change.where_index} on"
-    else:
-        how = "changes gradually over the series"
-    return Structure(
-        change.effect,
-        f"{change.effect}: {change.parameter} {how}, {change.before:.4g} to {change.after:.4g} "
-        f"(95 % interval of the change [{change.ci95_size[0]:.3g}, {change.ci95_size[1]:.3g}] on {change.n_tests} "
-        "tests): the tests are not one wall state",
-    )
+    return Structure(change.effect, f"{change.effect}: {change}: the tests are not one wall state")
 
 
 def _with_model_bias(

@@ -175,6 +175,33 @@ def diagnosis_series(n: Mapping[str, Any]) -> str:
     return markdown_table(["series", "boundary", "tests", "causes named", "unexplained"], rows)
 
 
+@_of("diagnosis")
+def series_changes(n: Mapping[str, Any]) -> str:
+    """The parameters that change over the tests of their series: where, how much, and what the pool made
+    of each."""
+    # a summary written before the series were tested for changes did not measure them
+    if "changes" not in n["diagnosis"]:
+        return NOT_MEASURED + "."
+
+    def row(c: Mapping[str, Any]) -> list[str]:
+        lo, hi = c["ci95_size"] or (None, None)
+        return [
+            c["series"],
+            f"`{c['effect']}`",
+            c["parameter"],
+            c["kind"] + (f" at test {c['where_test']}" if c["where_test"] else ""),
+            f"{show(c['before'], '.4g')} → {show(c['after'], '.4g')}",
+            f"{show(c['size'], '.3g')} [{show(lo, '.3g')}, {show(hi, '.3g')}] ({show(c['n_tests'])} tests)",
+            "not pooled"
+            if c["u_states"] is None
+            else f"counted, standard error widened by {show(c['u_states'], '.3g')}",
+        ]
+
+    rows = [row(c) for c in n["diagnosis"]["changes"]["changed"]]
+    header = ["series", "cause", "parameter", "change", "before → after", "size [95 % CI]", "in the pool"]
+    return markdown_table(header, rows) if rows else "None."
+
+
 def _effect_cell(e: Mapping[str, Any], spec: str = ".3g") -> str:
     """ "estimate [low, high]" of a campaign-level row, or "-" where it was not testable."""
     if e.get("estimate") is None:
@@ -533,6 +560,7 @@ TABLES: dict[str, Callable[[Mapping[str, Any]], str]] = {
     "minority_two_sided": lambda n: minority(n, "two_sided"),
     "minority_one_sided": lambda n: minority(n, "one_sided"),
     "diagnosis_series": diagnosis_series,
+    "series_changes": series_changes,
     "campaign_statements": campaign_statements,
     "campaign_found": campaign_found,
     "limestone_groups": limestone_groups,
