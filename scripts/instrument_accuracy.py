@@ -5,5 +5,5 @@ from rocklab.lab.accuracy import accuracy_summary
 from rocklab.summaries import write_summary
 
 job = jobs.start(snakemake)
-write_summary(accuracy_summary(), snakemake.output.docs_summary)
+write_summary(accuracy_summary(n_tests=snakemake.params.n_tests), snakemake.output.docs_summary)
 job.finish()

@@ -122,6 +122,8 @@ def _run_all(shape, workdir):
         "figures": {"fig9_specimen": shape.specimens[0]},
         # the maps of one short record on a 5 x 5 grid: test_overturning covers the stage
         "maps": {"records": ["Pac164"], "n": 5, "calibrated_n": 5},
+        # one virtual test per instrument and rate (tests/test_instruments.py covers the table)
+        "instruments": {"accuracy_tests": 1},
     }
     (workdir / "config.yaml").write_text(yaml.safe_dump(config))
     cmd = [

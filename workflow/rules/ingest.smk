@@ -50,5 +50,7 @@ rule instrument_accuracy:
         res("logs", "instrument_accuracy.log"),
     benchmark:
         res("benchmarks", "instrument_accuracy.tsv")
+    params:
+        n_tests=config["instruments"]["accuracy_tests"],
     script:
         "../../scripts/instrument_accuracy.py"

@@ -41,6 +41,10 @@ return wall (one-sided rocking, :class:`rocklab.physics.boundary.Boundary`)
 is not built.
 
 Lengths of the record in mm, dynamics in SI (m, s, rad, N).
+
+Size: one construction read top to bottom (the MJCF model, the hold and release,
+the contact episodes that give the truth, the campaign's ``simulate``); split, each
+part would need the others' conventions of axes, edges and signs.
 """
 
 from __future__ import annotations

@@ -18,6 +18,10 @@ effect is a knob that can be switched off, and everything is driven by one
 seed.
 
 Lengths of the record in mm, dynamics in SI (m, s, rad).
+
+Size: the plan, the simulation, the recording seam and the campaign folder are
+one pipeline whose truth columns each part adds to; the instruments, effects and
+native files already live in their own modules.
 """
 
 from __future__ import annotations
