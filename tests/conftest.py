@@ -100,9 +100,17 @@ def test_kind(item):
     return kind
 
 
+#: Files whose tests run longest or wait on other processes (the SLURM scheduler's polls): run
+#: first. pytest-xdist hands tests out in collection order, and one of these last kept one worker
+#: busy (or idle, waiting) for minutes after the other had finished.
+FIRST = ("test_slurm.py", "test_environments.py", "test_shapes.py")
+
+
 def pytest_collection_modifyitems(items):
     for item in items:
         item.add_marker(test_kind(item))
+    # a stable sort: each file's tests stay together, in their order (its module fixtures once)
+    items.sort(key=lambda item: FIRST.index(item.path.name) if item.path.name in FIRST else len(FIRST))
 
 
 def pytest_terminal_summary(terminalreporter):

@@ -75,3 +75,30 @@ def test_an_error_of_another_kind_is_not_taken_for_a_full_disk(tmp_path, monkeyp
     _full_disk(monkeypatch)
     with pytest.raises(ValueError), rocklab.disk.atomic_output(tmp_path / "a.csv"):
         raise ValueError("a bug, not the disk")
+
+
+def test_a_job_log_closed_on_a_full_disk_loses_its_lines_without_a_traceback(tmp_path):
+    """A map job logs each record to its own file in turn (rocklab.io.setup_logging): closing the
+    previous one on a full disk must not raise under the job's one-line stop."""
+
+    class FullStream:
+        def write(self, text):
+            return len(text)
+
+        def flush(self):
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+        def close(self):
+            self.flush()
+
+    handler = rocklab.io._JobLog(tmp_path / "job.log", mode="w")
+    handler.stream.close()
+    handler.stream = FullStream()
+    handler.close()
+    assert handler.stream is None
+    other = rocklab.io._JobLog(tmp_path / "other.log", mode="w")
+    other.stream.close()
+    other.stream = FullStream()
+    other.stream.flush = lambda: (_ for _ in ()).throw(OSError(errno.EACCES, "Permission denied"))
+    with pytest.raises(OSError, match="Permission denied"):
+        other.close()

@@ -99,8 +99,6 @@ def _snakemake(target, folder, results, *options, output="stdout", returncode=0)
         "figures={'fig9_specimen': '1a'}",
         # the overturning maps of one short record only (test_overturning covers the stage)
         "maps={'records': ['Pac164']}",
-        # one virtual test per instrument and rate: the table's cost is the campaign's in a tiny one
-        "instruments={'accuracy_tests': 1}",
     ]
     env = {**os.environ, "PYTHONWARNINGS": "ignore"}
     run = subprocess.run(cmd, capture_output=True, text=True, cwd=workdir, env=env)

@@ -72,6 +72,15 @@ class _JobLog(logging.FileHandler):
             return
         super().handleError(record)
 
+    def close(self) -> None:
+        # a job that logs to several files in turn closes each before the next: the lines
+        # a full disk kept in its buffer are lost, not a traceback under the one-line stop
+        try:
+            super().close()
+        except OSError as exc:
+            if exc.errno not in SPACE_ERRNOS:
+                raise
+
 
 def setup_logging(path: str | Path) -> None:
     """Send log records and warnings of this process to ``path``.
