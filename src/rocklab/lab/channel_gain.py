@@ -134,7 +134,12 @@ class ChannelGain:
     @property
     def disagrees(self) -> bool:
         """The interval excludes 1 -+ :data:`MARGIN`."""
-        return bool(self.low > 1.0 + MARGIN or self.high < 1.0 - MARGIN)
+        return outside_margin(self.low, self.high)
+
+
+def outside_margin(low: float, high: float) -> bool:
+    """Whether a gain's interval [low, high] excludes 1 -+ :data:`MARGIN`: the instrument disagrees."""
+    return bool(low > 1.0 + MARGIN or high < 1.0 - MARGIN)
 
 
 @dataclass(frozen=True)
@@ -169,7 +174,7 @@ class GainCheck:
         return next((g for g in self.gains if g.channel == self.channel), None)
 
 
-def _blocks(n: int, k: int) -> np.ndarray:
+def block_starts(n: int, k: int) -> np.ndarray:
     """Start indices of ``k`` contiguous blocks of ``n`` samples (fewer if ``n < k``)."""
     return np.unique(np.linspace(0, n, min(k, n) + 1).astype(int)[:-1])
 
@@ -260,7 +265,7 @@ def channel_gains(
     # pseudo-inverse: a degenerate geometry at some step gives its leverage, not an exception
     H = np.einsum("nck,nkl,ncl->nc", J, np.linalg.pinv(A), J)
     perp = np.clip(1.0 - H, 0.0, 1.0)
-    starts = _blocks(n, n_blocks)
+    starts = block_starts(n, n_blocks)
     num = np.add.reduceat(y * r, starts, axis=0)
     den = np.add.reduceat(y * y * perp, starts, axis=0)
     beta, half = ratio_interval(num, den, level)

@@ -19,8 +19,9 @@ Here, from what the record itself says:
 * the bound on the angle error this leaves (:func:`error_bound`): the random
   walk of the rate's noise pinned at both rests (a Brownian bridge), the
   tilt's noise at the anchor, the accelerometer's bias (which shifts every
-  static tilt alike) and a bias that changed during the test (the rate's
-  mean at the final rest against the bias of the closure);
+  static tilt alike), a bias that changed during the test (the rate's
+  mean at the final rest against the bias of the closure) and, where the
+  gyroscope's gain was corrected, that gain's interval;
 * the impacts: the spikes of the specific force (:func:`force_spikes`)
   are the instants at which the wall is on its base edge, theta = 0; the
   median of the integrated theta there is the offset that the
@@ -39,7 +40,11 @@ Here, from what the record itself says:
   whose rate was lost at it keeps the velocities of the flight fits of
   theta;
 * a dead or clipped gyroscope or accelerometer loses the instrument
-  (:func:`rocklab.lab.instrument.health`).
+  (:func:`rocklab.lab.instrument.health`);
+* the gains of both sensors against gravity, from the two rests
+  (:mod:`rocklab.lab.sensor_gain`): a gyroscope whose gain disagrees has
+  its rate divided by it before all of the above, an accelerometer's is
+  named.
 """
 
 from __future__ import annotations
@@ -50,6 +55,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike
 
+from rocklab.lab import sensor_gain
 from rocklab.lab.instrument import InstrumentMotion, health
 from rocklab.lab.records import InertialRecord
 from rocklab.lab.rotation import bridge
@@ -201,10 +207,23 @@ def inertial_motion(rec: InertialRecord, alpha: float, p: float) -> InstrumentMo
     lost = np.isnan(rec.rate) | np.isnan(rec.acc_y) | np.isnan(rec.acc_z)
     rate, acc_y, acc_z = (bridge(t, x, np.isnan(x)) for x in (rec.rate, rec.acc_y, rec.acc_z))
     tilt = static_tilt(acc_y, acc_z)
+    flags = ["phi, v, w not measured: 0"]
+    n_rest = rest_samples(fs, len(t))
+    gyro, acc = (
+        sensor_gain.gyroscope_gain(t, rate, tilt, n_rest, fs),
+        sensor_gain.accelerometer_gain(acc_y, acc_z, n_rest),
+    )
+    if gyro.disagrees:
+        # a scale error of the gyroscope is no motion: the rate a consistent one gives
+        rate = rate / gyro.gain
+        flags.append(f"gyroscope gain {gyro.gain:.4f} [{gyro.low:.4f}, {gyro.high:.4f}] against gravity: corrected")
+    if acc.disagrees:
+        flags.append(
+            f"accelerometer gain {acc.gain:.4f} [{acc.low:.4f}, {acc.high:.4f}] against g: the tilt unaffected"
+        )
     theta, bias, bias_end = integrated_rotation(t, rate, tilt, fs)
     spikes = force_spikes(t, acc_y, acc_z, fs)
     offset, offset_sigma = vertical_offset(t, theta, spikes, fs)
-    flags = ["phi, v, w not measured: 0"]
     if np.isfinite(offset) and abs(offset) <= ACC_BIAS_M_S2 / G + BOUND_SIGMAS * offset_sigma:
         theta = theta - offset
     elif np.isfinite(offset):
@@ -213,6 +232,10 @@ def inertial_motion(rec: InertialRecord, alpha: float, p: float) -> InstrumentMo
     else:
         flags.append(f"{spikes.size} force spike(s): the vertical from the accelerometer alone")
     bound = error_bound(rate, tilt, fs, float(t[-1] - t[0]), bias, bias_end, offset_sigma)
+    if gyro.disagrees:
+        # the corrected gain is known to its interval: a scale error d of the rate leaves d (theta - the
+        # closure's ramp), at most 2 d max|theta|
+        bound += (gyro.high - gyro.low) / gyro.gain * float(np.max(np.abs(theta)))
     if lost.any():
         flags.append(f"{int(lost.sum())} lost sample(s) bridged")
     unit = {"gyro_x_rad_s": "rad/s", "acc_y_m_s2": "m/s2", "acc_z_m_s2": "m/s2"}
@@ -240,6 +263,7 @@ def inertial_motion(rec: InertialRecord, alpha: float, p: float) -> InstrumentMo
             "force_spikes": int(spikes.size),
             "vertical_offset_rad": offset,
             "sensor_mm": rec.sensor_mm,
+            **sensor_gain.qc_values(gyro, acc),
         },
     )
 
@@ -491,7 +515,8 @@ def impacts_from_rate(ds: Any, impacts: pd.DataFrame) -> pd.DataFrame:
     ----------
     ds : xarray.Dataset
         A reduced inertial test: ``gyro_x_rad_s``, ``acc_y_m_s2``,
-        ``acc_z_m_s2`` as recorded on ``time``, ``gyro_bias_rad_s``,
+        ``acc_z_m_s2`` as recorded on ``time``, ``gyro_bias_rad_s`` (of the rate
+        divided by :func:`rocklab.lab.sensor_gain.applied_gyro_gain`),
         ``sampling_rate_hz`` and ``p`` [rad/s] in its attributes.
     impacts : DataFrame
         :attr:`rocklab.lab.motion.Motion.impacts` of its theta.
@@ -507,7 +532,7 @@ def impacts_from_rate(ds: Any, impacts: pd.DataFrame) -> pd.DataFrame:
         gives the sensor's height r_z.
     """
     t, fs, p = ds.time.values, float(ds.attrs["sampling_rate_hz"]), float(ds.attrs["p"])
-    rate = ds.gyro_x_rad_s.values - float(ds.attrs["gyro_bias_rad_s"])
+    rate = ds.gyro_x_rad_s.values / sensor_gain.applied_gyro_gain(ds.attrs) - float(ds.attrs["gyro_bias_rad_s"])
     acc_y, acc_z = (bridge(t, x, np.isnan(x)) for x in (ds.acc_y_m_s2.values, ds.acc_z_m_s2.values))
     spikes = force_spikes(t, acc_y, acc_z, fs)
     r_z = float(np.asarray(ds.attrs["sensor_mm"], float).ravel()[2]) / 1e3

@@ -18,14 +18,17 @@ from typing import Any
 
 import numpy as np
 
-from rocklab.lab import channel_gain
+from rocklab.lab import channel_gain, marker_frame, sensor_gain
 
 #: The columns of ``qc.csv`` of the instruments: which one recorded the test,
 #: how many lost samples were bridged, how many impacts fell on a lost
 #: stretch, the bound on theta's error that an integrated rate leaves [rad],
 #: the frames of a video in which the four markers were tracked and the
 #: tracking noise (theta's scatter at rest) [rad]; of transducers, the
-#: channel whose gain disagrees with the rigid body (:mod:`rocklab.lab.channel_gain`).
+#: channel whose gain disagrees with the rigid body (:mod:`rocklab.lab.channel_gain`);
+#: of an inertial record, its sensors' gains against gravity (:mod:`rocklab.lab.sensor_gain`);
+#: of motion capture, the frame markers' motion and the wall markers' length
+#: (:mod:`rocklab.lab.marker_frame`).
 QC_COLUMNS = (
     "instrument",
     "samples_bridged",
@@ -34,6 +37,8 @@ QC_COLUMNS = (
     "frames_tracked",
     "tracking_noise_rad",
     *channel_gain.QC_COLUMNS,
+    *sensor_gain.QC_COLUMNS,
+    *marker_frame.QC_COLUMNS,
 )
 #: The values of :data:`QC_COLUMNS` of a test whose instrument gives none of them.
 NO_VALUES = {
@@ -43,6 +48,8 @@ NO_VALUES = {
     "frames_tracked": 0,
     "tracking_noise_rad": np.nan,
     **channel_gain.NO_VALUES,
+    **sensor_gain.NO_VALUES,
+    **marker_frame.NO_VALUES,
 }
 #: A signal whose whole span is below this fraction of what the wall's motion
 #: must show (its release from about alpha) is dead.

@@ -33,6 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
+from rocklab.lab import marker_frame
 from rocklab.lab.raw_format import RawFormatError
 from rocklab.lab.records import InertialRecord, Record, RotationRecord, check_file, read_any_record
 
@@ -42,6 +43,8 @@ TDMS_GROUP = "displacements"
 TDMS_UNIT = "mm"
 #: The labels of the wall's two markers in a C3D file, lower then upper (trailing blanks ignored).
 C3D_WALL_MARKERS = ("WALL_LO", "WALL_HI")
+#: The label prefix of a marker on the fixed frame in a C3D file (:mod:`rocklab.lab.marker_frame`).
+C3D_FRAME_PREFIX = "FRAME_"
 #: The extensions of a filmed test.
 VIDEO_SUFFIXES = (".mp4", ".avi", ".mov")
 
@@ -180,7 +183,10 @@ def c3d_record(path: Path, expected_test_id: str | None = None) -> RotationRecor
     convention of a lost marker) is a lost sample, bridged or not by
     :func:`rocklab.lab.rotation.rotation_motion` as in a text rotation record.
     Two markers on a vertical line see no twist nor sliding: the record has
-    theta only.
+    theta only.  ``FRAME_*`` markers, where the file has them, must not move:
+    a motion of theirs beyond noise (the cameras drifting) is removed from the
+    wall's markers first, and ``attrs`` gives it and the wall markers' rigid
+    length for ``qc.csv`` (:mod:`rocklab.lab.marker_frame`).
 
     Raises
     ------
@@ -213,15 +219,22 @@ def c3d_record(path: Path, expected_test_id: str | None = None) -> RotationRecor
     if len(frames) < max(expected, 2):
         raise RawFormatError(path, None, f"{len(frames)} frames of the {expected} the header gives (truncated?)")
     points = np.stack(frames)  # (frames, markers, x y z residual)
-    lo, hi = (points[:, labels.index(m)] for m in C3D_WALL_MARKERS)
-    lost = (lo[:, 3] < 0) | (hi[:, 3] < 0)
-    theta = np.arctan2(hi[:, 1] - lo[:, 1], hi[:, 2] - lo[:, 2])
-    theta[lost] = np.nan
+    wall = points[:, [labels.index(m) for m in C3D_WALL_MARKERS]]
+    lost = (wall[:, 0, 3] < 0) | (wall[:, 1, 3] < 0)
     if lost.all():
         raise RawFormatError(path, None, "the wall's markers are lost in every frame")
+    fixed = [i for i, label in enumerate(labels) if label.startswith(C3D_FRAME_PREFIX)]
+    drift = marker_frame.frame_motion(points[:, fixed, :3], points[:, fixed, 3] >= 0, rate) if fixed else None
+    lo, hi = (
+        marker_frame.remove_frame_motion(wall[..., :3], drift) if drift and drift.named else wall[..., :3]
+    ).transpose(1, 0, 2)
+    theta = np.arctan2(hi[:, 1] - lo[:, 1], hi[:, 2] - lo[:, 2])
+    theta[lost] = np.nan
+    length = marker_frame.rigid_length(np.where(lost[:, None], np.nan, lo), hi)
     time = np.arange(len(theta)) / rate
     head = {**_header(expected_test_id, "rotation", "c3d"), "sampling_rate_hz": f"{rate:g}", "units": "s, rad"}
-    return RotationRecord(time, {"theta": theta}, rate, head, file_sha256(path), str(path))
+    attrs = marker_frame.qc_values(drift, length)
+    return RotationRecord(time, {"theta": theta}, rate, head, file_sha256(path), str(path), attrs)
 
 
 def video_record(path: Path, expected_test_id: str | None = None) -> RotationRecord:

@@ -9,7 +9,8 @@ From the same true motion as the transducers of :mod:`rocklab.lab.virtual_record
   (:class:`RotationEffects`, :func:`rotation_readings`);
 * a gyroscope and an accelerometer glued on the wall (``# record:
   inertial``): the rate of theta and the specific force at the sensor, with
-  the bias left after the zeroing and white noise
+  the bias left after the zeroing, white noise and, where asked, a gain
+  error of either sensor
   (:class:`InertialEffects`, :func:`inertial_readings`);
 
 and :func:`write_instrument_record` writes either in the lab's format
@@ -78,6 +79,10 @@ class InertialEffects:
         Largest magnitude of the accelerometer's bias on each axis [m/s^2].
     sensor : (float, float, float)
         Where the sensor is glued, as fractions (x / (L/2), y / (b/2), z / h).
+    gyro_gain, acc_gain : float
+        Scale of the gyroscope's rate and of the accelerometer's specific force
+        (reading = gain x true value + bias + noise) [-]: 1 for a calibrated sensor
+        (:mod:`rocklab.lab.sensor_gain` finds them).
     """
 
     gyro_density: float = 7e-5
@@ -85,6 +90,8 @@ class InertialEffects:
     acc_density: float = 1e-3
     acc_bias_m_s2: float = 3e-3
     sensor: tuple[float, float, float] = (1.0, 0.0, 0.8)
+    gyro_gain: float = 1.0
+    acc_gain: float = 1.0
 
 
 def occluded(n: int, fs: float, count: int, max_s: float, rng: np.random.Generator) -> np.ndarray:
@@ -183,10 +190,10 @@ def inertial_readings(
     sg, sa = effects.gyro_density * np.sqrt(fs / 2), effects.acc_density * np.sqrt(fs / 2)
     n = len(t)
     cols = {
-        "gyro_x_rad_s": rate + bias + rng.normal(0.0, sg, n),
+        "gyro_x_rad_s": effects.gyro_gain * rate + bias + rng.normal(0.0, sg, n),
         # zeroed on the vertical wall at rest: the offsets of f_z's g too
-        "acc_y_m_s2": f_y + rng.uniform(-1, 1) * effects.acc_bias_m_s2 + rng.normal(0.0, sa, n),
-        "acc_z_m_s2": f_z + rng.uniform(-1, 1) * effects.acc_bias_m_s2 + rng.normal(0.0, sa, n),
+        "acc_y_m_s2": effects.acc_gain * f_y + rng.uniform(-1, 1) * effects.acc_bias_m_s2 + rng.normal(0.0, sa, n),
+        "acc_z_m_s2": effects.acc_gain * f_z + rng.uniform(-1, 1) * effects.acc_bias_m_s2 + rng.normal(0.0, sa, n),
     }
     return cols, bias
 

@@ -9,9 +9,9 @@ instruments"), each by the real library, so that the readers of
 :mod:`rocklab.lab.native_files` are tested on what the instruments write:
 
 * :func:`write_tdms`: the transducer readings as a TDMS file (npTDMS);
-* :func:`write_c3d`: the wall's two markers (and one on the frame) as a C3D
-  file (the ``c3d`` package), with marker noise and occlusions
-  (:class:`MarkerEffects`);
+* :func:`write_c3d`: the wall's two markers (and up to three on the frame) as
+  a C3D file (the ``c3d`` package), with marker noise, occlusions and the
+  cameras' drift (:class:`MarkerEffects`);
 * :func:`write_video`: a rendered film of the wall's end face and a plumb
   post, four bright markers, at any frame rate, with noise, motion blur, a
   tilted camera and markers hidden for a few frames
@@ -38,6 +38,8 @@ from rocklab.lab.virtual_instruments import occluded
 
 #: Heights of the wall's two markers (lower, upper) as fractions of the wall's height.
 MARKER_HEIGHTS = (0.25, 0.9)
+#: Where the frame markers are: (y from the wall's -y face [mm], z / h), FRAME_1 first.
+FRAME_POINTS = ((-300.0, 0.5), (-300.0, 0.1), (-500.0, 0.95))
 #: The video containers and the codec OpenCV writes each with.
 CODECS = {".mp4": "mp4v", ".avi": "MJPG", ".mov": "mp4v"}
 
@@ -54,11 +56,21 @@ class MarkerEffects:
         Stretches in which a wall marker is lost (negative residual).
     max_occlusion_s : float
         Longest stretch lost [s] (each from one frame to this).
+    frame_markers : int
+        Markers on the fixed frame, ``FRAME_1`` ... (:data:`FRAME_POINTS`, at most three).
+    frame_drift_rad : float
+        Rotation of the cameras' coordinates about X reached at the end of the
+        record, growing linearly from 0 at the start (a drifting system) [rad].
+    frame_shift_mm : float
+        Their translation along Y reached at the end, likewise [mm].
     """
 
     noise_mm: float = 0.03
     occlusions: int = 4
     max_occlusion_s: float = 0.08
+    frame_markers: int = 1
+    frame_drift_rad: float = 0.0
+    frame_shift_mm: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -159,8 +171,10 @@ def write_c3d(
     """Write the markers of a motion as a motion-capture system does (``docs/raw-format.md``, "``.c3d``").
 
     ``WALL_LO`` and ``WALL_HI`` at :func:`marker_points`, moved by the
-    motion, and ``FRAME_1`` fixed beside the wall, in the lab frame [mm] at
-    the point rate ``fs``, with white noise; a lost marker has residual -1.
+    motion, and ``effects.frame_markers`` ``FRAME_<k>`` fixed beside the wall
+    (:data:`FRAME_POINTS`), in the lab frame [mm] at the point rate ``fs``,
+    with white noise, all of them seen by cameras whose coordinates drift as
+    ``effects`` says; a lost marker has residual -1.
     """
     import c3d
 
@@ -170,17 +184,25 @@ def write_c3d(
     b, h = float(specimen["thickness_mm"]), float(specimen["height_mm"])
     wall = lab_points(theta, phi, v, w, marker_points(specimen), b)
     n = wall.shape[0]
-    frame = np.broadcast_to([float(specimen["length_mm"]) / 2, -b / 2 - 300.0, 0.5 * h], (n, 1, 3))
-    pts = np.concatenate([wall, frame], axis=1) + rng.normal(0.0, effects.noise_mm, (n, 3, 3))
-    residual = np.full((n, 3, 1), 0.5)
+    fixed = [[float(specimen["length_mm"]) / 2, -b / 2 + dy, f * h] for dy, f in FRAME_POINTS[: effects.frame_markers]]
+    frame = np.broadcast_to(np.reshape(fixed, (1, -1, 3)), (n, len(fixed), 3))
+    pts = np.concatenate([wall, frame], axis=1)
+    # the cameras' coordinates drift: every point alike, a rotation about X and a shift along Y
+    ramp = np.arange(n) / max(n - 1, 1)
+    c, s = np.cos(effects.frame_drift_rad * ramp)[:, None], np.sin(effects.frame_drift_rad * ramp)[:, None]
+    y, z = pts[..., 1].copy(), pts[..., 2].copy()
+    pts[..., 1], pts[..., 2] = c * y - s * z + effects.frame_shift_mm * ramp[:, None], s * y + c * z
+    k_all = pts.shape[1]
+    pts = pts + rng.normal(0.0, effects.noise_mm, (n, k_all, 3))
+    residual = np.full((n, k_all, 1), 0.5)
     for k, count in enumerate(((effects.occlusions + 1) // 2, effects.occlusions // 2)):
         residual[occluded(n, fs, count, effects.max_occlusion_s, rng), k] = -1.0
-    cameras = np.zeros((n, 3, 1))
+    cameras = np.zeros((n, k_all, 1))
     points = np.concatenate([pts, residual, cameras], axis=2).astype(np.float32)
     writer = c3d.Writer(point_rate=float(fs), analog_rate=float(fs))
     no_analog = np.zeros((0, 0), np.float32)
     writer.add_frames([(p, no_analog) for p in points])
-    writer.set_point_labels([*C3D_WALL_MARKERS, "FRAME_1"])
+    writer.set_point_labels([*C3D_WALL_MARKERS, *(f"FRAME_{k + 1}" for k in range(len(fixed)))])
     with path.open("wb") as fh, warnings.catch_warnings():
         warnings.simplefilter("ignore")  # no analog channels: usual for motion capture
         writer.write(fh)
