@@ -60,6 +60,8 @@ SLOW = {
     "test_contact_lab.py": {"campaign"},
     # a mixed campaign of text, TDMS, C3D and video, written and reduced once: 4 s
     "test_native_files.py": {"mixed"},
+    # one series written as text, TDMS, C3D and film, each campaign reduced and diagnosed: 10 s
+    "test_native_verdicts.py": {"diagnosed"},
     # one series per instrument and scenario diagnosed once: 16 s
     "test_instruments_diagnosis.py": {"diagnosed"},
     # virtual series simulated and diagnosed: a few seconds each
