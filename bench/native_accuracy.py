@@ -17,7 +17,7 @@ e (median and 90th percentile of its magnitude, and the signed median), and
 the slowest impact whose e is still found within 0.05
 (:func:`rocklab.lab.accuracy.smallest_resolved`).  Writes
 ``<out>/native_accuracy.json``; exits 1 when the film at 240 frames per
-second misses e by more than 0.01 (median) on these two-sided walls (issue 43).
+second misses e by more than 0.01 (median |e error|) on these two-sided walls (issue 43).
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ RATES = {
     "video": (30.0, 60.0, 120.0, 240.0),
     "video_lossless": (240.0,),
 }
-#: Largest |median e error| of the film at 240 frames per second (issue 43).
+#: Largest median |e error| of the film at 240 frames per second (issue 43).
 TARGET_E = 0.01
 
 
@@ -65,9 +65,14 @@ def main(argv: list[str] | None = None) -> int:
                 acc = instrument_accuracy(instrument, fs, args.tests, args.seed, resolution=True, **options)
             acc["seconds"] = round(time.perf_counter() - t0, 1)
             formats.setdefault(kind, {})[f"{fs:g}"] = acc
-            median = "none (no impact found)" if acc["e_error_median"] is None else f"{acc['e_error_median']:+.4f}"
+            median = (
+                "none (no impact found)"
+                if acc["e_error_median"] is None
+                else f"{acc['e_error_median']:+.4f} (|e error| {acc['e_abs_error_median']:.4f})"
+            )
             print(f"{kind} {fs:g} Hz: median e error {median}, in {acc['seconds']} s", flush=True)
-    e240 = formats["video"]["240"]["e_error_median"]
+    # the target is each impact's e within 0.01 (median), not errors of both signs that cancel
+    e240 = formats["video"]["240"]["e_abs_error_median"]
     out = {
         "n_tests": args.tests,
         "seed": args.seed,
