@@ -73,7 +73,7 @@ from rocklab.lab.channels import LOST_STATUSES
 from rocklab.lab.flight_fit import local_fit, model_value, model_velocity, odd_samples, root_tau, stationary_tau
 from rocklab.lab.inertial import impacts_from_rate
 from rocklab.lab.release import screw_departure
-from rocklab.lab.rotation import unseen_impacts
+from rocklab.lab.rotation import FlightFits, flight_fits, unseen_impacts
 from rocklab.physics.boundary import Boundary
 from rocklab.physics.flight import quarter_period_linear
 
@@ -581,7 +581,8 @@ def write_test_with_motion(ds: xr.Dataset, path: str | Path) -> xr.Dataset:
 def stored_motion(ds: xr.Dataset) -> xr.Dataset:
     """The motion of a reduced test as the workflow stores it (module docstring).
 
-    :func:`extract_motion` of theta with the default settings, the test's
+    :func:`extract_motion` of theta with the default settings (a rotation
+    record's: :func:`rocklab.lab.rotation.flight_fits`), the test's
     :data:`TEST_ATTRS`, and ``centre_amplification``: the largest |reading|
     of the monitor channel after the first impact over that of the
     rigid-body motion (:func:`monitor_readings`,
@@ -604,7 +605,9 @@ def stored_motion(ds: xr.Dataset) -> xr.Dataset:
         error = f"no rotation: {a.get('reject_detail', '')}"
         return xr.Dataset(attrs={**_cf_attrs(attrs), **attrs, "motion_error": error})
     try:
-        m = extract_motion(ds.time.values, ds.theta.values, float(a["sampling_rate_hz"]), a["boundary"], float(a["p"]))
+        fs = float(a["sampling_rate_hz"])
+        fits: FlightFits = flight_fits(fs) if a.get("instrument") == "rotation" else {}
+        m = extract_motion(ds.time.values, ds.theta.values, fs, a["boundary"], float(a["p"]), **fits)
     except ValueError as exc:
         return xr.Dataset(attrs={**_cf_attrs(attrs), **attrs, "motion_error": str(exc)})
     if "theta_lost" in ds and len(m.impacts):
