@@ -159,10 +159,12 @@ def _reference(
             resting, rest_at, held, t_rest = True, th, side, 0.0
 
     def fill(ta: float, tb: float, sol: Callable[[FloatArray], FloatArray] | None = None, value: float = 0.0) -> None:
-        sel = (t_out >= ta) & (t_out <= tb)
+        # the samples ta <= t <= tb of the ascending grid, found by bisection: a comparison of the
+        # whole grid at every segment grew with the record's length times its flights
+        sel = slice(int(np.searchsorted(t_out, ta, "left")), int(np.searchsorted(t_out, tb, "right")))
         if sol is None:
             theta_out[sel], thetadot_out[sel] = value, 0.0
-        elif sel.any():
+        elif sel.stop > sel.start:
             y = sol(t_out[sel])
             theta_out[sel], thetadot_out[sel] = y[0], y[1]
 
