@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rocklab.physics.flight import apex, quarter_period, quarter_period_linear, transit_time
+from rocklab.physics.flight import apex, excursion_time, quarter_period, quarter_period_linear, transit_time
 from rocklab.simulation.reference import simulate_free
 from rocklab.simulation.rocking_model import RockingModel
 
@@ -25,6 +25,23 @@ def test_quarter_period_and_gap_transit_exact():
     v = 0.05
     d = apex(0.5 * v**2, ALPHA, P)
     assert transit_time(v, d, ALPHA, P) == pytest.approx(quarter_period(d, ALPHA, P), rel=1e-4)
+
+
+def test_an_excursion_is_its_way_in_and_its_way_out_and_nan_stays_nan():
+    """The compiled quadrature: the excursion's time the sum of its two transits (each the
+    array form's: Gauss-Legendre on 24 nodes), a turning point twice the transit to it, a stack's
+    padding (NaN) NaN, no depth no time, the shapes broadcast."""
+    u = np.array([[0.002, 0.0, np.nan], [0.004, 0.001, 0.003]])
+    v_in, v_out = np.array([[0.3, 0.2, 0.1], [0.25, np.nan, 0.2]]), np.array([[0.2, 0.1, 0.05], [0.2, 0.1, 0.15]])
+    a, p = np.array([[ALPHA], [0.1]]), np.array([[P], [2.0]])
+    t = excursion_time(v_in, v_out, u, a, p)
+    assert t.shape == (2, 3)
+    assert np.array_equal(t, transit_time(v_in, u, a, p) + transit_time(v_out, u, a, p), equal_nan=True)
+    assert np.isnan(t[0, 2]) and np.isnan(t[1, 1]) and t[0, 1] == 0.0
+    # to its turning point and back at the same speed: twice the quarter period of its flight
+    v = 0.05
+    d = apex(0.5 * v**2, ALPHA, P)
+    assert excursion_time(v, v, d, ALPHA, P) == pytest.approx(2.0 * quarter_period(d, ALPHA, P), rel=1e-4)
 
 
 def test_quarter_period_linear_against_housner_and_the_linear_simulator():

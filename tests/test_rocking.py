@@ -130,6 +130,15 @@ def test_impacts_separated_by_their_excursion():
     assert len(base) > 20 and np.all(gaps >= 2.0 * np.abs(base.thetadot_after.to_numpy()[:-1]) / bound)
 
 
+def test_a_record_without_its_apexes_is_the_same_motion():
+    """apexes=False drops the search of each flight's apex (the impacts' peaks NaN), nothing of the motion."""
+    m = RockingModel(alpha=0.2, p=2.0, mu=0.002, impact=impact.HousnerTwoSided())
+    located, record = (simulate_free(m, 0.15, t_end=3.0, rtol=1e-9, atol=1e-12, apexes=x) for x in (True, False))
+    assert np.array_equal(located.theta, record.theta, equal_nan=True)
+    assert np.array_equal(located.impacts.t, record.impacts.t)
+    assert located.impacts.theta_peak_before.notna().all() and record.impacts.theta_peak_before.isna().all()
+
+
 def test_free_overturning():
     model = RockingModel(alpha=0.1, p=2.0)
     assert simulate_free(model, 0.101, t_end=10.0).overturned

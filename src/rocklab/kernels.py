@@ -15,7 +15,7 @@ def compile_kernels() -> None:
     with the argument types of the library's own calls: the overturning
     engine (:func:`rocklab.simulation.batch.compile_kernels`), the
     diagnosis's noise model (:func:`rocklab.diagnosis.estimation.noise.noise_variance`)
-    and the flights' quadratures and Newton passes (:mod:`rocklab.physics.flight`)."""
+    and the flights' quadratures (the excursions into a gap too) and Newton passes (:mod:`rocklab.physics.flight`)."""
     from rocklab.diagnosis.estimation.noise import noise_variance
     from rocklab.physics import flight
     from rocklab.simulation.batch import compile_kernels as compile_engine
@@ -26,3 +26,4 @@ def compile_kernels() -> None:
     A, a, p = np.array([0.02, 0.05]), np.array([0.1, 0.1]), np.array([2.0, 2.0])
     flight.quarter_period(A, a, p)
     flight.apex_after(flight.landing_speed(A, a, p), a, p, zeta=0.01, mu=0.01, kappa=0.1, k=0.1)
+    flight.excursion_time(np.array([0.3, 0.2]), np.array([0.2, 0.1]), 0.1 * A, a, p)

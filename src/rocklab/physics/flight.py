@@ -586,13 +586,65 @@ def transit_time(v: Floats, u: Floats, a: Floats, p: Floats) -> Floats:
     int_0^u du' / sqrt(v^2 - 2 P(u')) with the exact potential P, through
     u' = u (1 - s^2), which keeps the integrand finite when u is the turning
     point (v^2 = 2 P(u)).  Used for the excursions into the gap of one-sided
-    walls.
+    walls (:func:`excursion_time`).
     """
-    v, u, a, p = (np.asarray(x, float)[..., None] for x in np.broadcast_arrays(v, u, a, p))
-    s = _GL24_S
-    q = np.maximum(v**2 - 2.0 * potential(u * (1.0 - s**2), a, p), 0.0)
-    g = np.sqrt(np.maximum(q, 1e-300)) / np.maximum(s, 1e-300)
-    return np.sum(_GL24_W * 2.0 * u / g, axis=-1)
+    return _transit_times((v,), u, a, p)[0]
+
+
+def excursion_time(v_in: Floats, v_out: Floats, u: Floats, a: Floats, p: Floats) -> Floats:
+    """Duration of an excursion from theta = 0 to depth u on hinge a and back [s]: in at |thetadot| = v_in,
+    out at v_out, :func:`transit_time` of each (the potential on the nodes computed once for both)."""
+    t_in, t_out = _transit_times((v_in, v_out), u, a, p)
+    return t_in + t_out
+
+
+def _transit_times(vs: Sequence[Floats], u: Floats, a: Floats, p: Floats) -> list[Floats]:
+    """:func:`transit_time` at each speed of ``vs`` to the same depth, broadcast (:func:`_transit_nodes`)."""
+    args = np.broadcast_arrays(*(np.asarray(x, float) for x in (*vs, u, a, p)))
+    shape = args[0].shape
+    flat = [np.ascontiguousarray(x).ravel() for x in args]
+    out = _transit_nodes(np.stack(flat[: len(vs)]), *flat[len(vs) :])
+    return [t.reshape(shape)[()] for t in out]
+
+
+@numba.njit(cache=True)
+def _nan_max(x: float, y: float) -> float:
+    """max(x, y) as :func:`numpy.maximum` takes it: NaN where x is NaN (``y`` is a number)."""
+    return x if (x >= y or x != x) else y
+
+
+@numba.njit(cache=True)
+def _sum24(r: FloatArray) -> float:
+    """Sum of 24 nodes in :func:`numpy.sum`'s pairwise order (8 running sums, then as :func:`_sum8`);
+    the running sums are kept in ``r``'s first 8 places."""
+    for j in range(8):
+        r[j] = (r[j] + r[j + 8]) + r[j + 16]
+    return _sum8(r)
+
+
+@numba.njit(cache=True)
+def _transit_nodes(v: FloatArray, u: FloatArray, a: FloatArray, p: FloatArray) -> FloatArray:
+    """:func:`transit_time` of flat arrays at the speeds of each row of ``v`` (speeds, flights), flight by
+    flight: a free run and a fit of the gap evaluate it on every impact of a series thousands of times,
+    the array form's (flights, 24) temporaries cost more than the quadrature, and the way in and the way
+    out of an excursion share its potential on the nodes.  Each node's terms in the array form's order
+    of operations (NaN in, NaN out), each sum in :func:`numpy.sum`'s: the results are those of the
+    array form to the last bit."""
+    out = np.empty(v.shape)
+    pot, r = np.empty(_GL24_S.size), np.empty(_GL24_S.size)
+    for i in range(u.size):
+        pp, ca = p[i] * p[i], math.cos(a[i])
+        for j in range(_GL24_S.size):
+            s = _GL24_S[j]
+            # 2 potential(u (1 - s^2), a, p)
+            pot[j] = 2.0 * (pp * (math.cos(a[i] - u[i] * (1.0 - s * s)) - ca))
+        for m in range(v.shape[0]):
+            vv = v[m, i] * v[m, i]
+            for j in range(_GL24_S.size):
+                g = math.sqrt(_nan_max(_nan_max(vv - pot[j], 0.0), 1e-300)) / max(_GL24_S[j], 1e-300)
+                r[j] = _GL24_W[j] * 2.0 * u[i] / g
+            out[m, i] = _sum24(r)
+    return out
 
 
 def quarter_period_linear(theta0_over_alpha: npt.ArrayLike, thetadot0_over_p_alpha: npt.ArrayLike = 0.0) -> FloatArray:

@@ -105,6 +105,11 @@ def _missed_edge(dense: Callable[[Floats], FloatArray], t0: float, t1: float, s:
     )
 
 
+def _never(tt: float, y: FloatArray) -> float:
+    """An event function that never changes sign (an event not searched for)."""
+    return 1.0
+
+
 def _reference(
     model: RockingModel,
     rec: _Record,
@@ -118,6 +123,7 @@ def _reference(
     atol: float,
     max_step: float,
     tail: float,
+    apexes: bool = True,
 ) -> RockingHistory:
     v_rest = rest_tol * model.thetadot_r
     law_base, law_tr = model.base_law, model.transverse_law
@@ -159,10 +165,12 @@ def _reference(
             resting, rest_at, held, t_rest = True, th, side, 0.0
 
     def fill(ta: float, tb: float, sol: Callable[[FloatArray], FloatArray] | None = None, value: float = 0.0) -> None:
-        sel = (t_out >= ta) & (t_out <= tb)
+        # the samples ta <= t <= tb of the ascending grid, found by bisection: a comparison of the
+        # whole grid at every segment grew with the record's length times its flights
+        sel = slice(int(np.searchsorted(t_out, ta, "left")), int(np.searchsorted(t_out, tb, "right")))
         if sol is None:
             theta_out[sel], thetadot_out[sel] = value, 0.0
-        elif sel.any():
+        elif sel.stop > sel.start:
             y = sol(t_out[sel])
             theta_out[sel], thetadot_out[sel] = y[0], y[1]
 
@@ -219,6 +227,10 @@ def _reference(
             return y[1] if not stick or tt > t0 else start
 
         ev_peak.terminal = stick  # type: ignore[attr-defined]
+        # the apexes only for the impacts' table: without it, an event never active (no root to search)
+        # keeps the events' places
+        located = stick or apexes
+        peak_event = ev_peak if located else _never
 
         # a wall moving towards its edge that turns back: if it turns past the
         # edge, it crossed the edge and came back inside one solver step (a
@@ -229,7 +241,7 @@ def _reference(
 
         ev_turn.terminal, ev_turn.direction = True, float(s)  # type: ignore[attr-defined]
 
-        events = [ev_base, ev_over, ev_peak, ev_turn]
+        events = [ev_base, ev_over, peak_event, ev_turn]
         if model.one_sided and model.gap > 0 and s < 0:
 
             def ev_tr(tt: float, y: FloatArray, t0: float = t) -> float:
@@ -295,7 +307,7 @@ def _reference(
                     e *= float(excursion.factor(e * v_before / v_entry, v_entry, model.alpha, model.p))
                     v_entry = 0.0
         thd = e * v_before
-        rows.append((t, "transverse" if transverse else "base", v_before, thd, max(peaks)))
+        rows.append((t, "transverse" if transverse else "base", v_before, thd, max(peaks) if located else math.nan))
         wrong_way = (model.one_sided and model.gap == 0 and thd <= 0) or (transverse and thd <= 0)
         if abs(thd) < v_rest or wrong_way:
             resting, rest_at, thd, t_rest = True, th, 0.0, t
@@ -319,6 +331,7 @@ def simulate_free(
     rest_tol: float = REST_TOL,
     rtol: float = 1e-12,
     atol: float = 1e-14,
+    apexes: bool = True,
 ) -> RockingHistory:
     """Free rocking from given initial conditions, exact event-driven reference.
 
@@ -335,13 +348,17 @@ def simulate_free(
         Output sampling frequency [Hz] (400 Hz as in the tests, Sect. 2.1).
     overturn : float
         Overturning rotation |theta| [rad], default pi/2.
+    apexes : bool
+        Locate each flight's apex for the impacts' ``theta_peak_before``; False: NaN there, and a
+        root search less per flight (the motion is the same to the last bit), for a caller that reads
+        the record only.
 
     Returns
     -------
     RockingHistory
     """
     return _reference(
-        model, _Record(None, 1.0), theta0, thetadot0, t_end, fs, overturn, rest_tol, rtol, atol, np.inf, 0.0
+        model, _Record(None, 1.0), theta0, thetadot0, t_end, fs, overturn, rest_tol, rtol, atol, np.inf, 0.0, apexes
     )
 
 

@@ -104,12 +104,13 @@ def fit(
         passes, converged, jac, m2 = 0, False, None, np.inf
         for _ in range(n_irls):
             passes += 1
-            w = {g: 1.0 / np.sqrt(var[g][0] + var[g][1] * xm[g] ** 2 + VAR_FLOOR) for g in masks}
+            wv = np.concatenate([1.0 / np.sqrt(var[g][0] + var[g][1] * xm[g] ** 2 + VAR_FLOOR) for g in masks])
 
-            def stacked(R: Mapping[str, np.ndarray], w: dict[str, np.ndarray] = w) -> np.ndarray:
-                return np.concatenate(
-                    [np.nan_to_num(R[g][m], nan=1.0, posinf=1.0, neginf=-1.0) * w[g] for g, m in masks.items()]
-                )
+            def stacked(R: Mapping[str, np.ndarray], wv: np.ndarray = wv) -> np.ndarray:
+                r = np.concatenate([R[g][m] for g, m in masks.items()])
+                # a residual the start had and a point of the search lacks: a bounded stand-in (nan_to_num,
+                # a tenth of the evaluation's cost, only where one is missing)
+                return (r if np.isfinite(r).all() else np.nan_to_num(r, nan=1.0, posinf=1.0, neginf=-1.0)) * wv
 
             def res(xx: np.ndarray) -> np.ndarray:
                 return stacked(problem.residuals(sub, ext, dict(zip(names, xx))))
@@ -119,7 +120,6 @@ def fit(
                 at = [dict(zip(names, xx)) for xx in points]
                 return [stacked(R) for R in problem.residuals_at(sub, ext, at)]
 
-            wv = np.concatenate([w[g] for g in masks])
             if jac is None:
                 sol = optimize.least_squares(
                     res, x, bounds=(lo, hi), x_scale="jac", diff_step=1e-5, xtol=1e-9, ftol=1e-9, workers=together
