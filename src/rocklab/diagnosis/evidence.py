@@ -55,7 +55,7 @@ def _deflection(tau, d, p):
     return -(sh * ic - ch * is_) / p
 
 
-def filter_reading(T, v, p, fs, *, from_rest=False, phases=4):
+def filter_reading(T, v, p, fs, *, from_rest=False, phases=4, fits=None):
     """How the derivative filter reads a flight with losses, per unit of each loss, to first order.
 
     The filter (:func:`rocklab.lab.motion.extract_motion`) reads an impact's
@@ -101,6 +101,10 @@ def filter_reading(T, v, p, fs, *, from_rest=False, phases=4):
         Sampling rate [Hz].
     from_rest : bool
         The fall from the release: a landing and no take-off.
+    fits : mapping, optional
+        The fits' settings where they are not the transducers' defaults
+        (``ring_guard_s``, ``window_p``: a rotation record's,
+        :func:`rocklab.lab.motion.instrument_fits`).
 
     Returns
     -------
@@ -111,7 +115,11 @@ def filter_reading(T, v, p, fs, *, from_rest=False, phases=4):
     """
     # computed once per duration, to a step of DURATION_STEP, which one wall's flights share
     step = math.exp(round(math.log(T) / DURATION_STEP) * DURATION_STEP)
-    return _reading_at_unit_speed(step, float(p), float(fs), bool(from_rest), phases) * v ** (SPEED_POWER - 1.0)
+    f = {**_FILTER, **(fits or {})}
+    reading = _reading_at_unit_speed(
+        step, float(p), float(fs), bool(from_rest), phases, float(f["ring_guard_s"]), float(f["window_p"])
+    )
+    return reading * v ** (SPEED_POWER - 1.0)
 
 
 #: Relative step of the flight durations at which :func:`filter_reading` is computed [-].
@@ -119,9 +127,9 @@ DURATION_STEP = 0.005
 
 
 @functools.lru_cache(maxsize=65536)
-def _reading_at_unit_speed(T, p, fs, from_rest, phases):
+def _reading_at_unit_speed(T, p, fs, from_rest, phases, guard, window_p):
     """:func:`filter_reading` of a flight of speed 1 rad/s at theta = 0."""
-    W, guard, hum = _FILTER["window_p"] / p, _FILTER["ring_guard_s"], _FILTER["hum_hz"]
+    W, hum = window_p / p, _FILTER["hum_hz"]
     tau = np.linspace(0.0, T, _GRID)
     # the lossless flight's speed and |thetadot''| at its roots
     if from_rest:
@@ -198,6 +206,12 @@ class MeasuredTest:
     log: dict = field(default_factory=dict)
     t: np.ndarray | None = field(default=None, repr=False)
     theta: np.ndarray | None = field(default=None, repr=False)
+    instrument: str = "transducers"
+
+    @property
+    def fits(self) -> dict:
+        """The settings of the fits that measured this test's flights (:func:`rocklab.lab.motion.instrument_fits`)."""
+        return dict(chain.instrument_fits(self.instrument, 1.0 / self.dt))
 
     @property
     def n_impacts(self) -> int:
@@ -217,7 +231,7 @@ class MeasuredTest:
             no landing, is timed by its apex and take-off speed (the
             linearised flight: a = (v^2 / p^2 + A^2) / (2 A)).
         """
-        n, p, fs = self.n_impacts, self.p, 1.0 / self.dt
+        n, p, fs, fits = self.n_impacts, self.p, 1.0 / self.dt, self.fits
         out = {k: np.zeros((max(m, 0), len(LOSSES))) for k, m in (("time", n - 1), ("takeoff", n), ("landing", n))}
         if n == 0:
             return out
@@ -228,13 +242,13 @@ class MeasuredTest:
         T[-1] = 2.0 * float(quarter_period_linear(A / a)) / p if a > A else np.nan
         for j in range(n):
             if np.isfinite(T[j]) and np.isfinite(v[j]) and T[j] > 0 and v[j] > 0:
-                r = filter_reading(T[j], v[j], p, fs)
+                r = filter_reading(T[j], v[j], p, fs, fits=fits)
                 out["takeoff"][j] = r[1]
                 if j < n - 1:
                     out["time"][j], out["landing"][j + 1] = r[0], r[2]
         fall, vb = self.t_before[0] - self.t_release, self.v_before[0]
         if np.isfinite(fall) and np.isfinite(vb) and fall > 0 and vb > 0:
-            out["landing"][0] = filter_reading(fall, vb, p, fs, from_rest=True)[2]
+            out["landing"][0] = filter_reading(fall, vb, p, fs, from_rest=True, fits=fits)[2]
         return out
 
     @property
@@ -255,9 +269,11 @@ def measured_test(record) -> MeasuredTest:
     """
     t = np.asarray(record["t"], float)
     theta = np.asarray(record["theta"], float)
+    instrument = str(record.get("instrument", "transducers"))
     m = record.get("motion")
     if m is None:
-        m = chain.extract_motion(t, theta, record["fs"], record["boundary"], record["p"])
+        fits = chain.instrument_fits(instrument, record["fs"])
+        m = chain.extract_motion(t, theta, record["fs"], record["boundary"], record["p"], **fits)
     imp = m.impacts
     n = min(len(imp), m.peaks.size)
     col = lambda name: np.abs(imp[name].to_numpy(float)[:n])  # noqa: E731
@@ -285,6 +301,7 @@ def measured_test(record) -> MeasuredTest:
         log=dict(record.get("log", {})),
         t=t,
         theta=theta,
+        instrument=instrument,
     )
 
 
@@ -338,6 +355,7 @@ def records_by_series(datasets, motions=None):
                 "p": float(a["p"]),
                 "boundary": a["boundary"],
                 "direction": a["direction"],
+                "instrument": a.get("instrument", "transducers"),
                 "log": {k[4:]: float(v) for k, v in a.items() if k.startswith("log_")},
             }
         )

@@ -110,7 +110,7 @@ def simulated_tests(
         ts, theta = simulate_measured(t, ext, values)
         theta = theta + rng.normal(0.0, noise_level(t.theta, fs), theta.size)
         record = dict(test_id=t.test_id, t=ts, theta=theta, fs=fs, alpha=t.alpha, p=t.p, boundary=t.boundary,
-                      direction=t.direction, series=t.series)  # fmt: skip
+                      direction=t.direction, series=t.series, instrument=t.instrument)  # fmt: skip
         sim = measured_test(record)
         if sim.n_impacts >= 2:
             out.append(replace(sim, order=t.order, log=t.log))

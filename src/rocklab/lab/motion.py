@@ -578,6 +578,17 @@ def write_test_with_motion(ds: xr.Dataset, path: str | Path) -> xr.Dataset:
     return motion
 
 
+def instrument_fits(instrument: str, fs: float) -> FlightFits:
+    """The settings of :func:`extract_motion`'s fits of the flights for a record of ``instrument`` at ``fs`` [Hz].
+
+    A rotation record's are :func:`rocklab.lab.rotation.flight_fits`; the
+    others take :func:`extract_motion`'s defaults.  The workflow's stored
+    motion and the diagnosis' model of what the fits read of a flight
+    (:func:`rocklab.diagnosis.evidence.filter_reading`) both take them here.
+    """
+    return flight_fits(fs) if instrument == "rotation" else {}
+
+
 def stored_motion(ds: xr.Dataset) -> xr.Dataset:
     """The motion of a reduced test as the workflow stores it (module docstring).
 
@@ -606,7 +617,7 @@ def stored_motion(ds: xr.Dataset) -> xr.Dataset:
         return xr.Dataset(attrs={**_cf_attrs(attrs), **attrs, "motion_error": error})
     try:
         fs = float(a["sampling_rate_hz"])
-        fits: FlightFits = flight_fits(fs) if a.get("instrument") == "rotation" else {}
+        fits = instrument_fits(a.get("instrument", ""), fs)
         m = extract_motion(ds.time.values, ds.theta.values, fs, a["boundary"], float(a["p"]), **fits)
     except ValueError as exc:
         return xr.Dataset(attrs={**_cf_attrs(attrs), **attrs, "motion_error": str(exc)})
