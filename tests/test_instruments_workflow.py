@@ -1,7 +1,7 @@
-"""Campaigns of other instruments through the workflow's `campaign` target: a mixed one (transducer,
-rotation and inertial tests of the same walls, and the instruments' own files: TDMS, C3D, a film),
-every valid test of each kind read, judged valid and carried to the dissipation; and one without
-transducers at all."""
+"""Campaigns of other instruments through the workflow: a mixed one (transducer, rotation and
+inertial tests of the same walls, and the instruments' own files: TDMS, C3D, a film) through the
+default target `all`, every valid test of each kind read, judged valid and carried to the
+dissipation, the diagnosis and the pages; and one without transducers at all through `campaign`."""
 
 import os
 import subprocess
@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+import yaml
 
 from rocklab.lab import virtual_lab as vl
 
@@ -20,24 +21,32 @@ INSTRUMENTS = {"transducers": 400.0, "rotation": 240.0, "inertial": 1000.0}
 NATIVE = {"tdms": ("D", 400.0), "c3d": ("C", 240.0), "video": ("V", 60.0)}
 
 
-def _campaign_target(tmp_path, plan):
-    """Write ``plan`` as a campaign and run the `campaign` target on it (a working directory of its own);
+def _run_target(tmp_path, plan, target="campaign"):
+    """Write ``plan`` as a campaign and run ``target`` on it (a working directory of its own);
     its truth and its results folder."""
     folder, results = tmp_path / "campaign", tmp_path / "results"
     truth = vl.write_campaign(folder, plan, seed=11).set_index("test_id")
+    config = {
+        "raw_dir": str(folder),
+        "results_dir": str(results),
+        "figures": {"fig9_specimen": "1a"},
+        # `all` beyond the campaign: the maps of one short record on a 5 x 5 grid (test_overturning
+        # covers the stage), one virtual test per instrument and rate (test_instruments the table)
+        "maps": {"records": ["Pac164"], "n": 5, "calibrated_n": 5},
+        "instruments": {"accuracy_tests": 1},
+    }
+    (tmp_path / "config.yaml").write_text(yaml.safe_dump(config))
     cmd = [
         str(SNAKEMAKE),
-        "campaign",
+        target,
         "--cores",
         "1",
         "--snakefile",
         str(ROOT / "Snakefile"),
         "--directory",
         str(tmp_path),
-        "--config",
-        f"raw_dir={folder}",
-        f"results_dir={results}",
-        "figures={'fig9_specimen': '1a'}",
+        "--configfile",
+        str(tmp_path / "config.yaml"),
     ]
     env = {**os.environ, "PYTHONWARNINGS": "ignore"}
     run = subprocess.run(cmd, capture_output=True, text=True, cwd=tmp_path, env=env)
@@ -46,9 +55,10 @@ def _campaign_target(tmp_path, plan):
 
 
 @pytest.mark.skipif(not SNAKEMAKE.exists(), reason="snakemake not installed beside this interpreter")
-def test_a_mixed_campaign_of_every_instrument_and_file_runs_through_the_campaign_target(tmp_path):
+def test_a_mixed_campaign_of_every_instrument_and_file_runs_through_the_default_target(tmp_path):
     """Transducer, rotation and inertial tests of two walls, and (issue 43) TDMS, C3D and a small
-    film of one of them, in one campaign: every test read, judged and carried to the dissipation."""
+    film of one of them, in one campaign: every test read, judged and carried to the dissipation,
+    the diagnosis and the pages of `all`."""
     from rocklab.lab.virtual_native import VideoEffects
 
     plan = [
@@ -72,7 +82,7 @@ def test_a_mixed_campaign_of_every_instrument_and_file_runs_through_the_campaign
         for k in range(2)
     ]
     plan.append(vl.VirtualTest("Rdead", specimen="1a", fs=240.0, instrument="rotation", faults=[vl.Fault("dead")]))
-    truth, results = _campaign_target(tmp_path, plan)
+    truth, results = _run_target(tmp_path, plan, "all")
     qc = pd.read_csv(results / "qc.csv", keep_default_na=False).set_index("test_id")
     recorded = {"tdms": "transducers", "c3d": "rotation", "video": "rotation"}
     assert qc.instrument.to_dict() == truth.instrument.replace(recorded).to_dict()
@@ -88,6 +98,8 @@ def test_a_mixed_campaign_of_every_instrument_and_file_runs_through_the_campaign
     e = tests.e_exp_eq11[by_instrument.isin(INSTRUMENTS)].groupby(by_instrument).median()
     assert (e.max() - e.min()) < 0.01, e
     assert (results / "diagnosis.json").is_file()
+    numbers = (results / "docs" / "numbers.json").read_text()
+    assert '"quality_control"' in numbers and list((results / "docs").glob("*.md"))
 
 
 @pytest.mark.skipif(not SNAKEMAKE.exists(), reason="snakemake not installed beside this interpreter")
@@ -98,7 +110,7 @@ def test_a_campaign_without_transducers_runs_through_the_campaign_target(tmp_pat
         for kind, fs in (("rotation", 100.0), ("inertial", 500.0))
         for k in range(3)
     ]
-    truth, results = _campaign_target(tmp_path, plan)
+    truth, results = _run_target(tmp_path, plan)
     qc = pd.read_csv(results / "qc.csv", keep_default_na=False).set_index("test_id")
     assert qc.valid.all() and set(qc.instrument) == {"rotation", "inertial"}
     assert list((results / "figures").glob("fig06*")), sorted(p.name for p in (results / "figures").iterdir())
