@@ -1,4 +1,4 @@
-"""How the derivative filter reads a flight with losses (rocklab.diagnosis.evidence.filter_reading).
+"""How the derivative filter reads a flight with losses (rocklab.diagnosis.flight_filter.filter_reading).
 
 The independent check is the chain itself: exact simulations of walls with a
 dry friction, a viscous loss or drag, their rotation read by
@@ -11,7 +11,7 @@ window it replaces missed by a third on a stocky wall's short flights.
 import numpy as np
 import pytest
 
-from rocklab.diagnosis.evidence import LOSSES, filter_reading
+from rocklab.diagnosis.flight_filter import LOSSES, filter_reading
 from rocklab.lab.motion import extract_motion
 from rocklab.physics import impact as I
 from rocklab.simulation.reference import simulate_free

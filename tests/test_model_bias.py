@@ -7,7 +7,7 @@ the fit is m (1 + s); the same model fitted on tests simulated at the fit
 (the truth the fit claims, measured without the model's error) lands at
 m (1 + s)^2, so b = s m (1 + s), to the noise, which u_model takes off.
 Then the wall: a viscous loss in flight, whose estimate what the
-derivative filter reads of it (evidence.filter_reading) moves by more than
+derivative filter reads of it (flight_filter.filter_reading) moves by more than
 the statistical interval is wide.
 """
 

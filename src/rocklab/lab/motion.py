@@ -584,7 +584,7 @@ def instrument_fits(instrument: str, fs: float) -> FlightFits:
     A rotation record's are :func:`rocklab.lab.rotation.flight_fits`; the
     others take :func:`extract_motion`'s defaults.  The workflow's stored
     motion and the diagnosis' model of what the fits read of a flight
-    (:func:`rocklab.diagnosis.evidence.filter_reading`) both take them here.
+    (:func:`rocklab.diagnosis.flight_filter.filter_reading`) both take them here.
     """
     return flight_fits(fs) if instrument == "rotation" else {}
 

@@ -10,7 +10,7 @@ import numpy as np
 import numpy.typing as npt
 
 from rocklab._imports import lazy_module
-from rocklab.diagnosis import evidence
+from rocklab.diagnosis import flight_filter
 from rocklab.diagnosis.causes import Cause, Signature
 from rocklab.diagnosis.parameters import Param
 from rocklab.physics.flight import flight_angle, quarter_period, speed_loss
@@ -93,7 +93,7 @@ def filter_reading(
 
     The speed loss (:func:`rocklab.physics.flight.speed_loss`) and what the
     filter reads of each loss: its take-off speed's share less its landing
-    speed's (:func:`rocklab.diagnosis.evidence.filter_reading`, per unit of
+    speed's (:func:`rocklab.diagnosis.flight_filter.filter_reading`, per unit of
     each loss, linear), ``read`` (flights, losses) where the flights were
     measured (:func:`long_flights`), else of the flight of apex A on its
     own angle, sampled at ``fs`` [Hz].
@@ -103,14 +103,14 @@ def filter_reading(
         read = np.array(
             [_loss_read(Tj, vj, p, fs) for Tj, vj in zip(np.ravel(T), np.broadcast_to(v, np.shape(T)).ravel())]
         )
-        read = read.reshape(*np.shape(T), len(evidence.LOSSES))
+        read = read.reshape(*np.shape(T), len(flight_filter.LOSSES))
     losses = np.array([zeta, mu, kappa], float)
     return speed_loss(A, a, p, zeta, mu=mu, kappa=kappa, k=k) + read @ losses
 
 
 def _loss_read(T: float, v: float, p: float, fs: float | None) -> np.ndarray:
     """What the filter reads of each loss in the speed loss of one flight, per unit: take-off less landing."""
-    r = evidence.filter_reading(T, v, p, fs)
+    r = flight_filter.filter_reading(T, v, p, fs)
     return r[1] - r[2]
 
 
@@ -162,7 +162,7 @@ def short_flights_only(ob: Observed) -> str:
     """Why the flights of a series cannot tell a loss in flight from a lower e ("" where they can).
 
     The derivative filter moves the loss of a flight shorter than its
-    windows into the measured e (:func:`rocklab.diagnosis.evidence.filter_reading`):
+    windows into the measured e (:func:`rocklab.diagnosis.flight_filter.filter_reading`):
     only flights above :data:`LONG_FLIGHT` alpha show it apart, and the
     curve needs :data:`MIN_LONG_FLIGHTS` of them.
     """

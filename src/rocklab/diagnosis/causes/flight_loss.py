@@ -14,7 +14,7 @@ take-off and the next impact relative to its take-off speed v
 mu / alpha (dry friction: constant in v), 4 zeta v / (3 p alpha) (viscous:
 proportional to v) and kappa v^2 / (2 p^2 alpha) (drag: as v^2).  Short
 flights show no loss in their measured speeds (the derivative filter moves
-it into the measured e, :func:`rocklab.diagnosis.evidence.filter_reading`):
+it into the measured e, :func:`rocklab.diagnosis.flight_filter.filter_reading`):
 the curve is read on the flights whose fit windows stay within one half.
 """
 
