@@ -76,3 +76,21 @@ def test_limits_of_the_reading():
     # a viscous loss reads the take-off low and the landing high, the flight long
     z = filter_reading(0.3, v, p, fs)[:, LOSSES.index("zeta")]
     assert z[0] > 0 and z[1] < 0 < z[2]
+
+
+def test_the_figure_curve_of_a_rotation_record_reads_with_its_own_fits():
+    """A loss curve drawn where no flight was measured (the figures) takes the record's fits, not the transducers'."""
+    from rocklab.diagnosis.causes import flight_damping
+    from rocklab.lab.motion import instrument_fits
+    from rocklab.physics.flight import takeoff_speed
+
+    alpha, p, fs = 0.1, 3.7, 240.0
+    A = np.linspace(0.1, 0.9, 5) * alpha
+    v = takeoff_speed(A, alpha, p)
+    default = flight_damping.filter_reading(A, alpha, p, v, zeta=0.01, fs=fs)
+    film = flight_damping.filter_reading(A, alpha, p, v, zeta=0.01, fs=fs, fits=instrument_fits("rotation", fs))
+    assert flight_damping.filter_reading(A, alpha, p, v, zeta=0.01, fs=fs, fits=instrument_fits("transducers", fs)) == (
+        pytest.approx(default)
+    )
+    # the rotation record's wider windows read a viscous loss otherwise
+    assert np.all(np.isfinite(film)) and np.max(np.abs(film - default)) > 1e-3 * np.max(np.abs(default))

@@ -56,6 +56,7 @@ from rocklab._imports import lazy_module
 from rocklab.lab.channel_gain import LEVEL, N_BLOCKS, block_starts, outside_margin, ratio_interval
 from rocklab.physics.constants import G
 
+integrate = lazy_module("scipy.integrate")
 stats = lazy_module("scipy.stats")
 
 
@@ -133,11 +134,9 @@ def gyroscope_gain(
     SensorGain
         NaN where the rests are shorter than two samples per block.
     """
-    from scipy.integrate import cumulative_trapezoid  # imported here: scipy costs 1 s at start-up
-
     if n_rest < 2 * n_blocks:
         return SensorGain()
-    turned = cumulative_trapezoid(rate, time, initial=0.0)
+    turned = integrate.cumulative_trapezoid(rate, time, initial=0.0)
     a, b = slice(0, n_rest), slice(len(time) - n_rest, len(time))
     starts = block_starts(n_rest, n_blocks)
     n_bias = max(n_rest, min(int(round(BIAS_REST_S * fs)), len(time) // 4))

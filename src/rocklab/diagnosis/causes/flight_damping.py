@@ -87,6 +87,7 @@ def filter_reading(
     k: float = 0.0,
     read: np.ndarray | None = None,
     fs: float | None = None,
+    fits: Mapping[str, float] | None = None,
 ) -> np.ndarray:
     """The speed a flight of apex A [rad] and take-off speed v [rad/s] loses by its next impact, over v, as
     the derivative filter reads it [-].
@@ -96,21 +97,23 @@ def filter_reading(
     speed's (:func:`rocklab.diagnosis.flight_filter.filter_reading`, per unit of
     each loss, linear), ``read`` (flights, losses) where the flights were
     measured (:func:`long_flights`), else of the flight of apex A on its
-    own angle, sampled at ``fs`` [Hz].
+    own angle, sampled at ``fs`` [Hz] and read by the fits of ``fits`` (the
+    record's instrument's, :func:`rocklab.lab.motion.instrument_fits`; the
+    transducers' by default).
     """
     if read is None:
         T = 2.0 * quarter_period(A, flight_angle(A, a, k), p)
         read = np.array(
-            [_loss_read(Tj, vj, p, fs) for Tj, vj in zip(np.ravel(T), np.broadcast_to(v, np.shape(T)).ravel())]
+            [_loss_read(Tj, vj, p, fs, fits) for Tj, vj in zip(np.ravel(T), np.broadcast_to(v, np.shape(T)).ravel())]
         )
         read = read.reshape(*np.shape(T), len(flight_filter.LOSSES))
     losses = np.array([zeta, mu, kappa], float)
     return speed_loss(A, a, p, zeta, mu=mu, kappa=kappa, k=k) + read @ losses
 
 
-def _loss_read(T: float, v: float, p: float, fs: float | None) -> np.ndarray:
+def _loss_read(T: float, v: float, p: float, fs: float | None, fits: Mapping[str, float] | None) -> np.ndarray:
     """What the filter reads of each loss in the speed loss of one flight, per unit: take-off less landing."""
-    r = flight_filter.filter_reading(T, v, p, fs)
+    r = flight_filter.filter_reading(T, v, p, fs, fits=fits)
     return r[1] - r[2]
 
 

@@ -191,7 +191,7 @@ def curve(tests: Sequence[MeasuredTest], values: Mapping[str, float], listed: Ma
     def line(zeta: float, mu_a: float, kappa_a: float, label: str) -> CurveLine:
         kw: _FlightKeywords = {"zeta": zeta, "mu": mu_a * alpha, "kappa": kappa_a / alpha, "k": k}
         v_off = takeoff_speed(A, a, p, **kw)
-        read = flight_damping.filter_reading(A, a, p, v_off, fs=fs, **kw)
+        read = flight_damping.filter_reading(A, a, p, v_off, fs=fs, fits=tests[0].fits, **kw)
         return {"x": (v_off / vr).tolist(), "y": read.tolist(), "label": label}
 
     zeta = listed.get("zeta", 0.0)
