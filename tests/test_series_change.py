@@ -152,3 +152,9 @@ def test_a_rocking_edge_that_stays_names_no_change():
 def test_a_change_reads_back_its_kind_as_the_enum():
     c = SeriesChange.from_dict({"parameter": "c", "kind": "change point"})
     assert c.kind is ChangeKind.CHANGE_POINT and c.to_dict()["kind"] == "change point"
+
+
+def test_a_series_of_more_tests_than_a_float_counts_orders_of_is_tested():
+    """171! overflows a float: a series of 200 tests (a large campaign's) was reported not finished."""
+    c = _changes(LevelProblem(n_tests=200, jump=0.08, split=120), n_permutations=19)
+    assert c.kind is ChangeKind.CHANGE_POINT and abs(c.where_index - 120) <= 2

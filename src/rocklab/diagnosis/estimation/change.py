@@ -169,7 +169,8 @@ def changes_over_tests(
     # many parameters tested must not make the shuffles, rather than the tests, what names nothing
     n_permutations = max(n_permutations, math.ceil(4 / per_test) - 1)
     # the rarest order of n tests (the gradual statistic's: the order and its reverse), or of the shuffles drawn
-    rarest = max(2.0 / math.factorial(n), 1.0 / (n_permutations + 1))
+    # (171! overflows a float, and 2 / 170! lies far below any Monte Carlo's 1 / (N + 1): the bound is exact)
+    rarest = max(2.0 / math.factorial(min(n, 170)), 1.0 / (n_permutations + 1))
     note = (
         f"no order of {n} tests is rarer than {rarest:.2g} among their orders, above the level {per_test:.2g}: "
         "these tests cannot carry a change"
