@@ -158,3 +158,23 @@ def test_a_series_of_more_tests_than_a_float_counts_orders_of_is_tested():
     """171! overflows a float: a series of 200 tests (a large campaign's) was reported not finished."""
     c = _changes(LevelProblem(n_tests=200, jump=0.08, split=120), n_permutations=19)
     assert c.kind is ChangeKind.CHANGE_POINT and abs(c.where_index - 120) <= 2
+
+
+def test_the_steps_drops_by_prefix_sums_are_those_of_the_steps_indicators():
+    """Every split of every order from sums over the tests in rank order equals the closed form of each
+    step's explicit 0/1 column (the indicators cost tests^2 per order)."""
+    from rocklab.diagnosis.estimation.change import _drops, _step_drops
+
+    rng = np.random.default_rng(3)
+    n, k, splits = 12, 3, list(range(2, 11))
+    A = rng.normal(size=(n, 15, k))
+    y = rng.normal(size=(n, 15))
+    AtA, Aty = np.einsum("nri,nrj->nij", A, A), np.einsum("nri,nr->ni", A, y)
+    ranks = np.array([rng.permutation(n) for _ in range(7)])
+    steps = (ranks[:, None, :] >= np.array(splits)[:, None]).astype(float)
+    in_order = (np.arange(n) >= np.array(splits)[:, None]).astype(float)
+    for j in range(k):
+        np.testing.assert_allclose(_step_drops(AtA, Aty, ranks, splits, j), _drops(AtA, Aty, steps, j), rtol=1e-10)
+        np.testing.assert_allclose(
+            _step_drops(AtA, Aty, np.arange(n), splits, j), _drops(AtA, Aty, in_order, j), rtol=1e-10
+        )
