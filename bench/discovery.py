@@ -316,7 +316,7 @@ def score(entry, truth, parts=(), optional=None):
     hidden = set(truth)
     found = {f["effect"]: f for f in entry["findings"]}
     covered, widened, missed, missed_joint, errors = 0, 0, [], [], []
-    for cause in hidden & named:
+    for cause in sorted(hidden & named):
         for k, x in truth[cause].items():
             ci = found[cause].get("ci95", {}).get(k)
             errors.append(_error(cause, k, x, found[cause].get("params", {}).get(k)))
@@ -581,7 +581,7 @@ def rates(cells):
 def _pooled_bias(df):
     """Mean signed error of the named parameters in units of their smallest effect worth naming, the
     series the units of its interval (:func:`rocklab.diagnosis.pooling.pooled_bias`)."""
-    err = [(e, s) for s, errs in zip(df.seed, df.errors_in_smallest) for e in errs]
+    err = [(e, s) for s, errs in zip(df.index, df.errors_in_smallest) for e in errs]  # a row is a series
     if not err:
         return None
     b = pooled_bias([e for e, _ in err], [0.0] * len(err), [1.0] * len(err), [str(s) for _, s in err], "series")

@@ -434,7 +434,8 @@ def contact_episodes(hist: ContactHistory, min_apex_rad: float = 0.0, tolerance:
         speed = vel[new][first : a1 + 1]
         still = speed <= tolerance * np.abs(hist.thetadot[first : a1 + 1]) * big_r
         # the first step from which the landing edge stays still for a window
-        run = np.convolve(still, np.ones(window), "valid") >= window
+        # none where the edge left still carries load at the next apex (a creeping soft contact)
+        run = np.convolve(still, np.ones(window), "valid") >= window if still.size >= window else still[:0]
         end = min(first + int(np.argmax(run)) if run.any() else a1, n - 1)
         before, after = speed_at_upright(hist, start), speed_at_upright(hist, end)
         seg = slice(start, end + 1)
