@@ -1,7 +1,7 @@
 """Benchmark: calibration of the whole diagnosis on virtual series with a known truth (issue 24).
 
     python bench/discovery.py --out results/bench [--budget-s 840] [--workers 2] [--design-seeds 0 1] [--replicates 3]
-                              [--noise-mm 0.002]
+                              [--noise-mm 0.002] [--generator {virtual,contact,both}]
 
 The virtual lab (:func:`rocklab.lab.virtual_lab.series_records`) writes
 series that hide one cause of the catalogue or one member of a family, or
@@ -23,6 +23,25 @@ still waiting when ``--budget-s`` has passed are not run (``n_skipped``
 says how many).  Every channel carries the virtual lab's noise and mains
 hum (:data:`NOISE_MM`); ``--noise-mm`` runs the same design with other
 instruments (``noise_mm`` in the output says which).
+
+A second generator, not the model the diagnosis fits (``--generator``, both by
+default): the contact lab (:mod:`rocklab.lab.contact_lab`, a rigid block on
+compliant MuJoCo contacts with Coulomb friction, two-sided walls only) writes
+the same tests (:func:`rocklab.lab.virtual_lab.series_records`, its simulator
+the contact lab's) for each knob of :data:`CONTACT_KNOBS` (the docs' table of
+knob and cause, docs/virtual-lab.md) :data:`CONTACT_REPLICATES` times and the
+default contact at each rate, on the same shuffles.  Nothing there is set as a
+cause: each series' truth is read from the block (:func:`contact_truth`), by a
+rule fixed before any diagnosis: c = e measured over Eq. 2 at the nominal alpha
+(the diagnosis' base e), zeta = the viscous zeta that loses what the block's long
+flights lose (the knob and the pivot's spring-damper,
+:func:`rocklab.lab.contact_lab.flight_zeta`), r = alpha_r / alpha of the edges
+as built.  A cause whose parameter departs from its null by more than its
+smallest effect worth naming (the catalogue's ``practical``: 0.005 for c and r,
+2e-4 for zeta) is hidden and must be named; below, it is optional: named, its
+interval must hold the truth, not named, nothing is missing.  A series with
+nothing worth naming is a null.  The same :func:`score` and :func:`rates`
+judge both generators; ``by_generator`` holds each one's.
 
 Writes ``<out>/discovery.json``: ``named_right_rate`` (the verdict is the
 hidden causes, every true parameter inside the verdict's simultaneous 95 %
@@ -48,8 +67,12 @@ alone missed and its systematic part holds: the pulls of the groups,
 :mod:`rocklab.diagnosis.estimation.systematic`, and the model's bias,
 :mod:`rocklab.diagnosis.estimation.bias`), each with its Clopper-Pearson 95 %
 interval over the series or parameters it rests on, ``n_series``, the
-targets and whether each is met, and ``cells`` (one row per series: its
-factors, verdict, what missed).  Exit status 1 where a target is missed.
+targets and whether each is met, ``pooled_bias`` (mean signed error of the
+named parameters in units of their smallest effect worth naming, its 95 %
+interval over series: 0 inside it, no bias shown), and ``cells`` (one row per
+series: its generator, factors, truth, verdict, what missed), the top-level
+rates the first generator's (the virtual lab's), ``by_generator`` each one's.
+Exit status 1 where a target of either is missed.
 """
 
 from __future__ import annotations
@@ -103,6 +126,7 @@ DESIGN_SEEDS = (0, 1)
 #: Longest free rocking simulated [s]: every wall of the design comes to rest before it (a slender two-sided
 #: wall of Housner's e rocks some 110 s).  The virtual lab holds the last angle of a history cut while the
 #: wall still rocks, a wall frozen in flight, which the diagnosis rightly reads as a wall that stops dead.
+#: The contact lab's block too (wall 2a on the default contact: at rest after some 100 s, 12 s of one core).
 RECORD_S = 400.0
 #: Noise and mains hum of every channel [mm]: the virtual lab's default, the real campaign's.  ``--noise-mm``
 #: runs the design with other instruments (a tenth of it: the model's own errors, which this noise hides, show).

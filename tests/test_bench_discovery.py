@@ -246,6 +246,10 @@ def test_the_page_shows_the_contact_labs_rates_and_series_apart_from_the_virtual
     assert len(d["cells"]) == 1 and d["cells"][0]["cause"] == "null"
     assert d["contact"]["missed"] == ["coverage_95"] and d["contact"]["n_caused"] == 1
     (cell,) = d["contact"]["cells"]
-    assert cell["knob"] == "default" and cell["truth"] == truth and cell["miss"] == "not named: flight_damping"
+    assert (
+        cell["knob"] == "default"
+        and cell["truth"] == "flight_damping.zeta = 0.0005"
+        and cell["miss"] == "not named: flight_damping"
+    )
     # a bench of the virtual lab alone (before the contact lab) has none
     assert _discovery({**bench, "by_generator": {"virtual": by["virtual"]}, "cells": [virtual]})["contact"] is None

@@ -451,12 +451,19 @@ def _contact(rates: Mapping[str, Any], cells: list[Mapping[str, Any]]) -> dict[s
     keys += ("named_right_rate", "named_right_ci95", "verdict_right_rate", "verdict_right_ci95")
     keys += ("false_name_rate_null", "false_name_ci95", "confident_misname_rate", "confident_misname_ci95")
     keys += ("coverage_95", "coverage_ci95", "pass")
-    cols = ("design_seed", "knob", "fs", "wall", "n_tests", "truth", "verdict", "named_right")
+    cols = ("design_seed", "knob", "fs", "wall", "n_tests", "verdict", "named_right")
     return {
         **{k: rates.get(k) for k in keys},
         "missed": [t for t, v in rates["targets"].items() if not v["met"]],
-        "cells": [{**{k: c.get(k) for k in cols}, "miss": _miss(c)} for c in cells],
+        "cells": [
+            {**{k: c.get(k) for k in cols}, "truth": _truth(c.get("truth") or {}), "miss": _miss(c)} for c in cells
+        ],
     }
+
+
+def _truth(truth: Mapping[str, Mapping[str, float]]) -> str:
+    """A series' truth in words: cause.parameter = value, or "none worth naming"."""
+    return "; ".join(f"{c}.{k} = {v:.4g}" for c, p in truth.items() for k, v in p.items()) or "none worth naming"
 
 
 def _projection(
