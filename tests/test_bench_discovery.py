@@ -3,6 +3,7 @@
 import importlib.util
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from rocklab.benchmarks import _discovery, _miss
@@ -145,3 +146,110 @@ def test_the_named_right_rate_splits_into_verdicts_and_their_intervals():
     assert cells[0]["outside"] and not cells[0]["outside_joint"]
     assert r["coverage_95"] == pytest.approx(2 / 3)
     assert r["named_right_at_coverage"] == pytest.approx((4 / 9 + 2 / 3) / 2 * 2 / 3)
+
+
+def _test_truth(e_true, zeta_flight, alpha_rock=0.1, alpha=0.1, e_analytic=0.98):
+    """A test's truth as the contact lab writes it (the fields contact_truth reads)."""
+    columns = {"zeta_flight": zeta_flight}
+    return {"e_true": e_true, "e_analytic": e_analytic, "alpha_rock": alpha_rock, "alpha": alpha, "columns": columns}
+
+
+def test_the_contact_labs_truth_requires_what_exceeds_the_smallest_effect_worth_naming():
+    # c 0.99 (beyond restitution_scale's 0.005), zeta 0.0005 (beyond flight_damping's 2e-4), r 0.999 (within 0.005)
+    tests = [_test_truth(0.98 * 0.99, 5e-4, 0.0999), _test_truth(0.98 * 0.99, np.nan, 0.0999)]
+    required, optional = discovery.contact_truth(tests)
+    assert set(required) == {"restitution_scale", "flight_damping"}
+    assert required["restitution_scale"]["c"] == pytest.approx(0.99)
+    assert required["flight_damping"]["zeta"] == pytest.approx(5e-4)  # the test without long flights left out
+    assert optional == {"instability_angle": {"alpha_r_over_alpha": pytest.approx(0.999)}}
+    # the same block with a stiffer pivot: nothing worth naming, all three optional
+    required, optional = discovery.contact_truth([_test_truth(0.98 * 1.004, 1e-4)])
+    assert required == {} and set(optional) == {"restitution_scale", "flight_damping", "instability_angle"}
+
+
+def test_an_optional_cause_is_neither_missing_unnamed_nor_wrong_named_inside_its_interval():
+    truth = {"flight_damping": {"zeta": 6e-4}}
+    optional = {"restitution_scale": {"c": 1.003}}
+    zeta = {"effect": "flight_damping", "params": {"zeta": 6e-4}, "ci95": {"zeta": [4e-4, 8e-4]}}
+    zeta["ci95_joint"] = zeta["ci95"]
+    alone = discovery.score(entry(["flight_damping"], [zeta]), truth, optional=optional)
+    assert alone["named_right"] and alone["missing"] == [] and alone["params_named"] == 1
+    scale = {"effect": "restitution_scale", "params": {"c": 1.006}, "ci95": {"c": [1.001, 1.011]}}
+    scale["ci95_joint"] = scale["ci95"]
+    both = discovery.score(entry(["flight_damping", "restitution_scale"], [zeta, scale]), truth, optional=optional)
+    assert both["named_right"] and both["wrong"] == [] and both["params_named"] == 2
+    assert both["errors_in_smallest"] == pytest.approx([0.0, 0.6])  # (1.006 - 1.003) / 0.005
+    off = {**scale, "ci95": {"c": [1.005, 1.011]}, "ci95_joint": {"c": [1.005, 1.011]}}
+    missed = discovery.score(entry(["flight_damping", "restitution_scale"], [zeta, off]), truth, optional=optional)
+    assert not missed["named_right"] and missed["wrong"] == [] and len(missed["outside_joint"]) == 1
+    # without the optional truth the same verdict names a cause that is not there
+    assert discovery.score(entry(["flight_damping", "restitution_scale"], [zeta, scale]), truth)["wrong"] == [
+        "restitution_scale"
+    ]
+
+
+def test_the_contact_design_is_two_sided_balanced_and_leaves_the_virtual_design_as_it_was():
+    rows = discovery.contact_design((0, 1))
+    knobs = [k for k in discovery.CONTACT_KNOBS if k != "default"]
+    for seed in (0, 1):
+        mine = [r for r in rows if r["design_seed"] == seed]
+        assert {r["boundary"] for r in mine} == {"two-sided"}
+        assert all(sum(r["knob"] == k for r in mine) == discovery.CONTACT_REPLICATES for k in knobs)
+        assert sorted(r["fs"] for r in mine if r["knob"] == "default") == sorted(discovery.RATES)
+    assert [r["seed"] for r in rows] == list(range(len(rows)))
+    # the held-out shuffle draws other combinations
+    assert [(r["fs"], r["wall"], r["n_tests"]) for r in rows if r["design_seed"] == 0] != [
+        (r["fs"], r["wall"], r["n_tests"]) for r in rows if r["design_seed"] == 1
+    ]
+    virtual = discovery.design((0, 1))
+    assert not any("generator" in r for r in virtual) and len(virtual) == 2 * 3 * (21 + 12)
+
+
+def test_the_pooled_bias_is_the_mean_error_over_series_in_smallest_effects():
+    row = {"boundary": "two-sided", "fs": 400.0, "wall": "paper", "n_tests": 5, "cause": "restitution_scale"}
+    cells = []
+    for seed, c in enumerate((1.001, 1.004, 0.997)):
+        found = {"effect": "restitution_scale", "params": {"c": c}, "ci95": {"c": [0.9, 1.1]}}
+        cells.append(
+            {
+                **row,
+                "seed": seed,
+                **discovery.score(entry(["restitution_scale"], [found]), {"restitution_scale": {"c": 1.0}}),
+            }
+        )
+    b = discovery.rates(cells)["pooled_bias"]
+    assert b["mean"] == pytest.approx((0.2 + 0.8 - 0.6) / 3) and b["n_series"] == 3
+    assert b["ci95"][0] < b["mean"] < b["ci95"][1]
+
+
+def test_the_page_shows_the_contact_labs_rates_and_series_apart_from_the_virtual_labs():
+    row = {"boundary": "two-sided", "fs": 400.0, "wall": "paper", "n_tests": 5, "h_over_b": 9.6, "n_impacts": 9}
+    row |= {"design_seed": 1}
+    truth = {"flight_damping": {"zeta": 5e-4}}
+    virtual = {**row, "cause": "null", "seed": 0, **discovery.score(entry([]), {})}
+    contact = {**row, "cause": "flight_damping", "seed": 0, "generator": "contact", "knob": "default"}
+    contact |= {"truth": truth, **discovery.score(entry([]), truth)}
+    by = {
+        g: {**discovery.rates([c]), "targets": {"coverage_95": {"met": g == "virtual"}}}
+        for g, c in (("virtual", virtual), ("contact", contact))
+    }
+    bench = {**by["virtual"], "by_generator": by, "cells": [virtual, contact], "pass": False}
+    bench |= {
+        "n_skipped": 0,
+        "wall_s": 1,
+        "workers": 1,
+        "design_seeds": [1],
+        "design": "d",
+        "targets": by["virtual"]["targets"],
+    }
+    d = _discovery(bench)
+    assert len(d["cells"]) == 1 and d["cells"][0]["cause"] == "null"
+    assert d["contact"]["missed"] == ["coverage_95"] and d["contact"]["n_caused"] == 1
+    (cell,) = d["contact"]["cells"]
+    assert (
+        cell["knob"] == "default"
+        and cell["truth"] == "flight_damping.zeta = 0.0005"
+        and cell["miss"] == "not named: flight_damping"
+    )
+    # a bench of the virtual lab alone (before the contact lab) has none
+    assert _discovery({**bench, "by_generator": {"virtual": by["virtual"]}, "cells": [virtual]})["contact"] is None

@@ -425,12 +425,45 @@ def _discovery(bench: Mapping[str, Any]) -> dict[str, Any]:
         "verdict",
     )
     cols += ("named_right",)
+    gens = bench.get("by_generator", {})
     return {
         **{k: bench[k] for k in keys},
+        "pooled_bias": bench.get("pooled_bias"),
         "targets": bench["targets"],
         "missed": [t for t, v in bench["targets"].items() if not v["met"]],
-        "cells": [{**{k: c[k] for k in cols}, "miss": _miss(c)} for c in bench["cells"]],
+        "cells": [{**{k: c[k] for k in cols}, "miss": _miss(c)} for c in bench["cells"] if _virtual(c)],
+        "contact": _contact(gens["contact"], [c for c in bench["cells"] if not _virtual(c)])
+        if "contact" in gens
+        else None,
     }
+
+
+def _virtual(cell: Mapping[str, Any]) -> bool:
+    """Whether a series of ``bench/discovery.py`` is the virtual lab's (the rocking model's own)."""
+    return cell.get("generator", "virtual") == "virtual"
+
+
+def _contact(rates: Mapping[str, Any], cells: list[Mapping[str, Any]]) -> dict[str, Any]:
+    """The contact lab's rates (:mod:`rocklab.lab.contact_lab`: the same score, another physics) and its
+    series: the knob, the truth read from the block, the verdict and what it missed."""
+    keys: tuple[str, ...] = ("n_series", "n_null", "n_caused", "n_not_identifiable", "n_params_named", "n_skipped")
+    keys += ("pooled_bias",)
+    keys += ("named_right_rate", "named_right_ci95", "verdict_right_rate", "verdict_right_ci95")
+    keys += ("false_name_rate_null", "false_name_ci95", "confident_misname_rate", "confident_misname_ci95")
+    keys += ("coverage_95", "coverage_ci95", "pass")
+    cols = ("design_seed", "knob", "fs", "wall", "n_tests", "verdict", "named_right")
+    return {
+        **{k: rates.get(k) for k in keys},
+        "missed": [t for t, v in rates["targets"].items() if not v["met"]],
+        "cells": [
+            {**{k: c.get(k) for k in cols}, "truth": _truth(c.get("truth") or {}), "miss": _miss(c)} for c in cells
+        ],
+    }
+
+
+def _truth(truth: Mapping[str, Mapping[str, float]]) -> str:
+    """A series' truth in words: cause.parameter = value, or "none worth naming"."""
+    return "; ".join(f"{c}.{k} = {v:.4g}" for c, p in truth.items() for k, v in p.items()) or "none worth naming"
 
 
 def _projection(

@@ -415,6 +415,9 @@ def contact_episodes(hist: ContactHistory, min_apex_rad: float = 0.0, tolerance:
     big_r = float(np.hypot(*hist.edges[1]))
     dt = float(hist.t[1] - hist.t[0])
     window = max(int(np.ceil(hist.step)), 3)
+    # each edge's motion once: per impact, on the whole history, it took 2/3 of a slender wall's test
+    vel = [np.hypot(*edge_velocity(hist, e).T) for e in (0, 1)]
+    edge_y = [_edge_y(hist, e) for e in (0, 1)]
     cross = np.flatnonzero(th[:-1] * th[1:] < 0)
     bounds = np.r_[0, cross + 1, n]
     apex = [int(lo) + int(np.argmax(np.abs(th[lo:hi]))) for lo, hi in zip(bounds[:-1], bounds[1:])]
@@ -428,10 +431,11 @@ def contact_episodes(hist: ContactHistory, min_apex_rad: float = 0.0, tolerance:
         start = max(a0 + int(on[0]) - 1 if on.size else i, 0)
         off = np.flatnonzero(force[i : a1 + 1, 1 - new] > thr)
         first = i + int(off[-1]) + 1 if off.size else i + 1
-        speed = np.hypot(*edge_velocity(hist, new)[first : a1 + 1].T)
+        speed = vel[new][first : a1 + 1]
         still = speed <= tolerance * np.abs(hist.thetadot[first : a1 + 1]) * big_r
         # the first step from which the landing edge stays still for a window
-        run = np.convolve(still, np.ones(window), "valid") >= window
+        # none where the edge left still carries load at the next apex (a creeping soft contact)
+        run = np.convolve(still, np.ones(window), "valid") >= window if still.size >= window else still[:0]
         end = min(first + int(np.argmax(run)) if run.any() else a1, n - 1)
         before, after = speed_at_upright(hist, start), speed_at_upright(hist, end)
         seg = slice(start, end + 1)
@@ -445,13 +449,34 @@ def contact_episodes(hist: ContactHistory, min_apex_rad: float = 0.0, tolerance:
                 "t_end": hist.t[end],
                 "duration_s": hist.t[end] - hist.t[start],
                 "lifted": bool(np.any((force[seg] <= thr).all(axis=1))),
-                "slip_mm": 1e3 * float(np.diff(_edge_y(hist, new)[[start, end]])[0]),
+                "slip_mm": 1e3 * float(np.diff(edge_y[new][[start, end]])[0]),
                 "apex_before": abs(th[a0]),
                 "apex_after": abs(th[a1]),
             }
         )
     cols = ["t", "thetadot_before", "thetadot_after", "e", "t_start", "t_end", "duration_s", "lifted", "slip_mm"]
     return pd.DataFrame(rows, columns=[*cols, "apex_before", "apex_after"])
+
+
+def flight_zeta(hist: ContactHistory, ep: pd.DataFrame, min_apex_rad: float = 0.0) -> np.ndarray:
+    """The viscous zeta that would lose what each flight between two contact episodes loses [-].
+
+    A moment -2 zeta p I_O thetadot takes dE/dt = -2 zeta p I_O thetadot^2,
+    so a flight that leaves one episode at thetadot_a and reaches the next at
+    thetadot_b (both carried to theta = 0, :func:`speed_at_upright`) loses
+    what zeta = (thetadot_a^2 - thetadot_b^2) / (4 p int thetadot^2 dt) would:
+    the knob ``zeta`` and the pivot's spring-damper alike, read on the scale
+    of :mod:`rocklab.diagnosis.causes.flight_damping`.  Flights of apex
+    below ``min_apex_rad`` [rad] are left out.
+    """
+    out = []
+    for a, b in zip(ep.iloc[:-1].itertuples(), ep.iloc[1:].itertuples()):
+        if a.apex_after < min_apex_rad:
+            continue
+        lo, hi = np.searchsorted(hist.t, [a.t_end, b.t_start])
+        work = np.trapezoid(hist.thetadot[lo : hi + 1] ** 2, hist.t[lo : hi + 1])
+        out.append((a.thetadot_after**2 - b.thetadot_before**2) / (4 * hist.p * work))
+    return np.asarray(out, float)
 
 
 def base_sliding_mm(hist: ContactHistory, height_m: float, thickness_m: float) -> np.ndarray:
@@ -582,6 +607,8 @@ def simulate_contact_test(
                 "e_housner_block": e_block,
                 "restitution_scale": float(np.median(e)) / e_block if e.size else np.nan,
                 "n_lifted": int(ep["lifted"].sum()),
+                # on the flights the diagnosis reads a flight loss on (flight_damping.LONG_FLIGHT of alpha)
+                "zeta_flight": float(np.median(zf)) if (zf := flight_zeta(hist, ep, 0.3 * alpha_r)).size else np.nan,
                 "max_slip_mm": float(ep["slip_mm"].abs().max()) if len(ep) else 0.0,
             },
         }
