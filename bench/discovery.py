@@ -84,7 +84,6 @@ import math
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
-from unittest import mock
 
 import numpy as np
 import pandas as pd
@@ -469,20 +468,19 @@ def _contact_records(name, sp, row, noise_mm=NOISE_MM):
         truths.append(truth)
         return t, E, truth
 
-    # series_records has no simulate seam (write_campaign has: a campaign on disk): its simulator swapped here
-    with mock.patch.object(vl, "simulate_virtual_test", simulate):
-        recs = vl.series_records(
-            name,
-            sp,
-            "two-sided",
-            model,
-            n=row["n_tests"],
-            fs=row["fs"],
-            seed=row["seed"],
-            t_end=RECORD_S,
-            noise_mm=noise_mm,
-            alpha_ratio=alpha_ratio,
-        )
+    recs = vl.series_records(
+        name,
+        sp,
+        "two-sided",
+        model,
+        n=row["n_tests"],
+        fs=row["fs"],
+        seed=row["seed"],
+        t_end=RECORD_S,
+        noise_mm=noise_mm,
+        alpha_ratio=alpha_ratio,
+        simulate=simulate,
+    )
     return recs, truths
 
 

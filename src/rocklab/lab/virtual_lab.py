@@ -389,6 +389,7 @@ def series_records(
     seed=0,
     log=None,
     t_end=60.0,
+    simulate=None,
 ):
     """Records of ``n`` virtual tests of one series, reduced to theta by the kinematics.
 
@@ -417,8 +418,12 @@ def series_records(
     log : dict, optional
         The numbers of the test log of each test (column -> n values), as
         :func:`rocklab.lab.reduction.log_values` reads tests.csv.
+    simulate : callable, optional
+        The wall's physics, as :func:`write_campaign`'s; default :func:`simulate_virtual_test`.
     """
     from rocklab.lab import kinematics
+
+    simulate = simulate_virtual_test if simulate is None else simulate
 
     one = boundary == Boundary.ONE_SIDED
     layout = usual_layout("S", specimen["length_mm"], specimen["height_mm"], specimen["thickness_mm"], one)
@@ -440,7 +445,7 @@ def series_records(
             model=model(i) if callable(model) else dict(model),
             effects=Effects(noise_mm=noise_mm, hum_mm=noise_mm),
         )
-        t, E, truth = simulate_virtual_test(vt, specimen, layout, rng=rng, t_end=t_end)
+        t, E, truth = simulate(vt, specimen, layout, rng, t_end)
         theta = kinematics.solve_wall_motion(E, X, F, specimen["thickness_mm"], weights=used)["theta"]
         recs.append(
             dict(
