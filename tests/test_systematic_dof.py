@@ -14,11 +14,10 @@ import pytest
 from scipy import stats
 
 from rocklab.diagnosis.estimation.systematic import (
+    bias_correction,
     effective_dof,
     pull_noise,
     pulls,
-    share_correction,
-    shares,
     simultaneous,
     statistical_error,
     systematic_uncertainty,
@@ -51,7 +50,7 @@ def _coverage(p: np.ndarray, scale: np.ndarray, seed: int) -> tuple[float, float
     e = rng.standard_normal((DRAWS, p.size)) * scale
     x0 = e @ p
     raw = np.sqrt(np.sum((p * (e - x0[:, None])) ** 2, axis=1))
-    k, nu = share_correction(p)
+    (k,), (nu,) = bias_correction(_groups(p, e[0]))
     for i in range(3):
         (u,), (nu_i,) = systematic_uncertainty(_groups(p, e[i]))
         assert (u, nu_i) == pytest.approx((np.sqrt(k) * raw[i], nu), rel=1e-6)
@@ -116,17 +115,42 @@ def test_the_pulls_are_taken_at_the_optimum_of_the_linearisation():
         assert off[g] == pytest.approx(at[g])
 
 
+def _correction(p):
+    return tuple(float(x[0]) for x in bias_correction(_groups(np.asarray(p, float), np.zeros(len(p)))))
+
+
 def test_equal_shares_give_g_over_g_less_one_on_g_less_one_degrees_of_freedom():
     for g in (2, 3, 4, 6):
-        assert share_correction(np.full(g, 1 / g)) == pytest.approx((g / (g - 1), g - 1))
+        assert _correction(np.full(g, 1 / g)) == pytest.approx((g / (g - 1), g - 1))
     # two groups: one difference between them, one degree of freedom, whatever the shares
-    assert share_correction([0.9, 0.1]) == pytest.approx((1 / 0.18, 1.0))
-    assert share_correction([1.0]) == (1.0, np.inf)
+    assert _correction([0.9, 0.1]) == pytest.approx((1 / 0.18, 1.0))
+    # one parameter: 1 / (1 - S2) on (1 - S2)^2 / (S2 - 2 sum p^3 + S2^2)
+    p = np.array([0.6, 0.3, 0.1])
+    s2, s3 = np.sum(p**2), np.sum(p**3)
+    assert _correction(p) == pytest.approx((1 / (1 - s2), (1 - s2) ** 2 / (s2 - 2 * s3 + s2**2)))
+    assert _correction([1.0]) == (1.0, np.inf)
 
 
-def test_the_shares_are_the_groups_weights_for_one_parameter():
-    p = np.array([0.5, 0.3, 0.2])
-    assert shares(_groups(p, np.zeros(3)))[:, 0] == pytest.approx(p)
+def test_a_group_that_pulls_a_parameter_through_its_correlation_is_a_view_of_it():
+    """Two parameters, x fixed by group a alone and y by b and c, a and b both reading x + y: a sees y only
+    through x.  The correction counts each group's view as it is: k sum d_g^2 is unbiased for the variance of
+    the fit's error in a Monte Carlo of biases in units of the groups' noise."""
+    A = {"a": np.array([[1.0, 0.0], [1.0, 1.0]]), "b": np.array([[1.0, 1.0]]), "c": np.array([[0.0, 1.0]])}
+    groups = {g: (a, np.zeros(len(a))) for g, a in A.items()}
+    k, nu = bias_correction(groups)
+    rng = np.random.default_rng(5)
+    B = sum(a.T @ a for a in A.values())
+    Binv = np.linalg.inv(B)
+    err, sq = [], []
+    for _ in range(4000):
+        # each group's bias delta_g of covariance B_g^+, read as its rows' offsets
+        off = {g: a @ (np.linalg.pinv(a) @ rng.standard_normal(len(a))) for g, a in A.items()}
+        fit = Binv @ sum(A[h].T @ off[h] for h in A)
+        grp = {g: (A[g], off[g] - A[g] @ fit) for g in A}
+        err.append(fit)
+        sq.append(np.sum(np.array(list(pulls(grp).values())) ** 2, axis=0))
+    assert k * np.mean(sq, axis=0) == pytest.approx(np.var(err, axis=0), rel=0.1)
+    assert np.all(nu >= 1) and np.all(np.isfinite(nu))
 
 
 def test_one_group_has_no_systematic_part_and_the_statistical_interval_stands():

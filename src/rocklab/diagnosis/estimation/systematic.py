@@ -31,8 +31,9 @@ and the 95 % interval adds it to the statistical part (:func:`widened`).
 The pulls of G groups sum to zero: u_sys^2 estimates the variance of the
 fit's systematic error from the G - 1 independent differences between the
 groups, biased low and loose.  Let group g hold the share p_g of the
-information on a parameter (the diagonal of B^-1 A_g^T A_g, :func:`shares`;
-for one parameter w_g / sum w, its weight in the fit) and carry a bias e_g
+information on a parameter (for one parameter w_g / sum w, its weight in
+the fit; :func:`bias_correction` holds the general case of correlated
+parameters) and carry a bias e_g
 of its own, independent between groups, of variance s^2 / w_g: a bias in
 units of the group's own noise, as the Birge ratio takes the disagreement
 of inconsistent data (the model is the same in any units of the parameter,
@@ -47,7 +48,7 @@ d_g = p_g (e_g - sum p_h e_h), so
 that k u_sys^2 is unbiased, and its degrees of freedom are Satterthwaite's
 for the quadratic form, nu = (1 - S2)^2 / (S2 - 2 sum p^3 + S2^2) (G - 1 for
 equal shares, 1 for two groups whatever their shares;
-:func:`share_correction`): the Type A evaluation of an uncertainty from the
+:func:`bias_correction`): the Type A evaluation of an uncertainty from the
 scatter of a few values (GUM, JCGM 100:2008, G.3).  Under this model the
 error is independent of the pulls and Student's t on nu is exact for equal
 shares.  Biases of one variance whatever the information (issue 41's
@@ -90,7 +91,6 @@ from collections.abc import Collection, Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, TypeAlias, TypeVar, cast
 
 import numpy as np
-import numpy.typing as npt
 
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.estimation.fitting import Fit, linearised
@@ -200,49 +200,57 @@ def pull_noise(groups: Mapping[str, tuple[np.ndarray, np.ndarray]]) -> np.ndarra
     return np.sum([np.diag(Binv @ b @ Binv - Binv @ b @ Binv @ b @ Binv) for b in Bg], axis=0)
 
 
-def shares(groups: Mapping[str, tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
-    """The share of each group in the information on each parameter, (groups, parameters).
-
-    The diagonal of B^-1 A_g^T A_g: the groups' shares sum to one for each
-    parameter, and for one parameter they are the groups' weights in the fit,
-    w_g / sum w.  Where the parameters are correlated a diagonal element can
-    fall below zero: it is taken as nothing, and the shares normalised again.
-    """
-    Bg = [a.T @ a for a, _ in groups.values()]
-    Binv = np.linalg.pinv(sum(Bg))
-    p = np.maximum(np.array([np.diag(Binv @ b) for b in Bg]), 0.0)
-    total = p.sum(axis=0)
-    return np.divide(p, total, out=np.zeros_like(p), where=total > 0)
+def _root_pinv(b: np.ndarray) -> np.ndarray:
+    """The symmetric square root of the pseudo-inverse of a symmetric positive semi-definite ``b``."""
+    w, v = np.linalg.eigh(b)
+    keep = w > 1e-12 * max(float(w.max()), 0.0)
+    return cast(np.ndarray, (v[:, keep] / np.sqrt(w[keep])) @ v[:, keep].T)
 
 
-def share_correction(p: npt.ArrayLike) -> tuple[float, float]:
-    """The factor k that makes k u_sys^2 unbiased and its degrees of freedom nu, for groups of shares ``p``.
+def bias_correction(groups: Mapping[str, tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
+    """The factor k that makes k sum d_g^2 unbiased for the variance of the fit's systematic error, and its
+    degrees of freedom nu, per parameter.
 
     Groups of independent biases in units of their own noise (module
-    docstring): u_sys^2 = e^T M e with M = Q P Q, P = diag(p),
-    Q = I - sqrt(p) sqrt(p)^T in units of the error's variance, so
-    k = 1 / tr M = 1 / (1 - S2) and nu = (tr M)^2 / tr(M^2)
-    = (1 - S2)^2 / (S2 - 2 sum p^3 + S2^2), S2 = sum p^2 (Satterthwaite
-    1946; GUM, JCGM 100:2008, G.4).  Equal shares of G groups give
-    k = G / (G - 1) and nu = G - 1.  One group holding everything sees
-    nothing (its pull is zero): k = 1, nu infinite.
+    docstring): group g reads the parameters off by delta_g, of covariance
+    s^2 B_g^+ (B_g = A_g^T A_g, the group's information).  With
+    H_g = B^-1 B_g the fit's error is sum H_g delta_g, of covariance s^2 B^-1,
+    and the pulls are d_g = H_g (delta_g - sum_h H_h delta_h), linear in the
+    standard normal z of delta_g = s (B_g^+)^(1/2) z_g: per parameter j,
+    sum d_gj^2 = s^2 z^T M_j z, so
 
-    Parameters
-    ----------
-    p : array_like
-        The groups' shares of one parameter's information (:func:`shares`), summing to one.
+        k_j = (B^-1)_jj / tr M_j,        nu_j = (tr M_j)^2 / tr(M_j^2)
+
+    (Satterthwaite 1946; GUM, JCGM 100:2008, G.4).  A parameter that one
+    group alone informs sees no second view: k = 1, nu infinite.  For one
+    parameter, with p_g the groups' shares of the information and
+    S2 = sum p_g^2, k = 1 / (1 - S2) and nu = (1 - S2)^2 / (S2 - 2 sum p^3 + S2^2):
+    G / (G - 1) and G - 1 for equal shares, nu = 1 for two groups whatever
+    their shares.  Correlated parameters are counted as they are: a group
+    that pulls a parameter through its correlation with another is a view
+    of it.
 
     Returns
     -------
-    k : float
-    nu : float
+    k, nu : ndarray
+        One per parameter.
     """
-    p = np.asarray(p, float)
-    p = p[p > 0]
-    s2, s3 = float(np.sum(p**2)), float(np.sum(p**3))
-    if 1.0 - s2 <= 1e-12:
-        return 1.0, np.inf
-    return 1.0 / (1.0 - s2), (1.0 - s2) ** 2 / (s2 - 2 * s3 + s2**2)
+    Bg = [a.T @ a for a, _ in groups.values()]
+    Binv = np.linalg.pinv(sum(Bg))
+    H = [Binv @ b for b in Bg]
+    root = [_root_pinv(b) for b in Bg]
+    n = Binv.shape[0]
+    # T[g][:, h-th block]: the map of z_h onto d_g
+    T = [np.hstack([((g == h) * H[g] - H[g] @ H[h]) @ root[h] for h in range(len(Bg))]) for g in range(len(Bg))]
+    k, nu = np.ones(n), np.full(n, np.inf)
+    for j in range(n):
+        rows = np.array([t[j] for t in T])
+        M = rows.T @ rows
+        tr = float(np.trace(M))
+        # below this the fit's error is not seen by the groups' disagreement: no second view
+        if tr > 1e-12 * Binv[j, j]:
+            k[j], nu[j] = Binv[j, j] / tr, tr**2 / float(np.sum(M * M))
+    return k, nu
 
 
 def systematic_uncertainty(groups: Mapping[str, tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
@@ -251,7 +259,7 @@ def systematic_uncertainty(groups: Mapping[str, tuple[np.ndarray, np.ndarray]]) 
     The pulls of the groups in quadrature (:func:`pulls`), net of the share
     their noise gives (:func:`pull_noise`: the statistical part is not
     counted twice), rescaled to an unbiased estimate of the variance by the
-    groups' shares of the information (:func:`share_correction`):
+    groups' views of the parameter (:func:`bias_correction`):
     u_sys = sqrt(k max(sum d_g^2 - noise, 0)).
 
     Parameters
@@ -267,7 +275,7 @@ def systematic_uncertainty(groups: Mapping[str, tuple[np.ndarray, np.ndarray]]) 
         Its degrees of freedom, one per parameter (infinite for a single group).
     """
     d = np.array(list(pulls(groups).values()))
-    k, nu = np.array([share_correction(p) for p in shares(groups).T]).reshape(-1, 2).T
+    k, nu = bias_correction(groups)
     return np.sqrt(k * np.maximum(np.sum(d**2, axis=0) - pull_noise(groups), 0.0)), nu
 
 
