@@ -466,8 +466,9 @@ def _with_model_bias(
             mp = model_params(sim, sel["effects"], sel["fit"].values)
             again = cause.estimate(sim, mp, seed=seed)
             for k, ci in f.ci95.items() if again is not None else ():
+                # the draw's own interval, on its units (the tests that stop) less one
                 own = again["finding"].ci95.get(k) or ci
-                df = (len(sim) if own is not ci else f.n_tests) - 1
+                df = ((again["finding"].n_tests or len(sim)) if own is not ci else f.n_tests) - 1
                 se = standard_error(cast("list[float]", own), df=max(df, 1))
                 found.setdefault(k, []).append((float(again["values"][k] - f.params[k]), se))
         for k, pairs in found.items():
