@@ -15,6 +15,7 @@ from test_diagnosis import SPEC
 
 from rocklab import diagnosis as D
 from rocklab.diagnosis.diagnosis_summary import diagnosis_summary
+from rocklab.diagnosis.estimation.systematic import widened
 from rocklab.diagnosis.pooling import pooled_bias, statistical_error
 from rocklab.diagnosis.result import (
     BaseRun,
@@ -142,10 +143,12 @@ def test_the_winners_curse_the_pool_takes_the_smaller_unnamed_estimates():
 
 
 def test_a_series_estimate_its_statistical_error_is_its_interval_less_the_systematic_part():
+    # the interval widened (systematic.widened) from t on the 7 tests less one and u_sys 0.0003 by
+    # Welch-Satterthwaite, its systematic part's degrees of freedom not kept: taken as infinite
     t = stats.t.ppf(0.975, 7)
     se = 0.001
-    h = np.hypot(t * se, 1.96 * 0.0003)
-    assert statistical_error([0.006 - h, 0.006 + h], 0.0003, 8) == pytest.approx(se, rel=1e-3)
+    ci = widened([0.006 - t * se, 0.006 + t * se], 0.006, 0.0, 1.0, 0.0003, df=7)
+    assert statistical_error(ci, 0.0003, 8) == pytest.approx(se, rel=1e-6)
     assert np.isnan(statistical_error([], 0.0, 8))
 
 

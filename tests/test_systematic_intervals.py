@@ -15,12 +15,14 @@ from rocklab.diagnosis.estimation import Problem, fit
 from rocklab.diagnosis.estimation.fitting import linearised
 from rocklab.diagnosis.estimation.resampling import parameter_intervals, sandwich_intervals
 from rocklab.diagnosis.estimation.systematic import (
+    bias_correction,
     by_group,
     simultaneous,
     standard_error,
     systematic_uncertainty,
     verdict_intervals,
     widened,
+    widened_dof,
 )
 from rocklab.diagnosis.parameters import Param
 from rocklab.diagnosis.result import Finding
@@ -64,7 +66,7 @@ def _fitted(problem):
 
 def _u_sys(delta, **kw):
     problem = TwoViews(delta, **kw)
-    return float(systematic_uncertainty(by_group(problem, _fitted(problem))[-1])[0])
+    return float(systematic_uncertainty(by_group(problem, _fitted(problem))[-1])[0][0])
 
 
 def test_the_linearisation_by_group_is_the_linearisation_of_all_groups():
@@ -80,11 +82,12 @@ def test_the_linearisation_by_group_is_the_linearisation_of_all_groups():
 
 @pytest.mark.parametrize("n_tests", [3, 6])
 def test_the_systematic_uncertainty_follows_the_offset_and_vanishes_with_it(n_tests):
-    # halfway between two groups alike, each pulls the fit by delta / 4 (to the noise's share of the weights)
+    # halfway between two groups alike, each pulls the fit by delta / 4 (to the noise's share of the weights);
+    # rescaled by G / (G - 1) = 2 for two groups of equal shares, u_sys is the fit's error delta / 2
     for delta in (0.02, 0.01):
-        assert _u_sys(delta, n_tests=n_tests) == pytest.approx(delta / (2 * np.sqrt(2)), rel=0.2)
-    # without an offset, only the noise of the group means: sigma / sqrt(observations)
-    assert _u_sys(0.0, n_tests=n_tests) < 0.01 / np.sqrt(n_tests * 30)
+        assert _u_sys(delta, n_tests=n_tests) == pytest.approx(delta / 2, rel=0.2)
+    # without an offset, only the noise of the group means: sigma / sqrt(observations), rescaled
+    assert _u_sys(0.0, n_tests=n_tests) < np.sqrt(2) * 0.01 / np.sqrt(n_tests * 30)
     assert _u_sys(0.02, n_tests=n_tests) > _u_sys(0.005, n_tests=n_tests) > _u_sys(0.0, n_tests=n_tests)
 
 
@@ -100,17 +103,22 @@ class SampledView(TwoViews):
 def test_the_systematic_uncertainty_grows_with_a_coarser_sampling_and_vanishes_with_it():
     def u(dt):
         problem = SampledView(dt)
-        return float(systematic_uncertainty(by_group(problem, _fitted(problem))[-1])[0])
+        groups = by_group(problem, _fitted(problem))[-1]
+        (k,), (nu,) = bias_correction(groups)
+        assert nu == pytest.approx(1.0)
+        return float(systematic_uncertainty(groups)[0][0] / np.sqrt(k))
 
     assert u(0.02) > u(0.01) > u(0.0)
-    # the noise dithers the grid: the bias is dt / 2, each group pulls by a quarter of it
+    # the noise dithers the grid: the bias is dt / 2, each group pulls by a quarter of it (the pulls before
+    # their rescaling by the groups' shares, 2.1 here: the floored group's noise weighs it a little less)
     assert u(0.01) == pytest.approx(0.01 / 2 / (2 * np.sqrt(2)), rel=0.3)
 
 
 def test_one_group_has_no_systematic_part():
     problem = TwoViews(0.02)
     problem.y = {"a": problem.y["a"]}
-    assert systematic_uncertainty(by_group(problem, _fitted(problem))[-1]) == pytest.approx([0.0], abs=1e-12)
+    u, nu = systematic_uncertainty(by_group(problem, _fitted(problem))[-1])
+    assert u == pytest.approx([0.0], abs=1e-12) and nu == [np.inf]
 
 
 def test_the_interval_holds_a_truth_that_the_statistical_interval_misses():
@@ -121,8 +129,9 @@ def test_the_interval_holds_a_truth_that_the_statistical_interval_misses():
     assert not statistical[0] <= TRUTH <= statistical[1]
     a, b = parameter_intervals(problem, f, n_boot=40)["m"]
     assert a <= TRUTH <= b and a <= f.values["m"] <= b
-    # no wider than the statistical part and 1.96 times the pulls of the offset in quadrature
-    assert b - f.values["m"] < 1.96 * 0.01 / (2 * np.sqrt(2)) + (statistical[1] - statistical[0])
+    # no wider than the statistical part and the fit's error, delta / 2, times t on the one degree of
+    # freedom two groups give (12.7)
+    assert b - f.values["m"] < stats.t.ppf(0.975, 1) * 0.01 / 2 + (statistical[1] - statistical[0])
 
 
 def test_a_widened_interval_holds_its_estimate_within_the_bounds():
@@ -136,37 +145,51 @@ def test_a_widened_interval_holds_its_estimate_within_the_bounds():
     assert widened([0.2, 0.4], 0.3, 0.0, 1.0, 10.0) == [0.0, 1.0]
 
 
-def test_a_simultaneous_interval_widens_each_part_by_its_own_factor_and_keeps_its_bound():
-    """The statistical part of a widened interval by Student's Šidák factor, the systematic by the normal's:
-    on 2 df two parameters widen a statistical half-width 0.1 by 1.433, a systematic 0.05 by 1.141."""
+def test_a_simultaneous_interval_takes_the_sidak_quantile_of_its_effective_degrees_of_freedom():
+    """A statistical half-width 0.1 on 2 df widened by a systematic 0.05 on 3: the interval is t(nu_eff) u_c,
+    and two such parameters together take the Šidák quantile of the same t; a side on its bound stays."""
     stat, u = 0.1, 0.05
-    ci = widened([0.3 - stat, 0.3 + stat], 0.3, 0.0, 1.0, u)
-    assert simultaneous(ci, 0.3, 0.0, 1.0, u, 1, 2) == pytest.approx(ci)
-    lo, hi = simultaneous(ci, 0.3, 0.0, 1.0, u, 2, 2)
-    half = np.hypot(1.4327 * stat, 1.1411 * 1.96 * u)
-    assert (lo, hi) == pytest.approx((0.3 - half, 0.3 + half), rel=1e-3)
-    # a side on its bound stays there; the other widens
-    lo, hi = simultaneous([0.0, 0.05], 0.0, 0.0, 1.0, 0.0, 3, 4)
+    ci = widened([0.3 - stat, 0.3 + stat], 0.3, 0.0, 1.0, u, df=2, df_sys=3)
+    nu = widened_dof([0.3 - stat, 0.3 + stat], 0.3, u, 2, 3)
+    u_c = np.hypot(stat / stats.t.ppf(0.975, 2), u)
+    # Welch-Satterthwaite's 4.15 would make t u_c 0.151, narrower than the systematic part's own interval,
+    # t(3) 0.05 = 0.159: the interval is that, and its degrees of freedom those of t u_c = 0.159
+    ws = u_c**4 / ((stat / stats.t.ppf(0.975, 2)) ** 4 / 2 + u**4 / 3)
+    assert stats.t.ppf(0.975, ws) * u_c < stats.t.ppf(0.975, 3) * u
+    assert ci[1] - 0.3 == pytest.approx(stats.t.ppf(0.975, 3) * u) and 2 < nu < ws
+    assert ci[1] - 0.3 == pytest.approx(stats.t.ppf(0.975, nu) * u_c)
+    # where neither part is alone the wider, the interval is Welch-Satterthwaite's
+    u_s = 0.1 / stats.t.ppf(0.975, 4)
+    ws = (u_s**2 + 0.03**2) ** 2 / (u_s**4 / 4 + 0.03**4 / 3)
+    assert widened_dof([0.2, 0.4], 0.3, 0.03, 4, 3) == pytest.approx(ws)
+    assert widened([0.2, 0.4], 0.3, 0.0, 1.0, 0.03, df=4, df_sys=3)[1] - 0.3 == pytest.approx(
+        stats.t.ppf(0.975, ws) * np.hypot(u_s, 0.03)
+    )
+    assert simultaneous(ci, 0.3, 0.0, 1.0, 1, nu) == pytest.approx(ci)
+    lo, hi = simultaneous(ci, 0.3, 0.0, 1.0, 2, nu)
+    half = stats.t.ppf(0.5 + 0.95**0.5 / 2, nu) * u_c
+    assert (lo, hi) == pytest.approx((0.3 - half, 0.3 + half), rel=1e-9)
+    lo, hi = simultaneous([0.0, 0.05], 0.0, 0.0, 1.0, 3, 4)
     assert lo == 0.0 and hi > 0.05
 
 
-def test_a_verdicts_intervals_count_all_its_parameters_each_on_its_own_units():
-    """Three parameters in two findings: each interval is simultaneous over k = 3, on the units its finding
-    rests on less one (a stop on the 5 tests that stop of 10); a side already cut at its bound by the
-    pulls and again by the model's bias stays there."""
+def test_a_verdicts_intervals_count_all_its_parameters_each_on_its_own_degrees_of_freedom():
+    """Three parameters in two findings: each interval is simultaneous over k = 3, on its effective degrees
+    of freedom where given, else on the units its finding rests on less one (a stop on the 5 tests that
+    stop of 10); a side cut at its bound by the systematic part stays there."""
     P = {n: Param(n, 0.0, 1.0, 0.0) for n in ("a", "b", "v")}
-    u_pull, u_model = 0.01, 0.02
-    cut = widened(widened([0.001, 0.05], 0.002, 0.0, 1.0, u_pull), 0.002, 0.0, 1.0, u_model)
-    assert cut[0] == 0.0
-    u = float(np.hypot(u_pull, u_model))
+    u = float(np.hypot(0.01, 0.02))
+    cut = widened([0.001, 0.05], 0.002, 0.0, 1.0, u, df=9, df_sys=3)
+    nu = widened_dof([0.001, 0.05], 0.002, u, 9, 3)
+    assert cut[0] == 0.0 and 3 < nu < 9
     found = [
         Finding(effect="x", params={"a": 0.3, "b": 0.002}, ci95={"a": [0.25, 0.36], "b": cut}, u_systematic={"b": u}),
         Finding(effect="stop", params={"v": 0.2}, ci95={"v": [0.15, 0.26]}),
     ]
-    verdict_intervals(found, P, {"x": 10, "stop": 5})
+    verdict_intervals(found, P, {"x": 10, "stop": 5}, dof={"x": {"b": nu}})
     joint = [f.ci95_joint or {} for f in found]
-    assert joint[0]["a"] == pytest.approx(simultaneous([0.25, 0.36], 0.3, 0.0, 1.0, 0.0, 3, 9))
-    assert joint[0]["b"] == pytest.approx(simultaneous(cut, 0.002, 0.0, 1.0, u, 3, 9))
+    assert joint[0]["a"] == pytest.approx(simultaneous([0.25, 0.36], 0.3, 0.0, 1.0, 3, 9))
+    assert joint[0]["b"] == pytest.approx(simultaneous(cut, 0.002, 0.0, 1.0, 3, nu))
     assert joint[0]["b"][0] == 0.0
     lo, hi = joint[1]["v"]
     r = stats.t.ppf(0.5 + 0.95 ** (1 / 3) / 2, 4) / stats.t.ppf(0.975, 4)

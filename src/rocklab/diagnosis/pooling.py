@@ -25,7 +25,8 @@ import numpy.typing as npt
 
 from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.errors import what_is_wrong
-from rocklab.diagnosis.estimation.systematic import standard_error, widened
+from rocklab.diagnosis.estimation import systematic
+from rocklab.diagnosis.estimation.systematic import widened
 from rocklab.diagnosis.evidence import MeasuredTest
 from rocklab.diagnosis.result import (
     BaseRun,
@@ -154,20 +155,21 @@ def statistical_error(ci: Sequence[Number], u_sys: float, n_tests: int | None) -
 
     The interval's half-width h holds the statistical part, Student's t on
     the tests less one times the standard error, and the systematic part
-    1.96 ``u_sys`` in quadrature (:func:`~rocklab.diagnosis.estimation.systematic.widened`):
-    the statistical part is what a mean over series averages, the
-    systematic part is shared and added once to the mean's interval
-    (:func:`pooled_parameter`).  An interval cut at a bound is taken by its
-    half-width (:func:`~rocklab.diagnosis.estimation.systematic.standard_error`).
-    NaN where there is no interval or it holds nothing but the systematic part.
+    ``u_sys``, added by Welch-Satterthwaite
+    (:func:`~rocklab.diagnosis.estimation.systematic.widened`): the
+    statistical part is what a mean over series averages, the systematic
+    part is shared and added once to the mean's interval
+    (:func:`pooled_parameter`).  The systematic part's degrees of freedom
+    are not kept with a finding: it is taken on infinite ones, which makes
+    the statistical error of an interval whose systematic part had fewer
+    too large (:func:`~rocklab.diagnosis.estimation.systematic.statistical_error`),
+    the cautious side.  An interval cut at a bound is taken by its
+    half-width.  NaN where there is no interval or it holds nothing but the
+    systematic part.
     """
     if len(ci) != 2 or ci[0] is None or ci[1] is None:
         return np.nan
-    df = max((n_tests or 2) - 1, 1)
-    # the half-width in standard errors of the normal (the systematic part's scale) and of Student's t
-    z, t = (1.0 / standard_error([-1.0, 1.0], df=d) for d in (np.inf, df))
-    stat = ((ci[1] - ci[0]) / 2.0) ** 2 - (z * u_sys) ** 2
-    return float(np.sqrt(stat) / t) if stat > 0 else np.nan
+    return systematic.statistical_error((ci[1] - ci[0]) / 2.0, u_sys, max((n_tests or 2) - 1, 1))
 
 
 def state_spread(change: SeriesChange) -> float:

@@ -30,12 +30,18 @@ from rocklab.diagnosis import catalogue
 from rocklab.diagnosis.discovery import discovery
 from rocklab.diagnosis.errors import what_is_wrong
 from rocklab.diagnosis.estimation import beyond_the_catalogue, rivals, select_effects, stand_ins
-from rocklab.diagnosis.estimation.bias import model_bias, net_of_noise
+from rocklab.diagnosis.estimation.bias import BIAS_DRAWS, model_bias, net_of_noise
 from rocklab.diagnosis.estimation.change import changes_over_tests
 from rocklab.diagnosis.estimation.fitting import linearised
 from rocklab.diagnosis.estimation.resampling import heldout_gain, heldout_means, sandwich_errors
 from rocklab.diagnosis.estimation.selection import RejectedBy, sentences, supported
-from rocklab.diagnosis.estimation.systematic import standard_error, verdict_intervals, widened
+from rocklab.diagnosis.estimation.systematic import (
+    effective_dof,
+    standard_error,
+    verdict_intervals,
+    widened,
+    widened_dof,
+)
 from rocklab.diagnosis.evidence import MeasuredTest, in_series_order, measured_test, observe
 from rocklab.diagnosis.extended import engineering_errors, model_params, simulated_tests
 from rocklab.diagnosis.result import (
@@ -63,8 +69,9 @@ log = logging.getLogger(__name__)
 #: Tests a series needs to name a cause: an interval over tests needs two to vary.
 MIN_TESTS_TO_NAME = 2
 #: Tests of a series simulated to measure the bias of its model, at most, spread over the series
-#: (:func:`spread_over`): the bias is a property of the model, the same on any tests; the noise of
-#: fewer is in its standard error, which u_model takes off (:mod:`rocklab.diagnosis.estimation.bias`).
+#: (:func:`spread_over`) and shared between the draws (:func:`_with_model_bias`): the bias is a property of
+#: the model, the same on any tests; the noise of fewer is in its standard error, which u_model takes off
+#: (:mod:`rocklab.diagnosis.estimation.bias`).
 #: Above every series of the embedded campaign (29 tests at most); a series ten times longer would
 #: otherwise simulate ten times the tests, and its job grow with the campaign.
 MAX_BIAS_TESTS = 32
@@ -300,13 +307,10 @@ def diagnose_series(
             findings.append(found["finding"])
             ext.append(cause.name)
             ext_values.update(found["values"])
-    bias = _with_model_bias(tests, findings, sel, ext, ext_values, seed)
-    for f in findings:
-        pulls = sel["ci"].u_sys if f.effect in sel["effects"] else {}
-        u_model = bias.get("u_model", {})
-        f.u_systematic = {k: float(np.hypot(pulls.get(k, 0.0), u_model.get(k, 0.0))) for k in f.ci95}
+    bias, draws = _with_model_bias(tests, findings, sel, ext, ext_values, seed)
+    dof = _with_systematic(findings, sel, bias.get("u_model", {}), draws)
     params = {q.name: q for f in findings for q in catalogue.by_name(f.effect).params}
-    verdict_intervals(findings, params, {f.effect: cast(int, f.n_tests) for f in findings})
+    verdict_intervals(findings, params, {f.effect: cast(int, f.n_tests) for f in findings}, dof=dof)
     blind = not_identifiable(tests, [f.effect for f in findings])
     # a cause the design cannot identify is never named, and a rival these tests cannot tell from a named
     # cause was never tested against it: a named cause whose effect either could produce is named with
@@ -418,49 +422,96 @@ def _with_model_bias(
     ext: list[str],
     values: dict[str, float],
     seed: int,
-) -> ModelBias:
-    """Widen the intervals of the findings by the bias of the model, measured on the tests simulated at
-    the extended model (:mod:`rocklab.diagnosis.estimation.bias`; at most :data:`MAX_BIAS_TESTS` of
-    them, spread over the series): the selected causes fitted again, a cause estimated after selection
-    (a stop) estimated again.
+) -> tuple[ModelBias, dict[str, int]]:
+    """The bias of the model, measured on the tests simulated at the extended model
+    (:mod:`rocklab.diagnosis.estimation.bias`): the selected causes fitted again, a cause estimated
+    after selection (a stop) estimated again, on each of :data:`~rocklab.diagnosis.estimation.bias.BIAS_DRAWS`
+    draws.
+
+    The draws share the tests simulated (at most :data:`MAX_BIAS_TESTS`, spread over the series), each
+    test simulated once, in one draw, with its own noise (seed + the draw): the simulation costs what one
+    draw of them all did, and a draw has two tests at least (fewer draws of a short series).
 
     Returns
     -------
-    dict
-        ``b`` and ``u_model`` by parameter, or ``not_measured`` (why); empty without a selected cause.
+    bias : dict
+        ``b`` (the mean over the draws) and ``u_model`` by parameter, or ``not_measured`` (why); empty
+        without a selected cause.
+    draws : dict
+        Parameter -> the draws its ``u_model`` rests on, its degrees of freedom.
     """
     if not sel["effects"]:
-        return {}
+        return {}, {}
+    picked = spread_over(tests, MAX_BIAS_TESTS)
+    n_draws = max(1, min(BIAS_DRAWS, len(picked) // 2))
     try:
-        simulated = simulated_tests(spread_over(tests, MAX_BIAS_TESTS), ext, values, seed=seed)
-        if len(simulated) < 2:
-            raise ValueError(f"{len(simulated)} simulated tests of two impacts or more (2 needed)")
+        simulated = [simulated_tests(picked[r::n_draws], ext, values, seed=seed + r) for r in range(n_draws)]
+        simulated = [s for s in simulated if len(s) >= 2]
+        if not simulated:
+            raise ValueError("no draw of two simulated tests of two impacts or more")
     except (NotImplementedError, ValueError) as err:
         log.warning("bias of the model not measured: %s", err)
-        return {"not_measured": str(err)}
-    u, b = model_bias(WallProblem(simulated), sel["fit"])
-    # a cause estimated after selection, estimated again on the simulated tests: its bias, net of the
-    # noise its interval gives (systematic.standard_error)
-    mp = model_params(simulated, sel["effects"], sel["fit"].values)
+        return {"not_measured": str(err)}, {}
+    u, b = model_bias([WallProblem(s) for s in simulated], sel["fit"])
+    draws = dict.fromkeys(u, len(simulated))
+    # a cause estimated after selection, estimated again on each draw: its bias, net of the noise its
+    # interval on the draw's tests gives (systematic.standard_error)
     for f in findings:
         cause = catalogue.by_name(f.effect)
         if f.effect in sel["effects"] or cause.estimate is None:
             continue
-        again = cause.estimate(simulated, mp, seed=seed)
-        for k, ci in f.ci95.items() if again is not None else ():
-            assert f.n_tests is not None
-            b[k] = float(again["values"][k] - f.params[k])
-            u[k] = float(net_of_noise(b[k], standard_error(cast("list[float]", ci), df=f.n_tests - 1)))
-    # the findings being made hold numbers (a file's None is a number not finite)
+        assert f.n_tests is not None
+        found: dict[str, list[tuple[float, float]]] = {}
+        for sim in simulated:
+            mp = model_params(sim, sel["effects"], sel["fit"].values)
+            again = cause.estimate(sim, mp, seed=seed)
+            for k, ci in f.ci95.items() if again is not None else ():
+                # the draw's own interval, on its units (the tests that stop) less one
+                own = again["finding"].ci95.get(k) or ci
+                df = ((again["finding"].n_tests or len(sim)) if own is not ci else f.n_tests) - 1
+                se = standard_error(cast("list[float]", own), df=max(df, 1))
+                found.setdefault(k, []).append((float(again["values"][k] - f.params[k]), se))
+        for k, pairs in found.items():
+            bk, sek = np.array(pairs).T
+            b[k], u[k], draws[k] = float(bk.mean()), float(net_of_noise(bk, sek)), len(pairs)
+    return {"b": b, "u_model": u}, draws
+
+
+def _with_systematic(
+    findings: list[Finding], sel: Selection, u_model: Mapping[str, float], draws: Mapping[str, int]
+) -> dict[str, dict[str, float]]:
+    """Widen each finding's statistical intervals by its systematic parts, the pulls of the residual
+    groups (a selected cause's, ``sel["ci"]``) and the model's bias ``u_model`` on its ``draws``, added
+    by Welch-Satterthwaite (:func:`rocklab.diagnosis.estimation.systematic.widened`); set
+    ``u_systematic``, their sum in quadrature.
+
+    Returns
+    -------
+    dict
+        Effect -> parameter -> the effective degrees of freedom of its interval (the verdict's
+        simultaneous intervals take their quantiles on them).
+    """
+    ci_all = sel["ci"]
+    dof: dict[str, dict[str, float]] = {}
     for f in findings:
+        assert f.n_tests is not None
+        selected = f.effect in sel["effects"]
         bounds = {q.name: q for q in catalogue.by_name(f.effect).params}
+        f.u_systematic = {}
         for k, ci in f.ci95.items():
-            q = bounds[k]
+            # the findings being made hold numbers (a file's None is a number not finite)
+            stat = ci_all.statistical.get(k, ci) if selected else cast("list[float]", ci)
+            df = ci_all.df if selected else max(f.n_tests - 1, 1)
+            u_p, nu_p = (ci_all.u_sys.get(k, 0.0), ci_all.dof_sys.get(k, np.inf)) if selected else (0.0, np.inf)
+            u_m, nu_m = u_model.get(k, 0.0), draws.get(k, np.inf)
+            u, nu = float(np.hypot(u_p, u_m)), effective_dof([u_p, u_m], [nu_p, nu_m])
+            x0, q = cast(float, f.params[k]), bounds[k]
             f.ci95[k] = cast(
-                "list[Number]",
-                widened(cast("list[float]", ci), cast(float, f.params[k]), q.lower, q.upper, u.get(k, 0.0)),
+                "list[Number]", widened(cast("list[float]", stat), x0, q.lower, q.upper, u, df=df, df_sys=nu)
             )
-    return {"b": b, "u_model": u}
+            f.u_systematic[k] = u
+            dof.setdefault(f.effect, {})[k] = widened_dof(cast("list[float]", stat), x0, u, df, nu)
+    return dof
 
 
 def spread_over(tests: Sequence[MeasuredTest], at_most: int) -> list[MeasuredTest]:

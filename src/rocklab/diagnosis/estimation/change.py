@@ -274,20 +274,22 @@ def _sized(change: SeriesChange) -> dict[str, Any]:
 def _change_point(problem: Problem[Any], fitted: Fit, k: str, split: int, test_ids: Sequence[str]) -> SeriesChange:
     """Parameter ``k`` before and after the change point at ``split`` (the first test after it): the model
     refitted on each side, warm from the series' fit, with each side's cluster-robust t intervals widened by
-    the parameter's systematic standard uncertainty at the series' fit
+    the parameter's systematic standard uncertainty at the series' fit on its degrees of freedom
     (:func:`~rocklab.diagnosis.estimation.systematic.systematic_uncertainty`)."""
     n = problem.n_tests
     # what every test shares (the pulls of the residual groups, at the series' fit) moves both sides alike:
     # it widens each side's value, as it does the findings', and leaves their difference
     names, *_, groups = by_group(problem, fitted)
-    u_sys = float(systematic_uncertainty(groups)[names.index(k)])
+    u_all, nu_all = systematic_uncertainty(groups)
+    u_sys, nu_sys = float(u_all[names.index(k)]), float(nu_all[names.index(k)])
     q = next(q for q in problem.params(fitted.ext) if q.name == k)
     sides = []
     for idx in (np.arange(split), np.arange(split, n)):
         f = fit(problem, idx, fitted.ext, x0=fitted.values)
         names, x0, lo, hi, A, y = linearised(problem, problem.subset(idx), f)
         j = names.index(k)
-        ci = widened(sandwich_intervals(names, x0, lo, hi, A, y)[k], f.values[k], q.lower, q.upper, u_sys)
+        stat = sandwich_intervals(names, x0, lo, hi, A, y)[k]
+        ci = widened(stat, f.values[k], q.lower, q.upper, u_sys, df=max(len(idx) - 1, 1), df_sys=nu_sys)
         se = float(sandwich_errors(A, y)[j])
         sides.append((f.values[k], ci, se, len(idx)))
     (b, ci_b, se_b, n_b), (a, ci_a, se_a, n_a) = sides

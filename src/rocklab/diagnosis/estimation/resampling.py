@@ -45,7 +45,9 @@ log = logging.getLogger(__name__)
 
 class Intervals(dict[str, list[float]]):
     """Parameter -> its 95 % interval, with ``u_sys``: parameter -> the systematic standard uncertainty
-    the interval holds [its unit] (:mod:`rocklab.diagnosis.estimation.systematic`).
+    the interval holds [its unit] (:mod:`rocklab.diagnosis.estimation.systematic`), ``dof_sys`` its
+    degrees of freedom, ``statistical`` the statistical interval it widens, on ``df`` degrees of freedom
+    (the tests less one).
 
     The systematic part is what every test of a series shares, and what the series of one lab measured
     with one chain and one model share too: a mean over series averages their statistical parts away
@@ -56,9 +58,15 @@ class Intervals(dict[str, list[float]]):
         self,
         ci: Mapping[str, list[float]] | Iterable[tuple[str, list[float]]] = (),
         u_sys: Mapping[str, float] | None = None,
+        dof_sys: Mapping[str, float] | None = None,
+        statistical: Mapping[str, list[float]] | None = None,
+        df: float = np.inf,
     ) -> None:
         super().__init__(ci)
         self.u_sys: dict[str, float] = dict(u_sys or {})
+        self.dof_sys: dict[str, float] = dict(dof_sys or {})
+        self.statistical: dict[str, list[float]] = dict(statistical or {})
+        self.df = df
 
 
 def finite_mean(x: npt.ArrayLike) -> float | None:
@@ -243,10 +251,12 @@ def parameter_intervals(problem: Problem[Any], fitted: Fit, n_boot: int = 40, se
     steps onto the bound the full fit stopped short of).
 
     Either is then widened by the systematic standard uncertainty of the
-    parameter, the pulls of the residual groups on it in quadrature
+    parameter, the pulls of the residual groups on it in quadrature,
+    rescaled for their few groups and on their effective degrees of freedom
     (:func:`~rocklab.diagnosis.estimation.systematic.systematic_uncertainty`):
-    each side's half-width h becomes sqrt(h^2 + (1.96 u_sys)^2), within the
-    bounds, and the interval always holds its estimate
+    each side's half-width h, on the tests less one, becomes
+    t(nu_eff) sqrt((h / t)^2 + u_sys^2) on the Welch-Satterthwaite degrees of
+    freedom, within the bounds, and the interval always holds its estimate
     (:func:`~rocklab.diagnosis.estimation.systematic.widened`).
 
     Returns
@@ -310,21 +320,27 @@ def _with_systematic(
     ci: Mapping[str, list[float]],
     groups: Mapping[str, tuple[np.ndarray, np.ndarray]],
 ) -> Intervals:
-    """The statistical intervals ``ci`` widened by the systematic uncertainty of each parameter, within its
-    bounds (:func:`~rocklab.diagnosis.estimation.systematic.widened`), as :class:`Intervals`."""
-    u = dict(zip(fitted.values, systematic_uncertainty(groups)))
+    """The statistical intervals ``ci``, on the tests less one degrees of freedom, widened by the
+    systematic uncertainty of each parameter on its own, within its bounds
+    (:func:`~rocklab.diagnosis.estimation.systematic.widened`), as :class:`Intervals`."""
+    u_all, nu_all = systematic_uncertainty(groups)
+    u, nu = dict(zip(fitted.values, map(float, u_all))), dict(zip(fitted.values, map(float, nu_all)))
+    df = max(problem.n_tests - 1, 1)
     out = Intervals(
         {
-            q.name: widened(ci[q.name], fitted.values[q.name], q.lower, q.upper, u[q.name])
+            q.name: widened(ci[q.name], fitted.values[q.name], q.lower, q.upper, u[q.name], df=df, df_sys=nu[q.name])
             for q in problem.params(fitted.ext)
             if q.name in ci
         },
-        {k: float(v) for k, v in u.items() if k in ci},
+        {k: v for k, v in u.items() if k in ci},
+        {k: v for k, v in nu.items() if k in ci},
+        {k: list(v) for k, v in ci.items()},
+        df,
     )
     log.info(
         "intervals of %s, statistical and systematic: %s",
         "+".join(fitted.ext),
-        ", ".join(f"{k} [{a:.4g}, {b:.4g}] u_sys {u[k]:.2g}" for k, (a, b) in ci.items()),
+        ", ".join(f"{k} [{a:.4g}, {b:.4g}] u_sys {u[k]:.2g} on {nu[k]:.3g}" for k, (a, b) in ci.items()),
         extra={"effects": tuple(fitted.ext), "statistical": dict(ci), "systematic": u},
     )
     return out

@@ -26,17 +26,62 @@ groups' errors independent (different parts of the chain), so
 
     u_sys = sqrt(sum over groups of d_g^2)             (per parameter),
 
-and the 95 % interval is the statistical one widened on each side to
-sqrt(h^2 + (z u_sys)^2), h its half-width on that side, z = 1.96 the normal
-quantile of the level (:func:`widened`): the statistical and the systematic
-parts added in quadrature (GUM, JCGM 100:2008, Sect. 5).  It is computed for
-each fit from its own data; no constant is set on a benchmark.  What it
-cannot see: an error that moves every group alike, or one of a group that
-alone fixes a parameter (its pull is then nothing); the noise of the
-residuals enters the pulls too, so with the statistical part it is counted
-twice (where the noise dominates, an interval some sqrt(2) too wide).
-A problem of one residual group has no second view: its systematic part is
-zero.
+and the 95 % interval adds it to the statistical part (:func:`widened`).
+
+The pulls of G groups sum to zero: u_sys^2 estimates the variance of the
+fit's systematic error from the G - 1 independent differences between the
+groups, biased low and loose.  Let group g hold the share p_g of the
+information on a parameter (for one parameter w_g / sum w, its weight in
+the fit; :func:`bias_correction` holds the general case of correlated
+parameters) and carry a bias e_g
+of its own, independent between groups, of variance s^2 / w_g: a bias in
+units of the group's own noise, as the Birge ratio takes the disagreement
+of inconsistent data (the model is the same in any units of the parameter,
+and it is the one whose error the information-weighted fit minimises).  The
+fit's error is sum p_g e_g, of variance V = s^2 / sum w, and
+d_g = p_g (e_g - sum p_h e_h), so
+
+    E[sum d_g^2] = V (1 - S2),          S2 = sum p_g^2,
+
+(G - 1)/G of V for equal shares, Kish's effective number of groups
+1 / S2 in place of G.  The estimate is rescaled by k = 1 / (1 - S2), so
+that k u_sys^2 is unbiased, and its degrees of freedom are Satterthwaite's
+for the quadratic form, nu = (1 - S2)^2 / (S2 - 2 sum p^3 + S2^2) (G - 1 for
+equal shares, 1 for two groups whatever their shares;
+:func:`bias_correction`): the Type A evaluation of an uncertainty from the
+scatter of a few values (GUM, JCGM 100:2008, G.3).  Under this model the
+error is independent of the pulls and Student's t on nu is exact for equal
+shares.  Biases of one variance whatever the information (issue 41's
+simulation) would call for a larger k where one group dominates: that
+model extrapolates the disagreement of a group that holds a few millionths
+of the information onto the one that holds the rest (on the contact lab,
+an edge inset's u_sys 0.015 where the error was 3e-4, and the cause no
+longer named); under it this interval undercovers with a dominant group,
+tests/test_systematic_dof.py measures by how much.  The pulls are taken at
+the optimum of the linearisation (:func:`pulls`) and net of the share the
+residuals' noise gives them (:func:`pull_noise`), which the statistical
+part holds already.
+
+The statistical part (on the units resampled less one, nu_stat) and the
+systematic parts (the pulls on nu; the model's bias on its draws,
+:mod:`rocklab.diagnosis.estimation.bias`) add in quadrature, each side of
+the interval apart, u_c^2 = u_stat^2 + sum u_i^2 with u_stat = h / t(nu_stat)
+from the statistical half-width h, and the interval's half-width is
+t(nu_eff) u_c, Student's t on the Welch-Satterthwaite degrees of freedom
+
+    nu_eff = u_c^4 / (u_stat^4 / nu_stat + sum u_i^4 / nu_i)
+
+(GUM, JCGM 100:2008, G.4.1 and G.6.4; :func:`effective_dof`).  It is the
+statistical interval where u_sys = 0 and tends to it where u_sys << u_stat;
+where the systematic part rests on one degree of freedom, t is 12.7 at
+95 %.  The simultaneous intervals of a verdict take the Šidák quantile of
+the same t (:func:`simultaneous`).  Everything is computed for each fit
+from its own data; no constant is set on a benchmark.  What it cannot see:
+an error that moves every group alike, or one of a group that alone fixes
+a parameter (its pull is then nothing); the noise taken off is the noise
+model's, and a noise underestimated is left in the pulls; the selection
+of the causes on the same data is not corrected for.  A problem of one
+residual group has no second view: its systematic part is zero.
 """
 
 from __future__ import annotations
@@ -52,6 +97,7 @@ from rocklab.diagnosis.estimation.fitting import Fit, linearised
 from rocklab.diagnosis.estimation.problem import Problem
 from rocklab.inference.multiplicity import simultaneous_factor
 
+optimize = lazy_module("scipy.optimize")
 stats = lazy_module("scipy.stats")
 
 if TYPE_CHECKING:
@@ -127,14 +173,94 @@ def by_group(
 
 
 def pulls(groups: Mapping[str, tuple[np.ndarray, np.ndarray]]) -> dict[str, np.ndarray]:
-    """The pull of each residual group on the parameters (module docstring), group -> ndarray."""
-    B = sum(a.T @ a for a, _ in groups.values())
-    Binv = np.linalg.pinv(B)
-    return {g: Binv @ (a.T @ b) for g, (a, b) in groups.items()}
+    """The pull of each residual group on the parameters at the optimum of the linearisation (module
+    docstring), group -> ndarray.
+
+    A fit stops within its tolerance of the optimum, or on a bound, where the pulls d_g = B^-1 A_g^T y_g
+    sum to the step left, D; group g's share of it, B^-1 A_g^T A_g D, is taken off each (the pulls at
+    the linearisation's optimum, which sum to zero: the groups' disagreement, wherever the fit stopped).
+    """
+    Bg = {g: a.T @ a for g, (a, _) in groups.items()}
+    Binv = np.linalg.pinv(sum(Bg.values()))
+    d = {g: Binv @ (a.T @ b) for g, (a, b) in groups.items()}
+    left = sum(d.values())
+    return {g: x - Binv @ Bg[g] @ left for g, x in d.items()}
 
 
-def systematic_uncertainty(groups: Mapping[str, tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
-    """The systematic standard uncertainty of each parameter: the pulls of the groups in quadrature.
+def pull_noise(groups: Mapping[str, tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+    """The share of sum d_g^2 the residuals' noise gives, per parameter [its unit squared].
+
+    The rows of A_g, y_g are weighted by their noise model (unit variance); with white noise eps_g and
+    H_g = B^-1 A_g^T A_g, d_g = B^-1 A_g^T eps_g - H_g B^-1 sum_h A_h^T eps_h, whose covariance is
+    B^-1 B_g B^-1 - B^-1 B_g B^-1 B_g B^-1 (for one parameter, the statistical variance times
+    p_g (1 - p_g)).
+    """
+    Bg = [a.T @ a for a, _ in groups.values()]
+    Binv = np.linalg.pinv(sum(Bg))
+    return np.sum([np.diag(Binv @ b @ Binv - Binv @ b @ Binv @ b @ Binv) for b in Bg], axis=0)
+
+
+def _root_pinv(b: np.ndarray) -> np.ndarray:
+    """The symmetric square root of the pseudo-inverse of a symmetric positive semi-definite ``b``."""
+    w, v = np.linalg.eigh(b)
+    keep = w > 1e-12 * max(float(w.max()), 0.0)
+    return cast(np.ndarray, (v[:, keep] / np.sqrt(w[keep])) @ v[:, keep].T)
+
+
+def bias_correction(groups: Mapping[str, tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
+    """The factor k that makes k sum d_g^2 unbiased for the variance of the fit's systematic error, and its
+    degrees of freedom nu, per parameter.
+
+    Groups of independent biases in units of their own noise (module
+    docstring): group g reads the parameters off by delta_g, of covariance
+    s^2 B_g^+ (B_g = A_g^T A_g, the group's information).  With
+    H_g = B^-1 B_g the fit's error is sum H_g delta_g, of covariance s^2 B^-1,
+    and the pulls are d_g = H_g (delta_g - sum_h H_h delta_h), linear in the
+    standard normal z of delta_g = s (B_g^+)^(1/2) z_g: per parameter j,
+    sum d_gj^2 = s^2 z^T M_j z, so
+
+        k_j = (B^-1)_jj / tr M_j,        nu_j = (tr M_j)^2 / tr(M_j^2)
+
+    (Satterthwaite 1946; GUM, JCGM 100:2008, G.4).  A parameter that one
+    group alone informs sees no second view: k = 1, nu infinite.  For one
+    parameter, with p_g the groups' shares of the information and
+    S2 = sum p_g^2, k = 1 / (1 - S2) and nu = (1 - S2)^2 / (S2 - 2 sum p^3 + S2^2):
+    G / (G - 1) and G - 1 for equal shares, nu = 1 for two groups whatever
+    their shares.  Correlated parameters are counted as they are: a group
+    that pulls a parameter through its correlation with another is a view
+    of it.
+
+    Returns
+    -------
+    k, nu : ndarray
+        One per parameter.
+    """
+    Bg = [a.T @ a for a, _ in groups.values()]
+    Binv = np.linalg.pinv(sum(Bg))
+    H = [Binv @ b for b in Bg]
+    root = [_root_pinv(b) for b in Bg]
+    n = Binv.shape[0]
+    # T[g][:, h-th block]: the map of z_h onto d_g
+    T = [np.hstack([((g == h) * H[g] - H[g] @ H[h]) @ root[h] for h in range(len(Bg))]) for g in range(len(Bg))]
+    k, nu = np.ones(n), np.full(n, np.inf)
+    for j in range(n):
+        rows = np.array([t[j] for t in T])
+        M = rows.T @ rows
+        tr = float(np.trace(M))
+        # below this the fit's error is not seen by the groups' disagreement: no second view
+        if tr > 1e-12 * Binv[j, j]:
+            k[j], nu[j] = Binv[j, j] / tr, tr**2 / float(np.sum(M * M))
+    return k, nu
+
+
+def systematic_uncertainty(groups: Mapping[str, tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
+    """The systematic standard uncertainty of each parameter, and its degrees of freedom.
+
+    The pulls of the groups in quadrature (:func:`pulls`), net of the share
+    their noise gives (:func:`pull_noise`: the statistical part is not
+    counted twice), rescaled to an unbiased estimate of the variance by the
+    groups' views of the parameter (:func:`bias_correction`):
+    u_sys = sqrt(k max(sum d_g^2 - noise, 0)).
 
     Parameters
     ----------
@@ -143,89 +269,153 @@ def systematic_uncertainty(groups: Mapping[str, tuple[np.ndarray, np.ndarray]]) 
 
     Returns
     -------
-    ndarray
+    u : ndarray
         One per parameter [its unit]; zeros for a single group.
+    nu : ndarray
+        Its degrees of freedom, one per parameter (infinite for a single group).
     """
     d = np.array(list(pulls(groups).values()))
-    return np.sqrt(np.sum(d**2, axis=0))
+    k, nu = bias_correction(groups)
+    return np.sqrt(k * np.maximum(np.sum(d**2, axis=0) - pull_noise(groups), 0.0)), nu
 
 
-def _z(level: float) -> float:
-    """The two-sided normal quantile of ``level`` (1.96 at 95 %)."""
-    return float(stats.norm.ppf(0.5 + level / 2))
+def effective_dof(u: Sequence[float], dof: Sequence[float]) -> float:
+    """The Welch-Satterthwaite degrees of freedom of the sum in quadrature of uncertainties ``u`` on ``dof``.
+
+    nu_eff = (sum u_i^2)^2 / sum(u_i^4 / nu_i) (GUM, JCGM 100:2008, Eq. G.2b);
+    a part on infinite degrees of freedom adds nothing to the denominator;
+    infinite where every part is known exactly or all are zero.
+    """
+    u2 = np.asarray(u, float) ** 2
+    nu = np.asarray(dof, float)
+    den = float(np.sum(np.divide(u2**2, nu, out=np.zeros_like(u2), where=np.isfinite(nu) & (u2 > 0))))
+    return float(np.sum(u2)) ** 2 / den if den > 0 else np.inf
+
+
+def _t(level: float, df: float) -> float:
+    """The two-sided quantile of Student's t on ``df`` degrees of freedom at ``level`` (the normal's for
+    ``df`` infinite: 1.96 at 95 %)."""
+    return float(stats.t.ppf(0.5 + level / 2, df))
 
 
 def standard_error(ci: Sequence[float], level: float = 0.95, df: float = np.inf) -> float:
     """The standard error a symmetric interval ``ci`` of ``level`` stands for: its half-width over the
     quantile of Student's t on ``df`` degrees of freedom (the normal's by default, the inverse of
     :func:`widened`'s scaling; an interval over n units, t or expanded bootstrap, on n - 1)."""
-    return (ci[1] - ci[0]) / (2.0 * float(stats.t.ppf(0.5 + level / 2, df)))
+    return (ci[1] - ci[0]) / (2.0 * _t(level, df))
+
+
+def _side(h: float, u_sys: float, df: float, df_sys: float, level: float) -> tuple[float, float]:
+    """One side of :func:`widened`: the half-width from a statistical one ``h`` on ``df``, and its
+    effective degrees of freedom."""
+    u_stat = h / _t(level, df) if h > 0 else 0.0
+    u_c = float(np.hypot(u_stat, u_sys))
+    nu = effective_dof([u_stat, u_sys], [df, df_sys])
+    # Welch-Satterthwaite's degrees of freedom grow faster than u_c where one part is the larger on the
+    # more degrees of freedom (a part small enough adds to them at second order in it, to their
+    # denominator at fourth): t(nu) u_c can fall below a part's own t(nu_i) u_i.  The interval is never
+    # narrower than either part's own, and its degrees of freedom those that make it so (they lie
+    # between the fewer of the parts' and Welch-Satterthwaite's), for the verdict's quantiles
+    floor = max(h, _t(level, df_sys) * u_sys)
+    if _t(level, nu) * u_c >= floor:
+        return _t(level, nu) * u_c, nu
+    fewest = min(df, df_sys)
+    # at the fewer degrees of freedom t u_c reaches the floor, but for rounding where one part is all of it
+    if _t(level, fewest) * u_c <= floor:
+        return floor, fewest
+    return floor, float(optimize.brentq(lambda n: _t(level, n) * u_c - floor, fewest, nu))
 
 
 def widened(
-    ci: Sequence[float], x0: float, lower: float, upper: float, u_sys: float, level: float = 0.95
-) -> list[float]:
-    """The interval ``ci`` of an estimate ``x0`` with a systematic standard uncertainty ``u_sys`` added.
-
-    Each side's half-width h becomes sqrt(h^2 + (z u_sys)^2), z the normal
-    quantile of ``level`` (1.96 at 95 %), cut at the bounds [lower, upper];
-    the result always holds ``x0`` (a side that missed it starts from it).
-    """
-    z = _z(level)
-    lo, hi = ci
-    below = np.hypot(max(x0 - lo, 0.0), z * u_sys)
-    above = np.hypot(max(hi - x0, 0.0), z * u_sys)
-    return [float(max(lower, x0 - below)), float(min(upper, x0 + above))]
-
-
-def simultaneous(
     ci: Sequence[float],
     x0: float,
     lower: float,
     upper: float,
     u_sys: float,
-    k: int,
-    df: float,
     level: float = 0.95,
+    df: float = np.inf,
+    df_sys: float = np.inf,
 ) -> list[float]:
-    """The interval ``ci`` of :func:`widened` (its systematic part ``u_sys``) as one of ``k`` that hold all
-    their parameters together at ``level``.
+    """The statistical interval ``ci`` of an estimate ``x0`` with a systematic standard uncertainty
+    ``u_sys`` added.
 
-    Each side's statistical half-width, sqrt(h^2 - (z u_sys)^2), is widened
-    by the Šidák factor of Student's t on ``df`` degrees of freedom (the
-    units resampled, less one), its systematic part by that of the normal
-    quantile (:func:`rocklab.inference.multiplicity.simultaneous_factor`),
-    added again in quadrature by :func:`widened` and cut at the bounds: a
-    side on its bound stays there.  For ``k`` = 1 the interval is ``ci``.
+    Each side's half-width h stands for the standard uncertainty
+    u_stat = h / t(df); with ``u_sys`` on ``df_sys`` degrees of freedom it
+    becomes t(nu_eff) sqrt(u_stat^2 + u_sys^2), Student's t on their
+    Welch-Satterthwaite degrees of freedom (module docstring,
+    :func:`effective_dof`), cut at the bounds [lower, upper]; the result
+    always holds ``x0`` (a side that missed it starts from it), and is
+    never narrower than either part's own interval (its degrees of freedom
+    then those that make t(nu) u_c that width: :func:`widened_dof`).  Both on
+    infinite degrees of freedom (the defaults) it is sqrt(h^2 + (z u_sys)^2),
+    z = 1.96 at 95 %; without ``u_sys`` it is ``ci``.
     """
-    z = _z(level)
-    r_stat = simultaneous_factor(k, df, level)
-    below, above = (
-        r_stat * np.sqrt(max(h**2 - (z * u_sys) ** 2, 0.0)) for h in (max(x0 - ci[0], 0.0), max(ci[1] - x0, 0.0))
-    )
-    return widened([x0 - below, x0 + above], x0, lower, upper, simultaneous_factor(k, np.inf, level) * u_sys, level)
+    below = _side(max(x0 - ci[0], 0.0), u_sys, df, df_sys, level)[0]
+    above = _side(max(ci[1] - x0, 0.0), u_sys, df, df_sys, level)[0]
+    return [float(max(lower, x0 - below)), float(min(upper, x0 + above))]
+
+
+def widened_dof(ci: Sequence[float], x0: float, u_sys: float, df: float, df_sys: float, level: float = 0.95) -> float:
+    """The effective degrees of freedom of the interval :func:`widened` makes of ``ci``: the fewer of its
+    two sides' (the wider quantile)."""
+    return min(_side(max(h, 0.0), u_sys, df, df_sys, level)[1] for h in (x0 - ci[0], ci[1] - x0))
+
+
+def statistical_error(half: float, u_sys: float, df: float, level: float = 0.95) -> float:
+    """The statistical standard error u_stat of a half-width ``half`` that :func:`widened` made from a
+    statistical part on ``df`` degrees of freedom and ``u_sys`` on infinite ones; NaN where ``half``
+    holds nothing but ``u_sys``.
+
+    The half-width grows with u_stat there (both the quantile and u_c do), so the root is one.  Of an
+    interval whose systematic part had fewer degrees of freedom it is too large: the cautious side.
+    """
+    if not half > _side(0.0, u_sys, df, np.inf, level)[0]:
+        return np.nan
+    return float(optimize.brentq(lambda s: _side(s * _t(level, df), u_sys, df, np.inf, level)[0] - half, 0.0, half))
+
+
+def simultaneous(
+    ci: Sequence[float], x0: float, lower: float, upper: float, k: int, df: float, level: float = 0.95
+) -> list[float]:
+    """The interval ``ci`` of ``level`` on ``df`` (effective) degrees of freedom as one of ``k`` that hold
+    all their parameters together at ``level``.
+
+    Each side's distance from ``x0`` is t(df) u_c (:func:`widened`): it is
+    widened by the Šidák factor of Student's t on the same ``df``
+    (:func:`rocklab.inference.multiplicity.simultaneous_factor`) and cut at
+    the bounds: a side on its bound stays there.  For ``k`` = 1 the interval
+    is ``ci``.
+    """
+    r = simultaneous_factor(k, df, level)
+    return [float(max(lower, x0 - r * max(x0 - ci[0], 0.0))), float(min(upper, x0 + r * max(ci[1] - x0, 0.0)))]
 
 
 def verdict_intervals(
-    findings: Sequence[Finding], params: Mapping[str, Param], n_units: Mapping[str, int], level: float = 0.95
+    findings: Sequence[Finding],
+    params: Mapping[str, Param],
+    n_units: Mapping[str, int],
+    level: float = 0.95,
+    dof: Mapping[str, Mapping[str, float]] | None = None,
 ) -> None:
     """Give each finding ``ci95_joint``: its intervals as part of the verdict's, which hold every parameter
-    of every cause named together at ``level`` (:func:`simultaneous` over all of them, each on the units
-    its intervals rest on less one): the claim that the verdict and all its values are right.
+    of every cause named together at ``level`` (:func:`simultaneous` over all of them): the claim that the
+    verdict and all its values are right.
 
     Parameters
     ----------
     findings : list of rocklab.diagnosis.result.Finding
-        With ``effect``, ``params``, ``ci95`` and, where known, ``u_systematic`` (none: the interval is all
-        statistical).
+        With ``effect``, ``params`` and ``ci95``.
     params : dict
         Parameter name -> :class:`~rocklab.diagnosis.parameters.Param` (its bounds).
     n_units : dict
         Effect -> the units (tests, the tests that show a stop, block groups) its intervals rest on.
+    dof : dict, optional
+        Effect -> parameter -> the effective degrees of freedom of its interval (:func:`widened_dof`);
+        one missing: the units less one, the statistical part's alone.
     """
     k = sum(len(f.ci95) for f in findings)
+    dof = dof or {}
     for f in findings:
-        u = f.u_systematic or {}
         df = n_units[f.effect] - 1
         # the findings of a diagnosis being made hold numbers (a file's None is a number not finite)
         f.ci95_joint = {
@@ -236,9 +426,8 @@ def verdict_intervals(
                     cast(float, f.params[name]),
                     params[name].lower,
                     params[name].upper,
-                    u.get(name, 0.0),
                     k,
-                    df,
+                    dof.get(f.effect, {}).get(name, df),
                     level,
                 ),
             )
