@@ -152,11 +152,13 @@ def test_a_simultaneous_interval_takes_the_sidak_quantile_of_its_effective_degre
     ci = widened([0.3 - stat, 0.3 + stat], 0.3, 0.0, 1.0, u, df=2, df_sys=3)
     nu = widened_dof([0.3 - stat, 0.3 + stat], 0.3, u, 2, 3)
     u_c = np.hypot(stat / stats.t.ppf(0.975, 2), u)
-    # Welch-Satterthwaite's 4.15 would make t u_c 0.151, narrower than the systematic part's own interval,
-    # t(3) 0.05 = 0.159: the interval is that, and its degrees of freedom those of t u_c = 0.159
+    # Welch-Satterthwaite's 4.15: t u_c 0.151, below the systematic part's own t(3) 0.05 = 0.159, which is no
+    # floor (tests/test_systematic_dof.py), and above the statistical part's 0.1, which is one
     ws = u_c**4 / ((stat / stats.t.ppf(0.975, 2)) ** 4 / 2 + u**4 / 3)
     assert stats.t.ppf(0.975, ws) * u_c < stats.t.ppf(0.975, 3) * u
-    assert ci[1] - 0.3 == pytest.approx(stats.t.ppf(0.975, 3) * u) and 2 < nu < ws
+    assert nu == pytest.approx(ws) and ci[1] - 0.3 == pytest.approx(stats.t.ppf(0.975, ws) * u_c)
+    # a statistical part on few units beside a small systematic one on many: the statistical interval stands
+    assert widened([0.2, 0.4], 0.3, 0.0, 1.0, 0.001, df=2, df_sys=50) == pytest.approx([0.2, 0.4])
     assert ci[1] - 0.3 == pytest.approx(stats.t.ppf(0.975, nu) * u_c)
     # where neither part is alone the wider, the interval is Welch-Satterthwaite's
     u_s = 0.1 / stats.t.ppf(0.975, 4)
