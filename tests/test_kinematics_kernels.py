@@ -1,5 +1,7 @@
 """The compiled loops of the rigid-body fit (rocklab.lab.kinematics_kernels) against the array forms they
-replace: the same motion to the last bit, and the leverage of rocklab.lab.channel_gain against the
+replace: the same motion to rounding (on the machine they were written on, to the last bit; NumPy's
+vectorised sin, cos and sums take other paths on other processors, so the check is the rounding's), and the
+leverage of rocklab.lab.channel_gain against the
 pseudo-inverse it replaces."""
 
 from collections.abc import Sequence
@@ -204,10 +206,15 @@ def noisy_readings(channels, seed=0, n=4000, lost=0.0):
     return e
 
 
-def assert_same_bits(got, want):
+#: Relative difference of the compiled loops from the array forms: rounding, where a processor's vector
+#: paths for sin, cos and sums differ from the loops' (none on the machine they were written on).
+ROUNDING = 1e-12
+
+
+def assert_same_values(got, want):
     for key in want:
         assert got[key].dtype == want[key].dtype, key
-        assert got[key].tobytes() == want[key].tobytes(), key
+        np.testing.assert_allclose(got[key], want[key], rtol=ROUNDING, atol=0.0, equal_nan=True, err_msg=key)
 
 
 @pytest.mark.parametrize(
@@ -224,40 +231,25 @@ def assert_same_bits(got, want):
     ],
 )
 @pytest.mark.parametrize("lost", [0.0, 0.2])
-def test_the_compiled_solve_is_the_array_form_to_the_last_bit(channels, kwargs, lost):
+def test_the_compiled_solve_is_the_array_form_to_rounding(channels, kwargs, lost):
     """Every output of every time step: the start, the halvings at the kink, the steps that end short of
     their channels (lost samples) or out of iterations, the residual."""
     e = noisy_readings(channels, seed=len(channels), lost=lost)
     want = array_solve(e, WALL[channels], FRAME[channels], B, **kwargs)
     got = solve_wall_motion(e, WALL[channels], FRAME[channels], B, **kwargs)
-    assert_same_bits(got, want)
+    assert_same_values(got, want)
     if lost:
         assert np.isnan(got["theta"]).any() and np.isfinite(got["theta"]).any()
 
 
-def test_the_compiled_model_is_the_array_form_to_the_last_bit():
+def test_the_compiled_model_is_the_array_form_to_rounding():
     theta, phi, v, w = rocking_motion(999)
     L, J = _pose(theta, phi, v, w, WALL, FRAME, B, True)
     L0, J0 = array_pose(theta, phi, v, w, WALL, FRAME, B, True)
-    assert L.tobytes() == L0.tobytes()
-    assert all(J[a].tobytes() == J0[a].tobytes() for a in range(4))
-    assert _pose(theta, phi, v, w, WALL, FRAME, B, False)[0].tobytes() == L0.tobytes()
-
-
-def test_a_sum_over_channels_is_taken_as_numpy_einsum_takes_it():
-    """The order the compiled loops reproduce (even and odd terms apart) is einsum's for fewer than eight
-    channels: if NumPy changed it, the loops would no longer give the array forms' bits."""
-    rng = np.random.default_rng(3)
-    for nch in range(1, 8):
-        a, b = rng.normal(size=(500, nch)) * 10.0 ** rng.integers(-8, 8, (500, nch)), rng.normal(size=(500, nch))
-        even = np.zeros(500)
-        odd = np.zeros(500)
-        for c in range(nch):
-            if c % 2:
-                odd = odd + a[:, c] * b[:, c]
-            else:
-                even = even + a[:, c] * b[:, c]
-        assert np.einsum("nc,nc->n", a, b).tobytes() == (even + odd).tobytes()
+    np.testing.assert_allclose(L, L0, rtol=ROUNDING, atol=0.0)
+    for a in range(4):
+        np.testing.assert_allclose(J[a], J0[a], rtol=ROUNDING, atol=1e-15 * np.abs(J0[a]).max())
+    np.testing.assert_allclose(_pose(theta, phi, v, w, WALL, FRAME, B, False)[0], L0, rtol=ROUNDING, atol=0.0)
 
 
 def test_a_step_too_few_channels_or_singular_is_nan_as_in_the_array_form():
@@ -265,12 +257,12 @@ def test_a_step_too_few_channels_or_singular_is_nan_as_in_the_array_form():
     e[:50, :2] = np.nan  # two channels left: fewer than the unknowns
     X = WALL[[0, 1, 3, 4]].copy()
     got = solve_wall_motion(e, X, FRAME[[0, 1, 3, 4]], B)
-    assert_same_bits(got, array_solve(e, X, FRAME[[0, 1, 3, 4]], B))
+    assert_same_values(got, array_solve(e, X, FRAME[[0, 1, 3, 4]], B))
     assert np.isnan(got["theta"][:50]).all() and not got["converged"][:50].any()
     # all the channels at one point: a singular geometry
     Xs, Fs = np.repeat(X[:1], 4, axis=0), np.repeat(FRAME[:1], 4, axis=0)
     got = solve_wall_motion(e[50:], Xs, Fs, B)
-    assert_same_bits(got, array_solve(e[50:], Xs, Fs, B))
+    assert_same_values(got, array_solve(e[50:], Xs, Fs, B))
 
 
 def test_the_leverage_is_the_pseudo_inverses_and_the_more_accurate():
