@@ -493,10 +493,10 @@ def run_cell(row, n_boot, noise_mm=NOISE_MM):
         sp = sp.copy()
         # the block's mass scales only the contact forces (contact_lab.simulate_contact): the clay's for all
         sp["unit_weight_kN_m3"] = _SPEC.loc["1a", "unit_weight_kN_m3"]
-        recs, truths = _contact_records(f"contact-{row['knob']}-{row['seed']}", sp, row, noise_mm)
+        name = f"contact-{row['knob']}-{row['seed']}"
+        recs, truths = _contact_records(name, sp, row, noise_mm)
         truth, optional = contact_truth(truths)
         row = {**row, "cause": "+".join(sorted(truth)) or "null"}
-        name = f"contact-{row['knob']}-{row['seed']}"
         extra = {"truth": truth, "optional": optional, "n_lifted": sum(t["columns"]["n_lifted"] for t in truths)}
         extra["max_slip_mm"] = max(t["columns"]["max_slip_mm"] for t in truths)
     else:
