@@ -45,7 +45,9 @@ import json, runpy, sys
 class Names(list):
     # like Snakemake's: a list whose items are also named
     def __init__(self, items):
-        super().__init__(items.values() if isinstance(items, dict) else items)
+        # a named list is flattened into the positional items, as Snakemake does
+        values = items.values() if isinstance(items, dict) else items
+        super().__init__([x for v in values for x in (v if isinstance(v, list) else [v])])
         self.__dict__.update(items if isinstance(items, dict) else {})
     def __getitem__(self, key):
         return self.__dict__[key] if isinstance(key, str) else super().__getitem__(key)
@@ -70,6 +72,7 @@ def run(campaign: Path, results: Path) -> dict:
     """Every reduction job of ``campaign`` and the tables, into ``results``; CPU times [s]."""
     from rocklab.config import SCHEMA, schema_defaults
     from rocklab.lab.campaign import open_campaign
+    from rocklab.lab.hierarchy import walls_of_specimens
 
     config = schema_defaults(yaml.safe_load((ROOT / SCHEMA).read_text()))
     jobs = open_campaign(campaign).reduction_jobs(config["reduction"]["max_tests_per_job"])
@@ -81,12 +84,15 @@ def run(campaign: Path, results: Path) -> dict:
         cpu[job] = run_shim(
             "reduce_tests.py",
             input={},
-            output={"tests": str(results / "tests" / job), "rows": str(results / "reduction" / f"{job}.json")},
+            output={
+                "tests": str(results / "tests" / job),
+                "rows": str(results / "reduction" / f"{job}.json"),
+                "dissipation": str(results / "reduction" / f"{job}.dissipation.json"),
+            },
             params={"tests": {t: {} for t in ids}, "raw_dir": str(raw_dir), "options": options},
             log=[str(results / "logs" / "reduce" / f"{job}.log")],
             config={"results_dir": str(results)},
         )
-    files = [str(results / "tests" / job / f"{t}.nc") for job, part in jobs.items() for t in part]
     tables = {name: str(results / f"{name}.csv") for name in TABLES}
     tables["laws"] = str(results / "amplitude_laws.csv")
     run_shim(
@@ -106,14 +112,18 @@ def run(campaign: Path, results: Path) -> dict:
     )
     run_shim(
         "dissipation_tables.py",
-        input={"qc": tables["qc"]},
+        input={
+            "qc": tables["qc"],
+            "analysed": [str(results / "reduction" / f"{job}.dissipation.json") for job in jobs],
+        },
         output={
             **{k: v for k, v in tables.items() if k not in ("qc", "kinematics")},
             "table3_md": tables["table3"][:-3] + "md",
             "docs_summary": str(results / "summaries" / "dissipation.json"),
         },
         params={
-            "test_files": files,
+            "test_ids": open_campaign(campaign).test_ids,
+            "walls": walls_of_specimens(open_campaign(campaign)),
             "schemas": str(ROOT / "workflow" / "schemas"),
             **config["statistics"],
         },

@@ -1,4 +1,4 @@
-"""Snakemake shim: the energy-dissipation tables of the valid tests, from the motions stored in their files."""
+"""Snakemake shim: the energy-dissipation tables of the valid tests, from the per-test tables of the reduction jobs."""
 
 import logging
 from pathlib import Path
@@ -7,16 +7,19 @@ import pandas as pd
 
 from rocklab import jobs
 from rocklab.disk import write_text
+from rocklab.dissipation.analysis import AnalysedTests
 from rocklab.dissipation.dissipation_summary import dissipation_summary
 from rocklab.dissipation.statistics import campaign_tables, table3_markdown
-from rocklab.io import write_table
-from rocklab.lab.motion import valid_stored_motions
+from rocklab.io import valid_test_ids, write_table
 from rocklab.summaries import write_summary
 
 job = jobs.start(snakemake)
 qc = pd.read_csv(snakemake.input.qc, keep_default_na=False, na_values=[""])
+valid = set(valid_test_ids(snakemake.input.qc))
 tables, failed = campaign_tables(
-    valid_stored_motions(snakemake.params.test_files, snakemake.input.qc),
+    AnalysedTests.joined(
+        map(AnalysedTests.read, snakemake.input.analysed), [t for t in snakemake.params.test_ids if t in valid]
+    ),
     qc,
     snakemake.params.walls,
     snakemake.params.n_boot,

@@ -11,6 +11,7 @@ from test_motion import free_rocking_record
 
 from rocklab.dissipation.analysis import (
     IMPACT_COLUMNS,
+    AnalysedTests,
     TEST_COLUMNS,
     amplitude_law_fit,
     analyse_motion,
@@ -263,6 +264,28 @@ def test_the_stored_motion_gives_the_tables_of_the_reduced_test(virtual_tests, t
     assert all(s[k] == s0[k] or (pd.isna(s[k]) and pd.isna(s0[k])) for k in s)
     pd.testing.assert_frame_equal(imp, imp0)
     pd.testing.assert_frame_equal(e_n, e_n0)
+
+
+def test_the_tables_a_reduction_job_writes_are_those_of_the_files_it_wrote(virtual_tests, tmp_path):
+    """The dissipation tables the reduction job writes from the motions in memory
+    (results/reduction/<job>.dissipation.json) read back equal, to the bit, to
+    those of the motions read back from the tests' files; joined in the
+    campaign's order, whatever the order of the jobs."""
+    motions, stored = [], []
+    for tid in ("V0002", "V0001"):
+        motions.append(write_test_with_motion(virtual_tests[tid][0], tmp_path / f"{tid}.nc"))
+        stored.append(read_stored_motion(tmp_path / f"{tid}.nc"))
+    AnalysedTests.of(motions).write(tmp_path / "job.json")
+    back = AnalysedTests.joined([AnalysedTests.read(tmp_path / "job.json")], ["V0001", "V0002"])
+    files = AnalysedTests.of(stored[::-1])
+    assert [t["test_id"] for t in back.tests] == ["V0001", "V0002"]
+    pd.testing.assert_frame_equal(pd.DataFrame(back.tests), pd.DataFrame(files.tests), check_exact=True)
+    pd.testing.assert_frame_equal(back.impacts, files.impacts, check_exact=True)
+    pd.testing.assert_frame_equal(back.e_by_n, files.e_by_n, check_exact=True)
+    assert back.failed == files.failed == []
+    # a test left out of the order is left out of every table
+    one = AnalysedTests.joined([AnalysedTests.read(tmp_path / "job.json")], ["V0002"])
+    assert set(one.impacts.test_id) == set(one.e_by_n.test_id) == {"V0002"} and len(one.tests) == 1
 
 
 @pytest.mark.parametrize("test_id", ["V0001", "V0002"])

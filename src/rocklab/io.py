@@ -519,6 +519,11 @@ def write_table(
     write_text(path, df.to_csv(index=False, float_format=float_format))
 
 
+def is_valid(attrs: Mapping[str, Any]) -> bool:
+    """Whether a reduced test's attributes (its own verdict, of which ``qc.csv`` is made) say it is valid."""
+    return bool(int(attrs.get("valid", 0)))
+
+
 def valid_test_ids(qc_path: str | Path) -> list[str]:
     """Test ids that ``qc.csv`` marks valid, in its order."""
     qc = pd.read_csv(qc_path, keep_default_na=False)
@@ -593,6 +598,6 @@ def valid_tests(
     ``also``: a group read with it, each test then a pair (:func:`load_datasets`).
     """
     if qc_path is None:
-        return load_datasets(paths, lambda attrs: int(attrs.get("valid", 0)), variables, group, also=also)
+        return load_datasets(paths, is_valid, variables, group, also=also)
     valid = set(valid_test_ids(qc_path))
     return load_datasets((p for p in paths if Path(p).stem in valid), variables=variables, group=group, also=also)

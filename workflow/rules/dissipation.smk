@@ -22,7 +22,8 @@ DISSIPATION_OUTPUTS = [res(name) for name in ("table3.csv", "table3.md", "summar
 checkpoint dissipation_tables:
     input:
         qc=rules.qc_table.output.qc,
-        reduced=reduced_inputs(TEST_IDS),
+        # each reduction job's tests analysed as it extracted their motions
+        analysed=expand(rules.reduce.output.dissipation, job=REDUCTION_JOBS),
     output:
         tests=res("tests.csv"),
         impacts=res("impacts.csv"),
@@ -39,8 +40,7 @@ checkpoint dissipation_tables:
     benchmark:
         res("benchmarks", "dissipation_tables.tsv")
     params:
-        # the reduced tests, whose files hold their motions
-        test_files=[test_file(t) for t in TEST_IDS],
+        test_ids=TEST_IDS,
         schemas=schema_path(""),
         n_boot=config["statistics"]["n_boot"],
         seed=config["statistics"]["seed"],

@@ -24,6 +24,7 @@ rule reduce:
     output:
         tests=directory(res("tests", "{job}")),
         rows=res("reduction", "{job}.json"),
+        dissipation=res("reduction", "{job}.dissipation.json"),
     log:
         res("logs", "reduce", "{job}.log"),
     benchmark:

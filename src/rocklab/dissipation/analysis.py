@@ -32,7 +32,10 @@ Conventions
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import json
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -40,6 +43,7 @@ import pandas as pd
 import xarray as xr
 from numpy.typing import ArrayLike
 
+from rocklab.disk import write_text
 from rocklab.dissipation.regression import ols
 from rocklab.lab.motion import Motion, extract_motion, motion_from_dataset, stored_motion
 from rocklab.physics import restitution
@@ -365,3 +369,103 @@ def analyse_stored_motion(ds: xr.Dataset) -> MotionTables:
 def analyse_reduced_test(ds: xr.Dataset) -> MotionTables:
     """:func:`analyse_stored_motion` of a reduced test (``rocklab.lab.reduction``)."""
     return analyse_stored_motion(stored_motion(ds))
+
+
+def _frame_json(frame: pd.DataFrame) -> dict[str, Any]:
+    """A table as JSON: its columns, their dtypes and values (floats as Python writes them: exact)."""
+    return {
+        "columns": list(frame.columns),
+        "dtypes": [str(t) for t in frame.dtypes],
+        "data": {c: frame[c].tolist() for c in frame.columns},
+    }
+
+
+def _frame_of(js: Mapping[str, Any]) -> pd.DataFrame:
+    return pd.DataFrame({c: pd.Series(js["data"][c], dtype=t) for c, t in zip(js["columns"], js["dtypes"])})
+
+
+@dataclass
+class AnalysedTests:
+    """The per-test tables of Sects. 3-4 (:func:`analyse_stored_motion`) of some tests, in their order.
+
+    The reduction job that extracts a test's motion analyses it while the
+    motion is in memory (results/reduction/<job>.dissipation.json,
+    :meth:`write`), so that the campaign's tables (:func:`rocklab.dissipation.statistics.campaign_tables`)
+    need not open each test's file again: netCDF-C spends longer opening a
+    reduced test than the analysis takes, and a job that opened every test
+    of a campaign would grow with it.
+
+    Attributes
+    ----------
+    tests : list of dict
+        The summary of each test analysed (``results/tests.csv``'s row), with its ``unit``.
+    impacts, e_by_n : pandas.DataFrame
+        The impacts and e_exp after n impacts of those tests, one after the other.
+    failed : list of (str, str)
+        The tests whose motion could not be analysed, and why.
+    """
+
+    tests: list[dict[str, Any]] = field(default_factory=list)
+    impacts: pd.DataFrame = field(default_factory=pd.DataFrame)
+    e_by_n: pd.DataFrame = field(default_factory=pd.DataFrame)
+    failed: list[tuple[str, str]] = field(default_factory=list)
+
+    @classmethod
+    def of(cls, motions: Iterable[xr.Dataset]) -> AnalysedTests:
+        """:func:`analyse_stored_motion` of each stored motion; one that raises is listed in ``failed``."""
+        tests, impacts, e_n, failed = [], [], [], []
+        for ds in motions:
+            try:
+                s, i, e = analyse_stored_motion(ds)
+            except ValueError as exc:
+                failed.append((str(ds.attrs["test_id"]), str(exc)))
+                continue
+            tests.append({**s, "unit": ds.attrs.get("unit", "")})
+            impacts.append(i)
+            e_n.append(e)
+        def stacked(frames: list[pd.DataFrame]) -> pd.DataFrame:
+            return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
+
+        return cls(tests, stacked(impacts), stacked(e_n), failed)
+
+    @classmethod
+    def joined(cls, parts: Iterable[AnalysedTests], test_ids: Sequence[str]) -> AnalysedTests:
+        """The tests ``test_ids`` of ``parts`` (those analysed or failed), in that order."""
+        parts = list(parts)
+        rank = {t: i for i, t in enumerate(test_ids)}
+        tests = sorted((r for p in parts for r in p.tests if r["test_id"] in rank), key=lambda r: rank[r["test_id"]])
+
+        def ordered(frames: list[pd.DataFrame]) -> pd.DataFrame:
+            frames = [f for f in frames if len(f)]
+            if not frames:
+                return pd.DataFrame()
+            frame = pd.concat(frames, ignore_index=True)
+            frame = frame[frame.test_id.isin(rank)]
+            order = np.argsort(frame.test_id.map(rank).to_numpy(), kind="stable")
+            return frame.iloc[order].reset_index(drop=True)
+
+        failed = sorted((f for p in parts for f in p.failed if f[0] in rank), key=lambda f: rank[f[0]])
+        return cls(tests, ordered([p.impacts for p in parts]), ordered([p.e_by_n for p in parts]), failed)
+
+    def write(self, path: str | Path) -> None:
+        """Write to ``path`` (JSON; NaN as ``NaN``), as :meth:`read` reads it back, equal to the bit."""
+        js = {
+            "tests": self.tests,
+            "impacts": _frame_json(self.impacts),
+            "e_by_n": _frame_json(self.e_by_n),
+            "failed": self.failed,
+        }
+        write_text(path, json.dumps(js, default=_plain) + "\n")
+
+    @classmethod
+    def read(cls, path: str | Path) -> AnalysedTests:
+        """The tables :meth:`write` wrote to ``path``."""
+        js = json.loads(Path(path).read_text())
+        return cls(js["tests"], _frame_of(js["impacts"]), _frame_of(js["e_by_n"]), [tuple(f) for f in js["failed"]])
+
+
+def _plain(x: Any) -> Any:
+    # a summary's numbers can be NumPy scalars (attributes read from a file)
+    if isinstance(x, np.generic):
+        return x.item()
+    raise TypeError(f"{type(x).__name__} is not JSON")

@@ -53,7 +53,7 @@ import numpy as np
 import pandas as pd
 
 from rocklab._imports import lazy_module
-from rocklab.dissipation.analysis import amplitude_law_fit
+from rocklab.dissipation.analysis import AnalysedTests, amplitude_law_fit
 from rocklab.inference.intervals import (
     MIN_BOOTSTRAP,
     bootstrap_ci,
@@ -473,14 +473,20 @@ def series_table(
 
 
 def campaign_tables(
-    datasets: Iterable[xr.Dataset], qc_df: pd.DataFrame, walls: Mapping[str, str], n_boot: int = 4000, seed: int = 0
+    analysed: AnalysedTests | Iterable[xr.Dataset],
+    qc_df: pd.DataFrame,
+    walls: Mapping[str, str],
+    n_boot: int = 4000,
+    seed: int = 0,
 ) -> tuple[dict[str, pd.DataFrame], list[tuple[str, str]]]:
     """Every table of Sects. 3-4 for the valid tests of a campaign.
 
     Parameters
     ----------
-    datasets : iterable of xarray.Dataset
-        Stored motions of the valid tests (:func:`rocklab.lab.motion.stored_motion`).
+    analysed : AnalysedTests, or iterable of xarray.Dataset
+        The per-test tables of the valid tests
+        (:class:`~rocklab.dissipation.analysis.AnalysedTests`), or their
+        stored motions (:func:`rocklab.lab.motion.stored_motion`), analysed here.
     qc_df : pandas.DataFrame
         ``results/qc.csv``.
     walls : mapping
@@ -499,21 +505,9 @@ def campaign_tables(
         lists the valid tests whose motion could not be analysed, with the
         reason.
     """
-    from rocklab.dissipation.analysis import analyse_stored_motion
-
-    tests, impacts, e_n, failed = [], [], [], []
-    for ds in datasets:
-        try:
-            s, i, e = analyse_stored_motion(ds)
-        except ValueError as exc:
-            failed.append((ds.attrs["test_id"], str(exc)))
-            continue
-        tests.append({**s, "unit": ds.attrs.get("unit", "")})
-        impacts.append(i)
-        e_n.append(e)
-    tests = pd.DataFrame(tests)
-    impacts = pd.concat(impacts, ignore_index=True) if impacts else pd.DataFrame()
-    e_n = pd.concat(e_n, ignore_index=True) if e_n else pd.DataFrame()
+    if not isinstance(analysed, AnalysedTests):
+        analysed = AnalysedTests.of(analysed)
+    tests, impacts, e_n = pd.DataFrame(analysed.tests), analysed.impacts, analysed.e_by_n
     qc = qc_df.rename(columns={"reject_reason": "reason"})
     series = series_table(tests, qc, impacts, n_boot=n_boot, seed=seed)
     meta = tests.groupby("series").agg(
@@ -563,4 +557,4 @@ def campaign_tables(
         "effects": effects,
         "table3": t3,
         "summary": boundary_summary(tests, SERIES_COLUMNS, walls),
-    }, failed
+    }, analysed.failed
