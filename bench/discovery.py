@@ -1,7 +1,7 @@
 """Benchmark: calibration of the whole diagnosis on virtual series with a known truth (issue 24).
 
-    python bench/discovery.py --out results/bench [--budget-s 840] [--workers 2] [--design-seeds 0 1] [--replicates 3]
-                              [--noise-mm 0.002] [--generator {virtual,contact,both}]
+    python bench/discovery.py --out results/bench [--budget-s 1200] [--workers 2] [--design-seeds 0 1] [--replicates 3]
+                              [--noise-mm 0.002] [--generator {virtual,contact,recorded,all}]
 
 The virtual lab (:func:`rocklab.lab.virtual_lab.series_records`) writes
 series that hide one cause of the catalogue or one member of a family, or
@@ -40,8 +40,21 @@ as built.  A cause whose parameter departs from its null by more than its
 smallest effect worth naming (the catalogue's ``practical``: 0.005 for c and r,
 2e-4 for zeta) is hidden and must be named; below, it is optional: named, its
 interval must hold the truth, not named, nothing is missing.  A series with
-nothing worth naming is a null.  The same :func:`score` and :func:`rates`
-judge both generators; ``by_generator`` holds each one's.
+nothing worth naming is a null.
+
+A third, the virtual lab through its files (``recorded``): the series
+:data:`RECORDED_CELLS` lists (the classes of issue 42: a transducer 2 % out of
+calibration on walls with nothing to find, losses in flight and the amplitude
+law recorded by a gyroscope at 1000 Hz and a motion capture at 200 Hz on both
+boundaries, a wall with a gap on a gyroscope, hinge friction on one-sided
+walls, the nulls of each instrument), each on the paper's or the slender
+wall and a size from the shuffle, written in the lab's format with the
+instrument and reduced as the workflow does
+(:func:`rocklab.diagnosis.recorded.recorded_series`: the channels' checks, the
+gain check, an inertial record's integration and rate steps, a rotation
+record's bridges), their truth the scenario's (:func:`scenario`).  The same
+:func:`score` and :func:`rates` judge every generator; ``by_generator`` holds
+each one's, ``by_class`` the recorded cells' by class.
 
 Writes ``<out>/discovery.json``: ``named_right_rate`` (the verdict is the
 hidden causes, every true parameter inside the verdict's simultaneous 95 %
@@ -81,6 +94,7 @@ import argparse
 import json
 import logging
 import math
+import re
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
@@ -92,6 +106,7 @@ from rocklab._imports import lazy_module
 from rocklab.diagnosis import catalogue, diagnose_records, jsonable
 from rocklab.diagnosis.estimation import systematic
 from rocklab.diagnosis.pooling import pooled_bias
+from rocklab.diagnosis.recorded import recorded_series
 from rocklab.lab import contact_lab
 from rocklab.lab import virtual_lab as vl
 from rocklab.physics import impact as I
@@ -106,6 +121,8 @@ TARGETS = {
     "coverage_95": (0.90, 0.98),
 }
 RATES = (100.0, 200.0, 400.0, 1000.0)
+#: The generators of the series, in the order of the output.
+GENERATORS = ("virtual", "contact", "recorded")
 SIZES = (3, 5, 10)
 _SPEC = vl.DEFAULT_SPECIMENS.set_index("specimen")
 #: Stocky (h/b 4), the paper's slender clay wall (h/b 9.6), the most slender one (h/b 14.4).
@@ -245,6 +262,54 @@ CAUSES = {
     ),
     "one-sided-gap": ("restitution_scale", "restitution_amplitude", "instability_angle", "flight_damping"),
 }
+
+
+#: The recorded generator's cells: (class, cause, boundary, instrument, rate [Hz]); "instrument error" is a null
+#: whose transducer :data:`FAULTY_CHANNEL` reads :data:`FAULTY_GAIN` of the truth.
+RECORDED_CELLS = (
+    ("instrument error", "null", "two-sided", "transducers", 400.0),
+    ("instrument error", "null", "one-sided", "transducers", 400.0),
+    ("flight loss", "flight_loss[drag]", "two-sided", "inertial", 1000.0),
+    ("flight loss", "flight_loss[drag]", "two-sided", "rotation", 200.0),
+    ("flight loss", "flight_damping", "two-sided", "inertial", 1000.0),
+    ("flight loss", "flight_damping", "one-sided", "inertial", 1000.0),
+    ("amplitude law", "restitution_amplitude", "two-sided", "inertial", 1000.0),
+    ("amplitude law", "restitution_amplitude", "one-sided", "inertial", 1000.0),
+    ("amplitude law", "restitution_amplitude", "two-sided", "rotation", 200.0),
+    ("amplitude law", "restitution_amplitude", "one-sided", "rotation", 200.0),
+    ("gap", "restitution_amplitude", "one-sided-gap", "inertial", 1000.0),
+    ("gap", "flight_damping", "one-sided-gap", "inertial", 1000.0),
+    ("hinge friction", "flight_loss[friction]", "one-sided", "transducers", 400.0),
+    ("hinge friction", "flight_loss[friction]", "one-sided", "inertial", 1000.0),
+    ("null", "null", "two-sided", "inertial", 1000.0),
+    ("null", "null", "one-sided", "inertial", 1000.0),
+    ("null", "null", "two-sided", "rotation", 200.0),
+    ("null", "null", "one-sided", "rotation", 200.0),
+)
+FAULTY_CHANNEL, FAULTY_GAIN = 2, 0.98
+#: The specimens of the recorded cells' walls (written with the campaign's specimens.csv).
+RECORDED_WALLS = {"paper": "1a", "slender": "2a"}
+#: Longest free rocking of a recorded test [s]: the paper's and the slender wall are at rest before it (a
+#: slender two-sided wall of Housner's e rocks some 110 s); a file of 400 s at 1000 Hz costs more to write
+#: and read than its diagnosis.
+RECORDED_S = 150.0
+
+
+def recorded_design(seeds=DESIGN_SEEDS):
+    """The recorded generator's designs of the shuffles ``seeds``: each of :data:`RECORDED_CELLS` once per
+    shuffle, on a wall of :data:`RECORDED_WALLS` and a size of :data:`SIZES` in turn from the shuffle's
+    order; series numbered on."""
+    combos = [(w, n) for w in RECORDED_WALLS for n in SIZES]
+    rows = []
+    for seed in seeds:
+        order = np.random.default_rng(seed).permutation(len(combos))
+        for i, (cls, cause, boundary, instrument, fs) in enumerate(RECORDED_CELLS):
+            w, n = combos[order[i % len(combos)]]
+            rows.append(
+                {"generator": "recorded", "class": cls, "cause": cause, "boundary": boundary}
+                | {"instrument": instrument, "fs": fs, "wall": w, "n_tests": n, "design_seed": seed, "seed": len(rows)}
+            )
+    return rows
 
 
 def design(seeds=DESIGN_SEEDS, replicates=REPLICATES):
@@ -499,6 +564,28 @@ def run_cell(row, n_boot, noise_mm=NOISE_MM):
         row = {**row, "cause": "+".join(sorted(truth)) or "null"}
         extra = {"truth": truth, "optional": optional, "n_lifted": sum(t["columns"]["n_lifted"] for t in truths)}
         extra["max_slip_mm"] = max(t["columns"]["max_slip_mm"] for t in truths)
+    elif row.get("generator") == "recorded":
+        alpha = float(wall.slenderness_angle(sp["height_mm"], sp["thickness_mm"]))
+        boundary = "two-sided" if row["boundary"] == "two-sided" else "one-sided"
+        model, kw, truth = scenario(row["cause"], row["boundary"], alpha, row["n_tests"])
+        # a test id is a file name: no brackets (flight_loss[drag])
+        name = re.sub(r"[^\w-]", "-", f"{row['instrument']}-{row['cause']}-{row['boundary']}-{row['seed']}")
+        faults = [vl.Fault("gain", FAULTY_CHANNEL, level=FAULTY_GAIN)] if row["class"] == "instrument error" else []
+        recs, rejected = recorded_series(
+            name,
+            RECORDED_WALLS[row["wall"]],
+            boundary,
+            model,
+            instrument=row["instrument"],
+            n=row["n_tests"],
+            fs=row["fs"],
+            seed=row["seed"],
+            t_end=RECORDED_S,
+            noise_mm=noise_mm,
+            faults=faults,
+            **kw,
+        )
+        extra = {"truth": truth, "rejected": rejected}
     else:
         alpha = float(wall.slenderness_angle(sp["height_mm"], sp["thickness_mm"]))
         boundary = "two-sided" if row["boundary"] == "two-sided" else "one-sided"
@@ -618,18 +705,19 @@ def _met(value, bounds):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=Path("results/bench"))
-    ap.add_argument("--budget-s", type=float, default=840.0)
+    ap.add_argument("--budget-s", type=float, default=1200.0)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--n-boot", type=int, default=40)
     ap.add_argument("--design-seeds", type=int, nargs="+", default=list(DESIGN_SEEDS))
     ap.add_argument("--replicates", type=int, default=REPLICATES)
     ap.add_argument("--noise-mm", type=float, default=NOISE_MM, help="noise and hum of every channel [mm]")
-    ap.add_argument("--generator", choices=("virtual", "contact", "both"), default="both")
+    ap.add_argument("--generator", choices=(*GENERATORS, "all"), default="all")
     args = ap.parse_args()
     t0 = time.perf_counter()
-    gens = ("virtual", "contact") if args.generator == "both" else (args.generator,)
+    gens = GENERATORS if args.generator == "all" else (args.generator,)
     rows = design(args.design_seeds, args.replicates) if "virtual" in gens else []
     rows += contact_design(args.design_seeds) if "contact" in gens else []
+    rows += recorded_design(args.design_seeds) if "recorded" in gens else []
     cells, skipped = [], []
     with ProcessPoolExecutor(args.workers) as pool:
         pending = {pool.submit(run_cell, row, args.n_boot, args.noise_mm): row for row in rows[: args.workers]}
@@ -640,7 +728,8 @@ def main():
             cells.append(done.result())
             c = cells[-1]
             print(
-                f"{c['generator']:8s} {c.get('knob', ''):13s}{c['cause']:24s} {c['boundary']:14s} {c['fs']:5.0f} Hz "
+                f"{c['generator']:8s} {c.get('knob', c.get('instrument', '')):13s}{c['cause']:24s} "
+                f"{c['boundary']:14s} {c['fs']:5.0f} Hz "
                 f"{c['wall']:8s} {c['n_tests']:2d} tests: "
                 f"{','.join(c['verdict']) or '-'}{' right' if c['named_right'] else ''} "
                 f"({c['simulate_s'] + c['diagnose_s']:.0f} s)",
@@ -651,7 +740,7 @@ def main():
                 pending[pool.submit(run_cell, nxt, args.n_boot, args.noise_mm)] = nxt
             elif queue:
                 skipped, queue = queue, []
-    cells.sort(key=lambda c: (c["generator"] != "virtual", c["seed"]))
+    cells.sort(key=lambda c: (GENERATORS.index(c["generator"]), c["seed"]))
     by_generator = {}
     for g in gens:
         mine = [c for c in cells if c["generator"] == g]
@@ -659,6 +748,10 @@ def main():
         r["targets"] = {k: {"low": lo, "high": hi, "met": _met(r.get(k), (lo, hi))} for k, (lo, hi) in TARGETS.items()}
         r["n_skipped"] = sum(row.get("generator", "virtual") == g for row in skipped)
         r["pass"] = all(t["met"] for t in r["targets"].values()) and not r["n_skipped"]
+        if g == "recorded" and mine:
+            r["by_class"] = {
+                k: rates([c for c in mine if c["class"] == k]) for k in dict.fromkeys(c["class"] for c in mine)
+            }
         by_generator[g] = r
     # the top level: the virtual lab's rates, the page's (rocklab.benchmarks._discovery); the contact lab's alone
     result = dict(by_generator[gens[0]])
@@ -672,6 +765,10 @@ def main():
     result["contact_design"] = (
         f"each contact knob ({', '.join(k for k in CONTACT_KNOBS if k != 'default')}) {CONTACT_REPLICATES} times, "
         "the default contact at each rate, two-sided, on the same shuffles"
+    )
+    result["recorded_design"] = (
+        f"each of {len(RECORDED_CELLS)} cells (class, cause, boundary, instrument, rate) once per shuffle, on the "
+        "paper's or the slender wall, written in the lab's format and reduced as the workflow does"
     )
     result["generators"] = list(gens)
     result["design_seeds"] = args.design_seeds

@@ -253,3 +253,53 @@ def test_the_page_shows_the_contact_labs_rates_and_series_apart_from_the_virtual
     )
     # a bench of the virtual lab alone (before the contact lab) has none
     assert _discovery({**bench, "by_generator": {"virtual": by["virtual"]}, "cells": [virtual]})["contact"] is None
+
+
+def test_the_recorded_design_runs_every_cell_once_per_shuffle_on_the_walls_with_files():
+    rows = discovery.recorded_design((0, 1))
+    assert len(rows) == 2 * len(discovery.RECORDED_CELLS)
+    assert [r["seed"] for r in rows] == list(range(len(rows)))
+    for seed in (0, 1):
+        mine = [r for r in rows if r["design_seed"] == seed]
+        cells = [(r["class"], r["cause"], r["boundary"], r["instrument"], r["fs"]) for r in mine]
+        assert cells == list(discovery.RECORDED_CELLS)
+        assert {r["wall"] for r in mine} <= set(discovery.RECORDED_WALLS) and {r["generator"] for r in mine} == {
+            "recorded"
+        }
+    # every instrument on both boundaries; the miscalibrated transducer's cells are nulls
+    seen = {(i, b) for _, _, b, i, _ in discovery.RECORDED_CELLS}
+    assert {(i, b) for i in ("transducers", "inertial", "rotation") for b in ("two-sided", "one-sided")} <= seen
+    assert {c for k, c, *_ in discovery.RECORDED_CELLS if k == "instrument error"} == {"null"}
+
+
+def test_a_transducer_out_of_calibration_through_the_whole_chain_is_not_taken_for_physics():
+    """Issue 42: a channel 2 % low on a wall with nothing to find, written in the lab's format, reduced
+    (the gain check) and diagnosed: no cause named."""
+    row = {"generator": "recorded", "class": "instrument error", "cause": "null", "boundary": "two-sided"}
+    row |= {"instrument": "transducers", "fs": 400.0, "wall": "paper", "n_tests": 3, "design_seed": 0, "seed": 0}
+    cell = discovery.run_cell(row, n_boot=20)
+    assert cell["n_impacts"] > 0 and cell["rejected"] == []
+    assert cell["verdict"] == [] and cell["wrong"] == [] and cell["named_right"]
+
+
+def test_the_page_shows_the_recorded_cells_by_class():
+    row = {"boundary": "one-sided", "fs": 1000.0, "wall": "paper", "n_tests": 5, "h_over_b": 9.6, "n_impacts": 9}
+    row |= {"design_seed": 1, "generator": "recorded", "instrument": "inertial"}
+    truth = {"flight_damping": {"zeta": 0.01}}
+    null = {**row, "class": "null", "cause": "null", "seed": 0, **discovery.score(entry(["instability_angle"]), {})}
+    caused = {**row, "class": "flight loss", "cause": "flight_damping", "seed": 1, "truth": truth}
+    caused |= discovery.score(entry([]), truth)
+    rates = {**discovery.rates([null, caused]), "targets": {"coverage_95": {"met": False}}}
+    rates["by_class"] = {k: discovery.rates([c]) for k, c in (("null", null), ("flight loss", caused))}
+    virtual = {**row, "cause": "null", "seed": 0, **discovery.score(entry([]), {})}
+    virtual.pop("generator")
+    by = {"virtual": {**discovery.rates([virtual]), "targets": {}}, "recorded": rates}
+    bench = {**by["virtual"], "by_generator": by, "cells": [virtual, null, caused], "pass": False}
+    bench |= {"n_skipped": 0, "wall_s": 1, "workers": 1, "design_seeds": [1], "design": "d", "targets": {}}
+    d = _discovery(bench)
+    assert len(d["cells"]) == 1 and d["contact"] is None
+    rec = d["recorded"]
+    assert [c["class"] for c in rec["by_class"]] == ["null", "flight loss"]
+    assert rec["by_class"][0]["false_name_rate_null"] == 1.0 and rec["by_class"][1]["named_right_rate"] == 0.0
+    assert [c["instrument"] for c in rec["cells"]] == ["inertial", "inertial"]
+    assert rec["cells"][1]["miss"] == "not named: flight_damping"

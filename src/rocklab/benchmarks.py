@@ -14,7 +14,7 @@ import hashlib
 import json
 import math
 import subprocess
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -431,32 +431,46 @@ def _discovery(bench: Mapping[str, Any]) -> dict[str, Any]:
         "pooled_bias": bench.get("pooled_bias"),
         "targets": bench["targets"],
         "missed": [t for t, v in bench["targets"].items() if not v["met"]],
-        "cells": [{**{k: c[k] for k in cols}, "miss": _miss(c)} for c in bench["cells"] if _virtual(c)],
-        "contact": _contact(gens["contact"], [c for c in bench["cells"] if not _virtual(c)])
-        if "contact" in gens
+        "cells": [{**{k: c[k] for k in cols}, "miss": _miss(c)} for c in _of(bench, "virtual")],
+        "contact": _generator(gens["contact"], _of(bench, "contact"), CONTACT_COLUMNS) if "contact" in gens else None,
+        "recorded": _generator(gens["recorded"], _of(bench, "recorded"), RECORDED_COLUMNS)
+        if "recorded" in gens
         else None,
     }
 
 
-def _virtual(cell: Mapping[str, Any]) -> bool:
-    """Whether a series of ``bench/discovery.py`` is the virtual lab's (the rocking model's own)."""
-    return cell.get("generator", "virtual") == "virtual"
+#: The columns of a contact-lab series and of a recorded one on the performance page.
+CONTACT_COLUMNS = ("design_seed", "knob", "fs", "wall", "n_tests", "verdict", "named_right")
+RECORDED_COLUMNS: tuple[str, ...] = ("design_seed", "class", "cause", "boundary", "instrument", "fs", "wall")
+RECORDED_COLUMNS += ("n_tests", "verdict", "named_right")
 
 
-def _contact(rates: Mapping[str, Any], cells: list[Mapping[str, Any]]) -> dict[str, Any]:
-    """The contact lab's rates (:mod:`rocklab.lab.contact_lab`: the same score, another physics) and its
-    series: the knob, the truth read from the block, the verdict and what it missed."""
+def _of(bench: Mapping[str, Any], generator: str) -> list[Mapping[str, Any]]:
+    """The series of ``bench/discovery.py`` that ``generator`` made (the virtual lab's carry no name)."""
+    return [c for c in bench["cells"] if c.get("generator", "virtual") == generator]
+
+
+def _generator(rates: Mapping[str, Any], cells: list[Mapping[str, Any]], cols: Sequence[str]) -> dict[str, Any]:
+    """Another generator's rates (the same score: the contact lab, :mod:`rocklab.lab.contact_lab`, another
+    physics; the virtual lab through its files, :mod:`rocklab.diagnosis.recorded`, the whole chain) and its
+    series: ``cols``, the truth, the verdict and what it missed; the recorded cells' rates by class."""
     keys: tuple[str, ...] = ("n_series", "n_null", "n_caused", "n_not_identifiable", "n_params_named", "n_skipped")
     keys += ("pooled_bias",)
     keys += ("named_right_rate", "named_right_ci95", "verdict_right_rate", "verdict_right_ci95")
     keys += ("false_name_rate_null", "false_name_ci95", "confident_misname_rate", "confident_misname_ci95")
     keys += ("coverage_95", "coverage_ci95", "pass")
-    cols = ("design_seed", "knob", "fs", "wall", "n_tests", "verdict", "named_right")
+    by_class = rates.get("by_class") or {}
     return {
         **{k: rates.get(k) for k in keys},
         "missed": [t for t, v in rates["targets"].items() if not v["met"]],
         "cells": [
             {**{k: c.get(k) for k in cols}, "truth": _truth(c.get("truth") or {}), "miss": _miss(c)} for c in cells
+        ],
+        "by_class": [
+            {"class": k}
+            | {q: r.get(q) for q in ("n_series", "n_null", "named_right_rate", "false_name_rate_null")}
+            | {"confident_misname_rate": r.get("confident_misname_rate"), "coverage_95": r.get("coverage_95")}
+            for k, r in by_class.items()
         ],
     }
 

@@ -423,6 +423,7 @@ class AnalysedTests:
             tests.append({**s, "unit": ds.attrs.get("unit", "")})
             impacts.append(i)
             e_n.append(e)
+
         def stacked(frames: list[pd.DataFrame]) -> pd.DataFrame:
             return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
 
