@@ -237,19 +237,18 @@ def _reduce_transducers(
     if key not in layouts:
         layouts[key] = validity.setup_layout(campaign.setup(meta["setup"]), meta["thickness_mm"])
     layout = layouts[key]
-    described = layout.rows
-    missing = sorted(set(rec.channels) - set(described.channel))
+    missing = sorted(set(rec.channels) - set(layout.channels))
     if missing:
         return _unreadable(
             meta,
             RawFormatError(path, None, f"channel(s) {missing} not described in setups.csv for setup {meta['setup']}"),
         )
     try:
-        check_setup_channels(rec, described.channel)
+        check_setup_channels(rec, layout.channels)
     except RawFormatError as exc:
         return _unreadable(meta, exc)
     # the rows of setups.csv of the record's channels, in its order (a setup's channels are unique)
-    row_of = {ch: i for i, ch in enumerate(described.channel.to_numpy())}
+    row_of = {ch: i for i, ch in enumerate(layout.channels)}
     rows = np.array([row_of[ch] for ch in rec.channels], int)
     c = opt["channels"]
     repaired, reports = health.assess_channels(
@@ -257,7 +256,7 @@ def _reduce_transducers(
     )
     # a transducer of the setup with no column in the record is lost like a dead one (the backup stands in)
     all_roles = layout.roles
-    absent = sorted(set(described.channel) - set(rec.channels))
+    absent = sorted(set(layout.channels) - set(rec.channels))
     lost = {r.channel for r in reports if r.lost} | set(absent)
     choice = validity.choose_channels(
         all_roles, lost, c["backup"], c["policy"], opt["validity"]["max_lost_out_of_plane"], absent

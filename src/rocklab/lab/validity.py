@@ -95,16 +95,16 @@ class SetupLayout:
 
     Attributes
     ----------
-    rows : DataFrame
-        Rows of ``setups.csv`` of the setup, by channel.
+    channels : list of int
+        The setup's channel numbers, in the order of its rows of ``setups.csv`` (by channel).
     wall_xyz, frame_xyz : ndarray (nch, 3)
         Transducer end points on the wall (body frame) and on the frame
-        (lab frame) [mm], in the order of ``rows`` (read-only).
+        (lab frame) [mm], in the order of ``channels`` (read-only).
     roles : DataFrame
-        :func:`channel_roles` of ``rows``.
+        :func:`channel_roles` of the setup.
     """
 
-    rows: pd.DataFrame
+    channels: list[int]
     wall_xyz: np.ndarray
     frame_xyz: np.ndarray
     roles: pd.DataFrame
@@ -116,7 +116,7 @@ def setup_layout(setup: pd.DataFrame, thickness_mm: float) -> SetupLayout:
     frame_xyz = setup[["frame_x_mm", "frame_y_mm", "frame_z_mm"]].to_numpy(float)
     # shared by the tests of the setup: a test takes its rows, never changes these
     wall_xyz.flags.writeable = frame_xyz.flags.writeable = False
-    return SetupLayout(setup, wall_xyz, frame_xyz, channel_roles(setup, thickness_mm))
+    return SetupLayout(setup.channel.tolist(), wall_xyz, frame_xyz, channel_roles(setup, thickness_mm))
 
 
 @dataclass
@@ -159,8 +159,9 @@ def choose_channels(
         The lost channels that are lost because the record has no column for
         them (a channel of the setup the acquisition did not write); named so.
     """
-    oop = roles.channel[roles.role == "out_of_plane"].tolist()
-    inp = roles.channel[roles.role == "in_plane"].tolist()
+    # as arrays: the pandas lookups cost more than the choice
+    channel, role = roles.channel.to_numpy(), roles.role.to_numpy()
+    oop, inp = channel[role == "out_of_plane"].tolist(), channel[role == "in_plane"].tolist()
     lost_oop = [c for c in oop if c in lost]
     flags: list[str] = []
     primary = [c for c in oop if c not in backup]
@@ -175,7 +176,7 @@ def choose_channels(
         used += stand_in
         for c in stand_in:
             flags.append(f"backup ch{c} used")
-    names = {c: f"ch{c} not in the record" if c in absent else f"ch{c}" for c in roles.channel}
+    names = {c: f"ch{c} not in the record" if c in absent else f"ch{c}" for c in channel.tolist()}
     for c in lost_oop:
         flags.append(names[c] if c in absent else f"ch{c} lost")
     malfunction = None
