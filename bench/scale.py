@@ -38,8 +38,7 @@ from pathlib import Path
 import pandas as pd
 import psutil
 
-from rocklab.benchmarks import measured_code
-from rocklab.io import benchmark_times
+from rocklab.benchmarks import benchmark_times, measured_code
 from rocklab.lab import virtual_lab
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -32,7 +32,7 @@ from pathlib import Path
 
 from scale import run_snakemake
 
-from rocklab.io import benchmark_times
+from rocklab.benchmarks import benchmark_times
 
 #: Wall time [s] of the main job on two cores, install aside (issue 14).
 TARGET_S = 150.0

@@ -8,8 +8,8 @@ import pandas as pd
 import pytest
 
 from rocklab.lab.campaign import UNREADABLE, open_campaign, series_id
-from rocklab.lab.raw_format import RawFormatError
-from rocklab.lab.records import read_record
+from rocklab.lab.raw_format import CONTROL, RawFormatError, holds_any
+from rocklab.lab.records import PLAIN_NUMBERS, read_record
 
 
 def _rewrite(path, edit):
@@ -187,3 +187,24 @@ def test_diagnosis_jobs_pack_whole_series(max_tests):
         assert sum(len(groups[s]) for s in [*first, second[0]]) > max_tests
     if max_tests >= sum(map(len, groups.values())):
         assert len(jobs) == 1
+
+
+@pytest.mark.parametrize("characters", [CONTROL, PLAIN_NUMBERS], ids=["control", "not a number"])
+def test_holds_any_answers_as_the_search(characters):
+    """The reader's fast check of a record's characters says what the regular expression says, for
+    every ASCII character and for text beyond ASCII (Unicode blanks, which the ``\\s`` of a str pattern takes)."""
+    base = "0.125,-1.5e-3, 7\n"
+    texts = [base, "", *(base + chr(c) + base for c in range(128))]
+    texts += [base + c for c in ("\u00a0", "\u2003", "\u2028", "\u00e9", "\u0661", "\x85")]
+    for text in texts:
+        assert holds_any(characters, text) == (characters.search(text) is not None), repr(text)
+
+
+def test_a_setup_is_filtered_once_and_as_the_table_says(tiny_campaign):
+    camp = open_campaign(tiny_campaign)
+    for name in camp.setups.setup.unique():
+        rows = camp.setup(name)
+        expected = camp.setups[camp.setups.setup == name].sort_values("channel").reset_index(drop=True)
+        pd.testing.assert_frame_equal(rows, expected)
+        assert camp.setup(name) is rows  # kept for the job's next test
+    assert camp.setup("no such setup").empty

@@ -11,8 +11,8 @@ from test_motion import free_rocking_record
 
 from rocklab.dissipation.analysis import (
     IMPACT_COLUMNS,
-    AnalysedTests,
     TEST_COLUMNS,
+    AnalysedTests,
     amplitude_law_fit,
     analyse_motion,
     analyse_reduced_test,

@@ -806,7 +806,7 @@ def test_a_boundary_too_small_to_extend_the_model_is_extracted(tiny_results):
 def test_workflow_stages_are_read_from_the_bench_file(tiny_results):
     """bench/workflow.py's results/bench/workflow.json, stage by stage, into the
     performance page; the job times of the benchmark files through rocklab.io."""
-    from rocklab.io import benchmark_times
+    from rocklab.benchmarks import benchmark_times
 
     jobs = benchmark_times(tiny_results)
     assert sorted(jobs.job) == ["qc_table", "reduce/1a-2s", "reduce/3a-2s"]

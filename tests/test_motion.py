@@ -15,7 +15,7 @@ import xarray as xr
 from scipy.integrate import solve_ivp
 
 from rocklab.io import write_netcdf
-from rocklab.lab.flight_fit import local_fit, model_velocity
+from rocklab.lab.flight_fit import local_fit, model_velocity, odd_samples
 from rocklab.lab.motion import (
     MOTION_GROUP,
     SCALAR_FIELDS,
@@ -348,3 +348,15 @@ def test_an_apex_is_resolved_where_its_flight_spans_the_samples_of_its_fit():
     exact = 2.0 * quarter_period(np.array([edge]), np.array([alpha]), np.array([p]))[0] * fs
     assert exact == pytest.approx(MIN_APEX_SAMPLES, rel=0.01)
     assert not apex_resolved(np.array([np.nan]), alpha, p, fs).any()
+
+
+def test_the_smoothing_of_a_mirrored_record_is_the_mirrored_smoothing():
+    """extract_motion hands the release its smoothing of theta turned to the release side (sign * sm)
+    instead of smoothing u = sign * theta again: the same bits only if the filter is odd to the last bit."""
+    from scipy.signal import savgol_filter
+
+    rng = np.random.default_rng(7)
+    theta = np.cumsum(rng.normal(0, 1e-4, 3000)) + 0.01 * np.sin(np.arange(3000) / 40)
+    for fs in (100.0, 400.0):
+        win = odd_samples(0.025 * fs)
+        assert savgol_filter(-theta, win, 2).tobytes() == (-savgol_filter(theta, win, 2)).tobytes()

@@ -18,10 +18,9 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 import yaml
-
-from rocklab.io import benchmark_times
 
 #: What can change a benchmark's numbers: the library, the workflow, its scripts, settings and
 #: build, the pinned packages (and the benchmark's own script, :func:`measured_code`'s ``extra``).
@@ -37,6 +36,41 @@ CODE_PATHS = (
 )
 #: The benchmarks whose numbers the README quotes: each must be a measurement of the code it describes.
 QUOTED = {"fresh_clone": "bench/fresh_clone.py", "scale": "bench/scale.py"}
+
+
+def benchmark_times(results: str | Path) -> pd.DataFrame:
+    """The jobs of a workflow run from Snakemake's benchmark files.
+
+    Parameters
+    ----------
+    results : path-like
+        A results folder; its ``benchmarks/`` holds one ``<rule>.tsv`` per
+        single-job rule and ``<folder>/<job>.tsv`` per job of a stage of
+        many jobs (the reduction, the diagnosis, the maps).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per job: ``stage`` (the rule or the folder), ``job`` (the
+        file's path under ``benchmarks/`` without ``.tsv``), ``s`` (wall time
+        of the job [s]) and ``cpu_s`` (its CPU time [s], NaN where the file
+        has none: Snakemake samples it once a second for the first 30 s of a
+        job and every 30 s after, so it is a lower bound for a long job).
+    """
+    root = Path(results) / "benchmarks"
+    rows = []
+    for tsv in sorted(root.rglob("*.tsv")) if root.is_dir() else []:
+        job = tsv.relative_to(root).with_suffix("")
+        last = pd.read_csv(tsv, sep="\t").iloc[-1]
+        rows.append(
+            {
+                "stage": job.parts[0],
+                "job": job.as_posix(),
+                "s": float(last["s"]),
+                "cpu_s": float(last.get("cpu_time", np.nan)),
+            }
+        )
+    return pd.DataFrame(rows, columns=["stage", "job", "s", "cpu_s"])
 
 
 def measured_code(checkout: str | Path, *extra: str) -> dict[str, Any]:

@@ -442,6 +442,7 @@ class Campaign:
     specimens: pd.DataFrame
     setups: pd.DataFrame
     log: TestLog
+    _setup_rows: dict[str, pd.DataFrame] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def tests(self) -> pd.DataFrame:
@@ -550,10 +551,20 @@ class Campaign:
         return self.root / self.test_row(test_id).file
 
     def specimen(self, name: str) -> pd.Series:
-        return self.specimens.set_index("specimen").loc[name]
+        return self._specimens_by_name.loc[name]
+
+    @cached_property
+    def _specimens_by_name(self) -> pd.DataFrame:
+        # indexed once: a reduction looks a specimen up for every test
+        return self.specimens.set_index("specimen")
 
     def setup(self, name: str) -> pd.DataFrame:
-        return self.setups[self.setups.setup == name].sort_values("channel").reset_index(drop=True)
+        """The rows of setups.csv of setup ``name``, by channel: one frame per setup, shared by
+        every test of that setup (a reduction's job filtered the table once a test), not to be modified."""
+        if name not in self._setup_rows:
+            rows = self.setups[self.setups.setup == name]
+            self._setup_rows[name] = rows.sort_values("channel").reset_index(drop=True)
+        return self._setup_rows[name]
 
 
 def row_series(row: pd.Series) -> str:

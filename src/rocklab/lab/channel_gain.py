@@ -78,6 +78,7 @@ Lengths in mm, angles in rad, gains dimensionless.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
@@ -199,8 +200,15 @@ def ratio_interval(num: np.ndarray, den: np.ndarray, level: float = LEVEL) -> tu
         beta = num.sum(axis=0) / den.sum(axis=0)
         u = num - beta * den
         se = np.sqrt(k / max(k - 1, 1) * (u * u).sum(axis=0)) / den.sum(axis=0)
-    half = stats.t.ppf(0.5 + level / 2, max(k - 1, 1)) * se if k > 1 else np.full_like(beta, np.inf)
+    half = t_quantile(0.5 + level / 2, max(k - 1, 1)) * se if k > 1 else np.full_like(beta, np.inf)
     return beta, half
+
+
+@functools.cache
+def t_quantile(q: float, dof: int) -> float:
+    """Student's t quantile ``q`` with ``dof`` degrees of freedom (``scipy.stats.t.ppf``), kept:
+    every test asks for the same few, and scipy's call costs as much as a test's interval."""
+    return float(stats.t.ppf(q, dof))
 
 
 def channel_gains(

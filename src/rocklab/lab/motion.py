@@ -334,8 +334,8 @@ def extract_motion(
     sm = savgol_filter(theta, smooth_win, 2)
     sign = 1 if sm[np.argmax(np.abs(sm))] >= 0 else -1
     u = sign * theta
-    t_rel, theta0, i_half, alpha_fall, v_rel = screw_departure(t, u, p, fs, noise, smooth_win)
-    us = sign * sm
+    us = sign * sm  # the smoothing of u itself, bit for bit: the filter is linear and odd
+    t_rel, theta0, i_half, alpha_fall, v_rel = screw_departure(t, u, us, p, fs, noise)
     threshold = k_noise * noise
     hyst = 5.0 * noise
     W = window_p / p

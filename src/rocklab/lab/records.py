@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from rocklab.lab.raw_format import CONTROL, RawFormatError
+from rocklab.lab.raw_format import CONTROL, RawFormatError, holds_any
 
 #: Relative tolerance between the declared sampling rate and the time column.
 RATE_TOLERANCE = 1e-3
@@ -91,7 +91,7 @@ def _numbers(body: str, columns: list[str], path: Path, first_data: int) -> np.n
     not a (finite) number.  Both read a number as Python's ``float`` does
     (tests/test_campaign.py).
     """
-    if not PLAIN_NUMBERS.search(body):
+    if not holds_any(PLAIN_NUMBERS, body):
         try:
             values = pd.read_csv(
                 io.StringIO(body), header=None, names=columns, dtype=float, na_values=[""], keep_default_na=False
@@ -186,7 +186,9 @@ def read_text(path: str | Path) -> RecordText:
     # a byte-order mark and CRLF line ends are harmless
     lines = text.removeprefix("\ufeff").splitlines()
     # line by line only when the text holds one (a CR of CRLF does, and ends a line)
-    bad = next((n for n, ln in enumerate(lines, start=1) if CONTROL.search(ln)), None) if CONTROL.search(text) else None
+    bad = None
+    if holds_any(CONTROL, text):
+        bad = next((n for n, ln in enumerate(lines, start=1) if CONTROL.search(ln)), None)
     if bad is not None:
         raise RawFormatError(path, bad, "a control character in the line")
     header, n_comment = {}, 0

@@ -28,7 +28,7 @@ import xarray as xr
 
 from rocklab.disk import write_text
 from rocklab.io import cf_attrs
-from rocklab.lab import channel_gain, inertial, instrument, kinematics, release, rotation, validity
+from rocklab.lab import channel_gain, inertial, instrument, kinematics, rotation, validity
 from rocklab.lab import channels as health
 from rocklab.lab.campaign import TEST_COLUMNS, Campaign, row_series
 from rocklab.lab.motion import noise_level
@@ -166,7 +166,12 @@ def _cf_attrs(test_id: str, kind: str = TRANSDUCERS) -> dict[str, str]:
     return cf_attrs(f"rocklab reduction of test {test_id}", SOURCE[kind])
 
 
-def reduce_test(campaign: Campaign, test_id: str, options: Mapping[str, Any] | None = None) -> xr.Dataset:
+def reduce_test(
+    campaign: Campaign,
+    test_id: str,
+    options: Mapping[str, Any] | None = None,
+    layouts: dict[tuple[str, float], validity.SetupLayout] | None = None,
+) -> xr.Dataset:
     """Reduce one test to a dataset: raw and repaired readings, motion, QC.
 
     Never raises for a bad record: an unreadable one gives a dataset with
@@ -180,6 +185,10 @@ def reduce_test(campaign: Campaign, test_id: str, options: Mapping[str, Any] | N
     test_id : str
     options : dict, optional
         ``channels`` and ``validity`` sections of the workflow config.
+    layouts : dict, optional
+        The :func:`rocklab.lab.validity.setup_layout` of each (setup, wall
+        thickness) met so far, filled as tests need them (:func:`reduce_tests`
+        shares one between its tests).
     """
     opt = _options(options)
     if test_id in campaign.log.errors:
@@ -199,7 +208,7 @@ def reduce_test(campaign: Campaign, test_id: str, options: Mapping[str, Any] | N
         return _unreadable(
             meta, RawFormatError(path, None, "a transducer record, but tests.csv gives the test no setup")
         )
-    return _reduce_transducers(campaign, meta, rec, opt)
+    return _reduce_transducers(campaign, meta, rec, opt, {} if layouts is None else layouts)
 
 
 #: CF ``long_name`` of the wall's degrees of freedom in a reduced test, whatever the instrument.
@@ -215,70 +224,45 @@ DOF_LONG_NAMES = {
 TOP_Y_LONG_NAME = "y displacement of the top corners (x = -L/2, +L/2)"
 
 
-def _judged(
-    meta: Mapping[str, Any],
-    time: np.ndarray,
-    fs: float,
-    theta: np.ndarray,
-    phi: np.ndarray,
-    v: np.ndarray,
-    w: np.ndarray,
-    malfunction: str | None,
-    rules: Mapping[str, float],
-) -> tuple[dict[str, Any], np.ndarray]:
-    """The lab's rules on a test's motion (:mod:`rocklab.lab.validity`), whatever the instrument:
-    the verdict and the numbers it rests on, as attributes of the reduced test, and the y
-    displacement of the top corners [mm] (N, 2) that the out-of-plumb is read from."""
-    top = validity.top_displacement(theta, phi, v, w, meta["length_mm"], meta["height_mm"], meta["thickness_mm"])
-    residual = validity.residual_out_of_plumb(top, fs)
-    state = release.release_state(time, theta, meta["p"])
-    ratio = state["thetadot0"] / meta["overturning_velocity"]
-    valid, reason, detail = validity.verdict(malfunction, ratio, residual, rules)
-    return {
-        "valid": int(valid),
-        "reject_reason": reason,
-        "reject_detail": detail or "",
-        "residual_top_mm": residual,
-        "release_velocity_ratio": ratio,
-        "t_release": state["t_release"],
-        "theta0_release": state["theta0"],
-        "alpha_fit_release": state["alpha_fit"],
-    }, top
-
-
 def _reduce_transducers(
-    campaign: Campaign, meta: dict[str, Any], rec: Record, opt: Mapping[str, Mapping[str, Any]]
+    campaign: Campaign,
+    meta: dict[str, Any],
+    rec: Record,
+    opt: Mapping[str, Mapping[str, Any]],
+    layouts: dict[tuple[str, float], validity.SetupLayout],
 ) -> xr.Dataset:
     """:func:`reduce_test` of a transducer record: channel health, four-DOF kinematics, the lab's rules."""
     test_id, path = meta["test_id"], rec.path
-    described = campaign.setup(meta["setup"])
-    missing = sorted(set(rec.channels) - set(described.channel))
+    key = (meta["setup"], meta["thickness_mm"])
+    if key not in layouts:
+        layouts[key] = validity.setup_layout(campaign.setup(meta["setup"]), meta["thickness_mm"])
+    layout = layouts[key]
+    missing = sorted(set(rec.channels) - set(layout.channels))
     if missing:
         return _unreadable(
             meta,
             RawFormatError(path, None, f"channel(s) {missing} not described in setups.csv for setup {meta['setup']}"),
         )
     try:
-        check_setup_channels(rec, described.channel)
+        check_setup_channels(rec, layout.channels)
     except RawFormatError as exc:
         return _unreadable(meta, exc)
     # the rows of setups.csv of the record's channels, in its order (a setup's channels are unique)
-    row_of = {ch: i for i, ch in enumerate(described.channel.to_numpy())}
+    row_of = {ch: i for i, ch in enumerate(layout.channels)}
     rows = np.array([row_of[ch] for ch in rec.channels], int)
     c = opt["channels"]
     repaired, reports = health.assess_channels(
         rec.readings, rec.fs, rec.channels, c["flat_run_s"], c["max_gap_s"], c["dead_span_mm"]
     )
     # a transducer of the setup with no column in the record is lost like a dead one (the backup stands in)
-    all_roles = validity.channel_roles(described, meta["thickness_mm"])
-    absent = sorted(set(described.channel) - set(rec.channels))
+    all_roles = layout.roles
+    absent = sorted(set(layout.channels) - set(rec.channels))
     lost = {r.channel for r in reports if r.lost} | set(absent)
     choice = validity.choose_channels(
         all_roles, lost, c["backup"], c["policy"], opt["validity"]["max_lost_out_of_plane"], absent
     )
 
-    wall_xyz = described[["wall_x_mm", "wall_y_mm", "wall_z_mm"]].to_numpy(float)[rows]
-    frame_xyz = described[["frame_x_mm", "frame_y_mm", "frame_z_mm"]].to_numpy(float)[rows]
+    wall_xyz, frame_xyz = layout.wall_xyz[rows], layout.frame_xyz[rows]
     col = {ch: i for i, ch in enumerate(rec.channels)}
     weights = np.zeros(len(rec.channels))
     weights[[col[ch] for ch in choice.used]] = 1.0
@@ -308,7 +292,7 @@ def _reduce_transducers(
     )
 
     theta, phi, v, w = (motion[k][1] for k in DOF_LONG_NAMES)
-    judged, top = _judged(meta, rec.time, rec.fs, theta, phi, v, w, choice.malfunction, opt["validity"])
+    judged, top = validity.judge_motion(meta, rec.time, rec.fs, theta, phi, v, w, choice.malfunction, opt["validity"])
 
     flags = [d for d in (r.describe() for r in reports) if d] + choice.flags + gain_flags
     # the channel variables in one assign: each added one by one is a merge
@@ -358,15 +342,15 @@ def _reduce_transducers(
             },
         ),
     }
-    for axis in "xyz":
+    for i, axis in enumerate("xyz"):
         channel_vars[f"wall_{axis}"] = (
             "channel",
-            described[f"wall_{axis}_mm"].to_numpy(float)[rows],
+            wall_xyz[:, i],
             {"units": "mm", "long_name": f"transducer point on the wall, {axis} (body frame)"},
         )
         channel_vars[f"frame_{axis}"] = (
             "channel",
-            described[f"frame_{axis}_mm"].to_numpy(float)[rows],
+            frame_xyz[:, i],
             {"units": "mm", "long_name": f"transducer point on the frame, {axis} (lab frame)"},
         )
     channel_vars["top_y"] = (
@@ -425,7 +409,8 @@ def _reduce_instrument(
         coords={"time": ("time", rec.time, {"long_name": "time since the start of the record", "units": "s"})},
     )
     b = meta["thickness_mm"]
-    judged, top = _judged(meta, rec.time, rec.fs, m.theta, m.phi, m.v, m.w, m.malfunction, opt["validity"])
+    rules = opt["validity"]
+    judged, top = validity.judge_motion(meta, rec.time, rec.fs, m.theta, m.phi, m.v, m.w, m.malfunction, rules)
     ds["top_y"] = (("time", "corner"), top, {"units": "mm", "long_name": TOP_Y_LONG_NAME})
     ds.attrs.update({k: v for k, v in meta.items() if not (isinstance(v, float) and np.isnan(v))})
     ds.attrs.update(
@@ -456,9 +441,10 @@ def reduce_tests(
     ------
     (test_id, xarray.Dataset)
     """
+    layouts: dict[tuple[str, float], validity.SetupLayout] = {}
     for test_id in test_ids:
         try:
-            ds = reduce_test(campaign, test_id, options)
+            ds = reduce_test(campaign, test_id, options, layouts)
         except Exception as exc:  # isolate the test: the error is kept in its entry
             log.exception("%s: reduction failed", test_id)
             ds = _unreadable(

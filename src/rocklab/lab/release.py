@@ -167,9 +167,12 @@ def release_state(t: ArrayLike, theta: ArrayLike, p: float) -> dict[str, float |
 
 
 def screw_departure(
-    t: np.ndarray, u: np.ndarray, p: float, fs: float, noise: float, smooth_win: int
+    t: np.ndarray, u: np.ndarray, us: np.ndarray, p: float, fs: float, noise: float
 ) -> tuple[float, float, int, float, float]:
     """Release instant and initial rotation of a record u = sign * theta.
+
+    ``us`` is ``u`` smoothed (a quadratic Savitzky-Golay filter over 25 ms:
+    :func:`rocklab.lab.motion.extract_motion`'s, which has it already).
 
     Returns (t_release, theta0, i_half, alpha_fall, v_release): ``i_half`` is
     the first sample below theta0 / 2 (the fall), ``alpha_fall`` the
@@ -183,7 +186,6 @@ def screw_departure(
     from scipy.optimize import brentq
     from scipy.signal import savgol_filter
 
-    us = savgol_filter(u, smooth_win, 2)
     i_max = int(np.argmax(us))
     below = np.flatnonzero(us[i_max:] < 0.5 * us[i_max])
     if below.size == 0:

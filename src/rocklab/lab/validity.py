@@ -20,12 +20,13 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
+from typing import Any
 
 import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike
 
-from rocklab.lab import kinematics
+from rocklab.lab import kinematics, release
 from rocklab.lab.channels import BACKUP_CHANNELS, CHANNEL_POLICY, LOST_STATUSES, ChannelReport
 
 #: Largest residual out-of-plumb of the wall top after the motion [mm].
@@ -87,6 +88,37 @@ def channel_roles(setup: pd.DataFrame, thickness_mm: float) -> pd.DataFrame:
     return pd.DataFrame({"channel": setup.channel.to_numpy(int), "role": role, "height_mm": X[:, 2]})
 
 
+@dataclass(frozen=True)
+class SetupLayout:
+    """A setup's transducers on a wall of one thickness, as a reduction reads them
+    (:func:`setup_layout`; the same for every test of that setup and wall).
+
+    Attributes
+    ----------
+    channels : list of int
+        The setup's channel numbers, in the order of its rows of ``setups.csv`` (by channel).
+    wall_xyz, frame_xyz : ndarray (nch, 3)
+        Transducer end points on the wall (body frame) and on the frame
+        (lab frame) [mm], in the order of ``channels`` (read-only).
+    roles : DataFrame
+        :func:`channel_roles` of the setup.
+    """
+
+    channels: list[int]
+    wall_xyz: np.ndarray
+    frame_xyz: np.ndarray
+    roles: pd.DataFrame
+
+
+def setup_layout(setup: pd.DataFrame, thickness_mm: float) -> SetupLayout:
+    """The :class:`SetupLayout` of the rows ``setup`` of ``setups.csv`` on a wall ``thickness_mm`` thick [mm]."""
+    wall_xyz = setup[["wall_x_mm", "wall_y_mm", "wall_z_mm"]].to_numpy(float)
+    frame_xyz = setup[["frame_x_mm", "frame_y_mm", "frame_z_mm"]].to_numpy(float)
+    # shared by the tests of the setup: a test takes its rows, never changes these
+    wall_xyz.flags.writeable = frame_xyz.flags.writeable = False
+    return SetupLayout(setup.channel.tolist(), wall_xyz, frame_xyz, channel_roles(setup, thickness_mm))
+
+
 @dataclass
 class ChannelChoice:
     """Channels used for the kinematics, and what that choice cost."""
@@ -127,8 +159,9 @@ def choose_channels(
         The lost channels that are lost because the record has no column for
         them (a channel of the setup the acquisition did not write); named so.
     """
-    oop = roles.channel[roles.role == "out_of_plane"].tolist()
-    inp = roles.channel[roles.role == "in_plane"].tolist()
+    # as arrays: the pandas lookups cost more than the choice
+    channel, role = roles.channel.to_numpy(), roles.role.to_numpy()
+    oop, inp = channel[role == "out_of_plane"].tolist(), channel[role == "in_plane"].tolist()
     lost_oop = [c for c in oop if c in lost]
     flags: list[str] = []
     primary = [c for c in oop if c not in backup]
@@ -143,7 +176,7 @@ def choose_channels(
         used += stand_in
         for c in stand_in:
             flags.append(f"backup ch{c} used")
-    names = {c: f"ch{c} not in the record" if c in absent else f"ch{c}" for c in roles.channel}
+    names = {c: f"ch{c} not in the record" if c in absent else f"ch{c}" for c in channel.tolist()}
     for c in lost_oop:
         flags.append(names[c] if c in absent else f"ch{c} lost")
     malfunction = None
@@ -283,3 +316,39 @@ def verdict(
             f"top residual {residual_top_mm:.2f} mm (limit {rules['residual_top_mm']} mm)",
         )
     return True, "", ""
+
+
+def judge_motion(
+    meta: Mapping[str, Any],
+    time: np.ndarray,
+    fs: float,
+    theta: np.ndarray,
+    phi: np.ndarray,
+    v: np.ndarray,
+    w: np.ndarray,
+    malfunction: str | None,
+    rules: Mapping[str, float],
+) -> tuple[dict[str, Any], np.ndarray]:
+    """The lab's rules on a test's motion, whatever the instrument: the verdict and the numbers
+    it rests on, as attributes of the reduced test, and the y displacement of the top corners
+    [mm] (N, 2) that the out-of-plumb is read from.
+
+    ``meta`` is the test's metadata (:func:`rocklab.lab.reduction.test_metadata`): the wall's
+    dimensions [mm], its ``p`` [rad/s] and ``overturning_velocity`` (Eq. 16) [rad/s]; the
+    release speed is :func:`rocklab.lab.release.release_state`'s.
+    """
+    top = top_displacement(theta, phi, v, w, meta["length_mm"], meta["height_mm"], meta["thickness_mm"])
+    residual = residual_out_of_plumb(top, fs)
+    state = release.release_state(time, theta, meta["p"])
+    ratio = state["thetadot0"] / meta["overturning_velocity"]
+    valid, reason, detail = verdict(malfunction, ratio, residual, rules)
+    return {
+        "valid": int(valid),
+        "reject_reason": reason,
+        "reject_detail": detail or "",
+        "residual_top_mm": residual,
+        "release_velocity_ratio": ratio,
+        "t_release": state["t_release"],
+        "theta0_release": state["theta0"],
+        "alpha_fit_release": state["alpha_fit"],
+    }, top
