@@ -12,7 +12,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Callable, Collection, Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, TypeAlias, TypeVar
 
 import numpy as np
@@ -34,7 +34,8 @@ Linearisation: TypeAlias = tuple[list[str], np.ndarray, np.ndarray, np.ndarray, 
 @dataclass
 class Fit:
     """A fitted model: parameter values, group noise models, -2 log L, observations,
-    and the reweighting passes of its best start and whether they converged."""
+    and the reweighting passes of its best start and whether they converged; ``heldout``: its
+    held-out result (:func:`rocklab.diagnosis.estimation.selection.heldout_of`), made once."""
 
     ext: tuple[str, ...]
     values: dict[str, float]
@@ -43,6 +44,7 @@ class Fit:
     n_obs: int
     passes: int = 0
     converged: bool = True
+    heldout: dict[str, np.ndarray] | None = field(default=None, repr=False, compare=False)
 
     @property
     def bic(self) -> float:
