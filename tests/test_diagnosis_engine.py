@@ -256,3 +256,40 @@ def test_a_fit_evaluates_its_finite_differences_together_and_ends_where_it_did()
     assert (a.values, a.m2ll, a.passes) == (b.values, b.m2ll, b.passes)
     assert together.together and max(together.together) == 2
     assert parameter_intervals(alone, a, n_boot=20, seed=1) == parameter_intervals(together, b, n_boot=20, seed=1)
+
+
+class CountingDecay(DecayProblem):
+    """DecayProblem that records the points its residuals are evaluated at, one by one."""
+
+    def __init__(self, **kw):
+        super().__init__(**kw)
+        self.points = []
+
+    def residuals(self, sub, ext, values):
+        self.points.append(tuple(sorted(values.items())))
+        return super().residuals(sub, ext, values)
+
+
+def test_a_fit_evaluates_the_residuals_of_a_point_once():
+    """The start the masks are read at and each pass's optimum (the point least_squares accepted
+    last) are not evaluated again: no point twice, and the fit is that of a problem that has
+    no such points to share (the counting changes nothing)."""
+    problem = CountingDecay(q=0.2)
+    idx = np.arange(problem.n_tests)
+    f = fit(problem, idx, ("decay",))
+    assert len(problem.points) == len(set(problem.points)), "a point evaluated twice"
+    g = fit(DecayProblem(q=0.2), idx, ("decay",))
+    assert (f.values, f.m2ll, f.passes) == (g.values, g.m2ll, g.passes)
+
+
+def test_a_fits_held_out_result_is_made_once():
+    """selection.heldout_of: the held-out result of a fit, made on the first call and shared after."""
+    from rocklab.diagnosis.estimation.selection import heldout_of
+
+    problem = DecayProblem()
+    f = fit(problem, np.arange(problem.n_tests), ("decay",))
+    first = heldout_of(problem, f)
+    assert heldout_of(problem, f) is first
+    again = resampling.heldout(problem, ("decay",), f)
+    assert first.keys() == again.keys()
+    assert all(np.array_equal(first[k], again[k], equal_nan=True) for k in first)

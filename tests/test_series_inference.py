@@ -11,7 +11,7 @@ freedom, and a null series of three tests names nothing.
 import numpy as np
 import pytest
 from scipy import stats
-from test_diagnosis import A2, H, virtual_series
+from test_diagnosis import A2, H, sticking, virtual_series
 
 from rocklab import diagnosis as D
 from rocklab.diagnosis.estimation import Problem, fit
@@ -197,3 +197,24 @@ def _point(params, rng):
     """Parameter values, some at their null: a branch of the closed forms left or taken."""
     span = {q.name: min(q.upper, q.null + 1.0) - q.null for q in params}
     return {q.name: q.null if rng.random() < 0.4 else q.null + rng.uniform(0.0, 0.3) * span[q.name] for q in params}
+
+
+def test_what_a_model_leaves_for_a_stop_is_read_once_and_as_it_was():
+    """WallProblem.left_for: what a model of the whole series leaves for the causes estimated after
+    selection, made once a model (the selection's structure tests, the search beyond the catalogue and
+    the estimation after selection ask it of the same model), equal to each cause's own reading."""
+    recs = virtual_series("stop", "two-sided", sticking(0.15, 0.95), n=4, seed=3)
+    problem = WallProblem(in_series_order([D.measured_test(r) for r in recs]))
+    sub = problem.subset(np.arange(problem.n_tests))
+    ext, values = ("restitution_scale",), {"c": 0.97}
+    mp = D.model_params(sub.tests, ext, values)
+    own = [st for c in problem.after_selection for st in c.unexplained(sub, mp)]
+    assert own, "the sticking walls leave their stop to the model without it"
+    assert problem.extra_structure(sub, ext, values) == own
+    assert problem.left_for(ext, values) is problem.left_for(ext, dict(values))
+    # a part of the series is read afresh, not from the whole series' reading
+    part = problem.subset(np.arange(problem.n_tests - 1))
+    mp_part = D.model_params(part.tests, ext, values)
+    assert problem.extra_structure(part, ext, values) == [
+        st for c in problem.after_selection for st in c.unexplained(part, mp_part)
+    ]

@@ -299,7 +299,7 @@ def diagnose_series(
         # a cause estimated after selection says what the model leaves for it, and estimates itself
         assert cause.unexplained is not None and cause.estimate is not None
         mp = model_params(tests, effects, values)
-        left = cause.unexplained(problem.S, mp)
+        left = problem.left_for(effects, values)[cause.name]
         found = cause.estimate(tests, mp, seed=seed) if left else None
         log.info("%s: %s; %s", cause.name, "; ".join(map(str, left)) or "nothing left for it", _estimated(left, found))
         if found is not None and found["named"]:

@@ -30,6 +30,8 @@ class WallProblem(Problem[TestStack]):
         self.causes = tuple(catalogue.for_boundary(self.boundary, families=True, columns=log_columns(self.tests)))
         self.after_selection = tuple(catalogue.for_boundary(self.boundary, Stage.AFTER_SELECTION))
         self._sig: dict[str, Signature] | None = None
+        # what a model of the whole series leaves for the causes estimated after selection, by model
+        self._left: dict[tuple[tuple[str, ...], tuple[tuple[str, float], ...]], dict[str, list[Structure]]] = {}
         # what residuals() keeps between calls: the base model of a subset, and evidence.residuals' own
         self._cache: dict[str, Any] = {}
 
@@ -83,9 +85,25 @@ class WallProblem(Problem[TestStack]):
 
     def extra_structure(self, sub: TestStack, ext: Collection[str], values: Mapping[str, float]) -> list[Structure]:
         """What the model leaves that the causes estimated after selection would explain."""
+        if len(sub.tests) == self.n_tests and all(a is b for a, b in zip(sub.tests, self.tests)):
+            return [st for left in self.left_for(ext, values).values() for st in left]
         mp = model_params(sub.tests, ext, values)
         # every cause estimated after selection says what it would explain (Cause.unexplained)
         return [st for cause in self.after_selection for st in cast("Unexplained", cause.unexplained)(sub, mp)]
+
+    def left_for(self, ext: Collection[str], values: Mapping[str, float]) -> dict[str, list[Structure]]:
+        """Cause estimated after selection -> what the model ``ext`` at ``values`` leaves in the whole series
+        that it would explain (:attr:`~rocklab.diagnosis.causes.Cause.unexplained`).
+
+        Made once a model: the selection's structure tests, the search beyond the catalogue and the
+        estimation after selection (:func:`rocklab.diagnosis.series.diagnose_series`) all ask it of the
+        chosen model, and the stop's reading of every test's end of motion is a costly part of it.
+        """
+        key = (tuple(ext), tuple(sorted(values.items())))
+        if key not in self._left:
+            mp = model_params(self.tests, ext, values)
+            self._left[key] = {c.name: cast("Unexplained", c.unexplained)(self.S, mp) for c in self.after_selection}
+        return self._left[key]
 
     def form_structure(self, ext: Collection[str]) -> list[Structure]:
         """What a family's signature says the model ``ext`` misses: its listed member of the wrong

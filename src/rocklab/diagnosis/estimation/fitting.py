@@ -12,7 +12,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Callable, Collection, Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, TypeAlias, TypeVar
 
 import numpy as np
@@ -34,7 +34,8 @@ Linearisation: TypeAlias = tuple[list[str], np.ndarray, np.ndarray, np.ndarray, 
 @dataclass
 class Fit:
     """A fitted model: parameter values, group noise models, -2 log L, observations,
-    and the reweighting passes of its best start and whether they converged."""
+    and the reweighting passes of its best start and whether they converged; ``heldout``: its
+    held-out result (:func:`rocklab.diagnosis.estimation.selection.heldout_of`), made once."""
 
     ext: tuple[str, ...]
     values: dict[str, float]
@@ -43,6 +44,7 @@ class Fit:
     n_obs: int
     passes: int = 0
     converged: bool = True
+    heldout: dict[str, np.ndarray] | None = field(default=None, repr=False, compare=False)
 
     @property
     def bic(self) -> float:
@@ -93,13 +95,25 @@ def fit(
         starts = [inside(nulls)]
         if any(n in guess for n in names):
             starts.append(inside(np.array([guess.get(n, nu) for n, nu in zip(names, nulls)], float)))
-    R0 = problem.residuals(sub, ext, dict(zip(names, starts[0])))
+    # the residuals of the latest points evaluated, by the points' bits: a start is the point the masks are
+    # read at, and a pass's optimum the point least_squares accepted last (where the two are equal bit for bit)
+    latest: dict[bytes, dict[str, np.ndarray]] = {}
+
+    def residuals_of(xx: np.ndarray) -> dict[str, np.ndarray]:
+        key = np.asarray(xx, float).tobytes()
+        if key not in latest:
+            if len(latest) >= 3:
+                del latest[next(iter(latest))]
+            latest[key] = problem.residuals(sub, ext, dict(zip(names, xx)))
+        return latest[key]
+
+    R0 = residuals_of(starts[0])
     masks = {g: np.isfinite(r) & np.isfinite(X[g]) for g, r in R0.items()}
     masks = {g: m for g, m in masks.items() if m.sum() >= 2}
     xm = {g: X[g][m] for g, m in masks.items()}
     best = None
     for x in starts:
-        R = problem.residuals(sub, ext, dict(zip(names, x)))
+        R = residuals_of(x)
         var = group_variances({g: R[g] for g in masks}, X)
         passes, converged, jac, m2 = 0, False, None, np.inf
         for _ in range(n_irls):
@@ -113,7 +127,7 @@ def fit(
                 return (r if np.isfinite(r).all() else np.nan_to_num(r, nan=1.0, posinf=1.0, neginf=-1.0)) * wv
 
             def res(xx: np.ndarray) -> np.ndarray:
-                return stacked(problem.residuals(sub, ext, dict(zip(names, xx))))
+                return stacked(residuals_of(xx))
 
             def together(_: object, points: Iterable[np.ndarray], stacked: Callable[..., np.ndarray] = stacked) -> list:
                 # the points of least_squares' finite differences (its own steps and bounds), evaluated at once
@@ -131,7 +145,7 @@ def fit(
                 step = optimize.lsq_linear(jac * wv[:, None], -stacked(R), bounds=(lo - x, hi - x)).x
             moved = np.max(np.abs(step) / (hi - lo))
             x_new = np.clip(x + step, lo, hi)
-            R_new = problem.residuals(sub, ext, dict(zip(names, x_new)))
+            R_new = residuals_of(x_new)
             var_new = group_variances({g: np.where(m, R_new[g], np.nan) for g, m in masks.items()}, X)
             m2_new = deviance({g: np.where(m, R_new[g], np.nan) for g, m in masks.items()}, X, var_new)
             if m2_new > m2 + 1e-6 * abs(m2):

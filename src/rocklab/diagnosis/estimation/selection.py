@@ -147,6 +147,15 @@ def _improves(d: np.ndarray) -> bool:
     return gain > 2 * se or bool(np.all(d > 0))
 
 
+def heldout_of(problem: Problem[Any], fitted: Fit) -> dict[str, np.ndarray]:
+    """:func:`~rocklab.diagnosis.estimation.resampling.heldout` of ``fitted`` (a fit of all the
+    problem's tests), made once a fit: the selections on one problem share their fits, and the second
+    (the families, :func:`beyond_the_catalogue`) and the rivals meet the first one's models again."""
+    if fitted.heldout is None:
+        fitted.heldout = heldout(problem, fitted.ext, fitted)
+    return fitted.heldout
+
+
 def _null_excluded(problem: Problem[Any], effect: str, ci: Mapping[str, Sequence[float]]) -> bool:
     """Whether some parameter of ``effect`` stays clear of its null by a practical margin.
 
@@ -254,7 +263,7 @@ def select_effects(
     log.info("selection over %d tests, candidates %s", problem.n_tests, ", ".join(candidates))
     current: tuple[str, ...] = ()
     cur_fit = fit_of(current)
-    cur_ho = heldout(problem, current)
+    cur_ho = heldout_of(problem, cur_fit)
     base_ho = cur_ho
     steps: dict[str, Step] = {}
     rejected: dict[str, Rejection] = {}
@@ -292,7 +301,7 @@ def select_effects(
             )
         accepted = False
         for dbic, eff, ext, f in cands:
-            ho = heldout(problem, ext, f)
+            ho = heldout_of(problem, f)
             d = cur_ho["deviance"] - ho["deviance"]
             gain, se = paired_difference(d)
             if not _improves(d):
@@ -337,7 +346,7 @@ def select_effects(
         for old in [c for c in current if c != eff and c in steps]:
             ext = tuple(c for c in current if c != old)
             f = fit_of(ext)
-            ho = heldout(problem, ext, f)
+            ho = heldout_of(problem, f)
             loss, se = paired_difference(ho["deviance"] - cur_ho["deviance"])
             if not _improves(ho["deviance"] - cur_ho["deviance"]) or f.bic - cur_fit.bic < bic_margin:
                 rejected[old] = Rejection(RejectedBy.CARRIED, loss=loss, se=se, carried_by=eff)
@@ -558,7 +567,7 @@ def rivals(
                 continue
             ext = problem.combine(tuple(e for e in named if e != y), x)
             assert ext is not None
-            d = heldout(problem, ext, fits[ext])["deviance"] - sel["final"]["deviance"]
+            d = heldout_of(problem, fits[ext])["deviance"] - sel["final"]["deviance"]
             if _improves(d):
                 continue
             gain, se = paired_difference(d)
