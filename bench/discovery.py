@@ -549,6 +549,14 @@ def _contact_records(name, sp, row, noise_mm=NOISE_MM):
     return recs, truths
 
 
+def _scenario_of(row, sp):
+    """The simulated boundary and :func:`scenario` of a design row on the wall ``sp`` (the virtual lab's
+    generators: in memory or through the lab's files)."""
+    alpha = float(wall.slenderness_angle(sp["height_mm"], sp["thickness_mm"]))
+    boundary = "two-sided" if row["boundary"] == "two-sided" else "one-sided"
+    return (boundary, *scenario(row["cause"], row["boundary"], alpha, row["n_tests"]))
+
+
 def run_cell(row, n_boot, noise_mm=NOISE_MM):
     """Simulate and diagnose one series of the design; its row with the outcome and the times."""
     t0 = time.perf_counter()
@@ -565,9 +573,7 @@ def run_cell(row, n_boot, noise_mm=NOISE_MM):
         extra = {"truth": truth, "optional": optional, "n_lifted": sum(t["columns"]["n_lifted"] for t in truths)}
         extra["max_slip_mm"] = max(t["columns"]["max_slip_mm"] for t in truths)
     elif row.get("generator") == "recorded":
-        alpha = float(wall.slenderness_angle(sp["height_mm"], sp["thickness_mm"]))
-        boundary = "two-sided" if row["boundary"] == "two-sided" else "one-sided"
-        model, kw, truth = scenario(row["cause"], row["boundary"], alpha, row["n_tests"])
+        boundary, model, kw, truth = _scenario_of(row, sp)
         # a test id is a file name: no brackets (flight_loss[drag])
         name = re.sub(r"[^\w-]", "-", f"{row['instrument']}-{row['cause']}-{row['boundary']}-{row['seed']}")
         faults = [vl.Fault("gain", FAULTY_CHANNEL, level=FAULTY_GAIN)] if row["class"] == "instrument error" else []
@@ -587,9 +593,7 @@ def run_cell(row, n_boot, noise_mm=NOISE_MM):
         )
         extra = {"truth": truth, "rejected": rejected}
     else:
-        alpha = float(wall.slenderness_angle(sp["height_mm"], sp["thickness_mm"]))
-        boundary = "two-sided" if row["boundary"] == "two-sided" else "one-sided"
-        model, kw, truth = scenario(row["cause"], row["boundary"], alpha, row["n_tests"])
+        boundary, model, kw, truth = _scenario_of(row, sp)
         name = f"{row['cause']}-{row['boundary']}-{row['seed']}"
         recs = vl.series_records(
             name,
