@@ -139,6 +139,23 @@ def test_a_record_without_its_apexes_is_the_same_motion():
     assert located.impacts.theta_peak_before.notna().all() and record.impacts.theta_peak_before.isna().all()
 
 
+@pytest.mark.parametrize("ratio", [0.97, 0.99, 1.0, 1.01])
+def test_a_release_the_dry_friction_holds_stays_there(ratio):
+    """Released from rest where sin(alpha - |theta0|) <= mu, the wall is held: no impact, at rest from
+    the release, in the reference integrator and in the compiled engine alike (the reference chattered
+    there for ever); just outside that zone both rock with the same impacts."""
+    from rocklab.simulation.batch import free_batch
+
+    alpha, mu = 0.1, 0.03 * 0.1
+    m = RockingModel(alpha=alpha, p=2.0, mu=mu, impact=impact.HousnerTwoSided())
+    assert np.sin(alpha * (1.0 - ratio)) <= mu < np.sin(0.04 * alpha)
+    held = simulate_free(m, ratio * alpha, t_end=3.0)
+    assert held.t_rest == 0.0 and held.impacts.empty and np.all(held.theta == ratio * alpha)
+    assert int(free_batch(m, ratio * alpha, t_end=3.0).n_impacts[0]) == 0
+    rocks = simulate_free(m, 0.96 * alpha, t_end=3.0)
+    assert len(rocks.impacts) == int(free_batch(m, 0.96 * alpha, t_end=3.0).n_impacts[0]) > 0
+
+
 def test_free_overturning():
     model = RockingModel(alpha=0.1, p=2.0)
     assert simulate_free(model, 0.101, t_end=10.0).overturned

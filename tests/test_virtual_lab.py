@@ -244,3 +244,13 @@ def test_a_virtual_test_of_an_unknown_specimen_is_refused_by_name(tmp_path):
     with pytest.raises(ValueError, match=r"specimens '2z' not in the specimens table \(known: 1a"):
         vl.write_campaign(tmp_path / "c", [vl.VirtualTest("V1", "2z")])
     assert not list((tmp_path / "c" / "tests").iterdir())
+
+
+def test_a_release_the_dry_friction_holds_is_refused():
+    """A wall its friction holds at the release never rocks: the virtual lab says so instead of
+    writing a test whose truth (valid, rocking) the record contradicts."""
+    specimen = {"height_mm": 1500.0, "thickness_mm": 150.0}
+    mu = 0.03 * wall.slenderness_angle(1.5, 0.15)
+    test = vl.VirtualTest("H001", theta0_ratio=0.99, model={"mu": mu})
+    with pytest.raises(ValueError, match="H001.*held there by the dry friction"):
+        vl.simulate_virtual_test(test, specimen, None, rng=0, t_end=5.0)

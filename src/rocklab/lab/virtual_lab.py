@@ -108,8 +108,9 @@ class VirtualTest:
         ``zeta``, ``mu``, ``kappa``, ``gap``,
         ``form``, ``hinge_rounding``, ...), every physical effect of the
         simulator; ``alpha_rock`` defaults to alpha_ratio * alpha.  With dry
-        friction mu, release below (1 - mu / alpha) of the rocking angle (a
-        wall held by friction at its apex is not simulated).
+        friction mu, release below (1 - mu / alpha) of the rocking angle: a
+        wall the friction holds at its release never rocks, and is refused
+        (ValueError).
     faults : list of Fault
     effects : Effects
     note : str
@@ -323,6 +324,14 @@ def simulate_virtual_test(test: VirtualTest, specimen, layout, rng=None, t_end=4
     w_r = float(wall.overturning_velocity(alpha, model.p))
     thetadot0 = -sgn * test.release_ratio * w_r
     hist = simulate_free(model, theta0, thetadot0, t_end=t_end, fs=test.fs)
+    if hist.t_rest == 0.0 and theta0 != 0.0:
+        # the simulator holds it (rocklab.simulation.reference): a test of a wall that never rocks
+        # has no truth the lab's rules could be checked against
+        raise ValueError(
+            f"test {test.test_id}: released at {test.theta0_ratio:g} of its rocking angle, the wall is held there "
+            f"by the dry friction of its model (mu = {model.mu:g}, sin(alpha - |theta0|) <= mu): release it "
+            f"below {1.0 - model.mu / a_side:.4g} of it"
+        )
     t_rest = hist.t_rest if hist.t_rest is not None else float(hist.t[-1])
     t, E, truth = record_virtual_test(
         test,

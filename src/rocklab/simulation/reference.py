@@ -157,12 +157,15 @@ def _reference(
         """Whether the wall at th, at rest on hinge s at t, moves in the direction d (+1 / -1)."""
         return float(model.acceleration(th, d * TURNED, s, rec(t))) * d > 0.0
 
-    if stick and thd == 0.0 and not resting:
+    # a wall released from rest where a term that jumps at a turn outweighs the restoring moment (dry
+    # friction near its apex, sin(alpha - |theta0|) <= mu) is held there, in free rocking too: integrated,
+    # it chatters at the release for ever
+    if model.jumps and thd == 0.0 and not resting:
         d = math.copysign(1.0, float(model.acceleration(th, 0.0, side, rec(0.0))))
-        if moves(th, d, side, 0.0):
-            thd = d * TURNED
-        else:
+        if not moves(th, d, side, 0.0):
             resting, rest_at, held, t_rest = True, th, side, 0.0
+        elif stick:
+            thd = d * TURNED
 
     def fill(ta: float, tb: float, sol: Callable[[FloatArray], FloatArray] | None = None, value: float = 0.0) -> None:
         # the samples ta <= t <= tb of the ascending grid, found by bisection: a comparison of the

@@ -147,8 +147,10 @@ class RockingModel:
         Dry friction at the hinge: a constant moment mu m g R opposing
         thetadot, the deceleration mu p^2 sign(thetadot) [-].  A wall whose
         restoring moment at an apex is below it (sin(alpha - |theta|) <= mu)
-        would stick there: not modelled (the integrator chatters), so
-        release it below alpha - mu.
+        sticks there: released there from rest, or at a turn under ground
+        motion, it is held (both simulators); at a turn in free rocking it is
+        not modelled (the reference integrator chatters), so release it below
+        alpha - mu, with no speed that carries it past.
     kappa : float
         Quadratic drag -kappa thetadot |thetadot| [1/rad].
     gap : float
