@@ -47,7 +47,9 @@ A third, the virtual lab through its files (``recorded``): the series
 calibration on walls with nothing to find, losses in flight and the amplitude
 law recorded by a gyroscope at 1000 Hz and a motion capture at 200 Hz on both
 boundaries, a wall with a gap on a gyroscope, hinge friction on one-sided
-walls, the nulls of each instrument), each on the paper's or the slender
+walls, the nulls of each instrument, a rocking edge crushed half-way through
+a series of twelve tests on every instrument and boundary, scored by
+:func:`score_change`), each on the paper's or the slender
 wall and a size from the shuffle, written in the lab's format with the
 instrument and reduced as the workflow does
 (:func:`rocklab.diagnosis.recorded.recorded_series`: the channels' checks, the
@@ -107,6 +109,7 @@ from rocklab.diagnosis import catalogue, diagnose_records, jsonable
 from rocklab.diagnosis.estimation import systematic
 from rocklab.diagnosis.pooling import pooled_bias
 from rocklab.diagnosis.recorded import recorded_series
+from rocklab.diagnosis.result import ChangeKind
 from rocklab.lab import contact_lab
 from rocklab.lab import virtual_lab as vl
 from rocklab.physics import impact as I
@@ -228,6 +231,9 @@ def scenario(cause, boundary, alpha, n):
     elif cause == "flight_loss[drag]":
         model["kappa"] = 0.06 / alpha
         truth["flight_loss"] = {"zeta": 0.0, "mu_over_alpha": 0.0, "kappa_alpha": 0.06}
+    elif cause == "edge_crushed":
+        # the rocking edge of a sharp wall crushed before test n // 2 (issue 42): a change within the series
+        kw["alpha_ratio"] = lambda i: 1.0 if i < n // 2 else CRUSHED_RATIO
     elif cause == "stop_threshold":
         model["impact"] = _sticking(0.15, 0.95)
         truth["restitution_scale"] = {"c": 0.95}
@@ -285,7 +291,18 @@ RECORDED_CELLS = (
     ("null", "null", "one-sided", "inertial", 1000.0),
     ("null", "null", "two-sided", "rotation", 200.0),
     ("null", "null", "one-sided", "rotation", 200.0),
+    *(
+        ("change within series", "edge_crushed", b, instrument, fs)
+        for b in ("two-sided", "one-sided")
+        for instrument, fs in (("transducers", 400.0), ("inertial", 1000.0), ("rotation", 200.0))
+    ),
 )
+#: A change within a series (:data:`RECORDED_CELLS`' "change within series"): the rocking angle over alpha
+#: after the edge is crushed, 1 before; the series' tests, the crushed edge from test ``CHANGE_TESTS // 2`` on.
+#: Twelve tests: a step after six of twelve has a permutation p-value down to 2 / C(12, 6) = 0.002, below the
+#: Bonferroni level of a series that tests two parameters (:mod:`rocklab.diagnosis.estimation.change`); ten
+#: give 0.008, five cannot name one.
+CRUSHED_RATIO, CHANGE_TESTS = 0.9, 12
 FAULTY_CHANNEL, FAULTY_GAIN = 2, 0.98
 #: The specimens of the recorded cells' walls (written with the campaign's specimens.csv).
 RECORDED_WALLS = {"paper": "1a", "slender": "2a"}
@@ -305,6 +322,7 @@ def recorded_design(seeds=DESIGN_SEEDS):
         order = np.random.default_rng(seed).permutation(len(combos))
         for i, (cls, cause, boundary, instrument, fs) in enumerate(RECORDED_CELLS):
             w, n = combos[order[i % len(combos)]]
+            n = CHANGE_TESTS if cause == "edge_crushed" else n
             rows.append(
                 {"generator": "recorded", "class": cls, "cause": cause, "boundary": boundary}
                 | {"instrument": instrument, "fs": fs, "wall": w, "n_tests": n, "design_seed": seed, "seed": len(rows)}
@@ -441,6 +459,61 @@ def score(entry, truth, parts=(), optional=None):
         "too_small": entry.get("too_small"),
         "not_identifiable": bool(entry.get("too_small")) or bool(unseen),
         "why_not_identifiable": entry.get("too_small") or "; ".join(blind[c] for c in unseen),
+    }
+
+
+#: What a crushed edge changes (:func:`score_change`): the cause and its parameter.
+CHANGED = ("instability_angle", "alpha_r_over_alpha")
+
+
+def score_change(entry, n_tests):
+    """What a diagnosis got right of a rocking edge crushed part-way through a series (issue 42), as
+    :func:`score` says it.
+
+    Named right: a change point of the instability angle found one test or less from where the edge was
+    crushed (test ``n_tests // 2``), the 95 % interval of its size holding the truth
+    (:data:`CRUSHED_RATIO` - 1), and no cause named but the instability angle (a cause of the series: half its
+    tests rock on the crushed edge).  The verdict is right where a change of that parameter is found, of either
+    kind, anywhere.  A series whose test of a change says it cannot reject (too few tests, its ``note``) is not
+    identifiable.
+    """
+    effect, name = CHANGED
+    k, size = n_tests // 2, CRUSHED_RATIO - 1.0
+    named = set(entry["verdict"])
+    found = {f["effect"]: f for f in entry["findings"]}
+    tested = [c for c in entry.get("changes") or [] if c["effect"] == effect and c["parameter"] == name]
+    seen = [c for c in tested if c["kind"] != ChangeKind.NONE]
+    placed = [c for c in seen if c["kind"] == ChangeKind.CHANGE_POINT and abs(c["where_index"] - k) <= 1]
+    ci = placed[0]["ci95_size"] if placed else None
+    covered = _inside(ci, size)
+    wrong = sorted(named - {effect})
+    caveat = {c: sorted(found[c].get("may_stand_in_for") or {}) for c in wrong}
+    notes = [c["note"] for c in tested if c.get("note")]
+    untestable = bool(entry.get("too_small")) or (not seen and bool(notes))
+    outside = (
+        []
+        if covered or not placed
+        else [f"change of {name} = {size:+g} outside {ci}{_by_how_much(effect, name, size, ci)}"]
+    )
+    return {
+        "verdict": sorted(named),
+        "unexplained": bool(entry["unexplained"]),
+        "named_right": covered and not wrong,
+        "named_right_marginal": covered and not wrong,
+        "verdict_right": bool(seen) and not wrong,
+        "missing": [] if seen else [f"a change of {effect}.{name} by {size:+g} from test {k}"],
+        "wrong": wrong,
+        "may_stand_in_for": {c: v for c, v in caveat.items() if v},
+        "confident_misname": any(not v for v in caveat.values()) and not entry["unexplained"],
+        "params_covered": int(covered),
+        "params_widened_by_systematic": 0,
+        "params_named": len(placed[:1]),
+        "outside": outside,
+        "outside_joint": outside,
+        "errors_in_smallest": [_error(effect, name, size, placed[0]["size"])] if placed else [],
+        "too_small": entry.get("too_small"),
+        "not_identifiable": untestable,
+        "why_not_identifiable": (entry.get("too_small") or "; ".join(notes)) if untestable else "",
     }
 
 
@@ -623,7 +696,11 @@ def run_cell(row, n_boot, noise_mm=NOISE_MM):
         if entry is None
         else entry.to_dict()
     )
-    scored = score(jsonable(entry), truth, parts.parts, optional)
+    scored = (
+        score_change(jsonable(entry), row["n_tests"])
+        if row["cause"] == "edge_crushed"
+        else score(jsonable(entry), truth, parts.parts, optional)
+    )
     out = {"generator": "virtual", **row, "h_over_b": float(sp["height_mm"] / sp["thickness_mm"]), **scored, **extra}
     out["n_impacts"] = int(entry.get("n_impacts", 0))
     return out | {"simulate_s": t1 - t0, "diagnose_s": time.perf_counter() - t1}

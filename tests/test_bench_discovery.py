@@ -303,3 +303,44 @@ def test_the_page_shows_the_recorded_cells_by_class():
     assert rec["by_class"][0]["false_name_rate_null"] == 1.0 and rec["by_class"][1]["named_right_rate"] == 0.0
     assert [c["instrument"] for c in rec["cells"]] == ["inertial", "inertial"]
     assert rec["cells"][1]["miss"] == "not named: flight_damping"
+
+
+def test_a_crushed_edge_is_named_right_only_where_its_change_point_is_placed_and_sized():
+    """Issue 42's change within a series: the change point of the rocking angle one test or less from where
+    the edge was crushed, its size's interval holding the truth; a change found elsewhere is a right verdict
+    with a missed place, none at all is missing, and a series too short to test says so."""
+    n = discovery.CHANGE_TESTS
+    size = discovery.CRUSHED_RATIO - 1.0
+    effect, name = discovery.CHANGED
+
+    def change(kind="change point", where=n // 2, ci=(size - 0.02, size + 0.02), note=None):
+        own = {"effect": effect, "parameter": name, "kind": kind, "where_index": where, "size": sum(ci) / 2}
+        return own | {"ci95_size": list(ci), "note": note}
+
+    right = discovery.score_change(entry([], changes=[change()], unexplained=True), n)
+    assert right["named_right"] and right["params_covered"] == 1 and right["missing"] == []
+    assert right["errors_in_smallest"][0] == pytest.approx(0.0, abs=1e-12)
+    assert discovery.score_change(entry([effect], [{"effect": effect}], changes=[change(where=n // 2 + 1)]), n)[
+        "named_right"
+    ]
+    far = discovery.score_change(entry([], changes=[change(where=2)]), n)
+    assert far["verdict_right"] and not far["named_right"] and far["params_named"] == 0
+    wide_of = discovery.score_change(entry([], changes=[change(ci=(size + 0.01, size + 0.05))]), n)
+    assert not wide_of["named_right"] and wide_of["outside"][0].startswith("change of alpha_r_over_alpha")
+    other = discovery.score_change(entry(["flight_damping"], [{"effect": "flight_damping"}], changes=[change()]), n)
+    assert not other["named_right"] and other["wrong"] == ["flight_damping"] and other["confident_misname"]
+    none = discovery.score_change(entry([], changes=[change(kind="none", where=None, ci=(0, 0))]), n)
+    assert none["missing"] and not none["not_identifiable"]
+    short = discovery.score_change(entry([], changes=[change(kind="none", note="a change needs 4 tests")]), 3)
+    assert short["not_identifiable"] and short["why_not_identifiable"] == "a change needs 4 tests"
+
+
+def test_the_crushed_edge_cells_have_the_tests_to_place_a_change():
+    rows = [r for r in discovery.recorded_design((0,)) if r["cause"] == "edge_crushed"]
+    assert {(r["boundary"], r["instrument"]) for r in rows} == {
+        (b, i) for b in ("two-sided", "one-sided") for i in ("transducers", "inertial", "rotation")
+    }
+    assert {r["n_tests"] for r in rows} == {discovery.CHANGE_TESTS}
+    _, kw, truth = discovery.scenario("edge_crushed", "two-sided", 0.1, discovery.CHANGE_TESTS)
+    ratios = [kw["alpha_ratio"](i) for i in range(discovery.CHANGE_TESTS)]
+    assert truth == {} and ratios == [1.0] * 6 + [discovery.CRUSHED_RATIO] * 6
