@@ -2,7 +2,7 @@
 on the others; below the cap, the diagnosis unsplit."""
 
 import pytest
-from test_diagnosis import H, virtual_series
+from test_diagnosis import H, sticking, virtual_series
 
 from rocklab import diagnosis as D
 from rocklab.diagnosis.result import CampaignDiagnosis
@@ -57,3 +57,15 @@ def test_above_the_cap_the_causes_are_chosen_on_some_tests_and_estimated_on_the_
     CampaignDiagnosis([e]).to_json(tmp_path / "d.json")
     (back,) = CampaignDiagnosis.from_json(tmp_path / "d.json").entries
     assert (back.n_tests_selection, back.n_tests_estimation) == (4, 4)
+
+
+def test_a_cause_estimated_after_selection_is_estimated_on_the_tests_that_did_not_choose_the_model():
+    """A wall that sticks on slow landings: the stop (a cause estimated after the selection) is looked for
+    where the selection's tests leave it, and named and sized on the others."""
+    recs = virtual_series("stop", "two-sided", sticking(0.15, 0.95), n=8, seed=3)
+    e = D.diagnose_series(recs, key="stop", n_boot=10, n_history=0, split_cap=4)
+    assert e.verdict == ["restitution_scale", "stop_threshold"] and e.n_tests_estimation == 4
+    scale, stop = e.findings
+    assert scale.n_tests == 4 and stop.n_tests <= 4
+    lo, hi = stop.ci95["v_stop_over_vr"]
+    assert lo <= 0.15 <= hi
