@@ -5,7 +5,10 @@ series (:mod:`rocklab.diagnosis.errors`), selects the causes the data
 carry (:func:`rocklab.diagnosis.estimation.selection.select_effects` on a
 :class:`rocklab.diagnosis.series_problem.WallProblem`), runs the causes estimated
 after selection and states the gain; :mod:`rocklab.diagnosis.pooling` sums
-the series of a boundary condition up.  Method: docs/diagnosis-method.md.
+the series of a boundary condition up.  A series longer than
+:data:`rocklab.diagnosis.splitting.SPLIT_CAP` tests has its causes chosen on
+some of its tests and estimated on the others (:mod:`rocklab.diagnosis.splitting`).
+Method: docs/diagnosis-method.md.
 
 Small samples: a cause is named only where the 95 % interval of its
 parameter over the tests clears its null value: a bootstrap over tests, or
