@@ -617,10 +617,17 @@ class SeriesDiagnosis(_Entry):
     that stopped it, its tests and impacts, and no model (no ``base``,
     ``what_is_wrong`` nor ``sample_test``): the campaign's readers skip it
     (:attr:`CampaignDiagnosis.series`, :attr:`CampaignDiagnosis.not_finished`).
+    A series longer than :data:`rocklab.diagnosis.splitting.SPLIT_CAP` tests was split
+    (:mod:`rocklab.diagnosis.splitting`): ``n_tests_selection`` of its tests chose the causes (the
+    evidence, the rejections, the signatures, the changes, the unnamed estimates rest on them), the
+    ``n_tests_estimation`` others estimated the named causes' parameters and intervals (the findings'
+    ``n_tests``); neither is written for a series not split.
     """
 
     _optional = frozenset(
         {
+            "n_tests_selection",
+            "n_tests_estimation",
             "base",
             "what_is_wrong",
             "sample_test",
@@ -650,6 +657,8 @@ class SeriesDiagnosis(_Entry):
     boundary: str | None = None
     n_tests: int | None = None
     n_impacts: int | None = None
+    n_tests_selection: int | None = None
+    n_tests_estimation: int | None = None
     base: BaseRun | None = None
     what_is_wrong: str | None = None
     not_finished: str | None = None

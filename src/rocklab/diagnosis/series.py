@@ -5,7 +5,10 @@ series (:mod:`rocklab.diagnosis.errors`), selects the causes the data
 carry (:func:`rocklab.diagnosis.estimation.selection.select_effects` on a
 :class:`rocklab.diagnosis.series_problem.WallProblem`), runs the causes estimated
 after selection and states the gain; :mod:`rocklab.diagnosis.pooling` sums
-the series of a boundary condition up.  Method: docs/diagnosis-method.md.
+the series of a boundary condition up.  A series longer than
+:data:`rocklab.diagnosis.splitting.SPLIT_CAP` tests has its causes chosen on
+some of its tests and estimated on the others (:mod:`rocklab.diagnosis.splitting`).
+Method: docs/diagnosis-method.md.
 
 Small samples: a cause is named only where the 95 % interval of its
 parameter over the tests clears its null value: a bootstrap over tests, or
@@ -56,6 +59,7 @@ from rocklab.diagnosis.result import (
     Structure,
 )
 from rocklab.diagnosis.series_problem import WallProblem
+from rocklab.diagnosis.splitting import SPLIT_CAP, estimated, split_series, spread_over
 from rocklab.physics.boundary import Boundary
 
 if TYPE_CHECKING:
@@ -190,6 +194,7 @@ def diagnose_series(
     n_boot: int = 40,
     n_history: int = 2,
     seed: int = 0,
+    split_cap: int = SPLIT_CAP,
 ) -> SeriesDiagnosis:
     """Diagnosis of one series: base model, what it gets wrong, causes, gain.
 
@@ -204,6 +209,11 @@ def diagnose_series(
     n_history : int
         Tests simulated in time (:func:`rocklab.diagnosis.extended.simulate_measured`) for the
         RMS of theta/alpha.
+    split_cap : int
+        Tests above which the causes are chosen on this many and estimated on the others
+        (:func:`rocklab.diagnosis.splitting.split_series`): the selection's steps (the causes, their
+        evidence, the stand-ins and rivals, the changes over the tests, the unnamed estimates) on the
+        first, the named causes' parameters, intervals and model bias on the second.
 
     Returns
     -------
@@ -260,12 +270,18 @@ def diagnose_series(
         )
         log.warning("%s %s is too small to name a cause: %s", scope, key, why)
         return SeriesDiagnosis(**head, what_is_wrong=statement, too_small=why, sample_test=_sample_test(tests))
-    problem = WallProblem(tests)
+    chosen, rest = split_series(tests, split_cap)
+    split = len(chosen) < len(tests)
+    if split:
+        log.info("%s %s: causes chosen on %d tests, estimated on the %d others", scope, key, len(chosen), len(rest))
+    problem = WallProblem(chosen)
     sig = problem.signature
     fits: Fits = {}
     sel = select_effects(problem, signature=sig, n_boot=n_boot, seed=seed, fits=fits)
     sel = beyond_the_catalogue(problem, sel, signature=sig, n_boot=n_boot, seed=seed, fits=fits)
-    effects, values = sel["effects"], sel["fit"].values
+    # the parameters and intervals of a split series rest on the tests that did not choose its model
+    est = estimated(WallProblem(rest), sel, n_boot=n_boot, seed=seed) if split else sel
+    effects, values = sel["effects"], est["fit"].values
     findings = []
     for eff in effects:
         own = [q.name for q in catalogue.by_name(eff).params]
@@ -275,8 +291,8 @@ def diagnose_series(
             Finding(
                 effect=eff,
                 params={k: values[k] for k in own},
-                ci95={k: cast("list[Number]", sel["ci"][k]) for k in own if k in sel["ci"]},
-                n_tests=len(tests),
+                ci95={k: cast("list[Number]", est["ci"][k]) for k in own if k in est["ci"]},
+                n_tests=len(rest),
                 evidence={
                     "signature": sig.get(eff, {}).get("text", ""),
                     "fit": f"held-out deviance per observation lowered by {st['gain']:.3g} "
@@ -287,7 +303,7 @@ def diagnose_series(
                 curve=cause.curve(tests, values, sel["catalogue"]["fit"].values)
                 if cause.curve is not None and "catalogue" in sel
                 else None,
-                **discovery(problem, eff, sel),
+                **discovery(problem, eff, est),
             )
         )
     # a cause selected has its paired deviance gain
@@ -298,17 +314,17 @@ def diagnose_series(
     for cause in problem.after_selection:
         # a cause estimated after selection says what the model leaves for it, and estimates itself
         assert cause.unexplained is not None and cause.estimate is not None
-        mp = model_params(tests, effects, values)
-        left = problem.left_for(effects, values)[cause.name]
-        found = cause.estimate(tests, mp, seed=seed) if left else None
+        mp = model_params(rest, effects, values)
+        left = problem.left_for(effects, sel["fit"].values)[cause.name]
+        found = cause.estimate(rest, mp, seed=seed) if left else None
         log.info("%s: %s; %s", cause.name, "; ".join(map(str, left)) or "nothing left for it", _estimated(left, found))
         if found is not None and found["named"]:
             structure = [st for st in structure if st not in left]
             findings.append(found["finding"])
             ext.append(cause.name)
             ext_values.update(found["values"])
-    bias, draws = _with_model_bias(tests, findings, sel, ext, ext_values, seed)
-    dof = _with_systematic(findings, sel, bias.get("u_model", {}), draws)
+    bias, draws = _with_model_bias(rest, findings, est, ext, ext_values, seed)
+    dof = _with_systematic(findings, est, bias.get("u_model", {}), draws)
     params = {q.name: q for f in findings for q in catalogue.by_name(f.effect).params}
     verdict_intervals(findings, params, {f.effect: cast(int, f.n_tests) for f in findings}, dof=dof)
     blind = not_identifiable(tests, [f.effect for f in findings])
@@ -318,7 +334,7 @@ def diagnose_series(
     caveats = stand_ins(problem, sel, blind, fits=fits)
     rival, preferred = rivals(problem, sel, sig, fits=fits)
     structure += preferred
-    changes = within_series(problem, sel, findings, [t.test_id for t in tests], fits, seed)
+    changes = within_series(problem, sel, findings, [t.test_id for t in chosen], fits, seed)
     # a change of a candidate the selection turned down: the tests are not one wall state, and the
     # verdict that pools them is no explanation of the series
     structure += [moved(c) for c in changes if c.kind is not ChangeKind.NONE and c.effect not in sel["effects"]]
@@ -339,6 +355,8 @@ def diagnose_series(
     ext_err = engineering_errors(tests, ext, ext_values, n_history=n_history) if ext else None
     entry = SeriesDiagnosis(
         **head,
+        n_tests_selection=len(chosen) if split else None,
+        n_tests_estimation=len(rest) if split else None,
         what_is_wrong=(verdict_text + ": " if verdict_text else "") + statement,
         verdict=[f.effect for f in findings],
         not_identifiable=blind or None,
@@ -512,14 +530,6 @@ def _with_systematic(
             f.u_systematic[k] = u
             dof.setdefault(f.effect, {})[k] = widened_dof(cast("list[float]", stat), x0, u, df, nu)
     return dof
-
-
-def spread_over(tests: Sequence[MeasuredTest], at_most: int) -> list[MeasuredTest]:
-    """At most ``at_most`` of ``tests`` (in series order), evenly spread from the first to the last;
-    all of them where there are no more."""
-    if len(tests) <= at_most:
-        return list(tests)
-    return [tests[i] for i in np.unique(np.round(np.linspace(0, len(tests) - 1, at_most)).astype(int))]
 
 
 def _estimated(left: list[Structure], found: StopEstimate | None) -> str:
