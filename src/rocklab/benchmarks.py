@@ -477,6 +477,15 @@ def _discovery(bench: Mapping[str, Any]) -> dict[str, Any]:
 CONTACT_COLUMNS = ("design_seed", "knob", "fs", "wall", "n_tests", "verdict", "named_right")
 RECORDED_COLUMNS: tuple[str, ...] = ("design_seed", "class", "cause", "boundary", "instrument", "fs", "wall")
 RECORDED_COLUMNS += ("n_tests", "verdict", "named_right")
+#: The rates of a class of the recorded cells on the performance page.
+CLASS_RATES: tuple[str, ...] = (
+    "n_series",
+    "n_null",
+    "named_right_rate",
+    "false_name_rate_null",
+    "confident_misname_rate",
+)
+CLASS_RATES += ("coverage_95",)
 
 
 def _of(bench: Mapping[str, Any], generator: str) -> list[Mapping[str, Any]]:
@@ -500,12 +509,7 @@ def _generator(rates: Mapping[str, Any], cells: list[Mapping[str, Any]], cols: S
         "cells": [
             {**{k: c.get(k) for k in cols}, "truth": _truth(c.get("truth") or {}), "miss": _miss(c)} for c in cells
         ],
-        "by_class": [
-            {"class": k}
-            | {q: r.get(q) for q in ("n_series", "n_null", "named_right_rate", "false_name_rate_null")}
-            | {"confident_misname_rate": r.get("confident_misname_rate"), "coverage_95": r.get("coverage_95")}
-            for k, r in by_class.items()
-        ],
+        "by_class": [{"class": k} | {q: r.get(q) for q in CLASS_RATES} for k, r in by_class.items()],
     }
 
 
