@@ -169,7 +169,8 @@ def test_a_series_whose_diagnosis_raises_is_reported_not_finished_and_the_rest_r
 def test_the_engine_s_record_of_every_cause_is_the_reference_s(wall_kind):
     """Each cause alone, off its null: the engine's record of the free run (free_record, which the
     diagnosis' model bias simulates its tests with) is the reference's at the diagnosis' tolerances
-    within 2e-9 rad, sample by sample, on the reference's grid; the engine refuses a rocking angle
+    within 2e-9 rad, sample by sample, on the reference's grid (NaN past the end, as the reference's); the
+    engine refuses a rocking angle
     that depends on the amplitude, and the caller then takes the reference."""
     boundary, gap = WALLS[wall_kind]
     for cause in _causes(boundary):
@@ -178,11 +179,14 @@ def test_the_engine_s_record_of_every_cause_is_the_reference_s(wall_kind):
             with pytest.raises(NotImplementedError, match="depends on the amplitude"):
                 free_record(model, 0.6 * model.alpha, t_end=T_END)
             continue
-        ref = simulate_free(model, 0.6 * model.alpha, t_end=T_END, fs=400.0, rtol=1e-9, atol=1e-12, apexes=False)
-        run = free_record(model, 0.6 * model.alpha, t_end=T_END, fs=400.0)
+        # an end between two samples: the grid's last sample lies past it, NaN in both
+        t_end = T_END + 2e-3
+        ref = simulate_free(model, 0.6 * model.alpha, t_end=t_end, fs=400.0, rtol=1e-9, atol=1e-12, apexes=False)
+        run = free_record(model, 0.6 * model.alpha, t_end=t_end, fs=400.0)
         assert run is not None, cause.name
         np.testing.assert_array_equal(run[0], ref.t)
-        np.testing.assert_allclose(run[1], ref.theta, rtol=0, atol=2e-9, err_msg=cause.name)
+        assert np.isnan(ref.theta[-1]) and np.isfinite(ref.theta[:-1]).all(), cause.name
+        np.testing.assert_allclose(run[1], ref.theta, rtol=0, atol=2e-9, equal_nan=True, err_msg=cause.name)
 
 
 def test_a_wall_that_overturns_has_no_engine_record():

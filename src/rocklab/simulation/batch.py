@@ -327,8 +327,8 @@ def free_record(
     Returns
     -------
     (t, theta) : tuple of ndarray, or None
-        Time [s] and rotation [rad]; None for a wall that overturns (the reference's record then ends
-        in NaN, which this one does not reproduce).
+        Time [s] and rotation [rad], NaN past ``t_end`` as the reference's; None for a wall that
+        overturns (the reference's record then ends in NaN, which this one does not reproduce).
 
     Raises
     ------
@@ -338,6 +338,8 @@ def free_record(
     t = np.arange(0.0, t_end + 0.5 / fs, 1.0 / fs)
     prm, law, terms = _model_arrays([model], overturn, rest_tol, substeps)
     over, theta = _record(1.0 / fs, t.size - 1, prm[0], law[0], terms, float(theta0), float(thetadot0))
+    # the grid's last sample may lie past t_end by up to half an interval: the reference leaves it NaN
+    theta[t > t_end] = np.nan
     return None if over else (t, theta)
 
 
