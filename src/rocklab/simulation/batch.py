@@ -363,8 +363,8 @@ def _dataset(out: tuple[npt.NDArray[Any], ...]) -> xr.Dataset:
 def compile_kernels() -> None:
     """Compile the engine's numba kernels into numba's on-disk cache.
 
-    Runs :func:`overturning_batch`, :func:`ground_batch` and
-    :func:`free_batch` and :func:`free_record` once on tiny inputs, so that the kernels are compiled
+    Runs :func:`overturning_batch`, :func:`ground_batch`, :func:`free_batch`
+    and :func:`free_record` once on tiny inputs, so that the kernels are compiled
     with the argument types of the library's own calls.  A process that then
     runs a map loads them from the cache (a fraction of a second) instead of
     compiling them (about 12 s of CPU, once per process while the cache is
