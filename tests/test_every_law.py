@@ -18,7 +18,7 @@ from rocklab.diagnosis.result import CampaignDiagnosis
 from rocklab.diagnosis.wall_model import impact_speeds, simulator
 from rocklab.physics import wall
 from rocklab.seismic.calibrated import MapWall
-from rocklab.simulation.batch import free_batch
+from rocklab.simulation.batch import free_batch, free_record
 from rocklab.simulation.reference import simulate_free
 
 #: The walls: a boundary, and whether a one-sided wall swings through a gap (Fig. 12).
@@ -163,3 +163,35 @@ def test_a_series_whose_diagnosis_raises_is_reported_not_finished_and_the_rest_r
     assert boundary.n_series == 2
     assert "bad (two-sided, 1 test): NotImplementedError" in diagnosis_markdown(full)
     assert [r["series"] for r in diagnosis_summary(full)["series"]] == ["a", "c"]
+
+
+@pytest.mark.parametrize("wall_kind", WALLS)
+def test_the_engine_s_record_of_every_cause_is_the_reference_s(wall_kind):
+    """Each cause alone, off its null: the engine's record of the free run (free_record, which the
+    diagnosis' model bias simulates its tests with) is the reference's at the diagnosis' tolerances
+    within 2e-9 rad, sample by sample, on the reference's grid (NaN past the end, as the reference's); the
+    engine refuses a rocking angle
+    that depends on the amplitude, and the caller then takes the reference."""
+    boundary, gap = WALLS[wall_kind]
+    for cause in _causes(boundary):
+        _, model = _model(boundary, gap, [cause.name])
+        if model.hinge_rounding:
+            with pytest.raises(NotImplementedError, match="depends on the amplitude"):
+                free_record(model, 0.6 * model.alpha, t_end=T_END)
+            continue
+        # an end between two samples: the grid's last sample lies past it, NaN in both
+        t_end = T_END + 2e-3
+        ref = simulate_free(model, 0.6 * model.alpha, t_end=t_end, fs=400.0, rtol=1e-9, atol=1e-12, apexes=False)
+        run = free_record(model, 0.6 * model.alpha, t_end=t_end, fs=400.0)
+        assert run is not None, cause.name
+        np.testing.assert_array_equal(run[0], ref.t)
+        assert np.isnan(ref.theta[-1]) and np.isfinite(ref.theta[:-1]).all(), cause.name
+        np.testing.assert_allclose(run[1], ref.theta, rtol=0, atol=2e-9, equal_nan=True, err_msg=cause.name)
+
+
+def test_a_wall_that_overturns_has_no_engine_record():
+    """Released beyond its instability angle the wall overturns: the engine gives no record (the
+    reference's ends in NaN), so the caller takes the reference's."""
+    _, model = _model("two-sided", False, [])
+    assert free_record(model, 1.2 * model.alpha, t_end=5.0) is None
+    assert np.isnan(simulate_free(model, 1.2 * model.alpha, t_end=5.0).theta[-1])

@@ -84,11 +84,12 @@ def engineering_rows(tests: Sequence[MeasuredTest], mp: ModelParams, n_max: int 
     return rows
 
 
-def history_rms(test: MeasuredTest, model: RockingModel) -> float:
-    """RMS of (theta_model - theta_measured) / alpha over the measured motion (the exact simulator ``model``)."""
+def history_rms(test: MeasuredTest, model: RockingModel, engine: bool = False) -> float:
+    """RMS of (theta_model - theta_measured) / alpha over the measured motion (the exact simulator ``model``;
+    ``engine``: run by the numba engine where it holds the wall, :func:`rocklab.diagnosis.wall_model.simulate_test`)."""
     if test.t is None or test.theta is None:
         return np.nan
-    t, th = simulate_test(test, model)
+    t, th = simulate_test(test, model, engine=engine)
     sel = (test.t >= test.t_release) & (test.t <= test.t_end)
     m = np.interp(test.t[sel], t, th, right=0.0)
     return float(np.sqrt(np.mean((m - test.theta[sel]) ** 2)) / test.alpha)

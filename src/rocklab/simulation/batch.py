@@ -25,6 +25,7 @@ from numba.core.ccallback import CFunc
 
 from rocklab.physics.flight import FloatArray
 from rocklab.simulation.engine import batch_kernel as _kernel
+from rocklab.simulation.engine import free_record as _record
 from rocklab.simulation.engine import slot
 from rocklab.simulation.flight_terms import flight_function
 from rocklab.simulation.rocking_model import OVERTURN, REST_TOL, RockingModel
@@ -305,6 +306,43 @@ def free_batch(
     return _dataset(out)
 
 
+def free_record(
+    model: RockingModel,
+    theta0: float,
+    thetadot0: float = 0.0,
+    *,
+    t_end: float = 30.0,
+    fs: float = 400.0,
+    substeps: int = 8,
+    overturn: float = OVERTURN,
+    rest_tol: float = REST_TOL,
+) -> tuple[FloatArray, FloatArray] | None:
+    """Free rocking of one wall, its record: the engine's :func:`rocklab.simulation.engine.run_history`
+    in place of :func:`rocklab.simulation.reference.simulate_free` where the engine holds the wall.
+
+    On the reference's grid (0, 1/fs, ... up to ``t_end``), ``substeps`` RK4 steps per sample interval
+    of the exact form; at the default 8 the impacts are the reference's within 1e-9 s and 1e-9 rad/s
+    (tests/test_every_law.py).
+
+    Returns
+    -------
+    (t, theta) : tuple of ndarray, or None
+        Time [s] and rotation [rad], NaN past ``t_end`` as the reference's; None for a wall that
+        overturns (the reference's record then ends in NaN, which this one does not reproduce).
+
+    Raises
+    ------
+    NotImplementedError
+        For a wall the engine does not hold (:meth:`RockingModel.numba_params`, :meth:`RockingModel.numba_law`).
+    """
+    t = np.arange(0.0, t_end + 0.5 / fs, 1.0 / fs)
+    prm, law, terms = _model_arrays([model], overturn, rest_tol, substeps)
+    over, theta = _record(1.0 / fs, t.size - 1, prm[0], law[0], terms, float(theta0), float(thetadot0))
+    # the grid's last sample may lie past t_end by up to half an interval: the reference leaves it NaN
+    theta[t > t_end] = np.nan
+    return None if over else (t, theta)
+
+
 def _dataset(out: tuple[npt.NDArray[Any], ...]) -> xr.Dataset:
     over, t_over, max_ratio, n_imp, log_t, log_vb, log_va, log_pk = out
     hist, imp = ("history",), ("history", "impact")
@@ -325,8 +363,8 @@ def _dataset(out: tuple[npt.NDArray[Any], ...]) -> xr.Dataset:
 def compile_kernels() -> None:
     """Compile the engine's numba kernels into numba's on-disk cache.
 
-    Runs :func:`overturning_batch`, :func:`ground_batch` and
-    :func:`free_batch` once on tiny inputs, so that the kernels are compiled
+    Runs :func:`overturning_batch`, :func:`ground_batch`, :func:`free_batch`
+    and :func:`free_record` once on tiny inputs, so that the kernels are compiled
     with the argument types of the library's own calls.  A process that then
     runs a map loads them from the cache (a fraction of a second) instead of
     compiling them (about 12 s of CPU, once per process while the cache is
@@ -338,3 +376,4 @@ def compile_kernels() -> None:
     overturning_batch(ag, 0.01, model, [1.0], [1.0], tail=0.1)
     ground_batch(ag, 0.01, [model], tail=0.1, max_impacts=1)
     free_batch(model, 0.05, t_end=0.1, max_impacts=1)
+    free_record(model, 0.05, t_end=0.1)

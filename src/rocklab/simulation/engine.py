@@ -397,6 +397,7 @@ def run_history(
     log_vb: FloatArray,
     log_va: FloatArray,
     log_peak: FloatArray,
+    record: FloatArray,
 ) -> tuple[bool, float, float, int]:
     """Event-driven integration of one wall, sample interval by sample interval.
 
@@ -408,7 +409,9 @@ def run_history(
     interval; exact form: ``params[_P_SUB]`` RK4 substeps per interval.  Events
     (impact, overturning, onset, velocity zero for the peaks) are located by
     bisection inside the step.  Impacts are logged into the ``log_*`` arrays
-    up to their length.
+    up to their length, and theta [rad] at the ends of the steps into ``record``
+    up to its length (``record[k]`` at k h, the release at 0; a wall that
+    overturns leaves the rest unwritten).
 
     Peaks inside a step (zeros of thetadot) are located only when impacts
     are logged; otherwise max |theta| is sampled at the step ends.  A term
@@ -472,6 +475,9 @@ def run_history(
     max_ratio = 0.0
     n_imp = 0
     max_log = log_t.shape[0]
+    n_record = record.shape[0]
+    if n_record > 0:
+        record[0] = x
     k = -1
     while k + 1 < n_steps:
         k += 1
@@ -491,6 +497,7 @@ def run_history(
             # earlier step has tested it, and skipping the step would miss an
             # onset in its first part
             lifts = _lifts(scale * ag[k], A0p, A1p, two, A0n, A1n)
+            k_rest = k
             while not lifts and k + 1 < n_rec - 1:
                 # a whole block at once where neither its smallest nor its
                 # largest sample lifts the wall: the test is monotone in ag,
@@ -508,6 +515,9 @@ def run_history(
                 if _lifts(scale * ag[k + 1], A0p, A1p, two, A0n, A1n):
                     break
                 k += 1
+            # the steps skipped start at rest
+            for j in range(k_rest + 1, min(k + 1, n_record)):
+                record[j] = rest_at
         elif fast:
             a_s = s * (prm[_P_APOS] if s > 0 else prm[_P_ANEG])
             turns_matter = want_peaks or (one and s < 0.0)
@@ -523,6 +533,8 @@ def run_history(
                 x, v = x1, v1
                 peak = max(peak, abs(x))
                 k += 1
+                if k < n_record:
+                    record[k] = x
         ga0 = scale * ag[k] if k < n_rec else 0.0
         hold = False
         t_lift = -1.0
@@ -668,6 +680,9 @@ def run_history(
                 v = v_after
                 if ev == 1:
                     s = 1.0 if v_after > 0.0 else -1.0
+        # the end of the step (a wall at rest is where it rests)
+        if k + 1 < n_record:
+            record[k + 1] = x
     a_s = prm[_P_APOS] if s > 0 else prm[_P_ANEG]
     max_ratio = max(max_ratio, peak / a_s)
     return False, math.nan, max_ratio, n_imp
@@ -712,6 +727,7 @@ def _row(
         logs[1, i],
         logs[2, i],
         logs[3, i],
+        logs[3, i, :0],
     )
     out[0][i], out[1][i], out[2][i], out[3][i] = o, t, m, k
 
@@ -753,3 +769,18 @@ def batch_kernel(
     for i in numba.prange(n):
         _row(ag, ag_range, h, scale, n_tail, to_rest, prm, law, terms, x0, v0, logs, out, i)
     return over, t_over, max_ratio, n_imp, logs[0], logs[1], logs[2], logs[3]
+
+
+@numba.njit(cache=True)
+def free_record(
+    h: float, n: int, prm: FloatArray, law: FloatArray, terms: FlightFunction, x0: float, v0: float
+) -> tuple[bool, FloatArray]:
+    """:func:`run_history` of one wall rocking freely from ``x0`` [rad], ``v0`` [rad/s] over ``n``
+    steps of ``h`` [s]: whether it overturned, and theta [rad] at 0, h, ..., n h (NaN after an overturning)."""
+    ag = np.zeros(n)
+    record = np.full(n + 1, np.nan)
+    none = np.empty(0)
+    over, _, _, _ = run_history(
+        ag, _block_range(ag), h, 1.0, 0, False, prm, law, terms, x0, v0, none, none, none, none, record
+    )
+    return over, record
