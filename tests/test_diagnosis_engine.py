@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from scipy import optimize
+from scipy import optimize, stats
 
 from rocklab.diagnosis.estimation import fit, noise, parameter_intervals, resampling, within_slope
 from rocklab.diagnosis.estimation.problem import Problem
@@ -97,15 +97,16 @@ def test_one_step_heldout_matches_the_refit_of_every_fold(n_tests):
     f = fit(problem, every, ("decay",))
     ho = resampling.heldout(problem, ("decay",), f)
     # the refit of each fold's training tests (the engine's former held-out fits), each held-out
-    # test scored by the normal law of the training variance's shape at its own best scale
+    # residual scored by the Student-t its training residuals predict (scipy's law, the normal law's
+    # constants taken out); the noise here is one variance, so one degree of freedom a residual
     ref = np.full(n_tests, np.nan)
     for held in resampling._folds(n_tests):
         train = np.setdiff1d(every, held)
         g = fit(problem, train, ("decay",), x0=f.values)
         r, x = problem.residuals(held, ("decay",), g.values)["g"], problem.noise(held)["g"]
         v = g.var["g"][0] + g.var["g"][1] * x**2 + noise.VAR_FLOOR
-        scale = np.mean(r**2 / v, axis=1, keepdims=True)
-        ref[held] = np.mean(r**2 / (scale * v) + np.log(scale * v), axis=1)
+        nu = problem.x[train].size
+        ref[held] = np.mean(-2.0 * stats.t.logpdf(r, nu, scale=np.sqrt(v)) - np.log(2.0 * np.pi), axis=1)
     base = resampling.heldout(problem, ())["deviance"]
     # per test, and the gain over the base model the selection weighs, to a per cent of that gain
     assert ho["deviance"] == pytest.approx(ref, abs=0.01 * np.mean(base - ref))
@@ -167,6 +168,26 @@ def test_noise_model_is_the_profile_minimum_of_a_fine_grid():
         best = min(m2ll(s, rho * s) for rho in grid for s in [np.mean(r2 / (1.0 + rho * x2))])
         best = min(best, m2ll(np.mean(r2), 0.0), m2ll(1e-300, np.mean(r2 / x2)))
         assert m2ll(v0, v1) <= best + 1e-6 * abs(best) + 1e-6, k
+
+
+def test_a_held_out_residual_is_scored_by_the_t_its_training_residuals_predict():
+    """The predictive law of a residual whose variance was estimated from n residuals is Student's t on n
+    degrees of freedom (one fewer where the shape of the variance is fitted too); the normal law's
+    deviance as n grows, and on three near-noiseless training residuals a residual ten times their scale
+    costs some 15 units, not the normal law's 100."""
+    r, x = np.array([0.1, -0.3, 2.0]), np.zeros(3)
+    var = {"g": (0.04, 0.0)}
+    for nu in (1, 3, 10):
+        ref = float(np.sum(-2.0 * stats.t.logpdf(r, nu, scale=0.2))) - 3 * np.log(2.0 * np.pi)
+        assert noise.deviance({"g": r}, {"g": x}, var, {"g": nu}) == pytest.approx(ref, rel=1e-8)
+    normal = noise.deviance({"g": r}, {"g": x}, var)
+    assert noise.deviance({"g": r}, {"g": x}, var, {"g": 1e7}) == pytest.approx(normal, rel=1e-5)
+    # the degrees of freedom: the residuals, less the shape where s0 and s1 are both fitted
+    R, X = {"a": np.array([1.0, 2.0, np.nan]), "b": np.arange(6.0)}, {"a": np.ones(3), "b": np.ones(6)}
+    assert noise.predictive_dof(R, X, {"a": (1.0, 0.0), "b": (1.0, 0.5)}) == {"a": 2, "b": 5}
+    R, X, tiny = {"g": np.array([1e-2])}, {"g": np.zeros(1)}, {"g": (1e-6, 0.0)}
+    assert 12.0 < noise.deviance(R, X, tiny, {"g": 3}) - np.log(1e-6) < 17.0
+    assert noise.deviance(R, X, tiny) - np.log(1e-6) == pytest.approx(100.0, rel=1e-3)
 
 
 def test_a_rejection_is_decided_on_its_step_and_worded_as_the_files_had_it():
@@ -272,45 +293,3 @@ def test_a_fits_held_out_result_is_made_once():
     again = resampling.heldout(problem, ("decay",), f)
     assert first.keys() == again.keys()
     assert all(np.array_equal(first[k], again[k], equal_nan=True) for k in first)
-
-
-class UnequalNoiseProblem(Problem):
-    """Residuals a s - y of tests alike in a true effect (a = 1 on s of rms 0.01) and unlike in their
-    noise: the first test's scatter is 0.01, the other's 0.03, nine times the variance (issue 42)."""
-
-    def __init__(self, seed=0):
-        rng = np.random.default_rng(seed)
-        self.s = np.tile(0.01 * np.sqrt(2.0) * np.sin(np.linspace(0.0, 12.0, 400)), (2, 1))
-        self.y = self.s + rng.normal(0.0, 1.0, self.s.shape) * np.array([[0.01], [0.03]])
-        self.n_tests = 2
-        self.causes = (_Cause("effect", (Param("a", -5.0, 5.0, 0.0, 0.1),)),)
-
-    def subset(self, idx):
-        return np.asarray(idx)
-
-    def residuals(self, sub, ext, values):
-        return {"g": values.get("a", 0.0) * self.s[sub] - self.y[sub]}
-
-    def noise(self, sub):
-        return {"g": np.ones(self.s[sub].shape)}
-
-
-def test_a_noisier_test_held_out_gains_what_its_residuals_gain():
-    """A true effect halves the quiet test's variance; held out, the test nine times noisier loses
-    likelihood under the training variance the effect shrank (its -2 log L per observation: the old
-    score), though its residuals shrank too; with its own scale it gains log(1 + 1/9) per observation,
-    the share of its mean square the effect explains."""
-    problem = UnequalNoiseProblem()
-    f = fit(problem, np.arange(2), ("effect",))
-    assert f.values["a"] == pytest.approx(1.0, abs=0.1)
-    base, model = resampling.heldout(problem, ())["deviance"], resampling.heldout(problem, ("effect",), f)["deviance"]
-    gain = base - model
-    # the old score of the noisy test held out: the normal law of the quiet test's variance under each model
-    old = []
-    for ext, values in (((), {}), (("effect",), {"a": fit(problem, [0], ("effect",)).values["a"]})):
-        v = np.mean(problem.residuals([0], ext, values)["g"] ** 2)
-        r = problem.residuals([1], ext, values)["g"]
-        old.append(np.mean(r**2 / v + np.log(v)))
-    assert old[0] - old[1] < -1.0
-    assert gain[1] == pytest.approx(np.log(1.0 + 1.0 / 9.0), rel=0.3)
-    assert gain[0] == pytest.approx(np.log(2.0), rel=0.3)

@@ -26,7 +26,7 @@ import numpy.typing as npt
 
 from rocklab._imports import lazy_module
 from rocklab.diagnosis.estimation.fitting import Fit, fit, linearised
-from rocklab.diagnosis.estimation.noise import finite_residuals, group_variances, own_scale_deviance
+from rocklab.diagnosis.estimation.noise import deviance, finite_residuals, group_variances, predictive_dof
 from rocklab.diagnosis.estimation.problem import Problem
 from rocklab.diagnosis.estimation.systematic import by_group, systematic_uncertainty, widened
 from rocklab.inference.intervals import MIN_BOOTSTRAP, expanded, percentile_interval
@@ -114,14 +114,10 @@ def heldout(problem: Problem[Any], ext: Collection[str], fitted: Fit | None = No
     linearisation of the bootstrap, :func:`parameter_intervals`); its noise
     model (:func:`~rocklab.diagnosis.estimation.noise.noise_variance`) is
     then that of the training tests' residuals at the step's parameters, and
-    each held-out test is scored by the normal law of that model's shape at
-    the test's own scale
-    (:func:`~rocklab.diagnosis.estimation.noise.own_scale_deviance`): the
-    tests of a series differ in noise (nine times in mean square between
-    the tests of a gyroscope's series), and under the training tests' scale
-    a model that moved it turned a test whose residuals it shrank into a
-    loss (issue 42), so that a true cause was within the noise of the
-    paired comparison (:func:`paired_gain`).
+    the held-out residuals are scored by the Student-t it predicts on their
+    number (:func:`~rocklab.diagnosis.estimation.noise.predictive_dof`): the
+    few residuals of a short series' training tests fix their variance
+    loosely, and the normal law would take that variance as known.
     A fold leaves out a fifth of the tests (one, up to six): its fit
     differs from the full one by about its standard errors, where the
     residuals are linear in the parameters, so the step lands on the refit
@@ -132,8 +128,7 @@ def heldout(problem: Problem[Any], ext: Collection[str], fitted: Fit | None = No
     -------
     dict
         ``deviance`` (per test, -2 log L per observation of the held-out test
-        under the training fit, at its own scale; its groups of two residuals
-        or more) and the per-test arrays of
+        under the training fit) and the per-test arrays of
         :meth:`Problem.heldout_measures`.
     """
     n = problem.n_tests
@@ -155,11 +150,12 @@ def heldout(problem: Problem[Any], ext: Collection[str], fitted: Fit | None = No
         R = problem.residuals(every, ext, values)
         Rt, Xt = {g: r[train] for g, r in R.items()}, {g: x[train] for g, x in X.items()}
         var = group_variances(Rt, Xt)
+        dof = predictive_dof(Rt, Xt, var)
         for i in held:
             Ri = {g: r[i : i + 1] for g, r in R.items() if g in var}
             Xi = {g: X[g][i : i + 1] for g in Ri}
-            nobs = sum(r.size for r, _ in finite_residuals(Ri, Xi).values() if r.size >= 2)
-            dev[i] = own_scale_deviance(Ri, Xi, var) / nobs if nobs else np.nan
+            nobs = sum(r.size for r, _ in finite_residuals(Ri, Xi).values())
+            dev[i] = deviance(Ri, Xi, var, dof) / nobs if nobs else np.nan
         for name, x in problem.heldout_measures(problem.subset(held), ext, values).items():
             meas.setdefault(name, np.full(n, np.nan))[held] = x
     return {"deviance": dev, **meas}
