@@ -435,30 +435,36 @@ def score(entry, truth, parts=(), optional=None):
             if not _inside(joint, x):
                 missed_joint.append(f"{cause}.{k} = {x:g} outside {joint}{_by_how_much(cause, k, x, joint)}")
     n_params = sum(len(truth[c]) for c in hidden & named)
-    wrong = sorted(named - hidden)
-    # a wrong cause named with the caveat that it may stand in for one the design cannot identify is flagged
-    caveat = {c: sorted(found.get(c, {}).get("may_stand_in_for") or {}) for c in wrong}
     blind = entry.get("not_identifiable") or {}
     unseen = sorted(c for c in hidden - named if c in blind)
-    return {
-        "verdict": sorted(named),
-        "unexplained": bool(entry["unexplained"]),
+    return _named(entry, named, found, sorted(named - hidden)) | {
         "named_right": named == hidden and not missed_joint,
         "named_right_marginal": named == hidden and not missed,
         "verdict_right": named == hidden,
         "missing": sorted(hidden - named),
-        "wrong": wrong,
-        "may_stand_in_for": {c: v for c, v in caveat.items() if v},
-        "confident_misname": any(not v for v in caveat.values()) and not entry["unexplained"],
         "params_covered": int(covered),
         "params_widened_by_systematic": int(widened),
         "params_named": int(n_params),
         "outside": missed,
         "outside_joint": missed_joint,
         "errors_in_smallest": [e for e in errors if e is not None],
-        "too_small": entry.get("too_small"),
         "not_identifiable": bool(entry.get("too_small")) or bool(unseen),
         "why_not_identifiable": entry.get("too_small") or "; ".join(blind[c] for c in unseen),
+    }
+
+
+def _named(entry, named, found, wrong):
+    """What a verdict named, the causes ``wrong`` among them, and whether one is a confident misname: a
+    wrong cause named neither with the caveat that it may stand in for one the design cannot identify
+    nor under the ``unexplained`` flag (the rule of :func:`score` and :func:`score_change`)."""
+    caveat = {c: sorted(found.get(c, {}).get("may_stand_in_for") or {}) for c in wrong}
+    return {
+        "verdict": sorted(named),
+        "unexplained": bool(entry["unexplained"]),
+        "wrong": wrong,
+        "may_stand_in_for": {c: v for c, v in caveat.items() if v},
+        "confident_misname": any(not v for v in caveat.values()) and not entry["unexplained"],
+        "too_small": entry.get("too_small"),
     }
 
 
@@ -487,7 +493,6 @@ def score_change(entry, n_tests):
     ci = placed[0]["ci95_size"] if placed else None
     covered = _inside(ci, size)
     wrong = sorted(named - {effect})
-    caveat = {c: sorted(found[c].get("may_stand_in_for") or {}) for c in wrong}
     notes = [c["note"] for c in tested if c.get("note")]
     untestable = bool(entry.get("too_small")) or (not seen and bool(notes))
     outside = (
@@ -495,23 +500,17 @@ def score_change(entry, n_tests):
         if covered or not placed
         else [f"change of {name} = {size:+g} outside {ci}{_by_how_much(effect, name, size, ci)}"]
     )
-    return {
-        "verdict": sorted(named),
-        "unexplained": bool(entry["unexplained"]),
+    return _named(entry, named, found, wrong) | {
         "named_right": covered and not wrong,
         "named_right_marginal": covered and not wrong,
         "verdict_right": bool(seen) and not wrong,
         "missing": [] if seen else [f"a change of {effect}.{name} by {size:+g} from test {k}"],
-        "wrong": wrong,
-        "may_stand_in_for": {c: v for c, v in caveat.items() if v},
-        "confident_misname": any(not v for v in caveat.values()) and not entry["unexplained"],
         "params_covered": int(covered),
         "params_widened_by_systematic": 0,
         "params_named": len(placed[:1]),
         "outside": outside,
         "outside_joint": outside,
         "errors_in_smallest": [_error(effect, name, size, placed[0]["size"])] if placed else [],
-        "too_small": entry.get("too_small"),
         "not_identifiable": untestable,
         "why_not_identifiable": (entry.get("too_small") or "; ".join(notes)) if untestable else "",
     }
