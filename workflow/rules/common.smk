@@ -83,9 +83,10 @@ DIAGNOSIS_JOBS = CAMPAIGN.diagnosis_jobs(config["diagnosis"]["max_tests_per_job"
 # maps; the maps come next (the paper's, independent of the campaign, fill
 # the cores the chain leaves idle), figures and pages last.  With equal
 # priorities a map job started first could hold a core for most of the
-# reduction and leave the diagnosis to the end.  Of the figures the
-# diagnosis' (about 11 s) starts first: last, it ran alone on one core.
-PRIORITY = {"campaign_chain": 20, "maps": 10, "longest_figures": 5}
+# reduction and leave the diagnosis to the end.  Of the jobs only the docs
+# wait for, the long ones start first (the diagnosis' figures, the
+# instruments' accuracy, about 10 s each): last, each ran alone on one core.
+PRIORITY = {"campaign_chain": 20, "maps": 10, "long_leaves": 5}
 #: The diagnosis job of each series.
 DIAGNOSIS_JOB = {s: job for job, series in DIAGNOSIS_JOBS.items() for s in series}
 _SERIES_OF_TEST = {t: s for s, ids in TESTS_BY_SERIES.items() for t in ids}

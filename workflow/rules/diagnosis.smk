@@ -114,7 +114,7 @@ rule diagnosis_figures:
         res("logs", "diagnosis_figures.log"),
     benchmark:
         res("benchmarks", "diagnosis_figures.tsv")
-    priority: PRIORITY["longest_figures"]
+    priority: PRIORITY["long_leaves"]
     params:
         tests={s: [test_file(t) for t in ids] for s, ids in TESTS_BY_SERIES.items()},
     script:

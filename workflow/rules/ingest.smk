@@ -51,6 +51,7 @@ rule instrument_accuracy:
         res("logs", "instrument_accuracy.log"),
     benchmark:
         res("benchmarks", "instrument_accuracy.tsv")
+    priority: PRIORITY["long_leaves"]
     params:
         n_tests=config["instruments"]["accuracy_tests"],
     script:

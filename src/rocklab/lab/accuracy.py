@@ -105,7 +105,6 @@ def instrument_accuracy(
     from rocklab.lab.motion import motion_from_dataset, stored_motion
     from rocklab.lab.reduction import reduce_test
     from rocklab.lab.virtual_lab import DEFAULT_SPECIMENS, VirtualTest, simulate_virtual_test, write_campaign
-    from rocklab.lab.virtual_record import usual_layout
 
     specs = DEFAULT_SPECIMENS.specimen.tolist()
     plan = [
@@ -119,15 +118,18 @@ def instrument_accuracy(
     resolved: list[float] = []
     first: list[float] = []
     held = 0
+    truths: dict[str, dict[str, Any]] = {}
+
+    def simulate(test: VirtualTest, *args: Any) -> tuple[Any, Any, dict[str, Any]]:
+        # the truth of the record written, kept rather than simulated a second time
+        t, readings, truths[test.test_id] = simulate_virtual_test(test, *args)
+        return t, readings, truths[test.test_id]
+
     with tempfile.TemporaryDirectory() as tmp:
-        write_campaign(tmp, plan, seed=seed)
+        write_campaign(tmp, plan, seed=seed, simulate=simulate)
         campaign = open_campaign(tmp)
-        streams = np.random.SeedSequence(seed).spawn(len(plan))
-        for test, ss in zip(plan, streams):
-            spec = DEFAULT_SPECIMENS.set_index("specimen").loc[test.specimen]
-            # the same stream and layout as write_campaign: the same record, and its truth
-            layout = usual_layout(test.setup, spec.length_mm, spec.height_mm, spec.thickness_mm, False)
-            _, _, truth = simulate_virtual_test(test, spec, layout, np.random.default_rng(ss))
+        for test in plan:
+            truth = truths[test.test_id]
             ds = reduce_test(campaign, test.test_id)
             motion = motion_from_dataset(stored_motion(ds))
             errors.append(impact_errors(motion.impacts, truth["impacts"]))

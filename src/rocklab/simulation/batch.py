@@ -28,7 +28,7 @@ from rocklab.simulation.engine import batch_kernel as _kernel
 from rocklab.simulation.engine import free_record as _record
 from rocklab.simulation.engine import slot
 from rocklab.simulation.flight_terms import flight_function
-from rocklab.simulation.rocking_model import OVERTURN, REST_TOL, RockingModel
+from rocklab.simulation.rocking_model import OVERTURN, REST_TOL, RockingModel, record_times
 
 
 def _model_arrays(
@@ -335,7 +335,7 @@ def free_record(
     NotImplementedError
         For a wall the engine does not hold (:meth:`RockingModel.numba_params`, :meth:`RockingModel.numba_law`).
     """
-    t = np.arange(0.0, t_end + 0.5 / fs, 1.0 / fs)
+    t = record_times(t_end, fs)
     prm, law, terms = _model_arrays([model], overturn, rest_tol, substeps)
     over, theta = _record(1.0 / fs, t.size - 1, prm[0], law[0], terms, float(theta0), float(thetadot0))
     # the grid's last sample may lie past t_end by up to half an interval: the reference leaves it NaN

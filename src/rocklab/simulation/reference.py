@@ -20,7 +20,7 @@ from rocklab._imports import lazy_module
 from rocklab.physics import impact as _impact
 from rocklab.physics.flight import FloatArray, Floats
 from rocklab.simulation.engine import TURNED
-from rocklab.simulation.rocking_model import OVERTURN, REST_TOL, RockingHistory, RockingModel
+from rocklab.simulation.rocking_model import OVERTURN, REST_TOL, RockingHistory, RockingModel, record_times
 
 integrate = lazy_module("scipy.integrate")
 optimize = lazy_module("scipy.optimize")
@@ -131,7 +131,7 @@ def _reference(
     excursion = _impact.speed_law(law_base, -1)
     excursion = excursion if excursion is not None and excursion.excursion else None
     v_entry = 0.0
-    t_out = np.arange(0.0, t_end + 0.5 / fs, 1.0 / fs)
+    t_out = record_times(t_end, fs)
     theta_out = np.full(t_out.shape, np.nan)
     thetadot_out = np.full(t_out.shape, np.nan)
     rows = []

@@ -105,6 +105,12 @@ OVERTURN = math.pi / 2
 TermValues: TypeAlias = tuple[tuple[FlightTerm, Sequence[Floats]], ...]
 
 
+def record_times(t_end: float, fs: float) -> np.ndarray:
+    """The sample times [s] of a simulated record, 0 to ``t_end`` at ``fs`` [Hz] (the last
+    sample may lie past ``t_end`` by up to half an interval), of both simulators."""
+    return np.arange(0.0, t_end + 0.5 / fs, 1.0 / fs)
+
+
 def _sign(x: float) -> float:
     """sign(x) of a float, 0 at 0 (the scalar right-hand side of the reference)."""
     return 1.0 if x > 0.0 else (-1.0 if x < 0.0 else 0.0)
