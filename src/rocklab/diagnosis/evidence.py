@@ -343,7 +343,7 @@ def residuals(S: TestStack, mp: ModelParams, cache=None):
     a_ap = mp.hinge(apex_side)
     v_hat, _, tau_hat, _, _ = impact_speeds(S.vb, S.side, mp)
     cache = {} if cache is None else cache
-    lossy = any(np.any(loss[k]) for k in LOSSES)
+    lossy = any(np.count_nonzero(loss[k]) for k in LOSSES)
     if lossy:
         # the losses in flight move what the filter reads of a flight: its speeds and its duration
         if cache.get("read_of") is not S:
@@ -357,7 +357,7 @@ def residuals(S: TestStack, mp: ModelParams, cache=None):
     # peak to peak: from the measured apex before (theta0 at rest for the first), a landing,
     # the impact, a rise
     v_land = landing_speed(S.A[:, :-1], mp.hinge(S.side[:, 1:]), p, **loss)
-    v_land = np.c_[release(S, mp, timed=False)[0], v_land]
+    v_land = np.concatenate([release(S, mp, timed=False)[0][:, None], v_land], axis=1)
     R["peak"] = log_ratio(apex_after(impact_speeds(v_land, S.side, mp, timed=False)[0], a_ap, p, **loss), S.A, f)
     R["peak"][~S.resolved] = np.nan
     key = mp.a_pos.tobytes() + mp.a_neg.tobytes() + mp.rounding.tobytes()

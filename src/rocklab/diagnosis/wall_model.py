@@ -119,6 +119,10 @@ class ModelParams:
         (:func:`rocklab.physics.flight.flight_angle`)."""
         return flight_angle(A, self.hinge(side), per_test(self.rounding, side))
 
+    def log_columns(self):
+        """The columns of the test log the model holds (``extra``): :func:`log_columns` of its tests."""
+        return tuple(k[4:] for k in self.extra if k.startswith("log:"))
+
     def place(self, column=None):
         """n of each test: its place in the series, or in the range of the test log's ``column``
         (0 to 1); a wall without the column (the maps' wall) stands for the middle of the series."""
@@ -241,12 +245,6 @@ def release_rotation(theta0, a):
     return np.minimum(theta0, (1.0 - RELEASE_MARGIN) * a)
 
 
-def _amplitude_factor(e, v, mp, like):
-    return _impact.amplitude_factor(
-        e, per_test(mp.amp_a, like), per_test(mp.amp_b, like), v, per_test(mp.alpha, like), per_test(mp.p, like)
-    )
-
-
 def impact_speeds(v, side, mp: ModelParams, timed=True):
     """Take-off speed after an impact at speed v leaving hinge ``side``.
 
@@ -274,11 +272,20 @@ def impact_speeds(v, side, mp: ModelParams, timed=True):
         (0 where there is none) [rad/s].
     """
     c_s = np.where(side > 0, per_test(mp.c_pos, side), per_test(mp.c_neg, side))
-    e = per_test(mp.e0, side) * c_s
-    v_out = np.abs(e * _amplitude_factor(e, v, mp, side)) * v
-    depth, duration, v_in, w = (np.zeros(np.shape(v_out)) for _ in range(4))
+    amp_a, amp_b = per_test(mp.amp_a, side), per_test(mp.amp_b, side)
+    # thetadot_r (Eq. 16): Eq. 17's bracket and a law of the impact speed read the speeds against it
+    vr = overturning_velocity(per_test(mp.alpha, side), per_test(mp.p, side))
     gm = per_test(mp.gap_model, side)
-    if gm.any():
+    through = gm.any()
+    if through and gm.all():
+        # every impact swings through the gap (a one-sided series with one): no impact on the base alone
+        v_out: float | np.ndarray = 0.0
+    else:
+        e = per_test(mp.e0, side) * c_s
+        v_out = np.abs(e * _impact.amplitude_factor_at(e, amp_a, amp_b, np.abs(v) / vr)) * v
+    if not through:
+        depth, duration, v_in, w = (np.zeros(np.shape(v_out)) for _ in range(4))
+    else:
         p, a_in, g = per_test(mp.p, side), per_test(mp.a_neg, side), per_test(mp.gap, side)
         e_b = per_test(restitution.two_sided(mp.alpha), side)
         e_tr = per_test(restitution.transverse(mp.alpha), side) * c_s
@@ -286,7 +293,7 @@ def impact_speeds(v, side, mp: ModelParams, timed=True):
         U = potential(np.minimum(g, a_in), a_in, p)
         reach = 0.5 * v1**2 > U
         vg = np.sqrt(np.maximum(v1**2 - 2 * U, 0.0))
-        wg = np.abs(e_tr * _amplitude_factor(e_tr, vg, mp, side)) * vg
+        wg = np.abs(e_tr * _impact.amplitude_factor_at(e_tr, amp_a, amp_b, np.abs(vg) / vr)) * vg
         v2 = np.where(reach, np.sqrt(wg**2 + 2 * U), v1)
         d = np.where(reach, g, apex(0.5 * v1**2, a_in, p))
         tau = excursion_time(v1, v2, d, a_in, p) if timed else 0.0
@@ -297,7 +304,6 @@ def impact_speeds(v, side, mp: ModelParams, timed=True):
         w = np.where(gm & reach, wg, 0.0)
     if mp.speed_knots is not None:
         # e / e_an = g(v / thetadot_r), after the base law of the other causes
-        vr = overturning_velocity(per_test(mp.alpha, side), per_test(mp.p, side))
         g = _law.speed_factor(np.asarray(v) / vr, mp.speed_knots)
         with np.errstate(invalid="ignore", divide="ignore"):
             # within the physical bounds of the impact as a whole: no faster take-off than landing
