@@ -270,10 +270,13 @@ class TestStack:
     def of(cls, tests):
         n = max(max(t.n_impacts for t in tests), 1)
 
-        def pad(name):
-            return np.array([np.r_[getattr(t, name), np.full(n - t.n_impacts, np.nan)] for t in tests])
+        def padded(x, m):
+            return np.concatenate([x, np.full(n - m, np.nan)])
 
-        side = np.array([np.r_[t.sides, np.full(n - t.n_impacts, np.nan)] for t in tests])
+        def pad(name):
+            return np.array([padded(getattr(t, name), t.n_impacts) for t in tests])
+
+        side = np.array([padded(t.sides, t.n_impacts) for t in tests])
         floor = np.array([t.floor for t in tests])
         A = pad("peaks")
         par = np.array([[t.alpha, t.p, 1.0 / t.dt] for t in tests]).T[..., None]

@@ -277,10 +277,10 @@ def impact_speeds(v, side, mp: ModelParams, timed=True):
     vr = overturning_velocity(per_test(mp.alpha, side), per_test(mp.p, side))
     gm = per_test(mp.gap_model, side)
     through = gm.any()
-    if through and gm.all():
-        # every impact swings through the gap (a one-sided series with one): no impact on the base alone
-        v_out: float | np.ndarray = 0.0
-    else:
+    # every impact swings through the gap (a one-sided series with one): no impact on the base alone,
+    # and the excursion's values are the impacts' own
+    every = through and gm.all()
+    if not every:
         e = per_test(mp.e0, side) * c_s
         v_out = np.abs(e * _impact.amplitude_factor_at(e, amp_a, amp_b, np.abs(v) / vr)) * v
     if not through:
@@ -297,11 +297,16 @@ def impact_speeds(v, side, mp: ModelParams, timed=True):
         v2 = np.where(reach, np.sqrt(wg**2 + 2 * U), v1)
         d = np.where(reach, g, apex(0.5 * v1**2, a_in, p))
         tau = excursion_time(v1, v2, d, a_in, p) if timed else 0.0
-        v_out = np.where(gm, e_b * v2, v_out)
-        depth = np.where(gm, d, 0.0)
-        duration = np.where(gm, tau, 0.0)
-        v_in = np.where(gm & reach, vg, 0.0)
-        w = np.where(gm & reach, wg, 0.0)
+        if every:
+            v_out, depth = e_b * v2, d
+            duration = tau if timed else np.zeros(np.shape(gm))
+            v_in, w = np.where(reach, vg, 0.0), np.where(reach, wg, 0.0)
+        else:
+            v_out = np.where(gm, e_b * v2, v_out)
+            depth = np.where(gm, d, 0.0)
+            duration = np.where(gm, tau, 0.0)
+            v_in = np.where(gm & reach, vg, 0.0)
+            w = np.where(gm & reach, wg, 0.0)
     if mp.speed_knots is not None:
         # e / e_an = g(v / thetadot_r), after the base law of the other causes
         g = _law.speed_factor(np.asarray(v) / vr, mp.speed_knots)
@@ -374,9 +379,10 @@ def free_run(S, mp: ModelParams, n_max=600):
     v, t = release(S, mp)
     first = t.copy()
     A = a = None  # apex and own angle of the previous flight, from the first impact on
+    loss = mp.flight_loss()
     for k in range(n_max):
         if k:
-            v = landing_speed(A, a, mp.p, **mp.flight_loss())
+            v = landing_speed(A, a, mp.p, **loss)
         A, side, a, d, tau = next_flight(v, side, mp)
         out["t_before"][:, k] = t
         out["t_after"][:, k] = t + tau
