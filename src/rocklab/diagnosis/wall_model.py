@@ -297,14 +297,13 @@ def impact_speeds(v, side, mp: ModelParams, timed=True):
         v2 = np.where(reach, np.sqrt(wg**2 + 2 * U), v1)
         d = np.where(reach, g, apex(0.5 * v1**2, a_in, p))
         tau = excursion_time(v1, v2, d, a_in, p) if timed else 0.0
+        duration = np.where(gm, tau, 0.0)
         if every:
             v_out, depth = e_b * v2, d
-            duration = tau if timed else np.zeros(np.shape(gm))
             v_in, w = np.where(reach, vg, 0.0), np.where(reach, wg, 0.0)
         else:
             v_out = np.where(gm, e_b * v2, v_out)
             depth = np.where(gm, d, 0.0)
-            duration = np.where(gm, tau, 0.0)
             v_in = np.where(gm & reach, vg, 0.0)
             w = np.where(gm & reach, wg, 0.0)
     if mp.speed_knots is not None:
