@@ -64,7 +64,9 @@ class ModelParams:
     ``terms`` the terms in flight of laws beyond the losses zeta, mu, kappa:
     ``(term, values)`` pairs, ``term`` a
     :class:`rocklab.physics.law.FlightTerm` and ``values`` a per-test array
-    for each of its parameters (:meth:`with_term`).
+    for each of its parameters (:meth:`with_term`); ``walls`` what the walls
+    alone give (:meth:`of_walls`), shared with the models the laws make of
+    this one.
     """
 
     alpha: np.ndarray
@@ -89,11 +91,32 @@ class ModelParams:
     extra: dict = field(default_factory=dict)
     speed_knots: np.ndarray | None = None  # (tests, knots): e / e_an at the knots of physics.law.SpeedFactor
     terms: tuple = ()
+    walls: dict = field(default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self):
         for name in ("mu", "kappa"):
             if getattr(self, name) is None:
                 setattr(self, name, np.zeros_like(self.zeta))
+
+    def of_walls(self):
+        """What the walls alone give, per test: ``v_r``, thetadot_r of Eq. 16 [rad/s]; ``e_2s``,
+        Housner's e (Eq. 2) and ``e_tr``, that of the transverse walls (Eqs. 12-13) [-].
+
+        Made once for a model and the models its laws make of it (``walls`` goes with
+        :func:`dataclasses.replace`), which keep its alpha and p: a fit evaluates thousands of them.
+        A model of other alpha or p makes its own.
+        """
+        w = self.walls
+        if w.get("alpha") is not self.alpha or w.get("p") is not self.p:
+            w.clear()
+            w.update(
+                alpha=self.alpha,
+                p=self.p,
+                v_r=overturning_velocity(self.alpha, self.p),
+                e_2s=restitution.two_sided(self.alpha),
+                e_tr=restitution.transverse(self.alpha),
+            )
+        return w
 
     def flight_loss(self, like=None):
         """zeta, mu, kappa of the losses in flight (:func:`rocklab.physics.flight.loss_deceleration`),
@@ -162,7 +185,8 @@ class ModelParams:
         """The model of test ``i`` (scalars)."""
         arrays = {k: np.asarray(v)[i] for k, v in vars(self).items() if isinstance(v, np.ndarray)}
         terms = tuple((t, tuple(np.asarray(v)[i] for v in values)) for t, values in self.terms)
-        return replace(self, **arrays, extra={k: np.asarray(v)[i] for k, v in self.extra.items()}, terms=terms)
+        extra = {k: np.asarray(v)[i] for k, v in self.extra.items()}
+        return replace(self, **arrays, extra=extra, terms=terms, walls={})
 
 
 def stacked(models: Sequence[ModelParams]) -> ModelParams:
@@ -178,7 +202,7 @@ def stacked(models: Sequence[ModelParams]) -> ModelParams:
         (t, tuple(np.concatenate([m.terms[j][1][i] for m in models]) for i in range(len(values))))
         for j, (t, values) in enumerate(first.terms)
     )
-    return replace(first, **arrays, extra=extra, terms=terms)
+    return replace(first, **arrays, extra=extra, terms=terms, walls={})
 
 
 def branches(mp: ModelParams) -> tuple[bool, ...]:
@@ -273,8 +297,9 @@ def impact_speeds(v, side, mp: ModelParams, timed=True):
     """
     c_s = np.where(side > 0, per_test(mp.c_pos, side), per_test(mp.c_neg, side))
     amp_a, amp_b = per_test(mp.amp_a, side), per_test(mp.amp_b, side)
+    walls = mp.of_walls()
     # thetadot_r (Eq. 16): Eq. 17's bracket and a law of the impact speed read the speeds against it
-    vr = overturning_velocity(per_test(mp.alpha, side), per_test(mp.p, side))
+    vr = per_test(walls["v_r"], side)
     gm = per_test(mp.gap_model, side)
     through = gm.any()
     # every impact swings through the gap (a one-sided series with one): no impact on the base alone,
@@ -287,8 +312,8 @@ def impact_speeds(v, side, mp: ModelParams, timed=True):
         depth, duration, v_in, w = (np.zeros(np.shape(v_out)) for _ in range(4))
     else:
         p, a_in, g = per_test(mp.p, side), per_test(mp.a_neg, side), per_test(mp.gap, side)
-        e_b = per_test(restitution.two_sided(mp.alpha), side)
-        e_tr = per_test(restitution.transverse(mp.alpha), side) * c_s
+        e_b = per_test(walls["e_2s"], side)
+        e_tr = per_test(walls["e_tr"], side) * c_s
         v1 = e_b * v
         U = potential(np.minimum(g, a_in), a_in, p)
         reach = 0.5 * v1**2 > U
@@ -331,7 +356,7 @@ def next_flight(v, side, mp: ModelParams):
     depth, duration : ndarray
         The excursion past theta = 0 of the impact (:func:`impact_speeds`).
     """
-    v = np.where(v < mp.stop * overturning_velocity(mp.alpha, mp.p), 0.0, v)
+    v = np.where(v < mp.stop * mp.of_walls()["v_r"], 0.0, v)
     v_out, d, tau, _, _ = impact_speeds(v, side, mp)
     side = np.where(mp.one_sided, side, -side)
     a = mp.hinge(side)
