@@ -282,8 +282,9 @@ def impact_speeds(v, side, mp: ModelParams, timed=True):
     velocity: it carries the dissipation that sets e_an,1s apart from
     e_an,2s (Sect. 3), and as the gap closes the sequence tends to Eq. 14
     with the same calibration.  A law of the impact speed
-    (:class:`rocklab.physics.law.SpeedFactor`) acts last.  ``timed=False`` skips the duration (returned as 0), for a
-    caller that needs the speeds only.
+    (:class:`rocklab.physics.law.SpeedFactor`) acts last.  ``timed=False`` gives the take-off
+    speed alone (the excursion's depth, duration and speeds returned as 0), for a caller that
+    needs no more.
 
     Returns
     -------
@@ -308,9 +309,7 @@ def impact_speeds(v, side, mp: ModelParams, timed=True):
     if not every:
         e = per_test(mp.e0, side) * c_s
         v_out = np.abs(e * _impact.amplitude_factor_at(e, amp_a, amp_b, np.abs(v) / vr)) * v
-    if not through:
-        depth, duration, v_in, w = (np.zeros(np.shape(v_out)) for _ in range(4))
-    else:
+    if through:
         p, a_in, g = per_test(mp.p, side), per_test(mp.a_neg, side), per_test(mp.gap, side)
         e_b = per_test(walls["e_2s"], side)
         e_tr = per_test(walls["e_tr"], side) * c_s
@@ -320,17 +319,15 @@ def impact_speeds(v, side, mp: ModelParams, timed=True):
         vg = np.sqrt(np.maximum(v1**2 - 2 * U, 0.0))
         wg = np.abs(e_tr * _impact.amplitude_factor_at(e_tr, amp_a, amp_b, np.abs(vg) / vr)) * vg
         v2 = np.where(reach, np.sqrt(wg**2 + 2 * U), v1)
+        v_out = e_b * v2 if every else np.where(gm, e_b * v2, v_out)
+    if through and timed:
         d = np.where(reach, g, apex(0.5 * v1**2, a_in, p))
-        tau = excursion_time(v1, v2, d, a_in, p) if timed else 0.0
-        duration = np.where(gm, tau, 0.0)
-        if every:
-            v_out, depth = e_b * v2, d
-            v_in, w = np.where(reach, vg, 0.0), np.where(reach, wg, 0.0)
-        else:
-            v_out = np.where(gm, e_b * v2, v_out)
-            depth = np.where(gm, d, 0.0)
-            v_in = np.where(gm & reach, vg, 0.0)
-            w = np.where(gm & reach, wg, 0.0)
+        on = reach if every else gm & reach
+        depth = d if every else np.where(gm, d, 0.0)
+        duration = np.where(gm, excursion_time(v1, v2, d, a_in, p), 0.0)
+        v_in, w = np.where(on, vg, 0.0), np.where(on, wg, 0.0)
+    else:
+        depth, duration, v_in, w = (np.zeros(np.shape(v_out)) for _ in range(4))
     if mp.speed_knots is not None:
         # e / e_an = g(v / thetadot_r), after the base law of the other causes
         g = _law.speed_factor(np.asarray(v) / vr, mp.speed_knots)
