@@ -66,7 +66,7 @@ def _some(x: Floats) -> bool | np.bool_:
 def _flat(*xs: Floats) -> tuple[tuple[int, ...], list[FloatArray]]:
     """The shape of xs broadcast together and each of xs broadcast to it, as a flat contiguous float array.
 
-    :func:`numpy.broadcast_arrays` then ``ravel``, the same values, at a fifth of its cost on the small
+    :func:`numpy.broadcast_arrays` then ``ravel``, the same values, at a quarter of its cost on the small
     arrays of the diagnosis's hot path: an array of the full shape is its own ravel (a view where it is
     contiguous), only the others are copied out.
     """
