@@ -84,3 +84,23 @@ def test_the_apex_after_losses_is_that_of_each_flight_alone_and_nan_stays_nan():
     np.testing.assert_allclose(stacked, alone, rtol=1e-12, atol=0.0)
     # the balance solved: the apex each take-off speed was made for
     np.testing.assert_allclose(stacked[np.isfinite(A)], A[np.isfinite(A)], rtol=1e-9, atol=1e-15)
+
+
+def test_flat_is_broadcast_arrays_raveled_bit_for_bit():
+    """The closed forms' broadcast (flight._flat): numpy's broadcast_arrays then ravel, the same
+    shape and bits, each flat array contiguous, whatever the inputs' shapes, strides and kinds."""
+    from rocklab.physics.flight import _flat
+
+    full = np.arange(12.0).reshape(3, 4) / 7.0
+    for xs in (
+        (full, full[:, :1], 2.0),
+        (full[:, ::2], np.array([[np.nan], [-0.0], [1.0]]), np.float64(3.0)),
+        (0.5, 1, np.array(2.0)),
+        (full.T, full[:, 0], [1.0, 2.0, 3.0]),
+    ):
+        shape, flat = _flat(*xs)
+        ref = np.broadcast_arrays(*(np.asarray(x, float) for x in xs))
+        assert shape == ref[0].shape
+        for x, y in zip(flat, ref):
+            assert x.flags.c_contiguous and x.dtype == np.float64
+            assert x.tobytes() == y.ravel().tobytes()

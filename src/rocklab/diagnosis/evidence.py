@@ -270,10 +270,13 @@ class TestStack:
     def of(cls, tests):
         n = max(max(t.n_impacts for t in tests), 1)
 
-        def pad(name):
-            return np.array([np.r_[getattr(t, name), np.full(n - t.n_impacts, np.nan)] for t in tests])
+        def padded(x, m):
+            return np.concatenate([x, np.full(n - m, np.nan)])
 
-        side = np.array([np.r_[t.sides, np.full(n - t.n_impacts, np.nan)] for t in tests])
+        def pad(name):
+            return np.array([padded(getattr(t, name), t.n_impacts) for t in tests])
+
+        side = np.array([padded(t.sides, t.n_impacts) for t in tests])
         floor = np.array([t.floor for t in tests])
         A = pad("peaks")
         par = np.array([[t.alpha, t.p, 1.0 / t.dt] for t in tests]).T[..., None]
@@ -343,7 +346,7 @@ def residuals(S: TestStack, mp: ModelParams, cache=None):
     a_ap = mp.hinge(apex_side)
     v_hat, _, tau_hat, _, _ = impact_speeds(S.vb, S.side, mp)
     cache = {} if cache is None else cache
-    lossy = any(np.any(loss[k]) for k in LOSSES)
+    lossy = any(np.count_nonzero(loss[k]) for k in LOSSES)
     if lossy:
         # the losses in flight move what the filter reads of a flight: its speeds and its duration
         if cache.get("read_of") is not S:
@@ -357,7 +360,7 @@ def residuals(S: TestStack, mp: ModelParams, cache=None):
     # peak to peak: from the measured apex before (theta0 at rest for the first), a landing,
     # the impact, a rise
     v_land = landing_speed(S.A[:, :-1], mp.hinge(S.side[:, 1:]), p, **loss)
-    v_land = np.c_[release(S, mp, timed=False)[0], v_land]
+    v_land = np.concatenate([release(S, mp, timed=False)[0][:, None], v_land], axis=1)
     R["peak"] = log_ratio(apex_after(impact_speeds(v_land, S.side, mp, timed=False)[0], a_ap, p, **loss), S.A, f)
     R["peak"][~S.resolved] = np.nan
     key = mp.a_pos.tobytes() + mp.a_neg.tobytes() + mp.rounding.tobytes()

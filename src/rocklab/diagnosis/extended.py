@@ -37,10 +37,13 @@ def model_params(
 
     The causes act in catalogue order; the values of causes outside ``ext``
     are not used.  ``base``: :func:`rocklab.diagnosis.wall_model.base_params` of
-    ``tests`` already made (the causes replace its arrays, never change them).
+    ``tests`` already made (the causes replace its arrays, never change them),
+    which holds the columns of their test log
+    (:meth:`rocklab.diagnosis.wall_model.ModelParams.log_columns`).
     """
     # a drift along a column of the test log that these tests (the maps' wall) lack still acts
-    columns = set(log_columns(tests)) | catalogue.log_columns_of(ext)
+    own = log_columns(tests) if base is None else base.log_columns()
+    columns = set(own) | catalogue.log_columns_of(ext)
     return model_of(tests, catalogue.laws(ext, values, tuple(sorted(columns))), base)
 
 

@@ -64,7 +64,9 @@ class ModelParams:
     ``terms`` the terms in flight of laws beyond the losses zeta, mu, kappa:
     ``(term, values)`` pairs, ``term`` a
     :class:`rocklab.physics.law.FlightTerm` and ``values`` a per-test array
-    for each of its parameters (:meth:`with_term`).
+    for each of its parameters (:meth:`with_term`); ``walls`` what the walls
+    alone give (:meth:`of_walls`), shared with the models the laws make of
+    this one.
     """
 
     alpha: np.ndarray
@@ -89,11 +91,32 @@ class ModelParams:
     extra: dict = field(default_factory=dict)
     speed_knots: np.ndarray | None = None  # (tests, knots): e / e_an at the knots of physics.law.SpeedFactor
     terms: tuple = ()
+    walls: dict = field(default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self):
         for name in ("mu", "kappa"):
             if getattr(self, name) is None:
                 setattr(self, name, np.zeros_like(self.zeta))
+
+    def of_walls(self):
+        """What the walls alone give, per test: ``v_r``, thetadot_r of Eq. 16 [rad/s]; ``e_2s``,
+        Housner's e (Eq. 2) and ``e_tr``, that of the transverse walls (Eqs. 12-13) [-].
+
+        Made once for a model and the models its laws make of it (``walls`` goes with
+        :func:`dataclasses.replace`), which keep its alpha and p: a fit evaluates thousands of them.
+        A model of other alpha or p makes its own.
+        """
+        w = self.walls
+        if w.get("alpha") is not self.alpha or w.get("p") is not self.p:
+            w.clear()
+            w.update(
+                alpha=self.alpha,
+                p=self.p,
+                v_r=overturning_velocity(self.alpha, self.p),
+                e_2s=restitution.two_sided(self.alpha),
+                e_tr=restitution.transverse(self.alpha),
+            )
+        return w
 
     def flight_loss(self, like=None):
         """zeta, mu, kappa of the losses in flight (:func:`rocklab.physics.flight.loss_deceleration`),
@@ -118,6 +141,10 @@ class ModelParams:
         """Rocking angle [rad] of a flight of apex A [rad] on hinge ``side``
         (:func:`rocklab.physics.flight.flight_angle`)."""
         return flight_angle(A, self.hinge(side), per_test(self.rounding, side))
+
+    def log_columns(self):
+        """The columns of the test log the model holds (``extra``): :func:`log_columns` of its tests."""
+        return tuple(k[4:] for k in self.extra if k.startswith("log:"))
 
     def place(self, column=None):
         """n of each test: its place in the series, or in the range of the test log's ``column``
@@ -158,7 +185,8 @@ class ModelParams:
         """The model of test ``i`` (scalars)."""
         arrays = {k: np.asarray(v)[i] for k, v in vars(self).items() if isinstance(v, np.ndarray)}
         terms = tuple((t, tuple(np.asarray(v)[i] for v in values)) for t, values in self.terms)
-        return replace(self, **arrays, extra={k: np.asarray(v)[i] for k, v in self.extra.items()}, terms=terms)
+        extra = {k: np.asarray(v)[i] for k, v in self.extra.items()}
+        return replace(self, **arrays, extra=extra, terms=terms, walls={})
 
 
 def stacked(models: Sequence[ModelParams]) -> ModelParams:
@@ -174,7 +202,7 @@ def stacked(models: Sequence[ModelParams]) -> ModelParams:
         (t, tuple(np.concatenate([m.terms[j][1][i] for m in models]) for i in range(len(values))))
         for j, (t, values) in enumerate(first.terms)
     )
-    return replace(first, **arrays, extra=extra, terms=terms)
+    return replace(first, **arrays, extra=extra, terms=terms, walls={})
 
 
 def branches(mp: ModelParams) -> tuple[bool, ...]:
@@ -241,12 +269,6 @@ def release_rotation(theta0, a):
     return np.minimum(theta0, (1.0 - RELEASE_MARGIN) * a)
 
 
-def _amplitude_factor(e, v, mp, like):
-    return _impact.amplitude_factor(
-        e, per_test(mp.amp_a, like), per_test(mp.amp_b, like), v, per_test(mp.alpha, like), per_test(mp.p, like)
-    )
-
-
 def impact_speeds(v, side, mp: ModelParams, timed=True):
     """Take-off speed after an impact at speed v leaving hinge ``side``.
 
@@ -260,8 +282,9 @@ def impact_speeds(v, side, mp: ModelParams, timed=True):
     velocity: it carries the dissipation that sets e_an,1s apart from
     e_an,2s (Sect. 3), and as the gap closes the sequence tends to Eq. 14
     with the same calibration.  A law of the impact speed
-    (:class:`rocklab.physics.law.SpeedFactor`) acts last.  ``timed=False`` skips the duration (returned as 0), for a
-    caller that needs the speeds only.
+    (:class:`rocklab.physics.law.SpeedFactor`) acts last.  ``timed=False`` gives the take-off
+    speed alone (the excursion's depth, duration and speeds returned as 0), for a caller that
+    needs no more.
 
     Returns
     -------
@@ -274,30 +297,39 @@ def impact_speeds(v, side, mp: ModelParams, timed=True):
         (0 where there is none) [rad/s].
     """
     c_s = np.where(side > 0, per_test(mp.c_pos, side), per_test(mp.c_neg, side))
-    e = per_test(mp.e0, side) * c_s
-    v_out = np.abs(e * _amplitude_factor(e, v, mp, side)) * v
-    depth, duration, v_in, w = (np.zeros(np.shape(v_out)) for _ in range(4))
+    amp_a, amp_b = per_test(mp.amp_a, side), per_test(mp.amp_b, side)
+    walls = mp.of_walls()
+    # thetadot_r (Eq. 16): Eq. 17's bracket and a law of the impact speed read the speeds against it
+    vr = per_test(walls["v_r"], side)
     gm = per_test(mp.gap_model, side)
-    if gm.any():
+    through = gm.any()
+    # every impact swings through the gap (a one-sided series with one): no impact on the base alone,
+    # and the excursion's values are the impacts' own
+    every = through and gm.all()
+    if not every:
+        e = per_test(mp.e0, side) * c_s
+        v_out = np.abs(e * _impact.amplitude_factor_at(e, amp_a, amp_b, np.abs(v) / vr)) * v
+    if through:
         p, a_in, g = per_test(mp.p, side), per_test(mp.a_neg, side), per_test(mp.gap, side)
-        e_b = per_test(restitution.two_sided(mp.alpha), side)
-        e_tr = per_test(restitution.transverse(mp.alpha), side) * c_s
+        e_b = per_test(walls["e_2s"], side)
+        e_tr = per_test(walls["e_tr"], side) * c_s
         v1 = e_b * v
         U = potential(np.minimum(g, a_in), a_in, p)
         reach = 0.5 * v1**2 > U
         vg = np.sqrt(np.maximum(v1**2 - 2 * U, 0.0))
-        wg = np.abs(e_tr * _amplitude_factor(e_tr, vg, mp, side)) * vg
+        wg = np.abs(e_tr * _impact.amplitude_factor_at(e_tr, amp_a, amp_b, np.abs(vg) / vr)) * vg
         v2 = np.where(reach, np.sqrt(wg**2 + 2 * U), v1)
+        v_out = e_b * v2 if every else np.where(gm, e_b * v2, v_out)
+    if through and timed:
         d = np.where(reach, g, apex(0.5 * v1**2, a_in, p))
-        tau = excursion_time(v1, v2, d, a_in, p) if timed else 0.0
-        v_out = np.where(gm, e_b * v2, v_out)
-        depth = np.where(gm, d, 0.0)
-        duration = np.where(gm, tau, 0.0)
-        v_in = np.where(gm & reach, vg, 0.0)
-        w = np.where(gm & reach, wg, 0.0)
+        on = reach if every else gm & reach
+        depth = d if every else np.where(gm, d, 0.0)
+        duration = np.where(gm, excursion_time(v1, v2, d, a_in, p), 0.0)
+        v_in, w = np.where(on, vg, 0.0), np.where(on, wg, 0.0)
+    else:
+        depth, duration, v_in, w = (np.zeros(np.shape(v_out)) for _ in range(4))
     if mp.speed_knots is not None:
         # e / e_an = g(v / thetadot_r), after the base law of the other causes
-        vr = overturning_velocity(per_test(mp.alpha, side), per_test(mp.p, side))
         g = _law.speed_factor(np.asarray(v) / vr, mp.speed_knots)
         with np.errstate(invalid="ignore", divide="ignore"):
             # within the physical bounds of the impact as a whole: no faster take-off than landing
@@ -321,7 +353,7 @@ def next_flight(v, side, mp: ModelParams):
     depth, duration : ndarray
         The excursion past theta = 0 of the impact (:func:`impact_speeds`).
     """
-    v = np.where(v < mp.stop * overturning_velocity(mp.alpha, mp.p), 0.0, v)
+    v = np.where(v < mp.stop * mp.of_walls()["v_r"], 0.0, v)
     v_out, d, tau, _, _ = impact_speeds(v, side, mp)
     side = np.where(mp.one_sided, side, -side)
     a = mp.hinge(side)
@@ -368,9 +400,10 @@ def free_run(S, mp: ModelParams, n_max=600):
     v, t = release(S, mp)
     first = t.copy()
     A = a = None  # apex and own angle of the previous flight, from the first impact on
+    loss = mp.flight_loss()
     for k in range(n_max):
         if k:
-            v = landing_speed(A, a, mp.p, **mp.flight_loss())
+            v = landing_speed(A, a, mp.p, **loss)
         A, side, a, d, tau = next_flight(v, side, mp)
         out["t_before"][:, k] = t
         out["t_after"][:, k] = t + tau

@@ -60,13 +60,19 @@ def bounded_factor(e0: Floats, factor: Floats) -> Floats:
     pass-through); the upper clip keeps |e0 factor| <= 1, so an impact never
     creates energy.
     """
-    hi = np.where(np.abs(e0) > 0, 1.0 / np.maximum(np.abs(e0), 1e-300), np.inf)
+    size = np.abs(e0)
+    hi = np.where(size > 0, 1.0 / np.maximum(size, 1e-300), np.inf)
     return np.clip(factor, 0.0, hi)
 
 
 def amplitude_factor(e0: Floats, a: Floats, b: Floats, thetadot_before: Floats, alpha: Floats, p: Floats) -> Floats:
     """a - b (thetadot^-/thetadot_r)^2 within the bounds of :func:`bounded_factor` (the bracket of Eq. 17)."""
-    ratio = np.abs(thetadot_before) / overturning_velocity(alpha, p)
+    return amplitude_factor_at(e0, a, b, np.abs(thetadot_before) / overturning_velocity(alpha, p))
+
+
+def amplitude_factor_at(e0: Floats, a: Floats, b: Floats, ratio: Floats) -> Floats:
+    """:func:`amplitude_factor` at the speed ratio |thetadot^-| / thetadot_r [-] (Eq. 16), for a
+    caller that holds thetadot_r: a - b ratio^2 within the bounds of :func:`bounded_factor`."""
     return bounded_factor(e0, a - b * ratio**2)
 
 
