@@ -84,12 +84,13 @@ def engineering_rows(tests: Sequence[MeasuredTest], mp: ModelParams, n_max: int 
     return rows
 
 
-def history_rms(test: MeasuredTest, model: RockingModel, engine: bool = False) -> float:
-    """RMS of (theta_model - theta_measured) / alpha over the measured motion (the exact simulator ``model``;
-    ``engine``: run by the numba engine where it holds the wall, :func:`rocklab.diagnosis.wall_model.simulate_test`)."""
+def history_rms(test: MeasuredTest, model: RockingModel) -> float:
+    """RMS of (theta_model - theta_measured) / alpha over the measured motion (the simulator ``model``,
+    run by the numba engine where it holds the wall, within its stated tolerance of the exact one:
+    :func:`rocklab.diagnosis.wall_model.simulate_test`)."""
     if test.t is None or test.theta is None:
         return np.nan
-    t, th = simulate_test(test, model, engine=engine)
+    t, th = simulate_test(test, model, engine=True)
     sel = (test.t >= test.t_release) & (test.t <= test.t_end)
     m = np.interp(test.t[sel], t, th, right=0.0)
     return float(np.sqrt(np.mean((m - test.theta[sel]) ** 2)) / test.alpha)

@@ -85,7 +85,7 @@ def engineering_errors(
     on ``n_history`` tests (the numba engine where it holds the wall, else the exact simulator: the
     same record within the tolerance of :func:`rocklab.diagnosis.wall_model.simulate_test`)."""
     out = summarise_rows(engineering_rows(tests, model_params(tests, ext, values).with_base(base)))
-    rms = [history_rms(t, rocking_model(t, ext, values, base), engine=True) for t in tests[:n_history]]
+    rms = [history_rms(t, rocking_model(t, ext, values, base)) for t in tests[:n_history]]
     out["rms_theta_over_alpha"] = finite_mean(rms) if rms else None
     return out
 
