@@ -24,7 +24,9 @@ def _git(repo, *args):
     return subprocess.run(["git", *args], cwd=repo, check=True, capture_output=True, text=True).stdout.strip()
 
 
-def test_the_trees_run_in_turn_from_empty_results_and_their_medians_are_compared(tmp_path, monkeypatch):
+def _project(tmp_path, first_sleep, then_sleep):
+    """A repository of two commits whose `make run` sleeps ``first_sleep``, then ``then_sleep`` [s]:
+    the first commit's hash (the baseline)."""
     repo = tmp_path / "repo"
     repo.mkdir()
     _git(repo, "init", "-q")
@@ -32,12 +34,17 @@ def test_the_trees_run_in_turn_from_empty_results_and_their_medians_are_compared
     _git(repo, "config", "user.name", "lab")
     (repo / "Makefile").write_text(MAKEFILE)
     (repo / ".gitignore").write_text("installed\nresults/\n")
-    (repo / "SLEEP").write_text("0.6\n")
+    (repo / "SLEEP").write_text(f"{first_sleep}\n")
     _git(repo, "add", "-A")
-    _git(repo, "commit", "-qm", "slow")
-    slow = _git(repo, "rev-parse", "HEAD")
-    (repo / "SLEEP").write_text("0.05\n")
-    _git(repo, "commit", "-qam", "fast")
+    _git(repo, "commit", "-qm", "first")
+    baseline = _git(repo, "rev-parse", "HEAD")
+    (repo / "SLEEP").write_text(f"{then_sleep}\n")
+    _git(repo, "commit", "-qam", "then")
+    return repo, baseline
+
+
+def test_the_trees_run_in_turn_from_empty_results_and_their_medians_are_compared(tmp_path, monkeypatch):
+    repo, slow = _project(tmp_path, 0.6, 0.05)
     out = tmp_path / "out"
     monkeypatch.setattr(beside.tempfile, "tempdir", str(tmp_path))
     rc = beside.main(["--repo", str(repo), "--baseline", slow[:7], "--runs", "2", "--cores", "3", "--out", str(out)])
@@ -53,19 +60,7 @@ def test_the_trees_run_in_turn_from_empty_results_and_their_medians_are_compared
 
 
 def test_a_slower_tree_fails_its_target(tmp_path, monkeypatch):
-    repo = tmp_path / "repo"
-    repo.mkdir()
-    _git(repo, "init", "-q")
-    _git(repo, "config", "user.email", "lab@example.org")
-    _git(repo, "config", "user.name", "lab")
-    (repo / "Makefile").write_text(MAKEFILE)
-    (repo / ".gitignore").write_text("installed\nresults/\n")
-    (repo / "SLEEP").write_text("0.05\n")
-    _git(repo, "add", "-A")
-    _git(repo, "commit", "-qm", "fast")
-    fast = _git(repo, "rev-parse", "HEAD")
-    (repo / "SLEEP").write_text("0.6\n")
-    _git(repo, "commit", "-qam", "slow")
+    repo, fast = _project(tmp_path, 0.05, 0.6)
     out = tmp_path / "out"
     monkeypatch.setattr(beside.tempfile, "tempdir", str(tmp_path))
     assert beside.main(["--repo", str(repo), "--baseline", fast, "--runs", "1", "--out", str(out)]) == 1
